@@ -1,17 +1,47 @@
-"""Command-line dispatch for ``python -m app``; each sub-command lives in its own module."""
+"""Command-line dispatch for ``python -m app``.
+
+Each sub-command lives in its own module exposing ``add_arguments(parser)`` and
+``run(args) -> int``; this file only wires them up, so modules load lazily.
+With no sub-command the performance window opens.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import sys
+
+# sub-command -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "window": ("app.window_cmd", "open the performance window (the default)"),
+    "demo": ("app.demo_cmd", "play the bundled performance through the default character"),
+    "render": ("app.render_cmd", "render a video or track headless to MP4 / GIF / PNGs"),
+    "edit": ("app.editor_cmd", "open the art-set editor"),
+    "send": ("app.net_cmd", "track a camera or video and send 10-byte packets over UDP"),
+    "receive": ("app.net_cmd", "receive packets over UDP and draw the character"),
+}
 
 
 def run(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="python -m app", description="Inkface: a face on video drives a hand-drawn cartoon.")
-    sub = ap.add_subparsers(dest="command")
-    sub.add_parser("demo", help="play the bundled performance through the default character")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
+    available = {}
+    for name, (modname, helptext) in COMMANDS.items():
+        try:
+            mod = importlib.import_module(modname)
+        except ModuleNotFoundError as e:
+            if e.name != modname:
+                raise
+            continue
+        p = sub.add_parser(name, help=helptext, description=helptext)
+        getattr(mod, f"add_{name}_arguments", mod.add_arguments)(p) if hasattr(mod, f"add_{name}_arguments") or hasattr(mod, "add_arguments") else None
+        available[name] = mod
+    if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
+        argv = ["window"] + argv
     args = ap.parse_args(argv)
-    if args.command == "demo":
-        print("Inkface demo: the renderer is not built yet (see the open issues).")
-        return 0
-    ap.print_help()
-    return 0
+    mod = available.get(args.command)
+    if mod is None:
+        print(f"inkface: '{args.command}' is not available in this build", file=sys.stderr)
+        return 2
+    runner = getattr(mod, f"run_{args.command}", None) or mod.run
+    return int(runner(args) or 0)
