@@ -1,7 +1,7 @@
 """Command-line dispatch for ``python -m app``.
 
-Each sub-command lives in its own module exposing ``add_arguments(parser)`` and
-``run(args) -> int``; this file only wires them up, so modules load lazily.
+Each sub-command lives in its own module exposing ``add_arguments(parser, command)``
+and ``run(args) -> int`` (``args.command`` names the sub-command); this file only wires them up, so modules load lazily.
 With no sub-command the performance window opens.
 """
 
@@ -34,7 +34,7 @@ def run(argv: list[str]) -> int:
                 raise
             continue
         p = sub.add_parser(name, help=helptext, description=helptext)
-        getattr(mod, f"add_{name}_arguments", mod.add_arguments)(p) if hasattr(mod, f"add_{name}_arguments") or hasattr(mod, "add_arguments") else None
+        mod.add_arguments(p, name)
         available[name] = mod
     if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
         argv = ["window"] + argv
@@ -43,5 +43,4 @@ def run(argv: list[str]) -> int:
     if mod is None:
         print(f"inkface: '{args.command}' is not available in this build", file=sys.stderr)
         return 2
-    runner = getattr(mod, f"run_{args.command}", None) or mod.run
-    return int(runner(args) or 0)
+    return int(mod.run(args) or 0)
