@@ -1,0 +1,215 @@
+"""Per-performer colour classifiers, learned from pixels around the calibration clicks.
+
+Each classifier separates one *target* class (pupil, lip, skin) from the colours seen around
+it. Both sides are modelled as small Gaussian mixtures in a feature space of luminance and
+brightness-normalised chroma; the decision is baked once into a 64³ lookup table indexed by
+the top six bits of B, G and R, so classifying a region of interest costs one table lookup
+per pixel and no colour conversion. A colour that both sides claim (the target is not
+clearly more likely) is background, as in Guenter et al.'s 32³ tables.
+
+Nothing here knows what colour lips or pupils "should" be: dark skin with brown lips works
+as long as the two differ somewhat in chroma or brightness on the calibration frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+BITS = 6
+"""Bits per channel of the lookup table (64 levels, 262 144 entries)."""
+_SHIFT = 8 - BITS
+_N = 1 << BITS
+
+
+def features(bgr: np.ndarray, y_weight: float) -> np.ndarray:
+    """Colour features ``(n, 3)`` of ``(n, 3)`` BGR values (any float or int dtype).
+
+    Luminance ``Y/255`` scaled by ``y_weight`` and two chroma ratios that do not change
+    when the light gets brighter or dimmer. The ``+24`` keeps near-black pixels from
+    getting wild chroma from sensor noise.
+    """
+    c = np.asarray(bgr, dtype=np.float64).reshape(-1, 3)
+    b, g, r = c[:, 0], c[:, 1], c[:, 2]
+    s = b + g + r + 24.0
+    y = 0.114 * b + 0.587 * g + 0.299 * r
+    return np.stack([y / 255.0 * y_weight, (r - g) / s, (r + g - 2.0 * b) / (2.0 * s)], axis=1)
+
+
+_MIN_STD = np.array([0.035, 0.012, 0.012])
+"""Floor on each feature's standard deviation (before the luminance weight)."""
+
+
+def _kmeans(x: np.ndarray, k: int, seed: int = 0, iters: int = 12) -> np.ndarray:
+    """Labels of a tiny deterministic k-means (farthest-point start)."""
+    n = len(x)
+    if k <= 1 or n <= k:
+        return np.zeros(n, dtype=np.int64)
+    centres = [x[np.argmin(x[:, 0])]]
+    for _ in range(1, k):
+        d = np.min([((x - c) ** 2).sum(1) for c in centres], axis=0)
+        centres.append(x[int(np.argmax(d))])
+    c = np.array(centres)
+    lab = np.zeros(n, dtype=np.int64)
+    for _ in range(iters):
+        lab = np.argmin(((x[:, None, :] - c[None]) ** 2).sum(2), axis=1)
+        for j in range(k):
+            m = lab == j
+            if m.any():
+                c[j] = x[m].mean(0)
+    return lab
+
+
+class Gaussians:
+    """A few Gaussian components (means, inverse covariances) fitted by k-means."""
+
+    def __init__(self, x: np.ndarray, k: int, min_std: np.ndarray, min_count: int = 6):
+        lab = _kmeans(x, k)
+        self.means: list[np.ndarray] = []
+        self.icovs: list[np.ndarray] = []
+        self.logdets: list[float] = []
+        for j in range(int(lab.max()) + 1 if len(lab) else 0):
+            pts = x[lab == j]
+            if len(pts) < min_count and j > 0:
+                continue
+            mu = pts.mean(0)
+            cov = np.cov(pts.T) if len(pts) > 3 else np.zeros((3, 3))
+            cov = cov + np.diag(min_std**2)
+            self.means.append(mu)
+            self.icovs.append(np.linalg.inv(cov))
+            self.logdets.append(float(np.linalg.slogdet(cov)[1]))
+
+    def d2(self, x: np.ndarray) -> np.ndarray:
+        """Smallest Mahalanobis distance² (plus log-det, i.e. a negative log-likelihood) of each row."""
+        out = np.full(len(x), np.inf)
+        for mu, ic, ld in zip(self.means, self.icovs, self.logdets):
+            d = x - mu
+            out = np.minimum(out, np.einsum("ni,ij,nj->n", d, ic, d) + ld)
+        return out
+
+    def mahalanobis2(self, x: np.ndarray) -> np.ndarray:
+        out = np.full(len(x), np.inf)
+        for mu, ic in zip(self.means, self.icovs):
+            d = x - mu
+            out = np.minimum(out, np.einsum("ni,ij,nj->n", d, ic, d))
+        return out
+
+
+_GRID_CACHE: np.ndarray | None = None
+
+
+def _bin_colours() -> np.ndarray:
+    """BGR centre of every table bin, ``(64³, 3)`` float, in table index order."""
+    global _GRID_CACHE
+    if _GRID_CACHE is None:
+        v = (np.arange(_N) << _SHIFT) + (1 << _SHIFT) / 2.0 - 0.5
+        b, g, r = np.meshgrid(v, v, v, indexing="ij")
+        _GRID_CACHE = np.stack([b.ravel(), g.ravel(), r.ravel()], axis=1)
+    return _GRID_CACHE
+
+
+def lut_index(bgr: np.ndarray) -> np.ndarray:
+    """Table index of every pixel of a ``(..., 3)`` uint8 BGR array (int32, same leading shape)."""
+    q = (bgr >> _SHIFT).astype(np.int32)
+    return (q[..., 0] << (2 * BITS)) | (q[..., 1] << BITS) | q[..., 2]
+
+
+class ColourClassifier:
+    """Target-vs-rest colour classifier baked into a lookup table.
+
+    ``prob(bgr)`` gives a soft target score in 0..1 (float32), ``mask(bgr)`` the hard tags
+    (score ≥ 0.5). ``gate`` is the largest Mahalanobis distance² from the target model a
+    colour may have and still be tagged; ``margin`` how much more likely (in units of
+    −2·log-likelihood) the target must be than the rest.
+    """
+
+    def __init__(
+        self,
+        target_bgr: np.ndarray,
+        other_bgr: np.ndarray,
+        y_weight: float = 1.0,
+        k_target: int = 2,
+        k_other: int = 3,
+        gate: float = 18.0,
+        margin: float = 2.0,
+        name: str = "",
+    ):
+        self.name = name
+        self.y_weight = float(y_weight)
+        self.gate = float(gate)
+        self.margin = float(margin)
+        tgt = np.asarray(target_bgr).reshape(-1, 3)
+        oth = np.asarray(other_bgr).reshape(-1, 3)
+        if len(tgt) < 4:
+            raise ValueError(f"{name or 'colour'} classifier: too few target pixels ({len(tgt)})")
+        if len(oth) < 4:
+            raise ValueError(f"{name or 'colour'} classifier: too few background pixels ({len(oth)})")
+        ms = _MIN_STD * np.array([self.y_weight, 1.0, 1.0])
+        self.target = Gaussians(features(tgt, self.y_weight), k_target, ms)
+        self.other = Gaussians(features(oth, self.y_weight), k_other, ms)
+        self.table = self._bake()
+
+    def score_colours(self, bgr: np.ndarray) -> np.ndarray:
+        """Soft target score 0..1 of ``(n, 3)`` colours, computed from the models (no table)."""
+        f = features(bgr, self.y_weight)
+        dt = self.target.d2(f)
+        do = self.other.d2(f)
+        inside = self.target.mahalanobis2(f)
+        z = np.clip((do - dt - self.margin) * 0.5, -30, 30)
+        s = 1.0 / (1.0 + np.exp(-z))
+        # fade out colours far from every target component
+        s *= 1.0 / (1.0 + np.exp(np.clip(inside - self.gate, -30, 30)))
+        return s
+
+    def _bake(self) -> np.ndarray:
+        return (self.score_colours(_bin_colours()) * 255.0 + 0.5).astype(np.uint8)
+
+    def prob_u8(self, bgr: np.ndarray) -> np.ndarray:
+        """Target score of every pixel as uint8 0..255 (same leading shape as ``bgr``)."""
+        return self.table[lut_index(bgr)]
+
+    def prob(self, bgr: np.ndarray) -> np.ndarray:
+        return self.prob_u8(bgr).astype(np.float32) * (1.0 / 255.0)
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        """Boolean tags (score ≥ 0.5)."""
+        return self.prob_u8(bgr) >= 128
+
+    # --- persistence: the models are tiny, the table is rebuilt on load -----------------
+    def to_dict(self) -> dict:
+        def g(m: Gaussians) -> dict:
+            return {
+                "means": [mu.tolist() for mu in m.means],
+                "icovs": [ic.tolist() for ic in m.icovs],
+                "logdets": list(m.logdets),
+            }
+
+        return {
+            "name": self.name,
+            "y_weight": self.y_weight,
+            "gate": self.gate,
+            "margin": self.margin,
+            "target": g(self.target),
+            "other": g(self.other),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ColourClassifier":
+        self = cls.__new__(cls)
+        self.name = str(d.get("name", ""))
+        self.y_weight = float(d["y_weight"])
+        self.gate = float(d["gate"])
+        self.margin = float(d["margin"])
+
+        def g(dd: dict) -> Gaussians:
+            m = Gaussians.__new__(Gaussians)
+            m.means = [np.asarray(v, dtype=np.float64) for v in dd["means"]]
+            m.icovs = [np.asarray(v, dtype=np.float64) for v in dd["icovs"]]
+            m.logdets = [float(v) for v in dd["logdets"]]
+            if not m.means or any(mu.shape != (3,) for mu in m.means) or any(ic.shape != (3, 3) for ic in m.icovs):
+                raise ValueError("malformed colour model")
+            return m
+
+        self.target = g(d["target"])
+        self.other = g(d["other"])
+        self.table = self._bake()
+        return self
