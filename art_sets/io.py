@@ -1,0 +1,416 @@
+"""Reading and writing art-set folders (``artset.json`` + PNGs).
+
+The manifest format is described in DESIGN.md ("Art sets"). Images are RGBA with straight
+alpha, loaded with Pillow. Every image's header is checked (size, pixel count) before any
+pixels are decoded, so a decompression bomb is refused without being loaded. Image paths are
+relative to the folder and may never leave it (no absolute paths, no ``..``, no symlink out).
+
+:func:`load_artset` raises :class:`ArtSetError` with a one-line message naming the file;
+:func:`scan` (used by ``art_sets.validate``) collects every problem instead of stopping.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from art_sets.model import FORMAT_VERSION, PART_NAMES, ArtSet, Drawing, Part
+
+MANIFEST = "artset.json"
+MAX_SIDE = 4096  # pixels; larger images are refused before decoding
+MAX_PIXELS = 4096 * 4096
+MIN_DRAWINGS = 3  # a part needs a triangle of drawings for the barycentric morph
+MIN_LINE_LENGTH = 1.0  # px; shorter control lines make the Beier-Neely field singular
+MAX_MANIFEST_BYTES = 8 * 1024 * 1024
+_KNOWN_KEYS = {"format", "name", "author", "canvas", "pivot", "heads", "parts"}
+
+
+class ArtSetError(Exception):
+    """An art set that cannot be loaded; the message is one line and names the file."""
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One problem found in an art set: the file it concerns and what is wrong."""
+
+    file: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.file}: {self.message}"
+
+
+def _folder_of(path: str | os.PathLike) -> Path:
+    p = Path(path)
+    return p.parent if p.name == MANIFEST or p.suffix.lower() == ".json" else p
+
+
+class _Scan:
+    """Reads a folder, collecting problems; keeps whatever loaded cleanly."""
+
+    def __init__(self, folder: Path, strict_geometry: bool = True):
+        self.folder = folder
+        self.strict = strict_geometry
+        self.problems: list[Problem] = []
+        self.manifest_file = str(folder / MANIFEST)
+        self.alpha_seen: dict[str, bool] = {}
+
+    def add(self, file: str, message: str) -> None:
+        self.problems.append(Problem(file, message))
+
+    # --- images ------------------------------------------------------------------------
+    def safe_path(self, rel, where: str) -> Path | None:
+        """Resolve a manifest image path inside the folder, or record why it is refused."""
+        if not isinstance(rel, str) or not rel.strip():
+            self.add(self.manifest_file, f"{where}: image path must be a non-empty string")
+            return None
+        if "\\" in rel or os.path.isabs(rel) or rel.startswith(("/", "~")) or ":" in rel.split("/")[0]:
+            self.add(self.manifest_file, f"{where}: image path {rel!r} is absolute; it must be relative to the art-set folder")
+            return None
+        if ".." in Path(rel).parts:
+            self.add(self.manifest_file, f"{where}: image path {rel!r} leaves the art-set folder")
+            return None
+        full = self.folder / rel
+        try:
+            full.resolve().relative_to(self.folder.resolve())
+        except ValueError:
+            self.add(self.manifest_file, f"{where}: image path {rel!r} leaves the art-set folder (symlink)")
+            return None
+        return full
+
+    def image(self, rel, where: str) -> np.ndarray | None:
+        full = self.safe_path(rel, where)
+        if full is None:
+            return None
+        name = str(full)
+        if not full.is_file():
+            self.add(name, f"missing image (named by {where})")
+            return None
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", Image.DecompressionBombWarning)
+                with Image.open(full) as im:  # reads the header only
+                    w, h = im.size
+                    if im.format != "PNG":
+                        self.add(name, f"not a PNG image ({im.format or 'unknown format'})")
+                        return None
+                    if w > MAX_SIDE or h > MAX_SIDE or w * h > MAX_PIXELS:
+                        self.add(name, f"image is {w}x{h}, larger than the {MAX_SIDE}x{MAX_SIDE} limit; refused without decoding")
+                        return None
+                    if w < 1 or h < 1:
+                        self.add(name, f"image has no pixels ({w}x{h})")
+                        return None
+                    has_alpha = im.mode in ("RGBA", "LA", "PA") or "transparency" in im.info
+                    arr = np.asarray(im.convert("RGBA"), dtype=np.uint8).copy()
+        except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+            self.add(name, "image looks like a decompression bomb; refused")
+            return None
+        except (OSError, ValueError, SyntaxError) as e:
+            self.add(name, f"unreadable PNG ({_one_line(e)})")
+            return None
+        self.alpha_seen[name] = has_alpha
+        return arr
+
+    # --- manifest ----------------------------------------------------------------------
+    def run(self) -> ArtSet | None:
+        mf = self.folder / MANIFEST
+        if not self.folder.is_dir():
+            self.add(str(self.folder), "not a folder")
+            return None
+        if not mf.is_file():
+            self.add(self.manifest_file, "missing manifest (artset.json)")
+            return None
+        try:
+            if mf.stat().st_size > MAX_MANIFEST_BYTES:
+                self.add(self.manifest_file, "manifest is larger than 8 MB; refused")
+                return None
+            data = json.loads(mf.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError) as e:
+            self.add(self.manifest_file, f"unreadable manifest ({_one_line(e)})")
+            return None
+        except json.JSONDecodeError as e:
+            self.add(self.manifest_file, f"bad JSON at line {e.lineno} column {e.colno}: {e.msg}")
+            return None
+        if not isinstance(data, dict):
+            self.add(self.manifest_file, "manifest must be a JSON object")
+            return None
+        missing = [k for k in ("format", "name", "canvas", "heads", "parts") if k not in data]
+        if missing:
+            self.add(self.manifest_file, f"missing key(s): {', '.join(missing)}")
+            return None
+        if data["format"] != FORMAT_VERSION or isinstance(data["format"], bool):
+            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads format {FORMAT_VERSION})")
+            return None
+        name = data["name"]
+        if not isinstance(name, str) or not name.strip():
+            self.add(self.manifest_file, "name must be a non-empty string")
+            name = str(name)
+        author = data.get("author", "")
+        if not isinstance(author, str):
+            self.add(self.manifest_file, "author must be a string")
+            author = str(author)
+        canvas = _int_pair(data["canvas"])
+        if canvas is None or min(canvas) < 1 or max(canvas) > MAX_SIDE:
+            self.add(self.manifest_file, f"canvas must be [width, height] in 1..{MAX_SIDE}, got {data['canvas']!r}")
+            return None
+        pivot_raw = data.get("pivot", [canvas[0] / 2, canvas[1] / 2])
+        pivot = _num_pair(pivot_raw)
+        if pivot is None:
+            self.add(self.manifest_file, f"pivot must be [x, y] numbers, got {pivot_raw!r}")
+            pivot = (canvas[0] / 2, canvas[1] / 2)
+
+        heads, head_files = self.read_heads(data["heads"], canvas)
+        parts = self.read_parts(data["parts"], canvas)
+        if parts is None:
+            return None
+        extra = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
+        return ArtSet(name=name, canvas=canvas, pivot=pivot, heads=heads, parts=parts, author=author,
+                      head_files=head_files, path=self.folder, extra=extra)
+
+    def read_heads(self, raw, canvas) -> tuple[list[np.ndarray], list[str]]:
+        heads, files = [], []
+        if not isinstance(raw, list) or not raw:
+            self.add(self.manifest_file, "heads must be a non-empty list of image paths")
+            return heads, files
+        for i, rel in enumerate(raw):
+            img = self.image(rel, f"heads[{i}]")
+            if img is None:
+                continue
+            file = str(self.folder / rel)
+            if (img.shape[1], img.shape[0]) != canvas:
+                self.add(file, f"head is {img.shape[1]}x{img.shape[0]}, the canvas is {canvas[0]}x{canvas[1]}")
+            elif not self.alpha_seen.get(file, True) or img[..., 3].min() == 255:
+                self.add(file, "head has no transparency; it needs soft alpha holes where the eyes and mouth show through")
+            heads.append(img)
+            files.append(rel)
+        return heads, files
+
+    def read_parts(self, raw, canvas) -> dict[str, Part] | None:
+        if not isinstance(raw, dict):
+            self.add(self.manifest_file, "parts must be an object with 'eyes' and 'mouth'")
+            return None
+        parts: dict[str, Part] = {}
+        for pname in PART_NAMES:
+            if pname not in raw:
+                self.add(self.manifest_file, f"parts: missing part {pname!r}")
+                continue
+            p = self.read_part(pname, raw[pname], canvas)
+            if p is not None:
+                parts[pname] = p
+        for pname in raw:
+            if pname not in PART_NAMES:
+                self.add(self.manifest_file, f"parts: unknown part {pname!r} (expected {', '.join(PART_NAMES)})")
+        return parts if len(parts) == len(PART_NAMES) else None
+
+    def read_part(self, pname: str, raw, canvas) -> Part | None:
+        where = f"parts.{pname}"
+        if not isinstance(raw, dict) or "box" not in raw or "drawings" not in raw:
+            self.add(self.manifest_file, f"{where}: needs 'box' and 'drawings'")
+            return None
+        box = _int_quad(raw["box"])
+        if box is None or box[2] < 1 or box[3] < 1:
+            self.add(self.manifest_file, f"{where}.box must be [x, y, w, h] integers with w, h > 0, got {raw['box']!r}")
+            return None
+        if box[0] < 0 or box[1] < 0 or box[0] + box[2] > canvas[0] or box[1] + box[3] > canvas[1]:
+            self.add(self.manifest_file, f"{where}.box {list(box)} does not fit inside the {canvas[0]}x{canvas[1]} canvas")
+        raw_d = raw["drawings"]
+        if not isinstance(raw_d, list):
+            self.add(self.manifest_file, f"{where}.drawings must be a list")
+            return None
+        if len(raw_d) < MIN_DRAWINGS:
+            self.add(self.manifest_file, f"{where}: {len(raw_d)} drawing(s); at least {MIN_DRAWINGS} are needed to make a triangle")
+        drawings: list[Drawing] = []
+        seen: set[str] = set()
+        count_ref: tuple[int, str] | None = None
+        for i, d in enumerate(raw_d):
+            dw = f"{where}.drawings[{i}]"
+            if not isinstance(d, dict) or not {"name", "image", "lines"} <= set(d):
+                self.add(self.manifest_file, f"{dw}: needs 'name', 'image' and 'lines'")
+                continue
+            dname = d["name"]
+            if not isinstance(dname, str) or not dname:
+                self.add(self.manifest_file, f"{dw}: name must be a non-empty string")
+                continue
+            if dname in seen:
+                self.add(self.manifest_file, f"{where}: two drawings are called {dname!r}")
+            seen.add(dname)
+            lines = _lines(d["lines"])
+            if lines is None:
+                self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] finite numbers")
+                continue
+            img = self.image(d["image"], f"{dw} ({dname})")
+            if img is None:
+                continue
+            file = str(self.folder / d["image"])
+            h, w = img.shape[:2]
+            if (w, h) != (box[2], box[3]):
+                self.add(file, f"{pname} drawing {dname!r} is {w}x{h}, the {pname} box is {box[2]}x{box[3]}")
+            if self.strict:
+                if count_ref is None:
+                    count_ref = (len(lines), dname)
+                elif len(lines) != count_ref[0]:
+                    self.add(self.manifest_file, f"{where}: drawing {dname!r} has {len(lines)} control lines, {count_ref[1]!r} has {count_ref[0]}")
+                if len(lines):
+                    xs, ys = lines[:, [0, 2]], lines[:, [1, 3]]
+                    bad = np.nonzero((xs < 0).any(1) | (xs > w).any(1) | (ys < 0).any(1) | (ys > h).any(1))[0]
+                    if len(bad):
+                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, bad))} lie outside its {w}x{h} image")
+                    short = np.nonzero(np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) < MIN_LINE_LENGTH)[0]
+                    if len(short):
+                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, short))} are shorter than {MIN_LINE_LENGTH:g} px")
+            drawings.append(Drawing(name=dname, image=img, lines=lines, file=d["image"]))
+        if self.strict and count_ref is not None and count_ref[0] == 0:
+            self.add(self.manifest_file, f"{where}: drawings have no control lines; a morph needs at least one")
+        return Part(name=pname, box=box, drawings=drawings)
+
+
+def scan(path: str | os.PathLike, strict_geometry: bool = True) -> tuple[ArtSet | None, list[Problem]]:
+    """Read the art set at ``path`` (folder or its artset.json); return it and every problem found."""
+    s = _Scan(_folder_of(path), strict_geometry)
+    art = s.run()
+    return art, s.problems
+
+
+def load_artset(path: str | os.PathLike, strict: bool = True) -> ArtSet:
+    """Load an art-set folder (or its ``artset.json``) into an :class:`ArtSet`.
+
+    Raises :class:`ArtSetError` naming the file of the first problem. With ``strict=False``
+    control-line problems (counts, bounds, lengths) are tolerated, e.g. for an editor opening
+    a half-finished set; unsafe paths, bad images and sizes are always refused.
+    """
+    art, problems = scan(path, strict_geometry=strict)
+    if problems:
+        more = f" (and {len(problems) - 1} more problem(s); run `python -m art_sets check`)" if len(problems) > 1 else ""
+        raise ArtSetError(f"{problems[0]}{more}")
+    assert art is not None
+    return art
+
+
+# --- writing -----------------------------------------------------------------------------
+def _atomic_write_bytes(target: Path, data: bytes) -> None:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def _png_bytes(img: np.ndarray) -> bytes:
+    import io as _io
+
+    arr = np.asarray(img)
+    if arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] != 4:
+        raise ArtSetError(f"image must be uint8 (h, w, 4) RGBA, got {arr.dtype} {arr.shape}")
+    buf = _io.BytesIO()
+    Image.fromarray(arr, "RGBA").save(buf, format="PNG", optimize=True)
+    return buf.getvalue()
+
+
+def write_png(path: str | os.PathLike, img: np.ndarray) -> None:
+    """Write an RGBA uint8 image as PNG atomically."""
+    _atomic_write_bytes(Path(path), _png_bytes(img))
+
+
+def manifest_dict(art: ArtSet) -> dict:
+    """The JSON manifest for ``art`` (image paths as in ``head_files`` / ``Drawing.file``)."""
+    head_files = _head_files(art)
+    parts = {}
+    for pname in PART_NAMES:
+        p = art.parts[pname]
+        parts[pname] = {
+            "box": [int(v) for v in p.box],
+            "drawings": [{"name": d.name, "image": _drawing_file(pname, d),
+                          "lines": [[float(v) for v in row] for row in np.asarray(d.lines, dtype=np.float64).reshape(-1, 4)]}
+                         for d in p.drawings],
+        }
+    out = {"format": FORMAT_VERSION, "name": art.name, "author": art.author,
+           "canvas": [int(art.canvas[0]), int(art.canvas[1])],
+           "pivot": [float(art.pivot[0]), float(art.pivot[1])],
+           "heads": head_files, "parts": parts}
+    for k, v in art.extra.items():
+        if k not in _KNOWN_KEYS:
+            out[k] = v
+    return out
+
+
+def _head_files(art: ArtSet) -> list[str]:
+    files = list(art.head_files[: len(art.heads)])
+    files += [f"head-{i + 1}.png" for i in range(len(files), len(art.heads))]
+    return files
+
+
+def _drawing_file(pname: str, d: Drawing) -> str:
+    return d.file or f"{pname}/{d.name}.png"
+
+
+def save_artset(art: ArtSet, path: str | os.PathLike) -> Path:
+    """Write ``art`` to the folder ``path``: PNGs first, then ``artset.json``, each atomically.
+
+    Image paths come from ``head_files`` / ``Drawing.file`` (defaults ``head-N.png`` and
+    ``<part>/<name>.png``) and must stay inside the folder. Returns the folder.
+    """
+    folder = _folder_of(path)
+    folder.mkdir(parents=True, exist_ok=True)
+    checker = _Scan(folder)
+    manifest = manifest_dict(art)
+    items = [(f, img) for f, img in zip(manifest["heads"], art.heads)]
+    for pname in PART_NAMES:
+        items += [(_drawing_file(pname, d), d.image) for d in art.parts[pname].drawings]
+    for rel, img in items:
+        if checker.safe_path(rel, rel) is None:
+            raise ArtSetError(str(checker.problems[-1]))
+    for rel, img in items:
+        write_png(folder / rel, img)
+    text = json.dumps(manifest, indent=1, ensure_ascii=False)
+    _atomic_write_bytes(folder / MANIFEST, (text + "\n").encode("utf-8"))
+    return folder
+
+
+# --- small parsers -------------------------------------------------------------------------
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+def _is_num(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _int_pair(v) -> tuple[int, int] | None:
+    if isinstance(v, list) and len(v) == 2 and all(_is_num(x) and float(x).is_integer() for x in v):
+        return int(v[0]), int(v[1])
+    return None
+
+
+def _num_pair(v) -> tuple[float, float] | None:
+    if isinstance(v, list) and len(v) == 2 and all(_is_num(x) for x in v):
+        return float(v[0]), float(v[1])
+    return None
+
+
+def _int_quad(v) -> tuple[int, int, int, int] | None:
+    if isinstance(v, list) and len(v) == 4 and all(_is_num(x) and float(x).is_integer() for x in v):
+        return tuple(int(x) for x in v)  # type: ignore[return-value]
+    return None
+
+
+def _lines(v) -> np.ndarray | None:
+    if not isinstance(v, list) or not all(isinstance(r, list) and len(r) == 4 and all(_is_num(x) for x in r) for r in v):
+        return None
+    return np.asarray(v, dtype=np.float64).reshape(-1, 4)
