@@ -1,0 +1,230 @@
+"""Assemble a frame: parts in their boxes, the head over them, shimmer, head tilt (Buck et al. §3.2).
+
+Everything is premultiplied RGBA uint8 (see ``morph``). Per frame the head (a precomputed
+premultiplied copy) is copied, and only inside the part boxes is ``head + parts·(1 − α_head)``
+computed, so the soft alpha of the head's holes feathers the parts in. The whole character is
+then rotated about the art set's pivot and translated with one ``cv2.warpAffine`` restricted to
+the rectangle that holds any content.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping, Sequence
+
+import cv2
+import numpy as np
+
+from morph.beier_neely import premultiply
+
+Box = tuple[int, int, int, int]
+
+
+def _rect_intersection(a: Box, b: Box) -> Box | None:
+    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
+    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1 - x0, y1 - y0
+
+
+class Compositor:
+    """Places parts on a head canvas and moves the character with the performer.
+
+    ``canvas`` is ``(w, h)``; ``pivot`` ``(x, y)`` canvas pixels (the neck, say); ``heads`` are
+    straight RGBA images of the canvas size (several = shimmer: the head changes every
+    ``shimmer_every`` frames); ``boxes`` maps part names to ``(x, y, w, h)``. The pose
+    ``(dx, dy, roll_deg)`` is multiplied by ``gain``: dx, dy in canvas pixels (x right, y down),
+    roll in degrees, positive turning the character counter-clockwise on screen (its right side
+    up), as the performer's ``roll_deg`` does in the camera image.
+    """
+
+    def __init__(
+        self,
+        canvas: tuple[int, int],
+        pivot: tuple[float, float],
+        heads: Sequence[np.ndarray],
+        boxes: Mapping[str, Sequence[int]],
+        gain: float = 1.0,
+        shimmer_every: int = 2,
+        heads_premultiplied: bool = False,
+    ):
+        self.w, self.h = int(canvas[0]), int(canvas[1])
+        self.pivot = (float(pivot[0]), float(pivot[1]))
+        self.gain = float(gain)
+        self.shimmer_every = max(1, int(shimmer_every))
+        if len(heads) == 0:
+            raise ValueError("Compositor needs at least one head image")
+        self.heads: list[np.ndarray] = []
+        for i, hd in enumerate(heads):
+            hd = np.asarray(hd)
+            if hd.shape != (self.h, self.w, 4) or hd.dtype != np.uint8:
+                raise ValueError(f"head {i} is {hd.dtype} {hd.shape}; expected uint8 {(self.h, self.w, 4)}")
+            self.heads.append(np.ascontiguousarray(hd if heads_premultiplied else premultiply(hd)))
+        full = (0, 0, self.w, self.h)
+        self.boxes: dict[str, Box] = {}
+        self._clip: dict[str, tuple[Box, tuple[int, int]]] = {}
+        for name, box in boxes.items():
+            box = tuple(int(v) for v in box)
+            if len(box) != 4 or box[2] <= 0 or box[3] <= 0:
+                raise ValueError(f"box of part {name!r} must be (x, y, w, h) with positive size, got {box}")
+            self.boxes[name] = box
+            inside = _rect_intersection(box, full)
+            if inside is not None:
+                self._clip[name] = (inside, (inside[0] - box[0], inside[1] - box[1]))
+        # 255 − α of each head inside each box, 4 channels, for one cv2.multiply per part.
+        self._inv_alpha = [
+            {name: np.ascontiguousarray(np.repeat(255 - hd[y:y + bh, x:x + bw, 3:4], 4, axis=2))
+             for name, ((x, y, bw, bh), _) in self._clip.items()}
+            for hd in self.heads
+        ]
+        self._content = self._content_rect()
+        self._flat = np.empty((self.h, self.w, 4), np.uint8)
+        self._overlaps = self._any_overlap()
+
+    def _content_rect(self) -> Box:
+        """Bounding rectangle of everything that can be non-transparent (heads ∪ boxes)."""
+        alpha = np.zeros((self.h, self.w), bool)
+        for hd in self.heads:
+            alpha |= hd[:, :, 3] > 0
+        for (x, y, bw, bh), _ in self._clip.values():
+            alpha[y:y + bh, x:x + bw] = True
+        ys, xs = np.nonzero(alpha)
+        if len(xs) == 0:
+            return (0, 0, 1, 1)
+        return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
+
+    def _any_overlap(self) -> bool:
+        rects = [r for r, _ in self._clip.values()]
+        return any(_rect_intersection(a, b) for i, a in enumerate(rects) for b in rects[i + 1:])
+
+    @property
+    def canvas(self) -> tuple[int, int]:
+        return self.w, self.h
+
+    def head_index(self, frame_no: int) -> int:
+        return (int(frame_no) // self.shimmer_every) % len(self.heads)
+
+    def matrix(self, pose: Sequence[float]) -> np.ndarray:
+        """The 2×3 affine map canvas → output for ``pose`` (after ``gain``)."""
+        dx, dy, roll = (float(v) * self.gain for v in pose)
+        m = cv2.getRotationMatrix2D(self.pivot, roll, 1.0)
+        m[0, 2] += dx
+        m[1, 2] += dy
+        return m
+
+    def flat(self, parts: Mapping[str, np.ndarray], frame_no: int = 0) -> np.ndarray:
+        """The untransformed character: parts under the head (an internal buffer, reused)."""
+        k = self.head_index(frame_no)
+        head = self.heads[k]
+        out = self._flat
+        np.copyto(out, head)
+        if self._overlaps:
+            return self._flat_overlapping(parts, head, out)
+        for name, part in parts.items():
+            if name not in self._clip:
+                if name in self.boxes:
+                    continue  # box entirely off the canvas
+                raise KeyError(f"no box for part {name!r} (boxes: {sorted(self.boxes)})")
+            (x, y, bw, bh), (ox, oy) = self._clip[name]
+            src = self._part_view(name, part, ox, oy, bw, bh)
+            under = cv2.multiply(src, self._inv_alpha[k][name], scale=1.0 / 255.0)
+            cv2.add(head[y:y + bh, x:x + bw], under, dst=out[y:y + bh, x:x + bw])
+        return out
+
+    def _part_view(self, name: str, part: np.ndarray, ox: int, oy: int, bw: int, bh: int) -> np.ndarray:
+        box = self.boxes[name]
+        if part.shape[:2] != (box[3], box[2]) or part.ndim != 3 or part.shape[2] != 4:
+            raise ValueError(f"part {name!r} is {part.shape}; its box needs {(box[3], box[2], 4)}")
+        src = part[oy:oy + bh, ox:ox + bw]
+        return src if src.flags.c_contiguous else np.ascontiguousarray(src)
+
+    def _flat_overlapping(self, parts, head, out) -> np.ndarray:
+        """General path when boxes overlap: parts layered in order, then the head over them."""
+        layer = np.zeros((self.h, self.w, 4), np.uint8)
+        for name, part in parts.items():
+            if name not in self._clip:
+                if name in self.boxes:
+                    continue
+                raise KeyError(f"no box for part {name!r} (boxes: {sorted(self.boxes)})")
+            (x, y, bw, bh), (ox, oy) = self._clip[name]
+            src = self._part_view(name, part, ox, oy, bw, bh)
+            under = layer[y:y + bh, x:x + bw]
+            inv = np.repeat(255 - src[:, :, 3:4], 4, axis=2)
+            layer[y:y + bh, x:x + bw] = cv2.add(src, cv2.multiply(under, inv, scale=1.0 / 255.0))
+        inv_head = np.repeat(255 - head[:, :, 3:4], 4, axis=2)
+        cv2.add(head, cv2.multiply(layer, inv_head, scale=1.0 / 255.0), dst=out)
+        return out
+
+    def compose(
+        self,
+        parts: Mapping[str, np.ndarray],
+        pose: Sequence[float] = (0.0, 0.0, 0.0),
+        frame_no: int = 0,
+    ) -> np.ndarray:
+        """The frame: premultiplied RGBA uint8 ``(h, w, 4)`` of the canvas size (a new array).
+
+        ``parts`` maps part names to premultiplied RGBA images of their box size.
+        """
+        return self.transform(self.flat(parts, frame_no), pose)
+
+    def transform(self, flat: np.ndarray, pose: Sequence[float]) -> np.ndarray:
+        """``flat`` (canvas-sized, premultiplied) moved by ``pose`` × gain, as a new array.
+
+        Only the rectangle that can hold content is warped (``cv2.warpAffine``, bilinear).
+        """
+        dx, dy, roll = (float(v) * self.gain for v in pose)
+        if dx == 0.0 and dy == 0.0 and roll == 0.0:
+            return flat.copy()
+        m = self.matrix(pose)
+        cx, cy, cw, ch = self._content
+        corners = np.array([[cx, cy], [cx + cw, cy], [cx, cy + ch], [cx + cw, cy + ch]], np.float64)
+        moved = corners @ m[:, :2].T + m[:, 2]
+        x0 = max(0, int(math.floor(moved[:, 0].min())) - 1)
+        y0 = max(0, int(math.floor(moved[:, 1].min())) - 1)
+        x1 = min(self.w, int(math.ceil(moved[:, 0].max())) + 2)
+        y1 = min(self.h, int(math.ceil(moved[:, 1].max())) + 2)
+        out = np.zeros((self.h, self.w, 4), np.uint8)
+        if x1 <= x0 or y1 <= y0:
+            return out
+        # Source: the content rectangle; destination: the rectangle [x0, x1) × [y0, y1).
+        shift_src = np.array([[1, 0, cx], [0, 1, cy], [0, 0, 1]], np.float64)
+        shift_dst = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], np.float64)
+        full = np.vstack([m, [0, 0, 1]])
+        local = (shift_dst @ full @ shift_src)[:2]
+        src = flat[cy:cy + ch, cx:cx + cw]
+        dst = out[y0:y1, x0:x1]
+        cv2.warpAffine(src, local, (x1 - x0, y1 - y0), dst=dst, flags=cv2.INTER_LINEAR,
+                       borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
+        return out
+
+
+def to_straight(pm: np.ndarray) -> np.ndarray:
+    """Premultiplied RGBA uint8 -> straight RGBA uint8 (for PNG); transparent pixels become 0."""
+    pm = np.asarray(pm)
+    a = pm[:, :, 3:4].astype(np.uint32)
+    rgb = (pm[:, :, :3].astype(np.uint32) * 255 + a // 2) // np.maximum(a, 1)
+    out = np.empty_like(pm)
+    out[:, :, :3] = np.minimum(rgb, 255)
+    out[:, :, 3:] = pm[:, :, 3:]
+    out[pm[:, :, 3] == 0] = 0
+    return out
+
+
+def over_background(pm: np.ndarray, bgr) -> np.ndarray:
+    """Premultiplied RGBA over an opaque background -> BGR uint8 (for video or the screen).
+
+    ``bgr`` is a colour ``(b, g, r)`` or a BGR image of the same size.
+    """
+    pm = np.asarray(pm)
+    h, w = pm.shape[:2]
+    bg = np.asarray(bgr)
+    if bg.ndim == 1:
+        if bg.shape[0] != 3:
+            raise ValueError(f"background colour must be (b, g, r), got {tuple(bg)}")
+        bg = np.broadcast_to(bg.astype(np.uint8), (h, w, 3))
+    elif bg.shape != (h, w, 3):
+        raise ValueError(f"background image is {bg.shape}; expected {(h, w, 3)}")
+    fg = np.ascontiguousarray(pm[:, :, 2::-1])
+    inv = np.ascontiguousarray(np.repeat(255 - pm[:, :, 3:4], 3, axis=2))
+    return cv2.add(fg, cv2.multiply(np.ascontiguousarray(bg, dtype=np.uint8), inv, scale=1.0 / 255.0))
