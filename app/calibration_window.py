@@ -1,0 +1,432 @@
+"""Calibration: freeze a frame, click the five points (or press Auto and adjust), look at the
+colour masks the tracker learned, accept.
+
+The five points are the CLICKS.json points of DESIGN.md: both pupils, both eyebrows, the
+mouth centre (``left_*`` = image-left). Accepting saves, per performer, ``calibration.json``
+(via ``Calibration.save``), ``clicks.json`` and the frozen frame as PNG into
+``<user data>/performers/<name>/``, where the main window looks next time.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QPointF, QRectF, Qt, Signal
+from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPainterPath, QPen
+from PySide6.QtWidgets import (
+    QDialog,
+    QGridLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QSizePolicy,
+    QVBoxLayout,
+    QWidget,
+)
+
+from app.settings import performer_dir
+from app.views import fit_rect, paint_placeholder
+from app.workers import _one_line, bgr_to_qimage
+
+POINTS = ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth")
+PROMPTS = {
+    "left_pupil": "Click the centre of the pupil on the image's LEFT",
+    "right_pupil": "Click the centre of the pupil on the image's RIGHT",
+    "left_brow": "Click the middle of the eyebrow on the image's LEFT",
+    "right_brow": "Click the middle of the eyebrow on the image's RIGHT",
+    "mouth": "Click the centre of the mouth",
+}
+SHORT = {"left_pupil": "L pupil", "right_pupil": "R pupil", "left_brow": "L brow", "right_brow": "R brow", "mouth": "mouth"}
+COLOURS = {
+    "left_pupil": QColor("#7aa2f7"),
+    "right_pupil": QColor("#7aa2f7"),
+    "left_brow": QColor("#ffd166"),
+    "right_brow": QColor("#ffd166"),
+    "mouth": QColor("#ff7eb6"),
+}
+
+
+class ClickView(QWidget):
+    """The frozen frame; click to place the next point, drag a placed point to move it."""
+
+    changed = Signal()
+
+    def __init__(self, frame_bgr: np.ndarray, parent=None):
+        super().__init__(parent)
+        self.frame = frame_bgr
+        self.image = bgr_to_qimage(frame_bgr)
+        self.points: dict[str, tuple[float, float]] = {}
+        self._drag: str | None = None
+        self.setMouseTracking(True)
+        self.setMinimumSize(480, 360)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+        self.setCursor(Qt.CursorShape.CrossCursor)
+
+    def next_point(self) -> str | None:
+        return next((k for k in POINTS if k not in self.points), None)
+
+    def _rect(self) -> QRectF:
+        return fit_rect(self.image.width(), self.image.height(), QRectF(self.rect()).adjusted(4, 4, -4, -4))
+
+    def to_view(self, x: float, y: float) -> QPointF:
+        r = self._rect()
+        s = r.width() / self.image.width()
+        return QPointF(r.x() + (x + 0.5) * s, r.y() + (y + 0.5) * s)
+
+    def to_frame(self, p: QPointF) -> tuple[float, float]:
+        r = self._rect()
+        s = r.width() / self.image.width()
+        x = (p.x() - r.x()) / s - 0.5
+        y = (p.y() - r.y()) / s - 0.5
+        return (float(np.clip(x, 0, self.image.width() - 1)), float(np.clip(y, 0, self.image.height() - 1)))
+
+    def _hit(self, pos: QPointF) -> str | None:
+        best, bd = None, 14.0
+        for k, (x, y) in self.points.items():
+            d = (self.to_view(x, y) - pos).manhattanLength()
+            if d < bd:
+                best, bd = k, d
+        return best
+
+    def set_point(self, key: str, xy: tuple[float, float]) -> None:
+        self.points[key] = (float(xy[0]), float(xy[1]))
+        self.changed.emit()
+        self.update()
+
+    def mousePressEvent(self, ev) -> None:
+        if ev.button() != Qt.MouseButton.LeftButton:
+            return
+        pos = ev.position()
+        hit = self._hit(pos)
+        if hit is not None:
+            self._drag = hit
+            return
+        nxt = self.next_point()
+        if nxt is not None and self._rect().contains(pos):
+            self.set_point(nxt, self.to_frame(pos))
+
+    def mouseMoveEvent(self, ev) -> None:
+        if self._drag is not None:
+            self.points[self._drag] = self.to_frame(ev.position())
+            self.update()
+        else:
+            self.setCursor(Qt.CursorShape.OpenHandCursor if self._hit(ev.position()) else Qt.CursorShape.CrossCursor)
+
+    def mouseReleaseEvent(self, ev) -> None:
+        if self._drag is not None:
+            self._drag = None
+            self.changed.emit()
+
+    def paintEvent(self, _ev) -> None:
+        p = QPainter(self)
+        p.setRenderHint(QPainter.RenderHint.Antialiasing)
+        p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform)
+        p.fillRect(self.rect(), QColor("#141518"))
+        r = self._rect()
+        path = QPainterPath()
+        path.addRoundedRect(r, 8, 8)
+        p.setClipPath(path)
+        p.drawImage(r, self.image)
+        p.setClipping(False)
+        f = QFont(p.font())
+        f.setPointSizeF(9)
+        f.setBold(True)
+        p.setFont(f)
+        if "left_pupil" in self.points and "right_pupil" in self.points:
+            p.setPen(QPen(QColor(122, 162, 247, 150), 1.2, Qt.PenStyle.DotLine))
+            p.drawLine(self.to_view(*self.points["left_pupil"]), self.to_view(*self.points["right_pupil"]))
+        for k, (x, y) in self.points.items():
+            c = self.to_view(x, y)
+            col = COLOURS[k]
+            p.setPen(QPen(QColor(0, 0, 0, 160), 4))
+            p.drawEllipse(c, 7, 7)
+            p.setPen(QPen(col, 2))
+            p.drawEllipse(c, 7, 7)
+            p.drawLine(QPointF(c.x() - 12, c.y()), QPointF(c.x() - 4, c.y()))
+            p.drawLine(QPointF(c.x() + 4, c.y()), QPointF(c.x() + 12, c.y()))
+            p.drawLine(QPointF(c.x(), c.y() - 12), QPointF(c.x(), c.y() - 4))
+            p.drawLine(QPointF(c.x(), c.y() + 4), QPointF(c.x(), c.y() + 12))
+            label = SHORT[k]
+            tw = p.fontMetrics().horizontalAdvance(label) + 10
+            lr = QRectF(c.x() + 10, c.y() - 24, tw, 18)
+            p.setPen(Qt.PenStyle.NoPen)
+            p.setBrush(QColor(20, 21, 24, 210))
+            p.drawRoundedRect(lr, 5, 5)
+            p.setBrush(Qt.BrushStyle.NoBrush)
+            p.setPen(col)
+            p.drawText(lr, Qt.AlignmentFlag.AlignCenter, label)
+
+
+class MaskView(QWidget):
+    """One learned colour mask over the dimmed frame, with a caption."""
+
+    def __init__(self, caption: str, parent=None):
+        super().__init__(parent)
+        self.caption = caption
+        self.image: QImage | None = None
+        self.note = "Place all five points to see what the tracker learned"
+        self.setMinimumSize(200, 150)
+
+    def set_image(self, img: QImage | None, note: str = "") -> None:
+        self.image = img
+        if note:
+            self.note = note
+        self.update()
+
+    def paintEvent(self, _ev) -> None:
+        p = QPainter(self)
+        p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform)
+        p.fillRect(self.rect(), QColor("#141518"))
+        area = QRectF(self.rect()).adjusted(4, 22, -4, -4)
+        p.setPen(QColor("#9aa0aa"))
+        p.drawText(QRectF(6, 2, self.width() - 12, 18), Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, self.caption)
+        if self.image is None:
+            paint_placeholder(p, area, self.note)
+            return
+        p.drawImage(fit_rect(self.image.width(), self.image.height(), area), self.image)
+
+
+def mask_picture(frame_bgr: np.ndarray, mask: np.ndarray, colour: QColor) -> QImage:
+    """The frame dimmed to grey with the mask's pixels painted in ``colour``."""
+    grey = frame_bgr.mean(axis=2, keepdims=True) * 0.45
+    out = np.repeat(grey, 3, axis=2)
+    m = np.asarray(mask, dtype=np.float32)
+    if m.max() > 1.0:
+        m = m / 255.0
+    m = m[..., None]
+    col = np.array([colour.blue(), colour.green(), colour.red()], np.float32)
+    out = out * (1 - m) + col * m
+    return bgr_to_qimage(np.clip(out, 0, 255).astype(np.uint8))
+
+
+def learned_masks(cal, frame_bgr: np.ndarray) -> dict[str, np.ndarray]:
+    """Masks of every colour classifier the calibration carries, applied to the whole frame.
+
+    Found by duck typing (any attribute with a ``mask(bgr)`` method, or a ``classifiers`` dict),
+    so a tracker that adds a classifier shows up here without changes."""
+    found: dict[str, object] = {}
+    cls = getattr(cal, "classifiers", None)
+    if isinstance(cls, dict):
+        found.update(cls)
+    for name in dir(cal):
+        if name.startswith("_") or name in found:
+            continue
+        try:
+            v = getattr(cal, name)
+        except Exception:
+            continue
+        if callable(getattr(v, "mask", None)) and not isinstance(v, type):
+            found[name] = v
+    out = {}
+    for name, c in found.items():
+        try:
+            m = np.asarray(c.mask(frame_bgr))
+        except Exception:
+            continue
+        if m.shape[:2] == frame_bgr.shape[:2]:
+            out[name.replace("_classifier", "").replace("_model", "").replace("_", " ")] = m
+    return out
+
+
+class CalibrationWindow(QDialog):
+    """Five clicks (or Auto) on a frozen frame → ``tracker.calibration.calibrate`` → saved."""
+
+    calibrated = Signal(object)
+
+    def __init__(self, frame_bgr: np.ndarray, performer: str = "default", parent=None, frame_index: int = 0):
+        super().__init__(parent)
+        self.setWindowTitle("Calibrate the tracker")
+        self.frame = np.ascontiguousarray(frame_bgr)
+        self.frame_index = int(frame_index)
+        self.calibration = None
+        self.error = ""
+        self.saved_to: Path | None = None
+
+        self.view = ClickView(self.frame)
+        self.view.changed.connect(self._on_changed)
+        self.prompt = QLabel("")
+        self.prompt.setObjectName("prompt")
+        self.prompt.setWordWrap(True)
+
+        self.auto_btn = QPushButton("Auto")
+        self.auto_btn.setToolTip("Find the face, eyes and mouth automatically; then drag any point to adjust")
+        self.auto_btn.clicked.connect(self.auto)
+        self.undo_btn = QPushButton("Undo point")
+        self.undo_btn.clicked.connect(self.undo)
+        self.reset_btn = QPushButton("Start over")
+        self.reset_btn.clicked.connect(self.reset)
+        self.name_edit = QLineEdit(performer)
+        self.name_edit.setPlaceholderText("performer's name")
+        self.name_edit.setMaximumWidth(200)
+        self.accept_btn = QPushButton("Accept and save")
+        self.accept_btn.setObjectName("primary")
+        self.accept_btn.clicked.connect(self.accept_calibration)
+        cancel = QPushButton("Cancel")
+        cancel.clicked.connect(self.reject)
+
+        self.masks_box = QWidget()
+        self.mask_grid = QGridLayout(self.masks_box)
+        self.mask_grid.setContentsMargins(0, 0, 0, 0)
+        self.mask_grid.setSpacing(8)
+        self.mask_views: list[MaskView] = []
+        self._set_mask_views(["pupil", "lip"])
+        self.info = QLabel("")
+        self.info.setObjectName("hint")
+        self.info.setWordWrap(True)
+
+        left = QVBoxLayout()
+        left.setSpacing(10)
+        left.addWidget(self.prompt)
+        left.addWidget(self.view, 1)
+        row = QHBoxLayout()
+        for b in (self.auto_btn, self.undo_btn, self.reset_btn):
+            row.addWidget(b)
+        row.addStretch(1)
+        left.addLayout(row)
+
+        right = QVBoxLayout()
+        right.setSpacing(10)
+        t = QLabel("What the tracker learned")
+        t.setObjectName("title")
+        right.addWidget(t)
+        right.addWidget(self.masks_box, 1)
+        right.addWidget(self.info)
+        nr = QHBoxLayout()
+        nr.addWidget(QLabel("Performer"))
+        nr.addWidget(self.name_edit, 1)
+        right.addLayout(nr)
+        br = QHBoxLayout()
+        br.addStretch(1)
+        br.addWidget(cancel)
+        br.addWidget(self.accept_btn)
+        right.addLayout(br)
+
+        h = QHBoxLayout(self)
+        h.setContentsMargins(16, 16, 16, 16)
+        h.setSpacing(16)
+        h.addLayout(left, 3)
+        rw = QWidget()
+        rw.setLayout(right)
+        rw.setMinimumWidth(340)
+        h.addWidget(rw, 2)
+        self.resize(1180, 640)
+        self._on_changed()
+
+    # ---------------------------------------------------------------------------- points
+    def set_points(self, points: dict[str, tuple[float, float]]) -> None:
+        """Place points programmatically (tests, Auto)."""
+        self.view.points = {k: (float(v[0]), float(v[1])) for k, v in points.items() if k in POINTS}
+        self.view.update()
+        self._on_changed()
+
+    def click(self, x: float, y: float) -> None:
+        """Place the next point at frame pixel (x, y), as a mouse click would."""
+        nxt = self.view.next_point()
+        if nxt is not None:
+            self.view.set_point(nxt, (x, y))
+
+    def undo(self) -> None:
+        placed = [k for k in POINTS if k in self.view.points]
+        if placed:
+            del self.view.points[placed[-1]]
+            self.view.update()
+            self._on_changed()
+
+    def reset(self) -> None:
+        self.set_points({})
+
+    def auto(self) -> bool:
+        """Find the five points with ``tracker.auto_init.auto_clicks``."""
+        try:
+            from tracker.auto_init import auto_clicks
+        except ImportError:
+            self.info.setText("Automatic start is not available in this build: please click the points.")
+            return False
+        try:
+            c = auto_clicks(self.frame)
+        except Exception as e:
+            self.info.setText(f"Auto found no face: {_one_line(e)}. Please click the points.")
+            return False
+        self.set_points(c.points())
+        self.info.setText("Found automatically — drag any point that is off, then accept.")
+        return True
+
+    def clicks(self):
+        from tracker.clicks import Clicks
+
+        d = {"frame": self.frame_index, **{k: list(v) for k, v in self.view.points.items()}}
+        return Clicks.from_dict(d, where="calibration clicks")
+
+    # ------------------------------------------------------------------------ calibrating
+    def _on_changed(self) -> None:
+        nxt = self.view.next_point()
+        n = len(self.view.points)
+        if nxt is not None:
+            self.prompt.setText(f"{n + 1} of 5 — {PROMPTS[nxt]}")
+            self.calibration = None
+            self.accept_btn.setEnabled(False)
+            for mv in self.mask_views:
+                mv.set_image(None)
+            return
+        self.prompt.setText("All five points placed — drag to adjust, check the masks, then accept")
+        self._calibrate()
+
+    def _calibrate(self) -> None:
+        try:
+            from tracker.calibration import calibrate
+
+            self.calibration = calibrate(self.frame, self.clicks())
+            self.error = ""
+        except Exception as e:
+            self.calibration = None
+            self.error = _one_line(e)
+            self.info.setText(f"Calibration failed: {self.error}")
+            self.accept_btn.setEnabled(False)
+            return
+        self.accept_btn.setEnabled(True)
+        masks = learned_masks(self.calibration, self.frame)
+        names = list(masks) or ["pupil", "lip"]
+        self._set_mask_views(names)
+        palette = [QColor("#7aa2f7"), QColor("#ff7eb6"), QColor("#9ece6a"), QColor("#ffd166")]
+        for i, (name, mv) in enumerate(zip(names, self.mask_views)):
+            if name in masks:
+                mv.set_image(mask_picture(self.frame, masks[name], palette[i % len(palette)]))
+            else:
+                mv.set_image(None, "this tracker exposes no colour classifiers")
+        ipd = getattr(self.calibration, "ipd", None)
+        self.info.setText(
+            (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
+            + "Coloured pixels are what each classifier accepts: the pupils and lips should light up, little else."
+        )
+
+    def _set_mask_views(self, names: list[str]) -> None:
+        if [m.caption for m in self.mask_views] == [f"{n} colour" for n in names]:
+            return
+        for mv in self.mask_views:
+            mv.setParent(None)
+        self.mask_views = [MaskView(f"{n} colour") for n in names]
+        for i, mv in enumerate(self.mask_views):
+            self.mask_grid.addWidget(mv, i // 1, 0)
+
+    def accept_calibration(self) -> Path | None:
+        """Save the calibration for the performer and hand it to the main window."""
+        if self.calibration is None:
+            return None
+        name = self.name_edit.text().strip() or "default"
+        folder = performer_dir(name)
+        try:
+            self.calibration.save(folder / "calibration.json")
+            self.clicks().save(folder / "clicks.json")
+            bgr_to_qimage(self.frame).save(str(folder / "calibration-frame.png"), "PNG")
+        except Exception as e:
+            self.info.setText(f"Could not save: {_one_line(e)}")
+            return None
+        self.saved_to = folder / "calibration.json"
+        parent = self.parent()
+        if parent is not None and hasattr(parent, "settings"):
+            parent.settings.set("performer/name", name)
+        self.calibrated.emit(self.calibration)
+        self.accept()
+        return self.saved_to

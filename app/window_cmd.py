@@ -1,0 +1,92 @@
+"""``python -m app`` / ``python -m app window``: open the performance window."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
+    src = parser.add_mutually_exclusive_group()
+    src.add_argument("--camera", type=int, metavar="N", help="play camera N")
+    src.add_argument("--video", metavar="FILE", help="play a video file of a face")
+    src.add_argument("--performance", action="store_true", help="play the bundled synthetic performance")
+    parser.add_argument("--art", metavar="NAME|DIR", help="the character to start with (name or folder)")
+    parser.add_argument("--fps", type=int, choices=(10, 15, 30), help="output rate")
+    parser.add_argument("--performer", metavar="NAME", help="whose calibration and training to use")
+
+
+def source_from_args(args):
+    from app.workers import SourceSpec
+
+    if getattr(args, "camera", None) is not None:
+        return SourceSpec("camera", camera=args.camera)
+    if getattr(args, "video", None):
+        return SourceSpec("video", video=args.video)
+    if getattr(args, "performance", False):
+        return SourceSpec("performance")
+    return None
+
+
+def resolve_art(name: str | None) -> str | None:
+    """An art-set folder from a name or path (raises ArtSetError with a one-line message)."""
+    if not name:
+        return None
+    from art_sets.library import find_artset
+
+    return str(find_artset(name).resolve())
+
+
+def make_app(argv: list[str] | None = None):
+    """The QApplication with Inkface's name and look (created once)."""
+    import app.qt_env  # noqa: F401  (sets QT_QPA_PLATFORM before Qt loads)
+    from PySide6.QtWidgets import QApplication
+
+    from app.views import apply_theme
+
+    qapp = QApplication.instance()
+    if qapp is None:
+        qapp = QApplication(argv or [sys.argv[0]])
+        qapp.setOrganizationName("Inkface")
+        qapp.setApplicationName("Inkface")
+        qapp.setApplicationDisplayName("Inkface")
+        apply_theme(qapp)
+    return qapp
+
+
+def open_window(source=None, art: str | None = None, fps: int | None = None, performer: str | None = None):
+    from app.main_window import MainWindow
+    from app.settings import Settings
+
+    settings = Settings()
+    if performer:
+        settings.set("performer/name", performer)
+    if fps:
+        settings.set("output/fps", fps)
+    win = MainWindow(settings=settings, source=source, art=art)
+    win.show()
+    return win
+
+
+def run(args) -> int:
+    import os
+
+    try:
+        art = resolve_art(getattr(args, "art", None))
+    except Exception as e:
+        print(f"inkface: {e}", file=sys.stderr)
+        return 2
+    if getattr(args, "video", None) and not os.path.isfile(args.video):
+        print(f"inkface: {args.video}: no such video file", file=sys.stderr)
+        return 2
+    qapp = make_app()
+    from app.qt_env import has_display
+
+    if not has_display():
+        print("inkface: no display to open a window on (set DISPLAY, or try `python -m app demo` "
+              "which renders to out/demo.mp4 without one)", file=sys.stderr)
+        return 2
+    win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None))
+    rc = qapp.exec()
+    del win
+    return int(rc)
