@@ -1,0 +1,229 @@
+"""Side panels of the editor: the character's image lists, the part strip, lines and problems."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QPointF, QRectF, QSize, Qt, Signal
+from PySide6.QtGui import QColor, QIcon, QImage, QPainter, QPen, QPixmap
+from PySide6.QtWidgets import QListWidget, QListWidgetItem, QSizePolicy, QWidget
+
+from art_sets import editing as ed
+
+from .document import EditorDocument
+from .imaging import checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
+
+
+def dropped_paths(mime) -> list[Path]:
+    return [Path(u.toLocalFile()) for u in mime.urls() if u.isLocalFile()] if mime.hasUrls() else []
+
+
+def image_paths(paths) -> list[Path]:
+    """Image files among ``paths`` (folders are searched one level deep), sorted by name."""
+    out = []
+    for p in paths:
+        p = Path(p)
+        if p.is_dir():
+            out += sorted(q for q in p.iterdir() if q.suffix.lower() in ed.IMAGE_SUFFIXES)
+        elif p.suffix.lower() in ed.IMAGE_SUFFIXES:
+            out.append(p)
+    return out
+
+
+def thumb_icon(rgba: np.ndarray, size: int = 56) -> QIcon:
+    img = rgba_to_qimage(rgba).scaled(size, size, Qt.KeepAspectRatio, Qt.SmoothTransformation)
+    pm = QPixmap(size, size)
+    pm.fill(Qt.transparent)
+    p = QPainter(pm)
+    p.fillRect(pm.rect(), checker_brush(4))
+    p.drawImage((size - img.width()) // 2, (size - img.height()) // 2, img)
+    p.end()
+    return QIcon(pm)
+
+
+class DropList(QListWidget):
+    """A list of thumbnails that accepts image files dropped on it."""
+
+    filesDropped = Signal(list)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setAcceptDrops(True)
+        self.setIconSize(QSize(48, 48))
+        self.setDragDropMode(QListWidget.DropOnly)
+        self.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Expanding)
+
+    def dragEnterEvent(self, ev):
+        if image_paths(dropped_paths(ev.mimeData())):
+            ev.acceptProposedAction()
+        else:
+            ev.ignore()
+
+    def dragMoveEvent(self, ev):
+        self.dragEnterEvent(ev)
+
+    def dropEvent(self, ev):
+        paths = image_paths(dropped_paths(ev.mimeData()))
+        if paths:
+            ev.acceptProposedAction()
+            self.filesDropped.emit(paths)
+
+
+class PartStrip(QWidget):
+    """Every drawing of the selected part side by side with its lines; the selected line is
+    highlighted in all of them and drawings still missing it get a red mark. Click to pick one."""
+
+    drawingClicked = Signal(int)
+
+    def __init__(self, doc: EditorDocument, parent=None):
+        super().__init__(parent)
+        self.doc = doc
+        self.setMinimumHeight(96)
+        self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Preferred)
+        self._cache: dict[int, QImage] = {}
+        self._checker = checker_brush(4)
+        doc.changed.connect(self.update)
+        doc.selectionChanged.connect(self.update)
+
+    def sizeHint(self):
+        return QSize(600, 120)
+
+    def _cells(self):
+        art = self.doc.artset
+        if art is None:
+            return []
+        part = art.parts[self.doc.part]
+        n = len(part.drawings)
+        if n == 0:
+            return []
+        w, h = part.size
+        cw = min((self.width() - 8) / n, 260)
+        s = min((cw - 8) / w, (self.height() - 24) / h)
+        out = []
+        for i in range(n):
+            x = 4 + i * cw + (cw - w * s) / 2
+            out.append((i, QRectF(x, 18, w * s, h * s), s))
+        return out
+
+    def _qimage(self, arr):
+        key = id(arr)
+        img = self._cache.get(key)
+        if img is None or img.width() != arr.shape[1]:
+            if len(self._cache) > 64:
+                self._cache.clear()
+            img = self._cache[key] = rgba_to_qimage(arr)
+        return img
+
+    def paintEvent(self, ev):
+        p = QPainter(self)
+        p.setRenderHint(QPainter.Antialiasing)
+        p.setRenderHint(QPainter.SmoothPixmapTransform)
+        p.fillRect(self.rect(), QColor(48, 50, 55))
+        art = self.doc.artset
+        if art is None:
+            return
+        part = art.parts[self.doc.part]
+        miss = ed.missing_lines(art, self.doc.part)
+        for i, r, s in self._cells():
+            d = part.drawings[i]
+            p.fillRect(r, self._checker)
+            p.drawImage(r, self._qimage(d.image))
+            sel = i == self.doc.drawing
+            p.setPen(QPen(QColor(255, 200, 40) if sel else QColor(20, 20, 20), 3 if sel else 1))
+            p.setBrush(Qt.NoBrush)
+            p.drawRect(r.adjusted(-1, -1, 1, 1))
+            un = ed.unplaced(art, self.doc.part, i)
+            for k, ln in enumerate(np.asarray(d.lines, np.float64).reshape(-1, 4)):
+                a = QPointF(r.left() + ln[0] * s, r.top() + ln[1] * s)
+                b = QPointF(r.left() + ln[2] * s, r.top() + ln[3] * s)
+                if self.doc.line >= 0 and k != self.doc.line:
+                    p.setOpacity(0.35)
+                draw_control_line(p, a, b, k, selected=(k == self.doc.line), unplaced=(k in un), width=1.2,
+                                  label=False, handles=False)
+                p.setOpacity(1.0)
+            missing_here = [k for k, names in miss.items() if d.name in names]
+            cap = d.name
+            if self.doc.line >= 0 and d.name in miss.get(self.doc.line, []):
+                cap += f"  — line {self.doc.line} to place"
+            elif missing_here:
+                cap += f"  — {len(missing_here)} to place"
+            p.setPen(QColor(255, 120, 100) if missing_here else QColor(225, 225, 225))
+            p.drawText(QRectF(r.left() - 20, 1, r.width() + 40, 16), Qt.AlignCenter, cap)
+
+    def mousePressEvent(self, ev):
+        for i, r, _ in self._cells():
+            if r.adjusted(-4, -18, 4, 4).contains(ev.position()):
+                self.drawingClicked.emit(i)
+                return
+
+
+class LinesList(QListWidget):
+    """One row per control line of the part: its colour and number, and where it is missing."""
+
+    def __init__(self, doc: EditorDocument, parent=None):
+        super().__init__(parent)
+        self.doc = doc
+        self._filling = False
+        doc.changed.connect(self.refill)
+        doc.selectionChanged.connect(self.refill)
+        self.currentRowChanged.connect(self._picked)
+
+    def refill(self):
+        self._filling = True
+        try:
+            self.clear()
+            art = self.doc.artset
+            if art is None:
+                return
+            miss = ed.missing_lines(art, self.doc.part)
+            for i, names in miss.items():
+                pm = QPixmap(14, 14)
+                pm.fill(qcolor_for_line(i))
+                txt = f"line {i}: " + (f"to place in {', '.join(names)}" if names else "placed in every drawing")
+                it = QListWidgetItem(QIcon(pm), txt)
+                if names:
+                    it.setForeground(QColor(190, 70, 40))
+                self.addItem(it)
+            if 0 <= self.doc.line < self.count():
+                self.setCurrentRow(self.doc.line)
+        finally:
+            self._filling = False
+
+    def _picked(self, row):
+        if not self._filling and row >= 0:
+            self.doc.select(line=row)
+
+
+class ProblemsList(QListWidget):
+    """The validator's problems and the editor's to-dos; clicking one selects what it is about."""
+
+    def __init__(self, doc: EditorDocument, parent=None):
+        super().__init__(parent)
+        self.doc = doc
+        doc.problemsChanged.connect(self.refill)
+        self.itemClicked.connect(self._clicked)
+        self.itemActivated.connect(self._clicked)
+
+    def refill(self):
+        self.clear()
+        if not self.doc.issues:
+            it = QListWidgetItem("✓ no problems: the validator accepts this character")
+            it.setForeground(QColor(40, 140, 60))
+            self.addItem(it)
+            return
+        for k, issue in enumerate(self.doc.issues):
+            mark = "✗" if issue.severity == "error" else "•"
+            it = QListWidgetItem(f"{mark} {issue.text()}")
+            it.setData(Qt.UserRole, k)
+            it.setForeground(QColor(200, 50, 40) if issue.severity == "error" else QColor(150, 100, 20))
+            self.addItem(it)
+
+    def _clicked(self, item):
+        k = item.data(Qt.UserRole)
+        if k is None or k >= len(self.doc.issues):
+            return
+        issue = self.doc.issues[k]
+        if issue.part:
+            self.doc.select(part=issue.part, drawing=issue.drawing if issue.drawing is not None else None,
+                            line=issue.line if issue.line is not None else None)

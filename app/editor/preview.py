@@ -1,0 +1,432 @@
+"""Preview panel: see a part morph while you edit its lines.
+
+Three modes, one per tab: a slider between any two drawings of the part (with the plain
+cross-dissolve beside it, so ghosting — doubled strokes where lines are missing or wrong — is
+visible at once), a triangle in which you drag a point to blend three drawings, and live mode in
+which the tracker drives the whole character (when the tracker and training modules are present).
+
+Morphs use ``morph.polymorph.PartMorpher`` built only on the drawings shown (cheap to rebuild
+after every line edit); without it the exact ``morph.beier_neely.polymorph_exact``; without
+either, a cross-dissolve with a visible note.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QTimer, Signal
+from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
+from PySide6.QtWidgets import (
+    QCheckBox, QComboBox, QGridLayout, QHBoxLayout, QLabel, QPushButton, QSizePolicy, QSlider,
+    QTabWidget, QVBoxLayout, QWidget,
+)
+
+from art_sets import editing as ed
+
+from .document import EditorDocument
+from .imaging import checker_brush, rgba_to_qimage
+
+
+class MorphEngine:
+    """Renders blends of one part's drawings; picks the best morph code that is installed."""
+
+    def __init__(self):
+        self.note = ""
+        self._cache_key = None
+        self._morpher = None
+        try:
+            from morph.polymorph import PartMorpher
+
+            self._PartMorpher = PartMorpher
+        except Exception:
+            self._PartMorpher = None
+        try:
+            from morph.beier_neely import polymorph_exact
+
+            self._exact = polymorph_exact
+        except Exception:
+            self._exact = None
+        if self._PartMorpher is None and self._exact is None:
+            self.note = "morph engine not available: showing a cross-dissolve"
+
+    def render(self, part, indices, weights) -> tuple[np.ndarray, bool]:
+        """Blend of ``part.drawings[indices]`` with ``weights``: (RGBA, premultiplied?)."""
+        idx = [int(i) for i in indices]
+        uniq = sorted(set(idx))
+        images = [part.drawings[i].image for i in uniq]
+        lines = [np.asarray(part.drawings[i].lines, np.float64).reshape(-1, 4) for i in uniq]
+        wmap = {i: 0.0 for i in uniq}
+        for i, w in zip(idx, weights):
+            wmap[i] += float(w)
+        w = [wmap[i] for i in uniq]
+        if len({len(l) for l in lines}) != 1:
+            self.note = "line counts differ: showing a cross-dissolve"
+            return ed.cross_dissolve(images, w), False
+        if self._PartMorpher is not None:
+            key = tuple((id(im), id(l)) for im, l in zip(images, (part.drawings[i].lines for i in uniq)))
+            try:
+                if key != self._cache_key:
+                    self._morpher = self._PartMorpher(images, lines, alpha_steps=11)
+                    self._cache_key = key
+                self.note = ""
+                return self._morpher.render(list(range(len(uniq))), w), True
+            except Exception as e:  # a bug in morph must not close the editor
+                self.note = f"morph failed ({_one_line(e)}): showing a cross-dissolve"
+                self._cache_key = None
+        elif self._exact is not None:
+            try:
+                self.note = "fast morph not available: exact Beier–Neely (slower)"
+                return self._exact(images, lines, w), True
+            except Exception as e:
+                self.note = f"morph failed ({_one_line(e)}): showing a cross-dissolve"
+        return ed.cross_dissolve(images, w), False
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+class ImageLabel(QWidget):
+    """Shows an RGBA image fitted and centred over a checkerboard, with a caption."""
+
+    def __init__(self, caption: str = "", parent=None):
+        super().__init__(parent)
+        self.caption = caption
+        self._img = None
+        self._checker = checker_brush(6)
+        self.setMinimumSize(120, 70)
+        self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
+
+    def set_image(self, rgba: np.ndarray | None, premultiplied: bool = False) -> None:
+        self._img = None if rgba is None else rgba_to_qimage(rgba, premultiplied)
+        self.update()
+
+    def paintEvent(self, ev):
+        p = QPainter(self)
+        p.setRenderHint(QPainter.SmoothPixmapTransform)
+        p.fillRect(self.rect(), QColor(58, 60, 66))
+        top = 16 if self.caption else 0
+        if self._img is not None:
+            iw, ih = self._img.width(), self._img.height()
+            s = min((self.width() - 8) / iw, (self.height() - top - 8) / ih)
+            w, h = iw * s, ih * s
+            r = QRectF((self.width() - w) / 2, top + (self.height() - top - h) / 2, w, h)
+            p.fillRect(r, self._checker)
+            p.drawImage(r, self._img)
+        if self.caption:
+            p.setPen(QColor(225, 225, 225))
+            p.drawText(QRectF(4, 0, self.width() - 8, 16), Qt.AlignLeft | Qt.AlignVCenter, self.caption)
+
+
+class TriangleWidget(QWidget):
+    """An equilateral triangle with a point you drag; emits barycentric weights (corner A, B, C)."""
+
+    weightsChanged = Signal(object)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setMinimumSize(150, 130)
+        self.point = None  # widget coordinates; None = centroid
+        self.labels = ["A", "B", "C"]
+
+    def corners(self) -> list[QPointF]:
+        m = 22
+        w, h = self.width() - 2 * m, self.height() - 2 * m
+        side = min(w, h * 2 / np.sqrt(3))
+        th = side * np.sqrt(3) / 2
+        cx, top = self.width() / 2, m + (h - th) / 2
+        return [QPointF(cx, top), QPointF(cx - side / 2, top + th), QPointF(cx + side / 2, top + th)]
+
+    def weights(self) -> np.ndarray:
+        c = self.corners()
+        if self.point is None:
+            return np.array([1 / 3, 1 / 3, 1 / 3])
+        return ed.triangle_weights((self.point.x(), self.point.y()), [(q.x(), q.y()) for q in c])
+
+    def set_weights(self, w) -> None:
+        c = self.corners()
+        w = np.asarray(w, np.float64) / max(float(np.sum(w)), 1e-9)
+        self.point = QPointF(sum(wi * q.x() for wi, q in zip(w, c)), sum(wi * q.y() for wi, q in zip(w, c)))
+        self.update()
+        self.weightsChanged.emit(self.weights())
+
+    def paintEvent(self, ev):
+        p = QPainter(self)
+        p.setRenderHint(QPainter.Antialiasing)
+        c = self.corners()
+        p.setPen(QPen(QColor(120, 120, 130), 1.5))
+        p.setBrush(QColor(245, 243, 236))
+        p.drawPolygon(QPolygonF(c))
+        w = self.weights()
+        pt = QPointF(sum(wi * q.x() for wi, q in zip(w, c)), sum(wi * q.y() for wi, q in zip(w, c)))
+        cols = [QColor(220, 80, 60), QColor(60, 140, 220), QColor(60, 170, 90)]
+        for q, col, lab, wi in zip(c, cols, self.labels, w):
+            p.setPen(Qt.NoPen)
+            p.setBrush(col)
+            p.drawEllipse(q, 5, 5)
+            p.setPen(QColor(230, 230, 230))
+            off = QPointF(0, -16) if q.y() < pt.y() else QPointF(0, 16)
+            p.drawText(QRectF(q.x() - 60 + off.x(), q.y() - 8 + off.y(), 120, 16), Qt.AlignCenter, f"{lab} {wi:.2f}")
+        p.setPen(QPen(QColor(20, 20, 20), 2))
+        p.setBrush(QColor(255, 210, 60))
+        p.drawEllipse(pt, 7, 7)
+
+    def mousePressEvent(self, ev):
+        self._move(ev.position())
+
+    def mouseMoveEvent(self, ev):
+        if ev.buttons() & Qt.LeftButton:
+            self._move(ev.position())
+
+    def _move(self, pos):
+        c = self.corners()
+        w = ed.triangle_weights((pos.x(), pos.y()), [(q.x(), q.y()) for q in c])
+        self.point = QPointF(sum(wi * q.x() for wi, q in zip(w, c)), sum(wi * q.y() for wi, q in zip(w, c)))
+        self.update()
+        self.weightsChanged.emit(w)
+
+    def sizeHint(self):
+        return QSize(220, 180)
+
+
+class PreviewPanel(QWidget):
+    """Two-drawing slider, three-drawing triangle and live mode for the selected part."""
+
+    def __init__(self, doc: EditorDocument, parent=None):
+        super().__init__(parent)
+        self.doc = doc
+        self.engine = MorphEngine()
+        self.live = None
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(4, 4, 4, 4)
+        row = QHBoxLayout()
+        self.morph_view = ImageLabel("morph")
+        self.dissolve_view = ImageLabel("cross-dissolve (for comparison)")
+        row.addWidget(self.morph_view, 3)
+        lay.addLayout(row, 3)
+        lay.addWidget(self.dissolve_view, 2)
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet("color: #b35c00;")
+        lay.addWidget(self.note)
+
+        self.tabs = QTabWidget()
+        lay.addWidget(self.tabs, 2)
+        # two-way
+        two = QWidget()
+        g = QGridLayout(two)
+        self.combo_a, self.combo_b = QComboBox(), QComboBox()
+        self.slider = QSlider(Qt.Horizontal)
+        self.slider.setRange(0, 100)
+        self.slider.setValue(50)
+        self.slider_label = QLabel("50 %")
+        g.addWidget(QLabel("from"), 0, 0)
+        g.addWidget(self.combo_a, 0, 1)
+        g.addWidget(QLabel("to"), 1, 0)
+        g.addWidget(self.combo_b, 1, 1)
+        g.addWidget(self.slider, 2, 0, 1, 2)
+        g.addWidget(self.slider_label, 3, 0, 1, 2)
+        g.setRowStretch(4, 1)
+        self.tabs.addTab(two, "Two drawings")
+        # three-way
+        three = QWidget()
+        v = QVBoxLayout(three)
+        combos = QHBoxLayout()
+        self.tri_combos = [QComboBox() for _ in range(3)]
+        for cb in self.tri_combos:
+            combos.addWidget(cb)
+        v.addLayout(combos)
+        self.triangle = TriangleWidget()
+        v.addWidget(self.triangle, 1)
+        self.tabs.addTab(three, "Three drawings")
+        # live
+        livew = QWidget()
+        lv = QVBoxLayout(livew)
+        self.live_button = QPushButton("Start live preview")
+        self.live_button.setCheckable(True)
+        self.live_status = QLabel("The tracker drives the whole character (camera, or the synthetic performer when there is no camera).")
+        self.live_status.setWordWrap(True)
+        lv.addWidget(self.live_button)
+        lv.addWidget(self.live_status)
+        lv.addStretch(1)
+        self.tabs.addTab(livew, "Live")
+
+        self._timer = QTimer(self)
+        self._timer.setSingleShot(True)
+        self._timer.setInterval(40)
+        self._timer.timeout.connect(self.refresh)
+        self._filling = False
+        for cb in [self.combo_a, self.combo_b] + self.tri_combos:
+            cb.currentIndexChanged.connect(self._schedule)
+        self.slider.valueChanged.connect(self._schedule)
+        self.triangle.weightsChanged.connect(self._schedule)
+        self.tabs.currentChanged.connect(self._on_tab)
+        self.live_button.toggled.connect(self._toggle_live)
+        doc.changed.connect(self._fill_combos)
+        doc.selectionChanged.connect(self._fill_combos)
+        self._fill_combos()
+
+    def sizeHint(self):
+        return QSize(300, 600)
+
+    def _schedule(self, *_):
+        if not self._filling:
+            self._timer.start()
+
+    def _fill_combos(self):
+        art = self.doc.artset
+        names = art.parts[self.doc.part].names() if art else []
+        self._filling = True
+        try:
+            defaults = [0, 1, 2]
+            for k, cb in enumerate([self.combo_a, self.combo_b] + self.tri_combos):
+                cur = cb.currentText()
+                cb.clear()
+                cb.addItems(names)
+                if cur in names:
+                    cb.setCurrentIndex(names.index(cur))
+                elif names:
+                    d = [0, 1][k] if k < 2 else defaults[k - 2]
+                    cb.setCurrentIndex(min(d, len(names) - 1))
+            self.triangle.labels = [cb.currentText() or "?" for cb in self.tri_combos]
+        finally:
+            self._filling = False
+        self._timer.start()
+
+    def _on_tab(self, i):
+        if self.tabs.widget(i) is not None and self.tabs.tabText(i) != "Live" and self.live_button.isChecked():
+            self.live_button.setChecked(False)
+        self._schedule()
+
+    def current_blend(self) -> tuple[list[int], list[float]] | None:
+        """The drawings and weights the visible tab asks for (None in live mode or without drawings)."""
+        art = self.doc.artset
+        if art is None or not art.parts[self.doc.part].drawings:
+            return None
+        tab = self.tabs.tabText(self.tabs.currentIndex())
+        if tab.startswith("Two"):
+            t = self.slider.value() / 100.0
+            return [max(self.combo_a.currentIndex(), 0), max(self.combo_b.currentIndex(), 0)], [1 - t, t]
+        if tab.startswith("Three"):
+            self.triangle.labels = [cb.currentText() or "?" for cb in self.tri_combos]
+            return [max(cb.currentIndex(), 0) for cb in self.tri_combos], list(self.triangle.weights())
+        return None
+
+    def refresh(self):
+        blend = self.current_blend()
+        self.slider_label.setText(f"{self.slider.value()} % of the way")
+        if blend is None:
+            if self.live is None:
+                self.morph_view.set_image(None)
+                self.dissolve_view.set_image(None)
+            return
+        part = self.doc.artset.parts[self.doc.part]
+        idx, w = blend
+        img, pm = self.engine.render(part, idx, w)
+        self.morph_view.caption = "morph"
+        self.morph_view.set_image(img, pm)
+        self.dissolve_view.set_image(ed.cross_dissolve([part.drawings[i].image for i in idx], w))
+        self.note.setText(self.engine.note)
+        self.note.setVisible(bool(self.engine.note))
+
+    # ---------------------------------------------------------------- live mode
+    def _toggle_live(self, on: bool):
+        if not on:
+            if self.live is not None:
+                self.live.stop()
+                self.live = None
+            self.live_button.setText("Start live preview")
+            return
+        try:
+            self.live = LivePreview(self.doc, self._show_live)
+        except Exception as e:
+            self.live = None
+            self.live_status.setText(f"Live preview is not available: {_one_line(e)}")
+            self.live_button.setChecked(False)
+            return
+        self.live_button.setText("Stop live preview")
+        self.live_status.setText(self.live.describe())
+
+    def _show_live(self, rgba_pm: np.ndarray, note: str):
+        self.morph_view.caption = "live"
+        self.morph_view.set_image(rgba_pm, True)
+        self.live_status.setText(note)
+
+    def stop(self):
+        if self.live is not None:
+            self.live.stop()
+            self.live = None
+
+
+class LivePreview:
+    """Feeds frames from a camera (or the synthetic performer) through a ``training.puppet.Puppet``
+    built on the art set being edited, at about 15 fps on the GUI thread."""
+
+    def __init__(self, doc: EditorDocument, show):
+        from training.puppet import Puppet  # ImportError -> "not available"
+
+        self.doc, self.show = doc, show
+        self.source, self.what = self._open_source()
+        self.frames = iter(self.source)
+        self._Puppet = Puppet
+        self._art_id = None
+        self.puppet = None
+        self.timer = QTimer()
+        self.timer.setInterval(66)
+        self.timer.timeout.connect(self.tick)
+        self.timer.start()
+
+    def _open_source(self):
+        from tracker.sources import CameraSource, SyntheticSource
+
+        try:
+            src = CameraSource(0)
+            return src, "camera 0"
+        except Exception:
+            from tracker.synthetic import Performance
+
+            return SyntheticSource(Performance(seconds=20)), "the synthetic performer (no camera found)"
+
+    def describe(self) -> str:
+        return f"live from {self.what}"
+
+    def _ensure_puppet(self):
+        art = self.doc.artset
+        key = id(art)
+        if self.puppet is None or key != self._art_id:
+            session = None
+            try:
+                from training.defaults import default_session
+
+                session = default_session(art)
+            except Exception:
+                session = None
+            self.puppet = self._Puppet(art, session=session)
+            self._art_id = key
+
+    def tick(self):
+        try:
+            fr = next(self.frames)
+        except StopIteration:
+            self.frames = iter(self.source)
+            return
+        except Exception as e:
+            self.stop()
+            self.show(np.zeros((2, 2, 4), np.uint8), f"live preview stopped: {_one_line(e)}")
+            return
+        try:
+            self._ensure_puppet()
+            out = self.puppet.step(fr.image, fr.index, fr.time)
+        except Exception as e:
+            self.stop()
+            self.show(np.zeros((2, 2, 4), np.uint8), f"live preview stopped: {_one_line(e)}")
+            return
+        ms = sum(getattr(out, "timings_ms", {}).values()) if hasattr(out, "timings_ms") else 0.0
+        status = getattr(getattr(out, "params", None), "status", "")
+        self.show(out.rgba_pm, f"live from {self.what} — {status} — {ms:.1f} ms a frame")
+
+    def stop(self):
+        self.timer.stop()
+        try:
+            self.source.close()
+        except Exception:
+            pass

@@ -1,0 +1,648 @@
+"""The art-set editor's main window: lists on the left, canvases in the middle, preview on the
+right, lines and problems below. Every action here calls an :class:`EditorDocument` method, so
+menus, drag-and-drop, the canvases and the tests all take the same path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import (
+    QCheckBox, QComboBox, QDialog, QDialogButtonBox, QDockWidget, QDoubleSpinBox, QFileDialog,
+    QFormLayout, QGroupBox, QHBoxLayout, QInputDialog, QLabel, QLineEdit, QMainWindow, QMessageBox,
+    QPushButton, QRadioButton, QSpinBox, QSplitter, QTabWidget, QToolBar, QVBoxLayout, QWidget,
+)
+
+from art_sets import editing as ed
+from art_sets.model import PART_NAMES
+
+from .canvas import HeadCanvas, LineCanvas
+from .document import EditorDocument, recoverable
+from .panels import DropList, LinesList, PartStrip, ProblemsList, dropped_paths, image_paths, thumb_icon
+from .preview import PreviewPanel
+
+IMAGE_FILTER = "Images (*.png *.jpg *.jpeg *.bmp *.gif *.tif *.tiff *.webp)"
+
+
+class NewCharacterDialog(QDialog):
+    """Name, author and the image files of a new character (file dialogs or drag-and-drop)."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setWindowTitle("New character from images")
+        form = QFormLayout(self)
+        self.name = QLineEdit("My character")
+        self.author = QLineEdit("")
+        form.addRow("Name", self.name)
+        form.addRow("Author", self.author)
+        self.lists: dict[str, DropList] = {}
+        for key, label in (("heads", "Head image(s)"), ("eyes", "Eye drawings"), ("mouth", "Mouth drawings")):
+            box = QWidget()
+            h = QHBoxLayout(box)
+            h.setContentsMargins(0, 0, 0, 0)
+            lst = DropList()
+            lst.setMinimumHeight(70)
+            lst.filesDropped.connect(lambda paths, k=key: self._add(k, paths))
+            btn = QPushButton("Add…")
+            btn.clicked.connect(lambda _=False, k=key: self._browse(k))
+            clr = QPushButton("Clear")
+            clr.clicked.connect(lambda _=False, k=key: self.lists[k].clear())
+            col = QVBoxLayout()
+            col.addWidget(btn)
+            col.addWidget(clr)
+            col.addStretch(1)
+            h.addWidget(lst, 1)
+            h.addLayout(col)
+            self.lists[key] = lst
+            form.addRow(label, box)
+        self.fit = QComboBox()
+        self.fit.addItems(["resize", "crop"])
+        form.addRow("Drawings of another size", self.fit)
+        hint = QLabel("Drop image files on the lists. Drawing names come from the file names "
+                      "(open, closed, wide, angry; neutral, smile, ah, oo, grin, frown).")
+        hint.setWordWrap(True)
+        form.addRow(hint)
+        bb = QDialogButtonBox(QDialogButtonBox.Ok | QDialogButtonBox.Cancel)
+        bb.accepted.connect(self._accept)
+        bb.rejected.connect(self.reject)
+        form.addRow(bb)
+        self.paths: dict[str, list[Path]] = {k: [] for k in self.lists}
+
+    def _browse(self, key):
+        files, _ = QFileDialog.getOpenFileNames(self, "Choose images", "", IMAGE_FILTER)
+        self._add(key, [Path(f) for f in files])
+
+    def _add(self, key, paths):
+        for p in image_paths(paths):
+            try:
+                icon = thumb_icon(ed.load_image(p), 40)
+            except ed.EditError as e:
+                QMessageBox.warning(self, "Inkface", str(e))
+                continue
+            self.paths[key].append(p)
+            self.lists[key].addItem(p.name)
+            self.lists[key].item(self.lists[key].count() - 1).setIcon(icon)
+
+    def _accept(self):
+        if not self.paths["heads"]:
+            QMessageBox.information(self, "Inkface", "Add at least one head image.")
+            return
+        self.accept()
+
+
+class EditorWindow(QMainWindow):
+    """The art-set editor."""
+
+    def __init__(self, parent=None, autosave_delay_ms: int = 1500):
+        super().__init__(parent)
+        self.doc = EditorDocument(self, autosave_delay_ms=autosave_delay_ms)
+        self.setAcceptDrops(True)
+        self.resize(1360, 860)
+        # hooks the tests replace to answer questions without modal dialogs
+        self.ask_fit = self._ask_fit_dialog
+        self.ask_recover = self._ask_recover_dialog
+        self.confirm_close = self._confirm_close_dialog
+        self._build()
+        self.doc.changed.connect(self._on_changed)
+        self.doc.selectionChanged.connect(self._on_selection)
+        self.doc.message.connect(lambda m: self.statusBar().showMessage(m, 6000))
+        self.doc.autosaved.connect(lambda where: self.statusBar().showMessage(f"autosaved to {where}", 2500))
+        self.doc.undo_stack.cleanChanged.connect(lambda *_: self._update_title())
+        self._on_changed()
+        self._on_selection()
+
+    # ------------------------------------------------------------------ layout
+    def _build(self):
+        self.line_canvas = LineCanvas(self.doc)
+        self.head_canvas = HeadCanvas(self.doc)
+        self.strip = PartStrip(self.doc)
+        self.strip.drawingClicked.connect(lambda i: self.doc.select(drawing=i))
+
+        lines_page = QWidget()
+        lv = QVBoxLayout(lines_page)
+        lv.setContentsMargins(0, 0, 0, 0)
+        bar = QHBoxLayout()
+        self.part_buttons = {}
+        for name in PART_NAMES:
+            b = QRadioButton(name.capitalize())
+            b.toggled.connect(lambda on, n=name: on and self.doc.select(part=n))
+            self.part_buttons[name] = b
+            bar.addWidget(b)
+        bar.addSpacing(16)
+        bar.addWidget(QLabel("Ghost:"))
+        self.ghost_combo = QComboBox()
+        self.ghost_combo.setToolTip("show another drawing faintly underneath, with its lines dotted")
+        self.ghost_combo.currentIndexChanged.connect(self._ghost_changed)
+        bar.addWidget(self.ghost_combo)
+        self.copy_button = QPushButton("Copy lines from…")
+        self.copy_button.clicked.connect(self._copy_lines_menu)
+        bar.addWidget(self.copy_button)
+        self.accept_button = QPushButton("Accept dashed lines")
+        self.accept_button.setToolTip("the copied (dashed) lines already sit on their features here")
+        self.accept_button.clicked.connect(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
+        bar.addWidget(self.accept_button)
+        bar.addStretch(1)
+        help_ = QLabel("drag: new line · drag an end or the middle: move · Alt: no snapping · Del: delete · Tab: next line · [ ]: drawings")
+        help_.setStyleSheet("color: #777;")
+        bar.addWidget(help_)
+        lv.addLayout(bar)
+        split = QSplitter(Qt.Vertical)
+        split.addWidget(self.line_canvas)
+        split.addWidget(self.strip)
+        split.setStretchFactor(0, 4)
+        split.setStretchFactor(1, 1)
+        lv.addWidget(split, 1)
+
+        head_page = QWidget()
+        hv = QVBoxLayout(head_page)
+        hv.setContentsMargins(0, 0, 0, 0)
+        hb = QHBoxLayout()
+        self.mode_arrange = QRadioButton("Arrange boxes")
+        self.mode_paint = QRadioButton("Paint holes")
+        self.mode_arrange.setChecked(True)
+        self.mode_arrange.toggled.connect(lambda on: self._set_head_mode("arrange" if on else "paint"))
+        hb.addWidget(self.mode_arrange)
+        hb.addWidget(self.mode_paint)
+        hb.addSpacing(10)
+        hb.addWidget(QLabel("brush"))
+        self.brush_spin = QSpinBox()
+        self.brush_spin.setRange(1, 200)
+        self.brush_spin.setValue(10)
+        self.brush_spin.setSuffix(" px")
+        self.brush_spin.valueChanged.connect(lambda v: setattr(self.head_canvas, "brush_radius", float(v)))
+        hb.addWidget(self.brush_spin)
+        self.all_heads = QCheckBox("all heads")
+        self.all_heads.setChecked(True)
+        self.all_heads.toggled.connect(lambda v: setattr(self.head_canvas, "paint_all_heads", v))
+        hb.addWidget(self.all_heads)
+        hb.addSpacing(10)
+        hb.addWidget(QLabel("feather"))
+        self.radius_spin = QDoubleSpinBox()
+        self.radius_spin.setRange(0, 100)
+        self.radius_spin.setValue(8)
+        self.radius_spin.setSuffix(" px")
+        hb.addWidget(self.radius_spin)
+        self.holes_button = QPushButton("Cut holes from boxes")
+        self.holes_button.setToolTip("open each part box in every head, soft-edged over the feather radius")
+        self.holes_button.clicked.connect(self.cut_holes)
+        hb.addWidget(self.holes_button)
+        self.head_only = QCheckBox("head only")
+        self.head_only.toggled.connect(self._head_only)
+        hb.addWidget(self.head_only)
+        hb.addStretch(1)
+        prev_h = QPushButton("◀ head")
+        next_h = QPushButton("head ▶")
+        prev_h.clicked.connect(lambda: self._step_head(-1))
+        next_h.clicked.connect(lambda: self._step_head(1))
+        hb.addWidget(prev_h)
+        hb.addWidget(next_h)
+        hv.addLayout(hb)
+        hv.addWidget(self.head_canvas, 1)
+
+        self.tabs = QTabWidget()
+        self.tabs.addTab(lines_page, "Control lines")
+        self.tabs.addTab(head_page, "Head, boxes and holes")
+        self.setCentralWidget(self.tabs)
+
+        # left: the character
+        left = QWidget()
+        ll = QVBoxLayout(left)
+        ll.setContentsMargins(4, 4, 4, 4)
+        info = QFormLayout()
+        self.name_edit = QLineEdit()
+        self.author_edit = QLineEdit()
+        self.name_edit.editingFinished.connect(self._info_edited)
+        self.author_edit.editingFinished.connect(self._info_edited)
+        info.addRow("Name", self.name_edit)
+        info.addRow("Author", self.author_edit)
+        ll.addLayout(info)
+        self.lists: dict[str, DropList] = {}
+        for key, title in (("heads", "Heads"), ("eyes", "Eyes"), ("mouth", "Mouth")):
+            g = QGroupBox(title)
+            gl = QVBoxLayout(g)
+            gl.setContentsMargins(4, 4, 4, 4)
+            lst = DropList()
+            lst.setToolTip("drop image files here")
+            lst.filesDropped.connect(lambda paths, k=key: self.add_files(k, paths))
+            lst.currentRowChanged.connect(lambda row, k=key: self._list_picked(k, row))
+            lst.itemDoubleClicked.connect(lambda it, k=key: self._rename(k))
+            gl.addWidget(lst)
+            row = QHBoxLayout()
+            add = QPushButton("Add…")
+            add.clicked.connect(lambda _=False, k=key: self._browse_add(k))
+            rem = QPushButton("Remove")
+            rem.clicked.connect(lambda _=False, k=key: self._remove(k))
+            row.addWidget(add)
+            row.addWidget(rem)
+            if key != "heads":
+                ren = QPushButton("Rename")
+                ren.clicked.connect(lambda _=False, k=key: self._rename(k))
+                row.addWidget(ren)
+            gl.addLayout(row)
+            ll.addWidget(g, 1 if key == "heads" else 2)
+            self.lists[key] = lst
+        self._filling_lists = False
+        dock = QDockWidget("Character", self)
+        dock.setObjectName("character")
+        dock.setWidget(left)
+        dock.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.LeftDockWidgetArea, dock)
+
+        self.preview = PreviewPanel(self.doc)
+        pd = QDockWidget("Preview", self)
+        pd.setObjectName("preview")
+        pd.setWidget(self.preview)
+        pd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.RightDockWidgetArea, pd)
+
+        self.lines_list = LinesList(self.doc)
+        ld = QDockWidget("Lines", self)
+        ld.setObjectName("lines")
+        ld.setWidget(self.lines_list)
+        ld.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.BottomDockWidgetArea, ld)
+        self.problems = ProblemsList(self.doc)
+        prd = QDockWidget("Problems", self)
+        prd.setObjectName("problems")
+        prd.setWidget(self.problems)
+        prd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.BottomDockWidgetArea, prd)
+        self.splitDockWidget(ld, prd, Qt.Horizontal)
+        self.resizeDocks([dock, pd], [250, 330], Qt.Horizontal)
+        self.resizeDocks([ld], [150], Qt.Vertical)
+        self._build_menus()
+
+    def _build_menus(self):
+        mb = self.menuBar()
+        f = mb.addMenu("&File")
+        self.act_new = f.addAction("&New character from images…", self.new_character_dialog, QKeySequence.New)
+        f.addAction("&Open…", self.open_dialog, QKeySequence.Open)
+        self.bundled_menu = f.addMenu("Open a &bundled character")
+        self.bundled_menu.aboutToShow.connect(self._fill_bundled)
+        f.addSeparator()
+        self.act_save = f.addAction("&Save", self.save, QKeySequence.Save)
+        f.addAction("Save &as…", self.save_as, QKeySequence.SaveAs)
+        f.addSeparator()
+        f.addAction("&Close", self.close, QKeySequence.Close)
+        e = mb.addMenu("&Edit")
+        undo = self.doc.undo_stack.createUndoAction(self, "&Undo")
+        undo.setShortcut(QKeySequence.Undo)
+        redo = self.doc.undo_stack.createRedoAction(self, "&Redo")
+        redo.setShortcut(QKeySequence.Redo)
+        e.addAction(undo)
+        e.addAction(redo)
+        e.addSeparator()
+        e.addAction("Delete selected line", lambda: self.doc.line >= 0 and self.doc.delete_line(self.doc.part, self.doc.line))
+        e.addAction("Accept dashed lines in this drawing", lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
+        e.addAction("Resize drawings to the box", lambda: self.doc.fit_part(self.doc.part, "resize"))
+        e.addAction("Crop drawings to the box", lambda: self.doc.fit_part(self.doc.part, "crop"))
+        a = mb.addMenu("&Add")
+        a.addAction("Head images…", lambda: self._browse_add("heads"))
+        a.addAction("Eye drawings…", lambda: self._browse_add("eyes"))
+        a.addAction("Mouth drawings…", lambda: self._browse_add("mouth"))
+        tb = QToolBar("Main")
+        tb.setObjectName("main-toolbar")
+        tb.setIconSize(QSize(16, 16))
+        tb.addAction(self.act_new)
+        tb.addAction(self.act_save)
+        tb.addSeparator()
+        tb.addAction(undo)
+        tb.addAction(redo)
+        self.addToolBar(tb)
+
+    # ------------------------------------------------------------------ refresh
+    def _update_title(self):
+        art = self.doc.artset
+        name = art.name if art else "no character"
+        where = f" — {self.doc.path}" if self.doc.path else " — not saved yet"
+        self.setWindowTitle(f"Inkface editor — {name}[*]{where if art else ''}")
+        self.setWindowModified(self.doc.dirty or (art is not None and self.doc.path is None))
+
+    def _on_changed(self):
+        art = self.doc.artset
+        self._update_title()
+        self._filling_lists = True
+        try:
+            if art is not None:
+                if self.name_edit.text() != art.name:
+                    self.name_edit.setText(art.name)
+                if self.author_edit.text() != art.author:
+                    self.author_edit.setText(art.author)
+            for key, lst in self.lists.items():
+                lst.clear()
+                if art is None:
+                    continue
+                if key == "heads":
+                    for i, h in enumerate(art.heads):
+                        lst.addItem(f"head {i + 1}")
+                        lst.item(i).setIcon(thumb_icon(h))
+                    continue
+                part = art.parts[key]
+                miss = ed.missing_lines(art, key)
+                for i, d in enumerate(part.drawings):
+                    todo = sum(d.name in names for names in miss.values())
+                    label = d.name
+                    if d.size != part.size:
+                        label += f"   ⚠ {d.size[0]}×{d.size[1]}"
+                    if todo:
+                        label += f"   ({todo} line{'s' if todo > 1 else ''} to place)"
+                    lst.addItem(label)
+                    lst.item(i).setIcon(thumb_icon(d.image))
+        finally:
+            self._filling_lists = False
+        self._on_selection()
+
+    def _on_selection(self):
+        art = self.doc.artset
+        self._filling_lists = True
+        try:
+            for name, b in self.part_buttons.items():
+                b.blockSignals(True)
+                b.setChecked(name == self.doc.part)
+                b.blockSignals(False)
+            if art is not None:
+                self.lists[self.doc.part].setCurrentRow(self.doc.drawing)
+                other = [k for k in PART_NAMES if k != self.doc.part]
+                for k in other:
+                    self.lists[k].setCurrentRow(-1)
+                self.lists["heads"].setCurrentRow(self.doc.head)
+                names = art.parts[self.doc.part].names()
+                cur = self.ghost_combo.currentText()
+                self.ghost_combo.blockSignals(True)
+                self.ghost_combo.clear()
+                self.ghost_combo.addItem("none")
+                self.ghost_combo.addItems(names)
+                self.ghost_combo.setCurrentIndex(names.index(cur) + 1 if cur in names else 0)
+                self.ghost_combo.blockSignals(False)
+                self._ghost_changed()
+                self.accept_button.setEnabled(bool(ed.unplaced(art, self.doc.part, self.doc.drawing)))
+        finally:
+            self._filling_lists = False
+
+    def _ghost_changed(self, *_):
+        self.line_canvas.ghost = self.ghost_combo.currentIndex() - 1
+        self.line_canvas.update()
+
+    def _list_picked(self, key, row):
+        if self._filling_lists or row < 0:
+            return
+        if key == "heads":
+            self.doc.select(head=row)
+        else:
+            self.doc.select(part=key, drawing=row)
+
+    # ------------------------------------------------------------------ actions
+    def new_character(self, name: str, heads, eyes=(), mouths=(), author: str = "", fit: str = "resize"):
+        """Start a new character from image files (what File ▸ New does after its dialog)."""
+        art = self.doc.new_character(name, heads, eyes, mouths, author=author, fit=fit)
+        self.tabs.setCurrentIndex(1)
+        self.statusBar().showMessage("New character: arrange the boxes, cut the holes, then draw control lines.", 8000)
+        return art
+
+    def new_character_dialog(self):
+        if not self._maybe_save():
+            return
+        dlg = NewCharacterDialog(self)
+        if dlg.exec() != QDialog.Accepted:
+            return
+        try:
+            self.new_character(dlg.name.text(), dlg.paths["heads"], dlg.paths["eyes"], dlg.paths["mouth"],
+                               author=dlg.author.text(), fit=dlg.fit.currentText())
+        except ed.EditError as e:
+            QMessageBox.warning(self, "Inkface", str(e))
+
+    def open_path(self, path) -> bool:
+        """Open an art-set folder (offering to recover a newer autosave). False if it failed."""
+        from art_sets.io import ArtSetError
+
+        path = Path(path)
+        if path.name == "artset.json":
+            path = path.parent
+        side = recoverable(path)
+        recover = bool(side) and self.ask_recover(path, side)
+        try:
+            self.doc.open(path, recover=recover)
+        except (ArtSetError, OSError) as e:
+            QMessageBox.warning(self, "Inkface", " ".join(str(e).split()))
+            return False
+        if side and not recover:
+            self.doc.discard_autosave()
+        self.tabs.setCurrentIndex(0)
+        return True
+
+    def open_dialog(self):
+        if not self._maybe_save():
+            return
+        d = QFileDialog.getExistingDirectory(self, "Open an art-set folder")
+        if d:
+            self.open_path(d)
+
+    def _fill_bundled(self):
+        self.bundled_menu.clear()
+        try:
+            from art_sets.library import list_bundled
+
+            items = list_bundled()
+        except Exception:
+            items = []
+        for name, path in items:
+            self.bundled_menu.addAction(name, lambda p=path: self._maybe_save() and self.open_path(p))
+        if not items:
+            self.bundled_menu.addAction("(none found)").setEnabled(False)
+
+    def save(self) -> bool:
+        if self.doc.artset is None:
+            return False
+        if self.doc.path is None:
+            return self.save_as()
+        return self._save_to(self.doc.path)
+
+    def save_as(self) -> bool:
+        if self.doc.artset is None:
+            return False
+        d = QFileDialog.getExistingDirectory(self, "Save the character in a folder (a new, empty one is best)")
+        if not d:
+            return False
+        folder = Path(d)
+        if any(folder.iterdir()) and not (folder / "artset.json").exists():
+            folder = folder / ed.slug(self.doc.artset.name)
+        return self._save_to(folder)
+
+    def _save_to(self, folder) -> bool:
+        from art_sets.io import ArtSetError
+
+        try:
+            self.doc.save(folder)
+        except (ArtSetError, OSError, ed.EditError) as e:
+            QMessageBox.warning(self, "Inkface", f"Could not save: {' '.join(str(e).split())}")
+            return False
+        self._update_title()
+        return True
+
+    def add_files(self, key: str, paths) -> None:
+        """Add image files as heads or drawings of a part, offering resize/crop for other sizes."""
+        paths = image_paths(paths)
+        if not paths or self.doc.artset is None:
+            if paths and self.doc.artset is None and key == "heads":
+                self.new_character("Untitled", paths)
+            return
+        try:
+            if key == "heads":
+                fit = "resize"
+                sizes = {ed.load_image(p).shape[1::-1] for p in paths}
+                if any(tuple(s) != tuple(self.doc.artset.canvas) for s in sizes):
+                    fit = self.ask_fit("heads", [p.name for p in paths])
+                    if fit is None:
+                        return
+                self.doc.add_heads(paths, fit)
+                return
+            part = self.doc.artset.parts[key]
+            images = [ed.load_image(p) for p in paths]
+            odd = [p.name for p, im in zip(paths, images) if (im.shape[1], im.shape[0]) != part.size]
+            fit = "resize"
+            if odd and part.drawings:
+                fit = self.ask_fit(key, odd)
+                if fit is None:
+                    return
+            if not part.drawings and images:
+                # the first drawings set the box size
+                box = ed.default_box(self.doc.artset.canvas, key, (images[0].shape[1], images[0].shape[0]))
+                self.doc.set_box(key, box)
+            self.doc.add_drawings(key, paths, fit)
+        except ed.EditError as e:
+            QMessageBox.warning(self, "Inkface", str(e))
+
+    def _browse_add(self, key):
+        if self.doc.artset is None and key != "heads":
+            QMessageBox.information(self, "Inkface", "Make a new character first (File ▸ New).")
+            return
+        files, _ = QFileDialog.getOpenFileNames(self, f"Add {key}", "", IMAGE_FILTER)
+        if files:
+            self.add_files(key, [Path(f) for f in files])
+
+    def _remove(self, key):
+        art = self.doc.artset
+        if art is None:
+            return
+        row = self.lists[key].currentRow()
+        if row < 0:
+            return
+        try:
+            if key == "heads":
+                self.doc.remove_head(row)
+            else:
+                self.doc.remove_drawing(key, row)
+        except ed.EditError as e:
+            QMessageBox.information(self, "Inkface", str(e))
+
+    def _rename(self, key):
+        art = self.doc.artset
+        if art is None or key == "heads":
+            return
+        row = self.lists[key].currentRow()
+        if row < 0:
+            return
+        old = art.parts[key].drawings[row].name
+        new, ok = QInputDialog.getText(self, "Rename drawing", f"New name for {key} drawing {old!r}:", text=old)
+        if ok and new.strip() and new != old:
+            self.doc.rename_drawing(key, row, new)
+
+    def _info_edited(self):
+        art = self.doc.artset
+        if art is None:
+            return
+        name, author = self.name_edit.text(), self.author_edit.text()
+        if (name.strip() or art.name) != art.name or author != art.author:
+            self.doc.set_info(name, author)
+
+    def _copy_lines_menu(self):
+        from PySide6.QtWidgets import QMenu
+
+        art = self.doc.artset
+        if art is None:
+            return
+        m = QMenu(self)
+        for j, d in enumerate(art.parts[self.doc.part].drawings):
+            if j != self.doc.drawing:
+                m.addAction(d.name, lambda j=j: self.doc.copy_lines(self.doc.part, j, self.doc.drawing))
+        m.exec(self.copy_button.mapToGlobal(self.copy_button.rect().bottomLeft()))
+
+    def cut_holes(self):
+        if self.doc.artset is not None:
+            self.doc.make_holes(self.radius_spin.value())
+
+    def _set_head_mode(self, mode):
+        self.head_canvas.mode = mode
+        self.head_canvas.update()
+
+    def _head_only(self, on):
+        self.head_canvas.head_only = on
+        self.head_canvas._invalidate()
+
+    def _step_head(self, step):
+        art = self.doc.artset
+        if art is not None and art.heads:
+            self.doc.select(head=(self.doc.head + step) % len(art.heads))
+
+    # ------------------------------------------------------------------ questions (replaceable in tests)
+    def _ask_fit_dialog(self, key, names) -> str | None:
+        box = QMessageBox(self)
+        box.setWindowTitle("Drawings of another size")
+        target = "the canvas" if key == "heads" else f"the {key} box"
+        box.setText(f"{len(names)} image(s) are not the size of {target}: {', '.join(names[:6])}"
+                    f"{'…' if len(names) > 6 else ''}.\nResize them (scale to fit) or crop them (keep the centre)?")
+        resize = box.addButton("Resize", QMessageBox.AcceptRole)
+        crop = box.addButton("Crop", QMessageBox.AcceptRole)
+        box.addButton(QMessageBox.Cancel)
+        box.exec()
+        return "resize" if box.clickedButton() is resize else "crop" if box.clickedButton() is crop else None
+
+    def _ask_recover_dialog(self, path, side) -> bool:
+        return QMessageBox.question(
+            self, "Recover unsaved changes?",
+            f"{path} has unsaved changes from an earlier session (autosaved).\nRecover them?",
+            QMessageBox.Yes | QMessageBox.No, QMessageBox.Yes) == QMessageBox.Yes
+
+    def _confirm_close_dialog(self) -> str:
+        r = QMessageBox.question(self, "Unsaved changes", "Save the changes to this character?",
+                                 QMessageBox.Save | QMessageBox.Discard | QMessageBox.Cancel, QMessageBox.Save)
+        return {QMessageBox.Save: "save", QMessageBox.Discard: "discard"}.get(r, "cancel")
+
+    def _maybe_save(self) -> bool:
+        if not self.doc.dirty and not (self.doc.artset is not None and self.doc.path is None and self.doc.undo_stack.count()):
+            return True
+        ans = self.confirm_close()
+        if ans == "save":
+            return self.save()
+        if ans == "discard":
+            self.doc.undo_stack.setClean()
+            self.doc.discard_autosave()
+            return True
+        return False
+
+    # ------------------------------------------------------------------ window events
+    def closeEvent(self, ev):
+        if not self._maybe_save():
+            ev.ignore()
+            return
+        self.preview.stop()
+        self.doc.close()
+        ev.accept()
+
+    def dragEnterEvent(self, ev):
+        paths = dropped_paths(ev.mimeData())
+        if any((p / "artset.json").is_file() or p.name == "artset.json" for p in paths) or image_paths(paths):
+            ev.acceptProposedAction()
+
+    def dropEvent(self, ev):
+        paths = dropped_paths(ev.mimeData())
+        sets = [p for p in paths if (p / "artset.json").is_file() or p.name == "artset.json"]
+        if sets:
+            if self._maybe_save():
+                self.open_path(sets[0])
+            return
+        imgs = image_paths(paths)
+        if imgs:
+            target = "heads" if self.doc.artset is None or self.tabs.currentIndex() == 1 and not self.doc.artset.parts[self.doc.part].drawings else self.doc.part
+            self.add_files(target, imgs)
