@@ -200,32 +200,76 @@ class MouthFinder:
             best_x, best_y = found
         return best_x, best_y
 
+    @staticmethod
+    def _refine_vertical(norm: np.ndarray, x: float, y_est: float, direction: int, reach: float = 3.0) -> float:
+        """Sub-pixel y where the normalised lip value crosses 0.5 on the column through ``x``.
+
+        Searches ``y_est ± reach`` walking outwards (``direction`` −1 up, +1 down) and returns
+        the outermost crossing from lip (≥ 0.5) to skin; ``y_est`` if there is none.
+        """
+        h, w = norm.shape
+        ys = y_est + np.arange(-reach, reach + 1e-9, 0.25) * direction
+        ys = np.clip(ys, 0, h - 1)
+        xs = np.full_like(ys, np.clip(x, 0, w - 1))
+        vals = cv2.remap(
+            norm, xs.astype(np.float32).reshape(1, -1), ys.astype(np.float32).reshape(1, -1), cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_REPLICATE,
+        ).ravel()
+        inside = vals >= 0.5
+        idx = np.nonzero(inside[:-1] & ~inside[1:])[0]
+        if len(idx) == 0:
+            return y_est
+        i = int(idx[-1])
+        a, b = float(vals[i]), float(vals[i + 1])
+        t = (a - 0.5) / (a - b) if a != b else 0.5
+        return float(ys[i] + t * (ys[i + 1] - ys[i]))
+
     def find(
         self,
         score_u8: np.ndarray,
+        value: np.ndarray | None = None,
         seed: tuple[float, float] | None = None,
         min_area: int = 6,
         max_r: float | None = None,
     ) -> MouthResult | None:
-        """Run all steps on a crop of lip scores; None when no lip blob is found."""
+        """Run all steps on a crop of lip scores; None when no lip blob is found.
+
+        ``value`` (float32, crop size) is an optional lip value that is linear in colour
+        mixtures (high on lip, low on skin, e.g. a projection of BGR); edges are then placed
+        where it crosses half-way between the lip's and the surrounding skin's levels, which
+        is exact for anti-aliased or blurred edges. Without it the smoothed score is used.
+        """
         blob = self.blob(score_u8, seed, min_area)
         if blob is None:
             return None
         area = int(blob.sum())
-        m = cv2.moments(blob.astype(np.uint8), binaryImage=True)
+        m = cv2.moments(blob.view(np.uint8), binaryImage=True)
         centre = (m["m10"] / m["m00"], m["m01"] / m["m00"])
+        ys, xs = np.nonzero(blob)
         if max_r is None:
-            max_r = 0.5 * math.hypot(*blob.shape)
+            max_r = 0.5 * math.hypot(xs.max() - xs.min() + 1, ys.max() - ys.min() + 1) + 3.0
         r0 = self.radial(blob, centre, max_r)
         raw = self.polygon(centre, r0)
-        score = cv2.GaussianBlur(score_u8.astype(np.float32) * (1.0 / 255.0), (5, 5), 0.8)
-        r = self.snake(score, centre, r0)
+        if value is not None:
+            lipish = blob & (score_u8 >= 128)
+            lo_level = float(np.median(value[~blob])) if (~blob).any() else 0.0
+            hi_level = float(np.median(value[lipish])) if lipish.any() else lo_level + 1.0
+            span = hi_level - lo_level
+            if abs(span) < 1e-6:
+                span = 1.0
+            norm = (value.astype(np.float32) - np.float32(lo_level)) * np.float32(1.0 / span)
+            norm = cv2.GaussianBlur(norm, (3, 3), 0.6)
+        else:
+            norm = cv2.GaussianBlur(score_u8.astype(np.float32) * (1.0 / 255.0), (5, 5), 0.8)
+        r = self.snake(norm, centre, r0)
         poly = self.polygon(centre, r)
-        left = self._corner(score, poly, -1)
-        right = self._corner(score, poly, +1)
+        left = self._corner(norm, poly, -1)
+        right = self._corner(norm, poly, +1)
         cx = 0.5 * (left[0] + right[0])
         cy = 0.5 * (left[1] + right[1])
         top, bottom = self._crossing_y(poly, cx, cy)
+        top = self._refine_vertical(norm, cx, top, -1)
+        bottom = self._refine_vertical(norm, cx, bottom, +1)
         return MouthResult(
             left=left,
             right=right,

@@ -1,0 +1,488 @@
+"""Calibration from the five clicks: everything the tracker learns about one performer.
+
+From the clicked frame ``calibrate`` learns colour classifiers (pupil vs. its surroundings,
+lip vs. skin, skin vs. eye interior for the lids), a stored grey picture of each eye, a
+vertical cross-section of each eyebrow, the inter-pupil distance and the neutral values.
+Clicks may be a few pixels off; pupils, brows and the mouth are snapped to the features.
+
+All pictures and profiles live in the *face frame*: an upright crop centred on the pupil
+midpoint, x along the pupil line, y along the face's down axis, scaled so the inter-pupil
+distance is ``work_ipd`` pixels (at most :data:`WORK_IPD_MAX`). The tracker crops every
+frame the same way, so rolling or leaning in changes nothing the finders see.
+
+Saved as JSON (``format`` 1) with the two eye pictures as PNGs beside it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tracker.brows import brow_centre, column_profile
+from tracker.clicks import Clicks, ClicksError
+from tracker.colour_model import ColourClassifier, Gaussians, features
+from tracker.params import FaceParams
+
+FORMAT = 1
+WORK_IPD_MAX = 80.0
+"""Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
+
+
+class CalibrationError(ValueError):
+    """Calibration failed or a calibration file is unusable (one-line message)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# atomic files
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+# ---------------------------------------------------------------------------------------------
+# the face frame
+
+
+@dataclass
+class FaceFrame:
+    """An upright, scale-normalised frame attached to the face.
+
+    ``mid`` is the pupil midpoint (frame px), ``angle`` the roll in radians (positive when
+    the image-right pupil is higher), ``scale`` face-frame px per frame px. Face
+    coordinates: x along the pupil line towards the image-right pupil, y along the face's
+    down axis, origin at ``mid``.
+    """
+
+    mid: tuple[float, float]
+    angle: float
+    scale: float
+
+    @classmethod
+    def from_pupils(cls, left: tuple[float, float], right: tuple[float, float], work_ipd: float) -> "FaceFrame":
+        dx, dy = right[0] - left[0], right[1] - left[1]
+        ipd = math.hypot(dx, dy)
+        return cls(
+            mid=(0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])),
+            angle=math.atan2(-dy, dx),
+            scale=work_ipd / max(ipd, 1e-6),
+        )
+
+    def axes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit vectors (frame px) of the face's x and down axes."""
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        return np.array([c, -s]), np.array([s, c])
+
+    def matrix(self, origin: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+        """2×3 affine from frame px to crop px, where a crop's (0,0) is face point ``origin``."""
+        u, d = self.axes()
+        k = self.scale
+        m = np.array([self.mid[0], self.mid[1]])
+        return np.array(
+            [
+                [k * u[0], k * u[1], -k * float(m @ u) - origin[0]],
+                [k * d[0], k * d[1], -k * float(m @ d) - origin[1]],
+            ]
+        )
+
+    def crop(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> np.ndarray:
+        """The face-frame crop ``(x0, y0, w, h)`` (face px) of ``image``, bilinear."""
+        x0, y0, w, h = rect
+        return cv2.warpAffine(
+            image, self.matrix((x0, y0)), (int(w), int(h)), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
+
+    def to_image(self, pts: np.ndarray) -> np.ndarray:
+        """Face coordinates ``(n, 2)`` to frame px."""
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+        u, d = self.axes()
+        k = 1.0 / self.scale
+        return np.array(self.mid) + k * (p[:, 0:1] * u + p[:, 1:2] * d)
+
+    def to_face(self, pts: np.ndarray) -> np.ndarray:
+        """Frame px ``(n, 2)`` to face coordinates."""
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2) - np.array(self.mid)
+        u, d = self.axes()
+        return self.scale * np.stack([p @ u, p @ d], axis=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# the calibration record
+
+
+@dataclass
+class Calibration:
+    """What the tracker knows about one performer (lengths in face-frame px unless noted).
+
+    ``ipd`` and ``frame_size`` are in frame px; ``work_ipd`` is the inter-pupil distance in
+    the face frame. Geometry (``brow_height``, ``mouth_offset`` …) is measured on the
+    calibration frame relative to the pupils.
+    """
+
+    frame_size: tuple[int, int]
+    ipd: float
+    roll_deg: float
+    work_ipd: float
+    clicks: Clicks
+    eye_templates: list[np.ndarray]
+    brow_profiles: list[np.ndarray]
+    brow_centres: list[float]
+    brow_heights: list[float]
+    lid_up: list[float]
+    lid_down: list[float]
+    mouth_offset: tuple[float, float]
+    mouth_width: float
+    mouth_height: float
+    mouth_area: float
+    pupil_radius: float
+    pupil_threshold: float
+    pupil: ColourClassifier
+    lip: ColourClassifier
+    eye: ColourClassifier
+    lip_axis: np.ndarray
+    neutral: FaceParams = field(default_factory=FaceParams)
+
+    # -------------------------------------------------------------- persistence
+    def to_dict(self, stem: str) -> dict:
+        return {
+            "format": FORMAT,
+            "kind": "inkface-calibration",
+            "frame_size": list(self.frame_size),
+            "ipd": self.ipd,
+            "roll_deg": self.roll_deg,
+            "work_ipd": self.work_ipd,
+            "clicks": self.clicks.to_dict(),
+            "eye_templates": [f"{stem}.eye_l.png", f"{stem}.eye_r.png"],
+            "brow_profiles": [p.astype(float).round(4).tolist() for p in self.brow_profiles],
+            "brow_centres": list(self.brow_centres),
+            "brow_heights": list(self.brow_heights),
+            "lid_up": list(self.lid_up),
+            "lid_down": list(self.lid_down),
+            "mouth_offset": list(self.mouth_offset),
+            "mouth_width": self.mouth_width,
+            "mouth_height": self.mouth_height,
+            "mouth_area": self.mouth_area,
+            "pupil_radius": self.pupil_radius,
+            "pupil_threshold": self.pupil_threshold,
+            "classifiers": {"pupil": self.pupil.to_dict(), "lip": self.lip.to_dict(), "eye": self.eye.to_dict()},
+            "lip_axis": [float(v) for v in self.lip_axis],
+            "neutral": {k: v for k, v in self.neutral.as_dict().items()},
+        }
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write ``path`` (JSON) and ``<stem>.eye_l.png`` / ``<stem>.eye_r.png`` beside it, atomically."""
+        path = Path(path)
+        d = self.to_dict(path.stem)
+        for name, t in zip(d["eye_templates"], self.eye_templates):
+            ok, buf = cv2.imencode(".png", np.clip(np.rint(t), 0, 255).astype(np.uint8))
+            if not ok:
+                raise CalibrationError(f"{path}: could not encode the eye picture")
+            atomic_write_bytes(path.parent / name, buf.tobytes())
+        atomic_write_text(path, json.dumps(d, indent=1) + "\n")
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "Calibration":
+        """Read a calibration written by :meth:`save`; :class:`CalibrationError` names the file."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text())
+        except OSError as e:
+            raise CalibrationError(f"{path}: cannot read calibration ({e.strerror or e})") from None
+        except (json.JSONDecodeError, UnicodeDecodeError) as e:
+            raise CalibrationError(f"{path}: not valid JSON ({e})") from None
+        if not isinstance(d, dict) or d.get("format") != FORMAT:
+            raise CalibrationError(f"{path}: not an Inkface calibration of format {FORMAT}")
+        try:
+            temps = []
+            for name in d["eye_templates"]:
+                p = path.parent / name
+                if Path(name).name != name:
+                    raise CalibrationError(f"{path}: eye picture {name!r} must sit beside the calibration")
+                img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+                if img is None:
+                    raise CalibrationError(f"{p}: missing or unreadable eye picture")
+                temps.append(img.astype(np.float32))
+            neutral_d = dict(d["neutral"])
+            cal = cls(
+                frame_size=(int(d["frame_size"][0]), int(d["frame_size"][1])),
+                ipd=float(d["ipd"]),
+                roll_deg=float(d["roll_deg"]),
+                work_ipd=float(d["work_ipd"]),
+                clicks=Clicks.from_dict(d["clicks"], where=str(path)),
+                eye_templates=temps,
+                brow_profiles=[np.asarray(p, dtype=np.float32) for p in d["brow_profiles"]],
+                brow_centres=[float(v) for v in d["brow_centres"]],
+                brow_heights=[float(v) for v in d["brow_heights"]],
+                lid_up=[float(v) for v in d["lid_up"]],
+                lid_down=[float(v) for v in d["lid_down"]],
+                mouth_offset=(float(d["mouth_offset"][0]), float(d["mouth_offset"][1])),
+                mouth_width=float(d["mouth_width"]),
+                mouth_height=float(d["mouth_height"]),
+                mouth_area=float(d["mouth_area"]),
+                pupil_radius=float(d["pupil_radius"]),
+                pupil_threshold=float(d["pupil_threshold"]),
+                pupil=ColourClassifier.from_dict(d["classifiers"]["pupil"]),
+                lip=ColourClassifier.from_dict(d["classifiers"]["lip"]),
+                eye=ColourClassifier.from_dict(d["classifiers"]["eye"]),
+                lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
+                neutral=FaceParams(**neutral_d),
+            )
+        except CalibrationError:
+            raise
+        except ClicksError as e:
+            raise CalibrationError(str(e)) from None
+        except (KeyError, TypeError, ValueError, IndexError) as e:
+            raise CalibrationError(f"{path}: malformed calibration ({type(e).__name__}: {e})") from None
+        return cal
+
+
+# ---------------------------------------------------------------------------------------------
+# calibrate
+
+
+def _odd(v: float, lo: int = 3) -> int:
+    n = max(int(round(v)), lo)
+    return n if n % 2 else n + 1
+
+
+def _refine_pupil(grey: np.ndarray, click: tuple[float, float], ipd: float) -> tuple[tuple[float, float], float]:
+    """Snap a clicked pupil to the centre of the dark disc under it; also return its radius (px)."""
+    h, w = grey.shape
+    r = max(int(round(0.14 * ipd)), 4)
+    x, y = click
+    radius = 0.05 * ipd
+    for _ in range(3):
+        xi, yi = int(round(x)), int(round(y))
+        x0, x1 = max(xi - r, 0), min(xi + r + 1, w)
+        y0, y1 = max(yi - r, 0), min(yi + r + 1, h)
+        win = cv2.GaussianBlur(grey[y0:y1, x0:x1], (3, 3), 0)
+        yy, xx = np.mgrid[y0:y1, x0:x1]
+        near = (xx - x) ** 2 + (yy - y) ** 2 <= (0.6 * r) ** 2
+        if not near.any():
+            break
+        dark = float(win[near].min())
+        bright = float(np.percentile(win, 75))
+        thr = dark + 0.5 * (bright - dark)
+        mask = (win < thr).astype(np.uint8)
+        n, lab = cv2.connectedComponents(mask, connectivity=8)
+        # the component holding the darkest pixel near the click
+        cand = np.where(near, win, np.inf)
+        k = np.unravel_index(int(np.argmin(cand)), cand.shape)
+        comp = lab == lab[k]
+        wgt = np.clip(thr - win, 0, None) * comp
+        if wgt.sum() <= 0:
+            break
+        x = float((wgt * xx).sum() / wgt.sum())
+        y = float((wgt * yy).sum() / wgt.sum())
+        radius = math.sqrt(comp.sum() / math.pi)
+    return (x, y), radius
+
+
+def _patch(img: np.ndarray, cx: float, cy: float, hw: float, hh: float) -> np.ndarray:
+    h, w = img.shape[:2]
+    x0, x1 = int(max(round(cx - hw), 0)), int(min(round(cx + hw) + 1, w))
+    y0, y1 = int(max(round(cy - hh), 0)), int(min(round(cy + hh) + 1, h))
+    return img[y0:y1, x0:x1].reshape(-1, img.shape[2]) if img.ndim == 3 else img[y0:y1, x0:x1].ravel()
+
+
+def _ellipse_pixels(img: np.ndarray, cx: float, cy: float, ax: float, ay: float, inner: float = 0.0) -> np.ndarray:
+    h, w = img.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w]
+    e = ((xx - cx) / ax) ** 2 + ((yy - cy) / ay) ** 2
+    return img[(e <= 1.0) & (e >= inner**2)]
+
+
+def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
+    """Learn a :class:`Calibration` from one frame and the five clicks on it.
+
+    Raises :class:`CalibrationError` (one line) when the frame or the clicks are unusable,
+    e.g. a point outside the frame or no lip colour that differs from the skin.
+    """
+    from tracker.mouth import MouthFinder
+
+    if not (isinstance(frame_bgr, np.ndarray) and frame_bgr.ndim == 3 and frame_bgr.shape[2] == 3 and frame_bgr.dtype == np.uint8):
+        raise CalibrationError("calibration frame must be a uint8 (H, W, 3) BGR image")
+    H, W = frame_bgr.shape[:2]
+    try:
+        clicks.check_inside((W, H))
+    except ClicksError as e:
+        raise CalibrationError(str(e)) from None
+    grey_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    ipd0 = clicks.ipd()
+    lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
+    rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
+    if not (0.7 * ipd0 < ipd < 1.3 * ipd0):
+        lp, rp, ipd = clicks.left_pupil, clicks.right_pupil, ipd0
+    work_ipd = min(ipd, WORK_IPD_MAX)
+    ff = FaceFrame.from_pupils(lp, rp, work_ipd)
+    k = ff.scale
+    wi = work_ipd
+
+    # one generous crop of the whole face in the face frame
+    mouth_f = ff.to_face(np.array([clicks.mouth]))[0]
+    brows_f = ff.to_face(np.array([clicks.left_brow, clicks.right_brow]))
+    if not (mouth_f[1] > 0.2 * wi):
+        raise CalibrationError(f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the pupils")
+    if not all(b[1] < -0.05 * wi for b in brows_f):
+        raise CalibrationError("clicks: the brows must be above the pupils")
+    ox, oy = -1.3 * wi, min(brows_f[:, 1].min(), 0) - 0.6 * wi
+    cw = int(round(2.6 * wi))
+    ch = int(round(mouth_f[1] + 0.9 * wi - oy))
+    crop = ff.crop(frame_bgr, (ox, oy, cw, ch))
+    grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+
+    def at(fx: float, fy: float) -> tuple[float, float]:
+        return fx - ox, fy - oy
+
+    pupils = [at(-0.5 * wi, 0.0), at(0.5 * wi, 0.0)]
+    prad = max(0.5 * (rl + rr) * k, 1.5)
+
+    # eye pictures: the iris and a margin of white and lids around it
+    tw, th = _odd(0.36 * wi, 7), _odd(0.24 * wi, 5)
+    temps = []
+    for px, py in pupils:
+        x0, y0 = int(round(px)) - tw // 2, int(round(py)) - th // 2
+        if x0 < 0 or y0 < 0 or x0 + tw > cw or y0 + th > ch:
+            raise CalibrationError("clicks: an eye is too close to the frame's edge")
+        # pupils sit at exact integer crop positions only if ox is integral; resample to be exact
+        M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
+        t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+        temps.append(np.rint(t).astype(np.float32))
+
+    # --- samples
+    def region(fx, fy, hw, hh):
+        return _patch(crop, *at(fx, fy), hw, hh)
+
+    skin_parts = [
+        region(-0.5 * wi, 0.42 * wi, 0.12 * wi, 0.05 * wi),
+        region(0.5 * wi, 0.42 * wi, 0.12 * wi, 0.05 * wi),
+        region(0.0, 0.0, 0.05 * wi, 0.05 * wi),
+        region(0.0, float(brows_f[:, 1].mean()), 0.06 * wi, 0.04 * wi),
+    ]
+    skin_px = np.concatenate(skin_parts)
+    mx, my = at(*mouth_f)
+    ring = _ellipse_pixels(crop, mx, my, 0.75 * wi, 0.42 * wi, inner=0.72)
+    # along the pupil line, pupil to near the eye's corners: pupil, iris and white
+    eye_interior = np.concatenate([_patch(crop, px, py, 0.18 * wi, 1) for px, py in pupils])
+    pupil_px = np.concatenate([_ellipse_pixels(crop, px, py, 0.7 * prad, 0.7 * prad) for px, py in pupils])
+    eye_box = np.concatenate(
+        [_ellipse_pixels(crop, px, py, 0.3 * wi, 0.2 * wi, inner=min(0.9, 1.8 * prad / (0.2 * wi))) for px, py in pupils]
+    )
+    brow_px = np.concatenate([_patch(crop, *at(*b), 0.08 * wi, 0.02 * wi) for b in brows_f])
+
+    try:
+        pupil_cls = ColourClassifier(pupil_px, np.concatenate([eye_box, skin_px, brow_px]), y_weight=4.0, name="pupil")
+        eye_cls = ColourClassifier(
+            np.concatenate([eye_interior, pupil_px]), np.concatenate([skin_px, brow_px]), y_weight=3.0, name="eye"
+        )
+    except ValueError as e:
+        raise CalibrationError(f"calibration: {e}") from None
+
+    # lips: pixels near the mouth click that the skin model does not explain
+    skin_g = Gaussians(features(np.concatenate([skin_px, ring]), 1.0), 3, np.array([0.035, 0.012, 0.012]))
+    cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
+    fc = features(cand, 1.0)
+    not_skin = skin_g.mahalanobis2(fc) > 12.0
+    lum = fc[:, 0]
+    med = np.median(lum[not_skin]) if not_skin.any() else 0.0
+    lips = cand[not_skin & (lum > 0.55 * med)]
+    if len(lips) < 12:
+        raise CalibrationError(
+            "calibration: no lip colour distinct from the skin near the mouth click "
+            f"({clicks.mouth[0]:g}, {clicks.mouth[1]:g})"
+        )
+    # a BGR direction that reads ~0 on skin and ~1 on lip, linear in colour mixtures (sub-pixel edges)
+    diff = lips.astype(np.float64).mean(0) - ring.astype(np.float64).mean(0)
+    lip_axis = diff / max(float(diff @ diff), 1e-6)
+    lip_cls = ColourClassifier(
+        lips, np.concatenate([skin_px, ring, pupil_px, brow_px, eye_interior]), y_weight=1.0, name="lip"
+    )
+
+    # --- mouth geometry on the calibration frame
+    mf = MouthFinder()
+    mh, mw = int(round(0.8 * wi)), int(round(1.4 * wi))
+    mx0, my0 = int(round(mx - mw / 2)), int(round(my - mh / 2))
+    mcrop = crop[max(my0, 0) : my0 + mh, max(mx0, 0) : mx0 + mw]
+    mval = cv2.transform(mcrop.astype(np.float32), lip_axis.astype(np.float32).reshape(1, 3))
+    res = mf.find(lip_cls.prob_u8(mcrop), value=mval, seed=(mx - max(mx0, 0), my - max(my0, 0)))
+    if res is None or res.width < 0.15 * wi:
+        raise CalibrationError("calibration: no lip blob found at the mouth click")
+    mcx = res.centre[0] + max(mx0, 0) + ox
+    mcy = res.centre[1] + max(my0, 0) + oy
+
+    # --- brows: cross-section through each pupil, centred on the brow's middle line
+    brow_profiles, brow_centres, brow_heights = [], [], []
+    half = max(int(round(0.13 * wi)), 4)
+    for (px, py), b in zip(pupils, brows_f):
+        top = int(math.floor(py - 1.1 * wi))
+        prof = column_profile(grey, px, top, int(py), 2)
+        guess = int(round(b[1] - oy - top))
+        c = brow_centre(prof, guess, max(int(round(0.08 * wi)), 3))
+        cy_b = top + c
+        height = py - cy_b
+        if not (0.08 * wi < height < 1.0 * wi):
+            raise CalibrationError("calibration: no eyebrow found above a pupil near the brow click")
+        start = int(math.floor(cy_b)) - half
+        frac = cy_b - math.floor(cy_b)
+        seg = column_profile(grey, px, start, start + 2 * half + 1, 2)
+        brow_profiles.append(seg)
+        brow_centres.append(half + frac)
+        brow_heights.append(float(height))
+
+    cal = Calibration(
+        frame_size=(W, H),
+        ipd=float(ipd),
+        roll_deg=math.degrees(ff.angle),
+        work_ipd=float(work_ipd),
+        clicks=Clicks(
+            frame=clicks.frame, left_pupil=lp, right_pupil=rp, left_brow=clicks.left_brow, right_brow=clicks.right_brow,
+            mouth=tuple(ff.to_image(np.array([[mcx, mcy]]))[0]),
+        ),
+        eye_templates=temps,
+        brow_profiles=brow_profiles,
+        brow_centres=brow_centres,
+        brow_heights=brow_heights,
+        lid_up=[0.0, 0.0],
+        lid_down=[0.0, 0.0],
+        mouth_offset=(float(mcx), float(mcy)),
+        mouth_width=float(res.width),
+        mouth_height=float(res.lip_upper + res.lip_lower),
+        mouth_area=float(res.area),
+        pupil_radius=float(prad),
+        pupil_threshold=0.5,
+        pupil=pupil_cls,
+        lip=lip_cls,
+        eye=eye_cls,
+        lip_axis=lip_axis,
+    )
+    # lids and the neutral values: measure the calibration frame the way the tracker will
+    from tracker.face_tracker import FaceTracker
+
+    tr = FaceTracker(cal)
+    r = tr.track(frame_bgr, index=clicks.frame)
+    cal.lid_up = list(r.debug.get("lid_up", [0.0, 0.0]))
+    cal.lid_down = list(r.debug.get("lid_down", [0.0, 0.0]))
+    cal.neutral = r.params.replace(status="ok")
+    return cal
