@@ -188,17 +188,55 @@ class MaskView(QWidget):
         p.drawImage(fit_rect(self.image.width(), self.image.height(), area), self.image)
 
 
-def mask_picture(frame_bgr: np.ndarray, mask: np.ndarray, colour: QColor) -> QImage:
-    """The frame dimmed to grey with the mask's pixels painted in ``colour``."""
+def classifier_regions(name: str, pts: dict[str, tuple[float, float]], ipd: float) -> list[tuple[int, int, int, int]]:
+    """Rectangles (x0, y0, x1, y1) where the tracker applies the classifier called ``name``:
+    around the pupils for pupil/eye colours, around the mouth for lip colours."""
+    if "lip" in name or "mouth" in name:
+        x, y = pts["mouth"]
+        boxes = [(x - 0.75 * ipd, y - 0.4 * ipd, x + 0.75 * ipd, y + 0.55 * ipd)]
+    elif "pupil" in name or "eye" in name:
+        boxes = [(x - 0.33 * ipd, y - 0.22 * ipd, x + 0.33 * ipd, y + 0.22 * ipd)
+                 for x, y in (pts["left_pupil"], pts["right_pupil"])]
+    else:
+        boxes = [face_box(pts, ipd)]
+    return [tuple(int(round(v)) for v in b) for b in boxes]
+
+
+def face_box(pts: dict[str, tuple[float, float]], ipd: float) -> tuple[float, float, float, float]:
+    xs = [p[0] for p in pts.values()]
+    ys = [p[1] for p in pts.values()]
+    return (min(xs) - 0.8 * ipd, min(ys) - 0.6 * ipd, max(xs) + 0.8 * ipd, max(ys) + 0.7 * ipd)
+
+
+def mask_picture(frame_bgr: np.ndarray, mask: np.ndarray, colour: QColor,
+                 regions: list[tuple[int, int, int, int]] | None = None,
+                 crop: tuple[float, float, float, float] | None = None) -> QImage:
+    """The frame dimmed to grey with the mask's pixels painted in ``colour``, only inside
+    ``regions`` (outlined), cropped to ``crop``."""
+    import cv2
+
+    h, w = frame_bgr.shape[:2]
     grey = frame_bgr.mean(axis=2, keepdims=True) * 0.45
     out = np.repeat(grey, 3, axis=2)
     m = np.asarray(mask, dtype=np.float32)
     if m.max() > 1.0:
         m = m / 255.0
-    m = m[..., None]
+    if regions:
+        keep = np.zeros((h, w), np.float32)
+        for x0, y0, x1, y1 in regions:
+            keep[max(0, y0):max(0, y1), max(0, x0):max(0, x1)] = 1.0
+        m = m * keep
     col = np.array([colour.blue(), colour.green(), colour.red()], np.float32)
-    out = out * (1 - m) + col * m
-    return bgr_to_qimage(np.clip(out, 0, 255).astype(np.uint8))
+    out = out * (1 - m[..., None]) + col * m[..., None]
+    out = np.clip(out, 0, 255).astype(np.uint8)
+    for x0, y0, x1, y1 in regions or []:
+        cv2.rectangle(out, (x0, y0), (x1, y1), (200, 200, 200), 1, cv2.LINE_AA)
+    if crop is not None:
+        x0, y0, x1, y1 = (int(round(v)) for v in crop)
+        x0, y0 = max(0, x0), max(0, y0)
+        x1, y1 = min(w, max(x0 + 2, x1)), min(h, max(y0 + 2, y1))
+        out = out[y0:y1, x0:x1]
+    return bgr_to_qimage(np.ascontiguousarray(out))
 
 
 def learned_masks(cal, frame_bgr: np.ndarray) -> dict[str, np.ndarray]:
@@ -219,8 +257,9 @@ def learned_masks(cal, frame_bgr: np.ndarray) -> dict[str, np.ndarray]:
             continue
         if callable(getattr(v, "mask", None)) and not isinstance(v, type):
             found[name] = v
+    order = {"pupil": 0, "lip": 1, "eye": 2, "skin": 3}
     out = {}
-    for name, c in found.items():
+    for name, c in sorted(found.items(), key=lambda kv: (order.get(kv[0], 9), kv[0])):
         try:
             m = np.asarray(c.mask(frame_bgr))
         except Exception:
@@ -390,15 +429,20 @@ class CalibrationWindow(QDialog):
         names = list(masks) or ["pupil", "lip"]
         self._set_mask_views(names)
         palette = [QColor("#7aa2f7"), QColor("#ff7eb6"), QColor("#9ece6a"), QColor("#ffd166")]
+        pts = self.view.points
+        ipd = float(getattr(self.calibration, "ipd", 0.0) or self.clicks().ipd())
+        crop = face_box(pts, ipd)
         for i, (name, mv) in enumerate(zip(names, self.mask_views)):
             if name in masks:
-                mv.set_image(mask_picture(self.frame, masks[name], palette[i % len(palette)]))
+                regions = classifier_regions(name, pts, ipd)
+                mv.set_image(mask_picture(self.frame, masks[name], palette[i % len(palette)], regions, crop))
             else:
                 mv.set_image(None, "this tracker exposes no colour classifiers")
         ipd = getattr(self.calibration, "ipd", None)
         self.info.setText(
             (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
-            + "Coloured pixels are what each classifier accepts: the pupils and lips should light up, little else."
+            + "Inside the boxes the tracker searches, coloured pixels are what each colour classifier "
+            "accepts: the pupils, the lips and the eye whites should light up, little else."
         )
 
     def _set_mask_views(self, names: list[str]) -> None:
@@ -408,7 +452,7 @@ class CalibrationWindow(QDialog):
             mv.setParent(None)
         self.mask_views = [MaskView(f"{n} colour") for n in names]
         for i, mv in enumerate(self.mask_views):
-            self.mask_grid.addWidget(mv, i // 1, 0)
+            self.mask_grid.addWidget(mv, i // 2, i % 2)
 
     def accept_calibration(self) -> Path | None:
         """Save the calibration for the performer and hand it to the main window."""

@@ -136,9 +136,10 @@ def _pts(v) -> np.ndarray | None:
         return None
     if a.ndim == 1 and a.size >= 2 and a.size % 2 == 0:
         a = a.reshape(-1, 2)
-    if a.ndim != 2 or a.shape[1] < 2 or not np.all(np.isfinite(a[:, :2])):
+    if a.ndim != 2 or a.shape[1] < 2:
         return None
-    return a[:, :2]
+    a = a[np.all(np.isfinite(a[:, :2]), axis=1), :2]
+    return a if len(a) else None
 
 
 def _get(obj, *names):
@@ -226,12 +227,11 @@ def paint_overlay(p: QPainter, ov: Any, to_view, scale: float) -> None:
         p.setBrush(fill)
         p.drawPolygon(poly(a))
     p.setBrush(Qt.BrushStyle.NoBrush)
-    p.setPen(QPen(QColor("#ffd166"), lw * 1.3))
+    p.setPen(QPen(QColor("#ffd166"), lw * 1.5))
     for a in shapes["brows"]:
-        if len(a) >= 2:
-            p.drawPolyline(poly(a))
         for x, y in a:
-            p.drawEllipse(to_view(x, y), 2.5, 2.5)
+            c = to_view(x, y)
+            p.drawLine(QPointF(c.x() - 8, c.y()), QPointF(c.x() + 8, c.y()))
     p.setPen(QPen(QColor("#7ee0d2"), lw))
     for a in shapes["lids"]:
         for x, y in a:

@@ -188,7 +188,88 @@ def open_source(spec: SourceSpec):
         return sources.CameraSource(spec.camera)
     if spec.kind == "video":
         return sources.VideoFileSource(spec.video)
-    return sources.SyntheticSource(bundled_performance(spec.seconds, spec.seed))
+    cached = performance_cache_path(spec.seconds, spec.seed)
+    if cached.is_file():
+        return sources.VideoFileSource(str(cached))
+    return CachingPerformanceSource(bundled_performance(spec.seconds, spec.seed), cached)
+
+
+def cache_dir() -> Path:
+    """Where re-creatable files go (``INKFACE_CACHE``, else ``$XDG_CACHE_HOME/inkface``)."""
+    import os
+
+    env = os.environ.get("INKFACE_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "inkface"
+
+
+def performance_cache_path(seconds: float = 20.0, seed: int = 0) -> Path:
+    """The bundled performance pre-rendered to MJPG, keyed by the synthetic performer's code.
+
+    Drawing a synthetic frame costs ~25 ms; decoding the cached one ~2 ms, which leaves the
+    CPU to the tracker and the renderer when the performance loops.
+    """
+    import hashlib
+
+    import tracker.synthetic as syn
+
+    h = hashlib.sha1(Path(syn.__file__).read_bytes()).hexdigest()[:10]
+    return cache_dir() / f"performance-{seconds:g}s-seed{seed}-{h}.avi"
+
+
+@dataclass
+class _Frame:
+    index: int
+    time: float
+    image: np.ndarray
+
+
+class CachingPerformanceSource:
+    """Plays a synthetic :class:`Performance` and writes it to the cache file as it goes;
+    the file is kept only when the whole performance was played."""
+
+    def __init__(self, perf, path: Path):
+        self.perf = perf
+        self.path = Path(path)
+        self.fps = float(perf.fps)
+        self.size = tuple(perf.frame_size)
+
+    def __iter__(self):
+        import cv2
+
+        writer = None
+        tmp = self.path.with_name(f".{self.path.stem}.{threading.get_ident()}.part.avi")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*"MJPG"), self.fps, self.size)
+            if writer.isOpened():
+                writer.set(cv2.VIDEOWRITER_PROP_QUALITY, 95)
+            else:
+                writer = None
+        except OSError:
+            writer = None
+        complete = False
+        try:
+            for i in range(len(self.perf)):
+                img = self.perf.frame(i)
+                if writer is not None:
+                    writer.write(img)
+                yield _Frame(i, i / self.fps, img)
+            complete = True
+        finally:
+            if writer is not None:
+                writer.release()
+                if complete and not self.path.exists():
+                    try:
+                        tmp.replace(self.path)
+                    except OSError:
+                        pass
+                tmp.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        pass
 
 
 _PERF_CACHE: dict[tuple, Any] = {}
@@ -211,6 +292,12 @@ def performance_calibration(perf):
 
     clicks = Clicks.from_dict(perf.clicks())
     return calibrate(perf.frame(clicks.frame), clicks)
+
+
+def bundled_performance_clip_path(seconds: float = 20.0, seed: int = 0) -> Path | None:
+    """The cached video of the bundled performance, if it has been played through once."""
+    p = performance_cache_path(seconds, seed)
+    return p if p.is_file() else None
 
 
 PERFORMANCE_CALIBRATION = "performance"
