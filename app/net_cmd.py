@@ -1,0 +1,412 @@
+"""``python -m app send`` and ``python -m app receive``: the teleconference split on the command line.
+
+send
+    ``send --to HOST:PORT [--camera N | --video FILE | --params TRACK] [--init CLICKS.json | --auto]
+    [--compress]`` tracks a camera or a video (calibrated from the clicks, or found automatically)
+    and sends each frame's ten bytes over UDP, paced in real time. ``--params`` replays a
+    recorded track instead: a CSV track, a packet-stream file (``.ifs``) or an MPEG-4 FAP file
+    (``.fap``). ``--record OUT.ifs`` also keeps what was sent.
+
+receive
+    ``receive --port PORT [--art NAME] [--training SESSION] [--bind ADDR] [--out OUT.mp4 | --frames N]``
+    listens on 127.0.0.1 (``--bind`` to change), draws every received frame with the character
+    into ``--out`` (MP4 / GIF / PNGs), and can keep the received track (``--csv``, ``--record
+    OUT.ifs``, ``--fap``). It stops after ``--frames`` frames, after ``--timeout`` seconds
+    without packets once the stream started, or on Ctrl-C, and prints the link statistics.
+
+Expected errors print one line, ``inkface: <message>``, and exit with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from app.net import NetError, Sender, UdpReceiver, check_port, parse_address
+from tracker.params import LOST, OK, PARAM_NAMES, FaceParams, TrackFormatError, params_array, read_csv, write_csv
+
+_MOUTH_PER_IPD = 0.8  # typical adult proportion, used only when a CSV track comes without its ipd
+
+
+class _Fail(Exception):
+    """An expected failure with a one-line message."""
+
+
+def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
+    if command == "send":
+        parser.add_argument("--to", required=True, metavar="HOST:PORT", help="where to send (e.g. 127.0.0.1:9000)")
+        src = parser.add_mutually_exclusive_group()
+        src.add_argument("--camera", type=int, metavar="N", help="camera index (the default source: camera 0)")
+        src.add_argument("--video", metavar="FILE", help="track a video file")
+        src.add_argument("--params", metavar="TRACK", help="replay a track: CSV, packet stream (.ifs) or FAP (.fap)")
+        init = parser.add_mutually_exclusive_group()
+        init.add_argument("--init", metavar="CLICKS.json", help="calibration clicks (see DESIGN.md)")
+        init.add_argument("--auto", action="store_true", help="find the face automatically")
+        parser.add_argument("--compress", action="store_true", help="temporal compression (lossless, ~3x fewer bits)")
+        parser.add_argument("--key-interval", type=int, default=30, metavar="N",
+                            help="with --compress: a key frame every N frames (default 30)")
+        parser.add_argument("--fps", type=float, metavar="F", help="send rate (default: the source's)")
+        parser.add_argument("--ipd", type=float, metavar="PX", help="inter-pupil distance of a CSV track (pixels)")
+        parser.add_argument("--frame-size", metavar="WxH", help="frame size of a CSV track (default 640x480)")
+        parser.add_argument("--frames", type=int, metavar="N", help="stop after N frames")
+        parser.add_argument("--record", metavar="OUT.ifs", help="also write what was sent as a packet-stream file")
+        parser.add_argument("--quiet", action="store_true", help="no progress line")
+    else:
+        parser.add_argument("--port", required=True, metavar="PORT", help="UDP port to listen on")
+        parser.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
+                            help="address to listen on (default 127.0.0.1; 0.0.0.0 for all)")
+        parser.add_argument("--art", metavar="NAME|DIR", help="the character (default: the first bundled one)")
+        parser.add_argument("--training", metavar="SESSION", help="a saved training session for the character")
+        parser.add_argument("--out", metavar="OUT.mp4", help="draw the character into a video / GIF / PNGs")
+        parser.add_argument("--frames", type=int, metavar="N", help="stop after N received frames")
+        parser.add_argument("--timeout", type=float, default=5.0, metavar="S",
+                            help="stop after S seconds without packets once the stream started (default 5; 0 = never)")
+        parser.add_argument("--wait", type=float, default=0.0, metavar="S",
+                            help="give up if nothing arrives within S seconds (default 0 = wait forever)")
+        parser.add_argument("--csv", metavar="OUT.csv", help="write the received track as CSV")
+        parser.add_argument("--record", metavar="OUT.ifs", help="write the received track as a packet-stream file")
+        parser.add_argument("--fap", metavar="OUT.fap", help="write the received track as MPEG-4 FAPs")
+        parser.add_argument("--quiet", action="store_true", help="no progress line")
+
+
+def run(args) -> int:
+    try:
+        return _send(args) if args.command == "send" else _receive(args)
+    except KeyboardInterrupt:
+        return 130
+    except _Fail as e:
+        print(f"inkface: {e}", file=sys.stderr)
+        return 2
+    except Exception as e:  # the project's one-line errors (track, stream, FAP, clicks, art set, ...)
+        if not _expected(e):
+            raise
+        msg = str(e).strip().splitlines()
+        print(f"inkface: {msg[0] if msg else type(e).__name__}", file=sys.stderr)
+        return 2
+
+
+def _expected(e: Exception) -> bool:
+    """Errors that carry a user-facing one-line message: ValueError subclasses of ours and OS errors."""
+    return isinstance(e, (NetError, TrackFormatError, OSError)) or (
+        isinstance(e, (ValueError, RuntimeError)) and type(e).__module__.split(".")[0] in ("tracker", "art_sets", "training", "morph", "app")
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# send
+
+
+@dataclass
+class _Track:
+    rows: list[FaceParams]
+    frame_size: tuple[int, int]
+    ipd: float
+    fps: float
+    neutral: FaceParams | None
+
+
+def _frame_size(text: str | None) -> tuple[int, int] | None:
+    if text is None:
+        return None
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise _Fail(f"frame size {text!r} must be WxH, e.g. 640x480") from None
+    if w <= 0 or h <= 0:
+        raise _Fail(f"frame size {text!r} must be positive")
+    return w, h
+
+
+def _rate(rows: list[FaceParams]) -> float:
+    t = np.array([r.time for r in rows], dtype=np.float64)
+    dt = np.diff(t[np.isfinite(t)])
+    dt = dt[dt > 0]
+    return float(1.0 / np.median(dt)) if len(dt) else 30.0
+
+
+def _load_track(args) -> _Track:
+    path = Path(args.params)
+    suffix = path.suffix.lower()
+    if suffix == ".ifs":
+        from tracker.stream_codec import read_track_stream
+
+        header, rows = read_track_stream(path)
+        neutral = None
+        if header.neutral is not None:
+            from tracker.params import ParamCodec
+
+            neutral = ParamCodec(header.frame_size, header.ipd).decode(bytes(header.neutral))
+        return _Track(rows, header.frame_size, header.ipd, header.fps, neutral)
+    if suffix == ".fap":
+        from tracker.fap import read_fap
+
+        fap = read_fap(path)
+        size = _frame_size(args.frame_size) or (640, 480)
+        return _Track(fap.rows, size, fap.fapu.es0, fap.fps, fap.neutral)
+    rows = read_csv(path)
+    if not rows:
+        raise _Fail(f"{path}: the track has no frames")
+    vals = params_array(r for r in rows if r.status != LOST)
+    if len(vals) == 0:
+        vals = params_array(rows)
+    neutral = FaceParams.from_values(np.nanmedian(vals, axis=0), status=OK)
+    ipd = args.ipd
+    if ipd is None and args.init:
+        from tracker.clicks import Clicks
+
+        c = Clicks.load(args.init)
+        ipd = float(math.dist(c.left_pupil, c.right_pupil))
+    if ipd is None:
+        ipd = neutral.mouth_width / _MOUTH_PER_IPD
+        if not args.quiet:
+            print(f"inkface: {path.name} has no ipd; assuming {ipd:.1f} px from the mouth width (use --ipd)", file=sys.stderr)
+    if not (math.isfinite(ipd) and ipd > 0):
+        raise _Fail(f"{path}: cannot tell the inter-pupil distance; pass --ipd PX")
+    size = _frame_size(args.frame_size) or (640, 480)
+    return _Track(rows, size, float(ipd), _rate(rows), neutral)
+
+
+def _tracked_frames(args):
+    """Yield ``(frame_size, ipd, neutral, fps)`` once, then FaceParams for every tracked frame."""
+    try:
+        from tracker.sources import CameraSource, VideoFileSource
+        from tracker.calibration import calibrate
+        from tracker.face_tracker import FaceTracker
+    except ImportError as e:
+        raise _Fail(f"the tracker is not available in this build ({e}); replay a track with --params") from None
+
+    def open_source():
+        return VideoFileSource(args.video) if args.video else CameraSource(args.camera or 0)
+
+    if args.init:
+        from tracker.clicks import Clicks
+
+        clicks = Clicks.load(args.init)
+    elif args.auto or not args.video:
+        clicks = None
+    else:
+        guess = Path(args.video).with_suffix(".clicks.json")
+        if not guess.exists():
+            raise _Fail(f"{args.video}: no --init CLICKS.json given and no {guess.name} beside it (or use --auto)")
+        from tracker.clicks import Clicks
+
+        clicks = Clicks.load(guess)
+    src = open_source()
+    try:
+        it = iter(src)
+        cal = None
+        first = 0 if clicks is None else clicks.frame
+        for fr in it:
+            if fr.index < first:
+                continue
+            if clicks is None:
+                from tracker.auto_init import auto_clicks
+
+                clicks = auto_clicks(fr.image)
+            cal = calibrate(fr.image, clicks)
+            break
+        if cal is None:
+            raise _Fail(f"{args.video or 'camera'}: no frame {first} to calibrate on")
+        yield src.size, cal.ipd, cal.neutral, src.fps
+        tracker = FaceTracker(cal)
+        if args.video:  # track the whole video from its first frame
+            src.close()
+            src = open_source()
+            it = iter(src)
+        for fr in it:
+            yield tracker.track(fr.image, fr.index, fr.time).params
+    finally:
+        src.close()
+
+
+def _send(args) -> int:
+    host, port = parse_address(args.to)
+    if args.key_interval < 1:
+        raise _Fail(f"--key-interval must be at least 1, got {args.key_interval}")
+    if args.fps is not None and not args.fps > 0:
+        raise _Fail(f"--fps must be positive, got {args.fps}")
+    if args.params:
+        tr = _load_track(args)
+        frames = iter(tr.rows)
+        size, ipd, neutral, fps = tr.frame_size, tr.ipd, tr.neutral, tr.fps
+        paced = True
+    else:
+        frames = _tracked_frames(args)
+        size, ipd, neutral, fps = next(frames)
+        paced = bool(args.video)  # a camera paces itself
+    fps = args.fps or fps or 30.0
+    sent: list[FaceParams] = []
+    t0 = time.monotonic()
+    last_note = t0
+    with Sender((host, port), size, ipd, fps=fps, compress=args.compress, key_interval=args.key_interval,
+                neutral=neutral) as tx:  # fmt: skip
+        for i, p in enumerate(frames):
+            if args.frames is not None and i >= args.frames:
+                break
+            if paced:
+                delay = t0 + i / fps - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            tx.send(p)
+            sent.append(p)
+            now = time.monotonic()
+            if not args.quiet and sys.stderr.isatty() and now - last_note > 0.5:
+                last_note = now
+                print(f"\rsent {tx.stats.frames} frames, {tx.stats.payload_bits_per_frame:.1f} bits/frame", end="", file=sys.stderr)
+        if not args.quiet and sys.stderr.isatty():
+            print(file=sys.stderr)
+        st = tx.stats
+    if args.record:
+        from tracker.stream_codec import write_track_stream
+
+        write_track_stream(args.record, sent, size, tx.hello.ipd, fps=fps, compressed=args.compress,
+                           key_interval=args.key_interval, neutral=neutral)  # fmt: skip
+    dt = max(time.monotonic() - t0, 1e-9)
+    print(
+        f"sent {st.frames} frames to {host}:{port} in {dt:.1f} s: {st.payload_bits_per_frame:.1f} payload bits/frame "
+        f"({'compressed' if args.compress else 'plain'}), {8 * st.bytes / dt:.0f} bit/s in UDP payloads"
+    )
+    return 0
+
+
+# ---------------------------------------------------------------------------------------------
+# receive
+
+
+@dataclass
+class _NetCalibration:
+    """What the puppet needs of a calibration, learnt from the sender's hello."""
+
+    ipd: float
+    neutral: FaceParams
+    frame_size: tuple[int, int]
+
+
+class _Drawing:
+    """The character and the output file, built when the first hello tells the performer's face."""
+
+    def __init__(self, args) -> None:
+        self.args = args
+        self.puppet = None
+        self.writer = None
+        self.frames = 0
+
+    def _build(self, rx: UdpReceiver) -> None:
+        args = self.args
+        try:
+            from training.puppet import Puppet
+        except ImportError as e:
+            raise _Fail(f"drawing needs the live puppet (training.puppet), not available in this build ({e})") from None
+        from art_sets.io import load_artset
+        from art_sets.library import find_artset, list_bundled
+
+        if args.art:
+            art_dir = find_artset(args.art)
+        else:
+            bundled = list_bundled()
+            if not bundled:
+                raise _Fail("no bundled character is installed; pass --art DIR")
+            art_dir = bundled[0][1]
+        artset = load_artset(Path(art_dir))
+        session = None
+        if args.training:
+            from training.session import TrainingSession
+
+            session = TrainingSession.load(args.training, artset=artset, autosave=False)
+        else:
+            try:
+                from training.defaults import default_session
+
+                session = default_session(artset)
+            except ImportError:
+                session = None
+        hello = rx.hello
+        neutral = rx.neutral if rx.neutral is not None else None
+        cal = _NetCalibration(hello.ipd, neutral, hello.frame_size) if neutral is not None else None
+        self.puppet = Puppet(artset, calibration=cal, session=session, fps=max(1, int(round(hello.fps))))
+        if args.out:
+            from app.record import FrameWriter
+
+            self.writer = FrameWriter(args.out, fps=hello.fps)
+
+    def draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
+        if self.puppet is None:
+            self._build(rx)
+        pf = self.puppet.step_params(frame)
+        if self.writer is not None and pf is not None and getattr(pf, "rgba_pm", None) is not None:
+            self.writer.write(pf.rgba_pm)
+            self.frames += 1
+
+    def close(self) -> str:
+        if self.writer is None:
+            return ""
+        path = self.writer.close()
+        return f"wrote {path} ({self.frames} frames)"
+
+
+def _receive(args) -> int:
+    port = check_port(args.port)
+    if args.frames is not None and args.frames < 1:
+        raise _Fail(f"--frames must be at least 1, got {args.frames}")
+    if args.out and not args.frames and not args.timeout:
+        raise _Fail("--out needs --frames N or a --timeout to know when the recording ends")
+    drawing = _Drawing(args) if (args.out or args.art or args.training) else None
+    got: list[FaceParams] = []
+    with UdpReceiver(port, bind=args.bind) as rx:
+        bound = rx.address
+        if not args.quiet:
+            print(f"listening on {bound[0]}:{bound[1]}", file=sys.stderr, flush=True)
+        start = time.monotonic()
+        last_note = start
+        try:
+            while True:
+                for f in rx.poll(0.1):
+                    got.append(f)
+                    if drawing is not None:
+                        drawing.draw(rx, f)
+                    if args.frames and len(got) >= args.frames:
+                        break
+                now = time.monotonic()
+                if args.frames and len(got) >= args.frames:
+                    break
+                if got and args.timeout and now - rx.last_arrival > args.timeout:
+                    break
+                if not got and args.wait and now - start > args.wait:
+                    raise _Fail(f"nothing received on {bound[0]}:{bound[1]} within {args.wait:g} s")
+                if not args.quiet and sys.stderr.isatty() and now - last_note > 1.0:
+                    last_note = now
+                    print(f"\r{rx.stats.summary()}   ", end="", file=sys.stderr)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            note = drawing.close() if drawing is not None else ""
+        stats = rx.stats
+        hello = rx.hello
+        neutral = rx.neutral
+    if not args.quiet and sys.stderr.isatty():
+        print(file=sys.stderr)
+    if args.csv:
+        write_csv(args.csv, got)
+    if args.record and hello is not None:
+        from tracker.stream_codec import write_track_stream
+
+        write_track_stream(args.record, got, hello.frame_size, hello.ipd, fps=hello.fps, compressed=hello.compressed,
+                           key_interval=hello.key_interval, neutral=neutral)  # fmt: skip
+    if args.fap and hello is not None:
+        from tracker.fap import write_fap
+
+        ref = neutral
+        if ref is None and got:
+            ref = FaceParams.from_values(np.nanmedian(params_array(got), axis=0))
+        if ref is not None:
+            write_fap(args.fap, got, ref, hello.ipd, fps=hello.fps)
+    if note:
+        print(note)
+    print(f"received {stats.summary()}")
+    return 0
