@@ -28,6 +28,7 @@ from PIL import Image
 from art_sets.model import ArtSet, Drawing, Part
 
 FIT_MODES = ("resize", "crop")
+HOLE_MARGIN = 2.0  # px along a part box's edge that holes leave closed (the validator checks 2)
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif", ".tif", ".tiff", ".webp")
 
 
@@ -590,18 +591,26 @@ def hit_line(point: Sequence[float], lines: np.ndarray, radius: float) -> tuple[
 # ----------------------------------------------------------------------------- masks
 
 
-def hole_mask(canvas: tuple[int, int], boxes: Iterable[Sequence[int]], radius: float) -> np.ndarray:
+def hole_mask(
+    canvas: tuple[int, int], boxes: Iterable[Sequence[int]], radius: float, margin: float = HOLE_MARGIN
+) -> np.ndarray:
     """How much of the head to cut away for the parts: float32 ``(h, w)``, 1 = fully open.
 
-    Each box becomes a rounded rectangle that is fully open ``radius`` pixels inside the box edge
-    and fades smoothly to closed at the edge, so the drawings' borders never show.
+    Each box becomes a rounded rectangle: closed on the ``margin`` pixels along the box edge,
+    then fading in smoothly over ``radius`` pixels to fully open, so the rectangle of a drawing
+    never shows around the face.
     """
     w, h = int(canvas[0]), int(canvas[1])
     r = max(float(radius), 0.0)
+    m = max(float(margin), 0.0)
     xs = np.arange(w, dtype=np.float32) + 0.5
     ys = np.arange(h, dtype=np.float32) + 0.5
     out = np.zeros((h, w), np.float32)
-    for bx, by, bw, bh in boxes:
+    for obx, oby, obw, obh in boxes:
+        bx, by = obx + m, oby + m
+        bw, bh = max(obw - 2 * m, 0.0), max(obh - 2 * m, 0.0)
+        if bw <= 0 or bh <= 0:
+            continue
         rr = min(r, bw / 2.0, bh / 2.0)
         x0, x1 = bx + rr, bx + bw - rr
         y0, y1 = by + rr, by + bh - rr
@@ -613,8 +622,7 @@ def hole_mask(canvas: tuple[int, int], boxes: Iterable[Sequence[int]], radius: f
             v = t * t * (3.0 - 2.0 * t)
         else:
             v = (d <= 0).astype(np.float32)
-        inside = np.zeros((h, w), bool)
-        inside[max(by, 0):max(by + bh, 0), max(bx, 0):max(bx + bw, 0)] = True
+        inside = ((xs[None, :] >= bx) & (xs[None, :] <= bx + bw)) & ((ys[:, None] >= by) & (ys[:, None] <= by + bh))
         out = np.maximum(out, np.where(inside, v, 0.0).astype(np.float32))
     return out
 
@@ -692,8 +700,16 @@ def paint_alpha(
     if x1 <= x0 or y1 <= y0:
         return out
     wgt = np.zeros((y1 - y0, x1 - x0), np.float32)
-    for p in dense:
-        np.maximum(wgt, brush(wgt.shape, (p[0] - x0, p[1] - y0), radius, hardness), out=wgt)
+    rr = int(np.ceil(radius)) + 1
+    for p in dense:  # each stamp only touches its own small window
+        lx0 = max(int(np.floor(p[0])) - rr - x0, 0)
+        ly0 = max(int(np.floor(p[1])) - rr - y0, 0)
+        lx1 = min(int(np.ceil(p[0])) + rr + 1 - x0, wgt.shape[1])
+        ly1 = min(int(np.ceil(p[1])) + rr + 1 - y0, wgt.shape[0])
+        if lx1 <= lx0 or ly1 <= ly0:
+            continue
+        win = wgt[ly0:ly1, lx0:lx1]
+        np.maximum(win, brush(win.shape, (p[0] - x0 - lx0, p[1] - y0 - ly0), radius, hardness), out=win)
     wgt *= float(np.clip(strength, 0.0, 1.0))
     a = out[y0:y1, x0:x1, 3].astype(np.float32)
     target = 0.0 if erase else 255.0

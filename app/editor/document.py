@@ -108,6 +108,7 @@ class EditorDocument(QObject):
         self.line = -1
         self.head = 0
         self.issues: list[Issue] = []
+        self._base_heads: dict = {}  # head file -> the head as loaded/added, before holes were cut
         self._autosave_timer = QTimer(self)
         self._autosave_timer.setSingleShot(True)
         self._autosave_timer.setInterval(autosave_delay_ms)
@@ -181,6 +182,7 @@ class EditorDocument(QObject):
     def _set_document(self, art: ArtSet, path: Path | None) -> None:
         self.artset = art
         self.path = path
+        self._base_heads = dict(zip(art.head_files, art.heads))
         self.undo_stack.clear()
         self.part = "mouth" if art.mouth.drawings or not art.eyes.drawings else "eyes"
         self.drawing, self.line, self.head = 0, -1, 0
@@ -270,8 +272,11 @@ class EditorDocument(QObject):
 
     def add_heads(self, paths: Iterable[str | Path], fit: str = "resize") -> list[int]:
         images = [ed.load_image(p) for p in paths]
-        return self.edit(f"add {len(images)} head(s)", lambda art: [ed.add_head(art, im, fit) for im in images],
-                         select={"head": lambda r: r[0] if r else self.head})
+        added = self.edit(f"add {len(images)} head(s)", lambda art: [ed.add_head(art, im, fit) for im in images],
+                          select={"head": lambda r: r[0] if r else self.head})
+        for i in added:
+            self._base_heads[self.artset.head_files[i]] = self.artset.heads[i]
+        return added
 
     def remove_head(self, index: int) -> None:
         self.edit("remove head", lambda art: ed.remove_head(art, index))
@@ -320,6 +325,15 @@ class EditorDocument(QObject):
         self.edit("move pivot", fn)
 
     def make_holes(self, radius: float, base_heads=None) -> None:
+        """Cut feathered holes for the part boxes into every head.
+
+        Holes are cut into the heads as they were loaded or added (so moving a box and cutting
+        again moves the hole instead of adding a second one); brush strokes made since are redone
+        by hand.
+        """
+        if base_heads is None and self.artset is not None:
+            base_heads = [self._base_heads.get(f, h) for f, h in zip(self.artset.head_files, self.artset.heads)]
+            base_heads = [b if b.shape == h.shape else h for b, h in zip(base_heads, self.artset.heads)]
         self.edit(f"cut holes (radius {radius:g})", lambda art: ed.make_holes(art, radius, base_heads))
 
     def paint(self, head: int | None, points, radius: float, erase: bool = True, hardness: float = 0.5) -> None:
@@ -354,6 +368,9 @@ class EditorDocument(QObject):
         for pname, p in saved.parts.items():
             for d, s in zip(self.artset.parts[pname].drawings, p.drawings):
                 d.file = s.file
+        for old, new in zip(self.artset.head_files, saved.head_files):
+            if old in self._base_heads:
+                self._base_heads[new] = self._base_heads[old]
         self.artset.head_files = list(saved.head_files)
         old_side = autosave_dir_for(self.path)
         self.path = target

@@ -1,0 +1,416 @@
+"""The art-set editor window, driven through the same actions and canvases its UI uses (offscreen)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image, ImageDraw
+
+pytest.importorskip("PySide6")
+pytest.importorskip("pytestqt")
+
+from PySide6.QtCore import QPoint, Qt  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
+
+from art_sets import editing as ed  # noqa: E402
+from art_sets.io import load_artset  # noqa: E402
+from art_sets.validate import validate  # noqa: E402
+
+
+# ----------------------------------------------------------------------------- generated images
+
+
+def _head(path: Path, size=(240, 280), tint=0) -> Path:
+    im = Image.new("RGBA", size, (0, 0, 0, 0))
+    dr = ImageDraw.Draw(im)
+    dr.ellipse([12, 8, size[0] - 12, size[1] - 8], fill=(245, 205 - tint, 170, 255), outline=(30, 20, 20, 255), width=5)
+    dr.arc([40, 20, size[0] - 40, 120], 200, 340, fill=(60, 40, 20, 255), width=8)
+    im.save(path)
+    return path
+
+
+def _eyes(path: Path, k: int, size=(120, 48)) -> Path:
+    w, h = size
+    im = Image.new("RGBA", size, (245, 205, 170, 255))
+    dr = ImageDraw.Draw(im)
+    for cx in (w * 0.28, w * 0.72):
+        dr.ellipse([cx - 14, h * 0.55 - 3 - 4 * k, cx + 14, h * 0.55 + 3 + 4 * k], fill=(255, 255, 255, 255), outline=(0, 0, 0, 255), width=2)
+        dr.line([cx - 16, h * 0.2 - 2 * k, cx + 16, h * 0.2 - 2 * k + (4 if k == 2 else 0)], fill=(40, 20, 10, 255), width=3)
+    im.save(path)
+    return path
+
+
+def _mouth(path: Path, k: int, size=(90, 44)) -> Path:
+    w, h = size
+    im = Image.new("RGBA", size, (245, 205, 170, 255))
+    dr = ImageDraw.Draw(im)
+    dr.chord([w * 0.15, h * 0.2, w * 0.85, h * (0.45 + 0.15 * k)], 0, 180, fill=(120, 20, 30, 255), outline=(0, 0, 0, 255), width=2)
+    im.save(path)
+    return path
+
+
+@pytest.fixture
+def images(tmp_path):
+    src = tmp_path / "src"
+    src.mkdir()
+    heads = [_head(src / "head_a.png"), _head(src / "head_b.png", tint=12)]
+    eyes = [_eyes(src / f"{n}.png", k) for k, n in enumerate(["open", "closed", "wide"])]
+    mouths = [_mouth(src / f"{n}.png", k) for k, n in enumerate(["neutral", "smile", "ah"])]
+    return heads, eyes, mouths
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, monkeypatch):
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    from app.editor.window import EditorWindow
+
+    def make():
+        win = EditorWindow(autosave_delay_ms=30)
+        win.confirm_close = lambda: "discard"
+        win.ask_recover = lambda path, side: False
+        win.ask_fit = lambda key, names: "resize"
+        qtbot.addWidget(win)
+        win.show()
+        qtbot.waitExposed(win)
+        return win
+
+    return make
+
+
+def _drag(qtbot, widget, pts_image, buttons=Qt.LeftButton):
+    """Press at the first image point, move through the rest, release at the last."""
+    wpts = [widget.to_widget(x, y).toPoint() for x, y in pts_image]
+    QTest.mousePress(widget, buttons, Qt.NoModifier, wpts[0])
+    for p in wpts[1:]:
+        QTest.mouseMove(widget, p)
+    QTest.mouseRelease(widget, buttons, Qt.NoModifier, wpts[-1])
+
+
+def _lines_everywhere(doc, part):
+    """Give a part three lines and place them in every drawing (what an artist would do)."""
+    w, h = doc.artset.parts[part].size
+    base = [[0.2 * w, 0.3 * h, 0.45 * w, 0.3 * h], [0.55 * w, 0.3 * h, 0.8 * w, 0.3 * h], [0.3 * w, 0.7 * h, 0.7 * w, 0.7 * h]]
+    first = [doc.add_line(part, 0, ln) for ln in base]
+    for di in range(1, len(doc.artset.parts[part].drawings)):
+        for i, ln in zip(first, base):
+            doc.move_line(part, di, i, np.add(ln, [0, di, 0, di]))
+
+
+# ----------------------------------------------------------------------------- tests
+
+
+def test_build_character_draw_save_reload_validate(make_window, images, tmp_path, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Blob", heads, eyes, mouths, author="tests")
+    art = doc.artset
+    assert [d.name for d in art.eyes.drawings] == ["open", "closed", "wide"]
+    assert len(art.heads) == 2 and art.canvas == (240, 280)
+
+    # draw the first mouth line with the mouse on the lines canvas, then move one end
+    win.tabs.setCurrentIndex(0)
+    doc.select(part="mouth", drawing=0)
+    canvas = win.line_canvas
+    qtbot.waitUntil(lambda: canvas.width() > 300)
+    _drag(qtbot, canvas, [(10, 10), (30, 12), (60, 14)])
+    assert ed.line_count(doc.artset.mouth) == 1
+    np.testing.assert_allclose(doc.artset.mouth.drawings[0].lines[0], [10, 10, 60, 14], atol=0.6 / canvas.scale() + 0.5)
+    assert doc.line == 0
+    assert ed.missing_lines(doc.artset, "mouth")[0] == ["smile", "ah"]
+    doc.select(drawing=1)
+    _drag(qtbot, canvas, [(60, 14), (70, 30)])  # grab the end of the copied line in "smile"
+    ln = doc.artset.mouth.drawings[1].lines[0]
+    assert abs(ln[2] - 70) < 1 and abs(ln[3] - 30) < 1 and abs(ln[0] - 10) < 1
+    assert "smile" not in ed.missing_lines(doc.artset, "mouth")[0]
+    doc.select(drawing=2)
+    doc.accept_lines("mouth", 2)
+    _lines_everywhere(doc, "eyes")
+    _lines_everywhere(doc, "mouth")
+    # the problems panel lists nothing left to place
+    assert not [i for i in doc.issues if "not placed" in i.message]
+
+    win.radius_spin.setValue(6)
+    win.cut_holes()
+    x, y, w, h = doc.artset.mouth.box
+    assert doc.artset.heads[0][y + h // 2, x + w // 2, 3] == 0
+
+    folder = tmp_path / "blob"
+    doc.save(folder)
+    assert validate(folder) == []
+    back = load_artset(folder)
+    assert ed.same_artset(back, doc.artset)
+    assert not doc.dirty and not (folder / ".artset.autosave").exists()
+    win.problems.refill()
+    assert "no problems" in win.problems.item(0).text()
+
+
+def test_undo_redo_restore_exactly(make_window, images, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Undo", heads, eyes, mouths)
+    states = [ed.clone(doc.artset)]
+    steps = [
+        lambda: doc.add_line("eyes", 0, [5, 5, 50, 9]),
+        lambda: doc.add_line("eyes", 1, [60, 5, 100, 20]),
+        lambda: doc.move_line("eyes", 2, 0, [6, 7, 48, 12]),
+        lambda: doc.copy_lines("eyes", 0, 2),
+        lambda: doc.set_box("mouth", (70, 170, 110, 50)),
+        lambda: doc.make_holes(5.0),
+        lambda: doc.paint(0, [(120, 60), (140, 70)], 9, erase=True),
+        lambda: doc.rename_drawing("mouth", 1, "Grin"),
+        lambda: doc.delete_line("eyes", 0),
+        lambda: doc.set_pivot((100, 200)),
+        lambda: doc.remove_head(1),
+    ]
+    for step in steps:
+        step()
+        states.append(ed.clone(doc.artset))
+    assert doc.artset.mouth.names()[1] == "grin" and len(doc.artset.heads) == 1
+    for k in range(len(steps), 0, -1):
+        assert ed.same_artset(doc.artset, states[k])
+        doc.undo_stack.undo()
+    assert ed.same_artset(doc.artset, states[0])
+    for k in range(1, len(steps) + 1):
+        doc.undo_stack.redo()
+        assert ed.same_artset(doc.artset, states[k])
+
+
+def test_crash_mid_save_leaves_previous_set_intact(make_window, images, tmp_path, monkeypatch):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Crash", heads, eyes, mouths)
+    _lines_everywhere(doc, "eyes")
+    _lines_everywhere(doc, "mouth")
+    doc.make_holes(6)
+    folder = tmp_path / "crash"
+    doc.save(folder)
+    old_json = (folder / "artset.json").read_bytes()
+    old = load_artset(folder)
+    # edits that change pixels of files the old manifest names
+    doc.replace_image("mouth", 1, _mouth(tmp_path / "src" / "other.png", 2, size=(100, 50)))
+    doc.paint(None, [(100, 40), (140, 40)], 12, erase=True)
+    doc.move_line("eyes", 1, 0, [3, 3, 40, 20])
+
+    real_replace = os.replace
+    calls = {"n": 0}
+
+    def dying_replace(src, dst):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise OSError("simulated crash while saving")
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", dying_replace)
+    with pytest.raises(OSError):
+        doc.save(folder)
+    monkeypatch.setattr(os, "replace", real_replace)
+    assert calls["n"] == 4
+    assert (folder / "artset.json").read_bytes() == old_json
+    assert validate(folder) == []
+    assert ed.same_artset(load_artset(folder), old)
+    assert doc.dirty
+    doc.save(folder)  # and a later save succeeds
+    assert validate(folder) == []
+    assert ed.same_artset(load_artset(folder), doc.artset)
+
+
+def test_autosave_appears_and_is_offered_back(make_window, images, tmp_path, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Auto", heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(6)
+    folder = tmp_path / "auto"
+    win.doc.save(folder)
+    side = folder / ".artset.autosave" / "artset.json"
+    assert not side.exists()
+    win.doc.move_line("mouth", 2, 1, [30, 20, 60, 30])
+    qtbot.waitUntil(side.exists, timeout=10000)
+    win.doc.wait_autosave()
+    edited = ed.clone(win.doc.artset)
+    # a new window opening the folder is offered the newer side copy
+    asked = []
+    win2 = make_window()
+    win2.ask_recover = lambda path, s: asked.append(path) or True
+    assert win2.open_path(folder)
+    assert asked == [folder]
+    np.testing.assert_array_equal(win2.doc.artset.mouth.drawings[2].lines, edited.mouth.drawings[2].lines)
+    assert win2.doc.dirty
+    # declining the offer opens the saved set and drops the side copy
+    win3 = make_window()
+    win3.ask_recover = lambda path, s: False
+    assert win3.open_path(folder)
+    assert not win3.doc.dirty and not side.exists()
+    assert not np.array_equal(win3.doc.artset.mouth.drawings[2].lines, edited.mouth.drawings[2].lines)
+
+
+def test_other_sizes_offered_resize_or_crop(make_window, images, tmp_path):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Sizes", heads, eyes, mouths)
+    big = _mouth(tmp_path / "src" / "grin.png", 2, size=(180, 70))
+    same = _mouth(tmp_path / "src" / "frown.png", 0)
+    asked = []
+    win.ask_fit = lambda key, names: asked.append((key, names)) or None
+    win.add_files("mouth", [big])
+    assert asked == [("mouth", ["grin.png"])] and "grin" not in win.doc.artset.mouth.names()
+    win.ask_fit = lambda key, names: "crop"
+    win.add_files("mouth", [big, same])
+    m = win.doc.artset.mouth
+    assert m.names()[-2:] == ["grin", "frown"]
+    assert all(d.size == m.size for d in m.drawings)
+    # a cropped drawing keeps its centre pixels unscaled
+    src = np.asarray(Image.open(big).convert("RGBA"))
+    w, h = m.size
+    np.testing.assert_array_equal(m.drawings[-2].image[h // 2], src[35 - h // 2 + h // 2, 90 - w // 2:90 - w // 2 + w])
+    win.add_files("heads", [_head(tmp_path / "src" / "head_c.png", size=(300, 350))])
+    assert len(win.doc.artset.heads) == 3 and win.doc.artset.heads[2].shape[:2] == (280, 240)
+
+
+def test_head_canvas_drags_boxes_and_paints_holes(make_window, images, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Head", heads, eyes, mouths)
+    win.tabs.setCurrentIndex(1)
+    hc = win.head_canvas
+    qtbot.waitUntil(lambda: hc.width() > 300)
+    x, y, w, h = doc.artset.mouth.box
+    _drag(qtbot, hc, [(x + w / 2, y + h / 2), (x + w / 2 + 10, y + h / 2 + 5), (x + w / 2 + 20, y + h / 2 + 10)])
+    nx, ny, nw, nh = doc.artset.mouth.box
+    assert (nw, nh) == (w, h) and abs(nx - (x + 20)) <= 2 and abs(ny - (y + 10)) <= 2
+    assert doc.part == "mouth"
+    # resize from the bottom-right corner: the drawings follow the box
+    _drag(qtbot, hc, [(nx + nw, ny + nh), (nx + nw + 20, ny + nh + 8)])
+    assert doc.artset.mouth.size[0] > nw and all(d.size == doc.artset.mouth.size for d in doc.artset.mouth.drawings)
+    doc.undo_stack.undo()
+    assert doc.artset.mouth.box == (nx, ny, nw, nh)
+    # paint a hole in every head
+    win.mode_paint.setChecked(True)
+    win.brush_spin.setValue(8)
+    before = [hd[:, :, 3].copy() for hd in doc.artset.heads]
+    _drag(qtbot, hc, [(100, 150), (130, 150)])
+    for hd, b in zip(doc.artset.heads, before):
+        assert hd[150, 115, 3] < b[150, 115] // 4
+        assert hd[30, 120, 3] == b[30, 120]
+    _drag(qtbot, hc, [(100, 150), (130, 150)], buttons=Qt.RightButton)  # and close it again
+    assert doc.artset.heads[0][150, 115, 3] > 200
+
+
+def test_problems_panel_and_line_selection(make_window, images, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Probs", heads, eyes[:2], mouths)
+    doc.add_line("mouth", 0, [5, 5, 40, 9])
+    doc.add_line("mouth", 0, [5, 20, 40, 25])
+    qtbot.waitUntil(lambda: any(i.severity == "error" for i in doc.issues), timeout=10000)
+    texts = [win.problems.item(k).text() for k in range(win.problems.count())]
+    assert any("at least 3" in t and "eyes" in t for t in texts)  # the validator's problem
+    todo = [k for k, i in enumerate(doc.issues) if i.line == 1 and i.part == "mouth" and "ah" in i.message]
+    assert todo
+    row = next(r for r in range(win.problems.count()) if win.problems.item(r).data(Qt.UserRole) == todo[0])
+    doc.select(part="eyes")
+    win.problems.itemClicked.emit(win.problems.item(row))
+    assert (doc.part, doc.drawing, doc.line) == ("mouth", 2, 1)
+    assert doc.artset.mouth.drawings[doc.drawing].name == "ah"
+    # the lines list shows where each line is missing and selects it everywhere
+    assert "to place in smile, ah" in win.lines_list.item(0).text()
+    win.lines_list.setCurrentRow(0)
+    assert doc.line == 0
+    # Delete removes the selected line from every drawing
+    win.line_canvas.setFocus()
+    QTest.keyClick(win.line_canvas, Qt.Key_Delete)
+    assert {len(d.lines) for d in doc.artset.mouth.drawings} == {1}
+
+
+def test_preview_slider_triangle_and_fallback(make_window, images, qtbot, monkeypatch):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Prev", heads, eyes, mouths)
+    _lines_everywhere(doc, "mouth")
+    pv = win.preview
+    pv.tabs.setCurrentIndex(0)
+    pv.combo_a.setCurrentIndex(0)
+    pv.combo_b.setCurrentIndex(2)
+    pv.slider.setValue(0)
+    pv.refresh()
+    part = doc.artset.mouth
+    img, pm = pv.engine.render(part, [0, 2], [1.0, 0.0])
+    if pm:  # a weight-1 morph is the drawing itself (premultiplied)
+        a = part.drawings[0].image.astype(np.float32)
+        np.testing.assert_allclose(img[:, :, 3], a[:, :, 3], atol=1)
+    assert pv.current_blend() == ([0, 2], [1.0, 0.0])
+    pv.slider.setValue(50)
+    assert pv.current_blend()[1] == [0.5, 0.5]
+    pv.tabs.setCurrentIndex(1)
+    pv.triangle.set_weights([0.2, 0.3, 0.5])
+    idx, w = pv.current_blend()
+    assert idx == [0, 1, 2]
+    np.testing.assert_allclose(w, [0.2, 0.3, 0.5], atol=0.02)
+    pv.refresh()
+    assert pv.morph_view._img is not None
+    # without the morph engine the preview still works and says so
+    from app.editor import preview as pvmod
+
+    eng = pvmod.MorphEngine()
+    eng._PartMorpher = eng._exact = None
+    out, premult = eng.render(part, [0, 1], [0.5, 0.5])
+    assert not premult and out.shape == part.drawings[0].image.shape
+    assert pvmod.MorphEngine().note == "" or "not available" in pvmod.MorphEngine().note
+
+
+def test_edit_command_line(tmp_path, capsys):
+    from app import editor_cmd
+
+    ns = argparse.Namespace(dir=str(tmp_path / "nope"), screenshot=None, command="edit")
+    assert editor_cmd.run(ns) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("inkface:") and "\n" not in err
+    (tmp_path / "empty").mkdir()
+    ns.dir = str(tmp_path / "empty")
+    assert editor_cmd.run(ns) == 2
+    assert "artset.json" in capsys.readouterr().err
+
+
+def test_open_editor_on_bundled_character(qtbot, tmp_path, monkeypatch):
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    try:
+        from art_sets.library import list_bundled
+
+        bundled = list_bundled()
+    except Exception:
+        bundled = []
+    if not bundled:
+        pytest.skip("no bundled characters yet")
+    from app.editor import open_editor
+
+    win = open_editor(bundled[0][1])
+    qtbot.addWidget(win)
+    win.confirm_close = lambda: "discard"
+    assert win.doc.artset is not None and win.doc.artset.name
+    assert len([i for i in win.doc.issues if i.severity == "error"]) == len(validate(bundled[0][1]))
+    assert not win.doc.dirty
+
+
+def test_recutting_holes_after_moving_a_box_moves_the_hole(make_window, images):
+    heads, eyes, mouths = images
+    win = make_window()
+    doc = win.doc
+    win.new_character("Move", heads, eyes, mouths)
+    doc.make_holes(5)
+    x, y, w, h = doc.artset.mouth.box
+    assert doc.artset.heads[0][y + h // 2, x + w // 2, 3] == 0
+    doc.set_box("mouth", (x, y + 40, w, h))
+    doc.make_holes(5)
+    assert doc.artset.heads[0][y + 5, x + w // 2, 3] == 255  # the old hole is closed again
+    assert doc.artset.heads[0][y + 40 + h // 2, x + w // 2, 3] == 0
