@@ -200,9 +200,9 @@ class DrawingCard(QWidget):
         self.thumb: QImage | None = None
         self.frame_no: int | None = None
         self.active = False
-        self.setFixedSize(QSize(248, 132))
+        self.setFixedSize(QSize(268, 134))
         self.btn = QPushButton("Use this frame", self)
-        self.btn.setGeometry(128, 96, 112, 28)
+        self.btn.setGeometry(128, 98, 132, 28)
         self.btn.clicked.connect(lambda: self.pairRequested.emit(self.part, self.name))
 
     def set_pair(self, thumb: QImage | None, frame_no: int | None) -> None:
@@ -231,7 +231,7 @@ class DrawingCard(QWidget):
         p.fillRect(pic, QColor(250, 248, 243))
         p.drawImage(fit_rect(self.drawing.width(), self.drawing.height(), pic), self.drawing)
         p.restore()
-        fr = QRectF(128, 8, 112, 84)
+        fr = QRectF(128, 8, 132, 84)
         if self.thumb is not None:
             path = QPainterPath()
             path.addRoundedRect(fr, 6, 6)
@@ -741,13 +741,15 @@ class TrainingWindow(QMainWindow):
             self.status.setText("Automatic pairing is not available in this build.")
             return
         try:
-            d = default_session(self.artset)
+            d = default_session(self.artset, thumbnails=True, reference=self.session.reference_track is None)
         except Exception as e:
             self.status.setText(f"Automatic pairing failed: {_one_line(e)}")
             return
         self.session.pairs = list(d.pairs)
         if self.session.features is None and d.features is not None:
             self.session.features = d.features
+        if self.session.reference_track is None and d.reference_track is not None:
+            self.session.reference_track = d.reference_track
         self.session._changed()
         self.status.setText(f"Paired automatically: {len(d.pairs)} pairs")
         self.refresh()
@@ -818,13 +820,17 @@ class TrainingWindow(QMainWindow):
             return
         loo = rep.get("loo") or []
         if loo:
-            lines.append("<br><b>Leave-one-out</b> (weight the other drawings' map gives each one; 1 = perfect):")
+            lines.append("<br><b>Leave-one-out</b>: each pair predicted by the others (own weight, 1 = perfect; "
+                         "a drawing with one pair shows what would stand in for it, and how far off that is):")
             for r in loo:
-                col = "#9ece6a" if r.weight_error < 0.34 else ("#e0af68" if r.weight_error < 0.67 else "#f7768e")
                 pred = ", ".join(f"{n} {w:.2f}" for n, w in r.predicted[:3])
-                note = " — the only pair of this drawing" if r.alone else ""
+                if r.alone:  # its own weight is 0 by construction: show what stands in for it
+                    lines.append(f"<span style='color:#6b6f76'>■</span> {r.name}: without it → {pred} "
+                                 f"<span style='color:#9aa0aa'>(error {r.recon_error:.3f})</span>")
+                    continue
+                col = "#9ece6a" if r.weight_error < 0.34 else ("#e0af68" if r.weight_error < 0.67 else "#f7768e")
                 lines.append(f"<span style='color:{col}'>■</span> {r.name}: {1 - r.weight_error:.2f} "
-                             f"<span style='color:#9aa0aa'>(from {pred}{note})</span>")
+                             f"<span style='color:#9aa0aa'>(from {pred}; error {r.recon_error:.3f})</span>")
         cov = rep.get("coverage")
         if cov is not None:
             lines.append(f"<br><b>Coverage</b>: {cov.outside_share:.0%} of the clip's {cov.frames} frames fall "
