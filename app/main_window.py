@@ -89,6 +89,7 @@ class MainWindow(QMainWindow):
         fake_source: Any = None,
         realtime: bool = True,
         start: bool = True,
+        calibration: Any = None,
     ):
         super().__init__()
         self.settings = settings or Settings()
@@ -98,7 +99,7 @@ class MainWindow(QMainWindow):
         self.frames_shown = 0
         self.recorder = None
         self._fake = fake_source
-        self._calibration = None
+        self._calibration = calibration  # given or made in the calibration window: wins over saved ones
         self._calibration_note = ""
         self._session = None
         self._art_names: dict[str, str] = {}
@@ -539,6 +540,9 @@ class MainWindow(QMainWindow):
         """The calibration for this source: the synthetic performer's own, the clicks beside a
         video file, or the performer's saved one."""
         self._calibration_note = ""
+        if self._calibration is not None and spec.kind != "performance":
+            self._calibration_note = "Calibrated in this session"
+            return self._calibration
         if spec.kind == "performance":
             self._calibration_note = "Bundled performer (calibrated from its own clicks)"
             return PERFORMANCE_CALIBRATION
