@@ -11,7 +11,9 @@ weights ``(length^p / (a + dist))^b`` where ``length`` is |Q' − P'| and ``dist
 0 <= u <= 1, else the distance from X to the nearer endpoint. Defaults: ``a = 1`` pixel (how
 strongly a line grips the pixels right on it: small ``a`` = precise control), ``b = 2`` (how fast
 influence falls off with distance), ``p = 0.5`` (longer lines count somewhat more).
-No lines (or only zero-length lines) give the identity.
+No lines (or only zero-length lines) give the identity. One line pair gives an affine map:
+translation and rotation of the line move the image rigidly; a longer line stretches it along the
+line only (``v`` is in pixels, so distances across the line are kept).
 
 The result is a *backward* map: for each destination pixel, where to sample the source image,
 ready for ``cv2.remap``. Images are warped and blended in premultiplied alpha (see ``morph``).

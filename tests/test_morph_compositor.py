@@ -1,0 +1,138 @@
+"""Compositor: boxes, head over parts, shimmer, rotation about the pivot; colour helpers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from morph.beier_neely import premultiply
+from morph.compositor import Compositor, over_background, to_straight
+
+CANVAS = (120, 100)
+
+
+def _clear_head():
+    return np.zeros((CANVAS[1], CANVAS[0], 4), np.uint8)
+
+
+def _part(w, h, colour):
+    p = np.zeros((h, w, 4), np.uint8)
+    p[:] = colour
+    return p
+
+
+def _centroid(img):
+    a = img[:, :, 3].astype(np.float64)
+    ys, xs = np.mgrid[0:a.shape[0], 0:a.shape[1]]
+    return np.array([(a * xs).sum() / a.sum(), (a * ys).sum() / a.sum()])
+
+
+def test_parts_land_in_their_boxes_under_a_clear_head():
+    boxes = {"eyes": (10, 20, 30, 10), "mouth": (50, 60, 40, 20)}
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], boxes)
+    eyes = _part(30, 10, (0, 0, 255, 255))
+    mouth = _part(40, 20, (128, 0, 0, 128))
+    out = c.compose({"eyes": eyes, "mouth": mouth})
+    assert np.array_equal(out[20:30, 10:40], eyes)
+    assert np.array_equal(out[60:80, 50:90], mouth)
+    rest = out.copy()
+    rest[20:30, 10:40] = 0
+    rest[60:80, 50:90] = 0
+    assert rest.max() == 0
+
+
+def test_head_lies_over_the_parts_with_its_soft_alpha():
+    head = _clear_head()
+    head[:] = (200, 100, 50, 255)
+    head[20:30, 10:40, 3] = 0  # a hole: the part shows fully
+    head[20:30, 25:40, 3] = 128  # half-feathered: half part, half head
+    c = Compositor(CANVAS, (60, 50), [head], {"eyes": (10, 20, 30, 10)})
+    out = c.compose({"eyes": _part(30, 10, (0, 0, 255, 255))})
+    hp = premultiply(head)
+    assert tuple(out[25, 15]) == (0, 0, 255, 255)
+    assert tuple(out[50, 50]) == tuple(hp[50, 50])
+    r, g, b, a = (int(v) for v in out[25, 30])
+    assert a == 255 and abs(b - (255 * 127 / 255 + hp[25, 30, 2])) <= 1 and abs(r - hp[25, 30, 0]) <= 1
+
+
+def test_heads_cycle_every_few_frames():
+    heads = [_clear_head(), _clear_head()]
+    heads[0][:, :, 3] = 255
+    heads[1][:, :, 3] = 255
+    heads[1][:, :, 0] = 255
+    c = Compositor(CANVAS, (60, 50), heads, {}, shimmer_every=3)
+    reds = [c.compose({}, frame_no=i)[0, 0, 0] for i in range(7)]
+    assert reds == [0, 0, 0, 255, 255, 255, 0]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-90, 90), st.floats(-10, 10), st.floats(-10, 10), st.floats(0.0, 2.0))
+def test_character_rotates_about_the_pivot_and_translates(roll, dx, dy, gain):
+    pivot = (60.0, 50.0)
+    head = _clear_head()
+    head[36:44, 76:84] = (255, 255, 255, 255)  # a blob centred at (79.5, 39.5)
+    c = Compositor(CANVAS, pivot, [head], {}, gain=gain)
+    out = c.compose({}, pose=(dx, dy, roll))
+    t = math.radians(roll * gain)
+    rel = np.array([79.5 - pivot[0], 39.5 - pivot[1]])
+    # positive roll turns counter-clockwise on screen (y down): the right side goes up
+    want = np.array(pivot) + [rel[0] * math.cos(t) + rel[1] * math.sin(t),
+                              -rel[0] * math.sin(t) + rel[1] * math.cos(t)] + np.array([dx, dy]) * gain
+    assert np.allclose(_centroid(out), want, atol=0.05)
+    assert abs(out[:, :, 3].sum() / 255.0 - 64) < 1.0
+
+
+def test_positive_roll_raises_the_right_side():
+    head = _clear_head()
+    head[48:52, 90:100] = 255
+    c = Compositor(CANVAS, (60, 50), [head], {})
+    assert _centroid(c.compose({}, pose=(0, 0, 20)))[1] < 49
+
+
+def test_overlapping_boxes_layer_parts_in_order():
+    boxes = {"a": (10, 10, 20, 20), "b": (20, 20, 20, 20)}
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], boxes)
+    out = c.compose({"a": _part(20, 20, (255, 0, 0, 255)), "b": _part(20, 20, (0, 255, 0, 255))})
+    assert tuple(out[15, 15]) == (255, 0, 0, 255)
+    assert tuple(out[25, 25]) == (0, 255, 0, 255)
+
+
+def test_boxes_partly_off_the_canvas_are_clipped():
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], {"m": (100, 90, 40, 20)})
+    out = c.compose({"m": _part(40, 20, (9, 9, 9, 255))})
+    assert (out[90:, 100:, 3] == 255).all() and out[:90, :, 3].max() == 0
+
+
+def test_bad_parts_and_heads_raise():
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], {"m": (0, 0, 10, 10)})
+    with pytest.raises(ValueError, match="its box needs"):
+        c.compose({"m": _part(5, 5, (0, 0, 0, 0))})
+    with pytest.raises(KeyError):
+        c.compose({"x": _part(5, 5, (0, 0, 0, 0))})
+    with pytest.raises(ValueError, match="head 0"):
+        Compositor(CANVAS, (0, 0), [np.zeros((5, 5, 4), np.uint8)], {})
+
+
+def test_straight_and_premultiplied_round_trip():
+    rng = np.random.default_rng(0)
+    img = rng.integers(0, 256, (20, 20, 4), dtype=np.uint8)
+    img[..., 3] = np.maximum(img[..., 3], 128)
+    back = to_straight(premultiply(img))
+    assert np.abs(back.astype(int) - img).max() <= 1
+    assert (to_straight(np.zeros((2, 2, 4), np.uint8)) == 0).all()
+
+
+def test_over_background_colour_and_image():
+    pm = np.zeros((4, 4, 4), np.uint8)
+    pm[0, 0] = (255, 0, 0, 255)  # opaque red
+    pm[1, 1] = (0, 0, 64, 128)  # half-transparent blue (premultiplied)
+    out = over_background(pm, (0, 255, 0))  # BGR green
+    assert tuple(out[0, 0]) == (0, 0, 255)
+    assert tuple(out[2, 2]) == (0, 255, 0)
+    assert tuple(out[1, 1]) == (64, 127, 0)
+    bg = np.full((4, 4, 3), 10, np.uint8)
+    assert tuple(over_background(pm, bg)[3, 3]) == (10, 10, 10)
