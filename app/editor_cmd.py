@@ -58,6 +58,8 @@ def run(args: argparse.Namespace) -> int:
             return 2
         win.open_path(path)
     win.show()
+    if path is None and not args.screenshot:
+        win.offer_untitled_recovery()
     if args.screenshot:
         qapp.processEvents()
         win.preview.refresh()

@@ -414,3 +414,18 @@ def test_recutting_holes_after_moving_a_box_moves_the_hole(make_window, images):
     doc.make_holes(5)
     assert doc.artset.heads[0][y + 5, x + w // 2, 3] == 255  # the old hole is closed again
     assert doc.artset.heads[0][y + 40 + h // 2, x + w // 2, 3] == 0
+
+
+def test_unsaved_new_character_is_autosaved_and_recovered(make_window, images, qtbot, tmp_path):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Fresh", heads, eyes, mouths)
+    win.doc.add_line("mouth", 0, [5, 5, 40, 20])
+    side = tmp_path / "userdata" / "editor-autosave" / "untitled" / "artset.json"
+    qtbot.waitUntil(side.exists, timeout=10000)
+    win.doc.wait_autosave()
+    win2 = make_window()
+    win2.ask_recover = lambda what, s: True
+    assert win2.offer_untitled_recovery()
+    assert win2.doc.artset.name == "Fresh" and win2.doc.path is None
+    np.testing.assert_array_equal(win2.doc.artset.mouth.drawings[0].lines, [[5, 5, 40, 20]])

@@ -25,9 +25,11 @@ def open_editor(path: str | Path | None = None, parent=None):
     if parent is not None:
         win.setWindowFlag(Qt.Window, True)
     win.setAttribute(Qt.WA_DeleteOnClose, True)
+    win.show()
     if path is not None:
         win.open_path(path)
-    win.show()
+    else:
+        win.offer_untitled_recovery()
     return win
 
 

@@ -66,6 +66,7 @@ class Issue:
     part: str | None = None
     drawing: int | None = None
     line: int | None = None
+    head: int | None = None
 
     def text(self) -> str:
         where = f"{self.file}: " if self.file else ""
@@ -502,6 +503,8 @@ class EditorDocument(QObject):
                 rel = Path(file).name
         issue = Issue("error", rel, msg)
         art = self.artset
+        if rel in art.head_files:
+            issue.head = art.head_files.index(rel)
         m = re.search(r"parts\.(\w+)|\b(eyes|mouth)\b", msg)
         if m:
             issue.part = m.group(1) or m.group(2)

@@ -198,6 +198,8 @@ class LinesList(QListWidget):
 class ProblemsList(QListWidget):
     """The validator's problems and the editor's to-dos; clicking one selects what it is about."""
 
+    issueActivated = Signal(object)  # the Issue clicked, after the selection moved to it
+
     def __init__(self, doc: EditorDocument, parent=None):
         super().__init__(parent)
         self.doc = doc
@@ -224,6 +226,6 @@ class ProblemsList(QListWidget):
         if k is None or k >= len(self.doc.issues):
             return
         issue = self.doc.issues[k]
-        if issue.part:
-            self.doc.select(part=issue.part, drawing=issue.drawing if issue.drawing is not None else None,
-                            line=issue.line if issue.line is not None else None)
+        if issue.part or issue.head is not None:
+            self.doc.select(part=issue.part, drawing=issue.drawing, line=issue.line, head=issue.head)
+        self.issueActivated.emit(issue)

@@ -159,11 +159,12 @@ class TriangleWidget(QWidget):
         w = self.weights()
         pt = QPointF(sum(wi * q.x() for wi, q in zip(w, c)), sum(wi * q.y() for wi, q in zip(w, c)))
         cols = [QColor(220, 80, 60), QColor(60, 140, 220), QColor(60, 170, 90)]
+        text = self.palette().color(self.foregroundRole())
         for q, col, lab, wi in zip(c, cols, self.labels, w):
             p.setPen(Qt.NoPen)
             p.setBrush(col)
             p.drawEllipse(q, 5, 5)
-            p.setPen(QColor(230, 230, 230))
+            p.setPen(text)
             off = QPointF(0, -16) if q.y() < pt.y() else QPointF(0, 16)
             p.drawText(QRectF(q.x() - 60 + off.x(), q.y() - 8 + off.y(), 120, 16), Qt.AlignCenter, f"{lab} {wi:.2f}")
         p.setPen(QPen(QColor(20, 20, 20), 2))

@@ -224,6 +224,13 @@ class EditorWindow(QMainWindow):
             gl.setContentsMargins(4, 4, 4, 4)
             lst = DropList()
             lst.setToolTip("drop image files here")
+            if key == "heads":
+                lst.setViewMode(DropList.IconMode)
+                lst.setFlow(DropList.LeftToRight)
+                lst.setWrapping(False)
+                lst.setIconSize(QSize(56, 56))
+                lst.setFixedHeight(96)
+                lst.setMovement(DropList.Static)
             lst.filesDropped.connect(lambda paths, k=key: self.add_files(k, paths))
             lst.currentRowChanged.connect(lambda row, k=key: self._list_picked(k, row))
             lst.itemDoubleClicked.connect(lambda it, k=key: self._rename(k))
@@ -240,7 +247,7 @@ class EditorWindow(QMainWindow):
                 ren.clicked.connect(lambda _=False, k=key: self._rename(k))
                 row.addWidget(ren)
             gl.addLayout(row)
-            ll.addWidget(g, 1 if key == "heads" else 2)
+            ll.addWidget(g, 0 if key == "heads" else 1)
             self.lists[key] = lst
         self._filling_lists = False
         dock = QDockWidget("Character", self)
@@ -263,6 +270,7 @@ class EditorWindow(QMainWindow):
         ld.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
         self.addDockWidget(Qt.BottomDockWidgetArea, ld)
         self.problems = ProblemsList(self.doc)
+        self.problems.issueActivated.connect(self._issue_activated)
         prd = QDockWidget("Problems", self)
         prd.setObjectName("problems")
         prd.setWidget(self.problems)
@@ -380,6 +388,10 @@ class EditorWindow(QMainWindow):
         finally:
             self._filling_lists = False
 
+    def _issue_activated(self, issue):
+        about_head = issue.head is not None or "box" in issue.message or "head" in issue.message
+        self.tabs.setCurrentIndex(1 if about_head and issue.line is None else 0)
+
     def _ghost_changed(self, *_):
         self.line_canvas.ghost = self.ghost_combo.currentIndex() - 1
         self.line_canvas.update()
@@ -429,6 +441,20 @@ class EditorWindow(QMainWindow):
         if side and not recover:
             self.doc.discard_autosave()
         self.tabs.setCurrentIndex(0)
+        return True
+
+    def offer_untitled_recovery(self) -> bool:
+        """If a never-saved character was autosaved, offer to reopen it (True if reopened)."""
+        from art_sets.io import ArtSetError
+
+        side = recoverable(None)
+        if side is None or not self.ask_recover("the unsaved character", side):
+            return False
+        try:
+            self.doc.open_recovered_untitled()
+        except (ArtSetError, OSError) as e:
+            self.statusBar().showMessage(f"could not recover: {' '.join(str(e).split())}", 8000)
+            return False
         return True
 
     def open_dialog(self):
