@@ -182,16 +182,43 @@ class CoreMissing(RuntimeError):
 
 def open_source(spec: SourceSpec):
     """Open the frame source a :class:`SourceSpec` names (raises ``SourceError`` one-liners)."""
-    from tracker import sources
-
+    try:
+        from tracker import sources
+    except ImportError:  # the foundation's sources are not in this build: read with OpenCV directly
+        sources = None
     if spec.kind == "camera":
-        return sources.CameraSource(spec.camera)
+        return sources.CameraSource(spec.camera) if sources else _Cv2Source(spec.camera, f"camera {spec.camera}")
     if spec.kind == "video":
-        return sources.VideoFileSource(spec.video)
+        return sources.VideoFileSource(spec.video) if sources else _Cv2Source(spec.video, spec.video)
     cached = performance_cache_path(spec.seconds, spec.seed)
     if cached.is_file():
-        return sources.VideoFileSource(str(cached))
+        return sources.VideoFileSource(str(cached)) if sources else _Cv2Source(str(cached), str(cached))
     return CachingPerformanceSource(bundled_performance(spec.seconds, spec.seed), cached)
+
+
+class _Cv2Source:
+    """Minimal OpenCV reader used only when ``tracker.sources`` is unavailable."""
+
+    def __init__(self, what, name: str):
+        import cv2
+
+        self._cap = cv2.VideoCapture(what)
+        if not self._cap.isOpened():
+            raise ValueError(f"{name}: cannot be opened")
+        self.fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 30.0) or 30.0
+        self.size = (int(self._cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self._cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+
+    def __iter__(self):
+        i = 0
+        while True:
+            ok, img = self._cap.read()
+            if not ok:
+                return
+            yield _Frame(i, i / self.fps, img)
+            i += 1
+
+    def close(self) -> None:
+        self._cap.release()
 
 
 def cache_dir() -> Path:

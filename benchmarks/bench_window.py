@@ -10,6 +10,7 @@ Two runs on frames of the bundled synthetic performance played by a fake camera:
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import statistics
 import tempfile
@@ -87,10 +88,11 @@ def run(ctx):
     app = QApplication.instance() or QApplication([])
 
     bundled = list_bundled()
+    missing = [m for m in ("tracker.sources", "training.puppet") if importlib.util.find_spec(m) is None]
     t = Table("Performance window loop (offscreen; capture + track + map + render + paint)",
               ["run", "frames shown", "seconds", "shown fps", "dropped (capture / display)", "ms per stage (median)"])
-    if not bundled:
-        t.note = "no bundled character installed: nothing to measure"
+    if not bundled or missing:
+        t.note = "nothing to measure: " + ("no bundled character installed" if not bundled else f"{', '.join(missing)} missing")
         return t
     art = str(bundled[0][1])
     perf = Performance(seconds=1.0 if ctx.quick else 4.0, seed=0)
