@@ -1,0 +1,111 @@
+"""Temporal compression of the 8-bit parameter stream: bits per frame and coder speed.
+
+Tracks: the synthetic performer's exact truth for a few styles (they differ in face size and
+roll; the truth carries no image noise) and seeds, the same with
+tracker-like jitter added, and (when the tracker is installed) the FaceTracker's own output on
+a rendered performance. Bits count frame payloads only (raw: 80 a frame); packet headers and
+IP/UDP headers are extra and reported in the note.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from benchmarks.harness import Table, benchmark, time_each
+from tracker.params import FaceParams, ParamCodec
+from tracker.stream_codec import STREAM_HEADER_SIZE, StreamDecoder, StreamEncoder, compress_frames
+
+
+def _bits(frames: list[bytes], key_interval: int) -> float:
+    coded = compress_frames(frames, key_interval)
+    return 8.0 * sum(len(p) for _, p in coded) / len(frames)
+
+
+def _worst_delta(frames: list[bytes]) -> int:
+    return max((8 * len(p) for k, p in compress_frames(frames, 30) if not k), default=0)
+
+
+def _truth(style: str, seed: int, seconds: float):
+    from tracker.synthetic import STYLES, Performance
+
+    perf = Performance(seconds=seconds, seed=seed, style=STYLES[style])
+    return perf, perf.truths()
+
+
+def _jitter(rows: list[FaceParams], sigma_px: float, seed: int) -> list[FaceParams]:
+    """Tracker-like noise: ``sigma_px`` on positions and lengths, 0.3 degrees on the roll."""
+    rng = np.random.default_rng(seed)
+    sigma = np.full(10, sigma_px)
+    sigma[2] = 0.3
+    return [FaceParams.from_values(r.values() + rng.normal(0, sigma), frame=r.frame, time=r.time, status=r.status)
+            for r in rows]  # fmt: skip
+
+
+def _tracked(seconds: float, seed: int) -> list[FaceParams] | None:
+    try:
+        from tracker.calibration import calibrate
+        from tracker.clicks import Clicks
+        from tracker.face_tracker import FaceTracker
+        from tracker.synthetic import STYLES, Performance
+    except ImportError:
+        return None
+    perf = Performance(seconds=seconds, seed=seed, style=STYLES["webcam"])
+    clicks = Clicks.from_dict(perf.clicks())
+    tracker = FaceTracker(calibrate(perf.frame(clicks.frame), clicks))
+    return [tracker.track(perf.frame(i), i, perf.time(i)).params for i in range(len(perf))]
+
+
+@benchmark("stream")
+def run(ctx):
+    seconds = 3.0 if ctx.quick else 20.0
+    styles = ["default", "small_far"] if ctx.quick else ["default", "small_far", "strong_roll"]
+    seeds = [0] if ctx.quick else [0, 1, 2]
+    t = Table(
+        f"Temporal compression, payload bits per frame ({seconds:g} s at 30 fps per track; raw = 80)",
+        ["track", "style", "seeds", "key 15", "key 30", "key 60", "max delta-frame bits (key 30)"],
+    )
+    all30 = []
+    sample: list[bytes] = []
+    for label, sigma in (("truth", 0.0), ("truth + 0.3 px jitter", 0.3)):
+        for style in styles:
+            per = {15: [], 30: [], 60: []}
+            worst = 0
+            for seed in seeds:
+                perf, rows = _truth(style, seed, seconds)
+                if sigma:
+                    rows = _jitter(rows, sigma, seed)
+                codec = ParamCodec(perf.frame_size, perf.ipd)
+                frames = [codec.encode(r) for r in rows]
+                sample = sample or frames
+                for k in per:
+                    per[k].append(_bits(frames, k))
+                worst = max(worst, _worst_delta(frames))
+            all30 += per[30]
+            t.add(label, style, len(seeds), *(float(np.mean(per[k])) for k in (15, 30, 60)), str(worst))
+    tracked = _tracked(2.0 if ctx.quick else 10.0, seed=0)
+    if tracked is not None:
+        from tracker.synthetic import STYLES, Performance
+
+        perf = Performance(seconds=1, seed=0, style=STYLES["webcam"])
+        codec = ParamCodec(perf.frame_size, perf.ipd)
+        frames = [codec.encode(r) for r in tracked]
+        vals = [_bits(frames, k) for k in (15, 30, 60)]
+        all30.append(vals[1])
+        t.add("FaceTracker output", "webcam", 1, *vals, str(_worst_delta(frames)))
+    t.note = (
+        f"mean over all tracks at key interval 30: {np.mean(all30):.1f} bits/frame (goal <= 40; "
+        f"{np.mean(all30) * 30:.0f} bit/s at 30 fps vs 2400 raw). Each packet adds a {STREAM_HEADER_SIZE}-byte "
+        "header and IP/UDP 28 bytes; the file format adds 2 bytes a frame."
+    )
+
+    enc_t = Table("Stream coder speed per frame (key interval 30, truth track 'default')",
+                  ["operation", "runs", "median µs", "min–max µs"])  # fmt: skip
+    enc = StreamEncoder(30)
+    coded = compress_frames(sample, 30)
+    dec = StreamDecoder()
+    for name, timing in (("encode", time_each(enc.encode, sample)),
+                         ("decode", time_each(lambda kp: dec.decode(*kp), coded, warmup=0))):  # fmt: skip
+        us = [1000.0 * v for v in timing.samples_ms]
+        enc_t.add(name, str(len(us)), f"{np.median(us):.1f}", f"{min(us):.1f}–{max(us):.1f}")
+    enc_t.note = "pure Python; decoding must see every frame in order, so it is not warmed up"
+    return [t, enc_t]
