@@ -38,6 +38,9 @@ QPushButton#primary:hover { background: #4c6ef5; }
 QPushButton:disabled { color: #6b6f76; }
 QComboBox, QSpinBox, QDoubleSpinBox, QLineEdit { background: #2a2c31; border: 1px solid #3c3f45; border-radius: 6px; padding: 4px 8px; color: #e6e6e6; }
 QComboBox::drop-down { border: none; width: 18px; }
+QSpinBox::up-button, QSpinBox::down-button { width: 16px; border: none; background: transparent; }
+QSpinBox::up-arrow { image: none; border-left: 4px solid transparent; border-right: 4px solid transparent; border-bottom: 5px solid #aab0ba; width: 0; height: 0; }
+QSpinBox::down-arrow { image: none; border-left: 4px solid transparent; border-right: 4px solid transparent; border-top: 5px solid #aab0ba; width: 0; height: 0; }
 QComboBox QAbstractItemView { background: #2a2c31; selection-background-color: #3d4a66; }
 QSlider::groove:horizontal { height: 4px; background: #3a3d43; border-radius: 2px; }
 QSlider::sub-page:horizontal { background: #7aa2f7; border-radius: 2px; }

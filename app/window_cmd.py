@@ -14,6 +14,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--art", metavar="NAME|DIR", help="the character to start with (name or folder)")
     parser.add_argument("--fps", type=int, choices=(10, 15, 30), help="output rate")
     parser.add_argument("--performer", metavar="NAME", help="whose calibration and training to use")
+    parser.add_argument("--init", metavar="CLICKS.json", help="calibrate from these five clicks on the --video")
 
 
 def source_from_args(args):
@@ -54,7 +55,8 @@ def make_app(argv: list[str] | None = None):
     return qapp
 
 
-def open_window(source=None, art: str | None = None, fps: int | None = None, performer: str | None = None):
+def open_window(source=None, art: str | None = None, fps: int | None = None, performer: str | None = None,
+                calibration=None):
     from app.main_window import MainWindow
     from app.settings import Settings
 
@@ -63,7 +65,7 @@ def open_window(source=None, art: str | None = None, fps: int | None = None, per
         settings.set("performer/name", performer)
     if fps:
         settings.set("output/fps", fps)
-    win = MainWindow(settings=settings, source=source, art=art)
+    win = MainWindow(settings=settings, source=source, art=art, calibration=calibration)
     win.show()
     return win
 
@@ -79,6 +81,19 @@ def run(args) -> int:
     if getattr(args, "video", None) and not os.path.isfile(args.video):
         print(f"inkface: {args.video}: no such video file", file=sys.stderr)
         return 2
+    calibration = None
+    if getattr(args, "init", None):
+        if not getattr(args, "video", None):
+            print("inkface: --init needs --video (the clicks are on a frame of that video)", file=sys.stderr)
+            return 2
+        try:
+            from tracker.clicks import Clicks
+
+            Clicks.load(args.init)
+        except Exception as e:
+            print(f"inkface: {e}", file=sys.stderr)
+            return 2
+        calibration = ("clicks", os.path.abspath(args.init), os.path.abspath(args.video))
     qapp = make_app()
     from app.qt_env import has_display
 
@@ -86,7 +101,8 @@ def run(args) -> int:
         print("inkface: no display to open a window on (set DISPLAY, or try `python -m app demo` "
               "which renders to out/demo.mp4 without one)", file=sys.stderr)
         return 2
-    win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None))
+    win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None),
+                      calibration)
     rc = qapp.exec()
     del win
     return int(rc)
