@@ -266,6 +266,14 @@ class ReceiveStats:
     payload_bytes: int = 0  # frame payloads of delivered frames
     bits_per_second: float = 0.0  # all datagrams over the last window
     payload_bits_per_second: float = 0.0
+    first_arrival: float = math.nan  # clock seconds of the first and the latest datagram
+    last_arrival: float = math.nan
+
+    @property
+    def mean_bits_per_second(self) -> float:
+        """All datagram bits over the time from the first to the latest datagram."""
+        span = self.last_arrival - self.first_arrival
+        return 8.0 * self.bytes / span if span > 0 else 0.0
 
     @property
     def bits_per_frame(self) -> float:
@@ -281,7 +289,8 @@ class ReceiveStats:
         return (
             f"{self.frames} frames, {self.lost} lost, {self.late} late, {self.duplicates} duplicate, "
             f"{self.waiting} waiting, {self.malformed} malformed, {self.foreign} foreign; "
-            f"{self.bits_per_frame:.1f} bits/frame, {self.bits_per_second:.0f} bit/s"
+            f"{self.bits_per_frame:.1f} payload bits/frame, {self.bits_per_second:.0f} bit/s now, "
+            f"{self.mean_bits_per_second:.0f} bit/s mean (UDP payloads)"
         )
 
 
@@ -327,6 +336,9 @@ class Receiver:
         st = self.stats
         st.datagrams += 1
         st.bytes += len(data)
+        if st.datagrams == 1:
+            st.first_arrival = now
+        st.last_arrival = now
         try:
             magic = bytes(data[:2])
             if magic == HELLO_MAGIC:

@@ -77,7 +77,7 @@ def test_loopback_send_receive(compress):
         assert rx.stats.bits_per_frame < 80
     else:
         assert rx.stats.bits_per_frame == 80
-    assert rx.stats.bits_per_second > 0
+    assert rx.stats.bits_per_second > 0 and rx.stats.mean_bits_per_second > 0
 
 
 def _packets(compress: bool, n: int = 40) -> tuple[bytes, list[bytes]]:
