@@ -429,3 +429,18 @@ def test_unsaved_new_character_is_autosaved_and_recovered(make_window, images, q
     assert win2.offer_untitled_recovery()
     assert win2.doc.artset.name == "Fresh" and win2.doc.path is None
     np.testing.assert_array_equal(win2.doc.artset.mouth.drawings[0].lines, [[5, 5, 40, 20]])
+
+
+def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monkeypatch):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Busy", heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(5)
+    from PySide6.QtWidgets import QFileDialog
+
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(tmp_path / "busy"))
+    assert win.save()  # no folder yet: asks for one (Save as)
+    assert validate(tmp_path / "busy") == [] and not win.doc.dirty
+    assert "busy" in win.windowTitle() and not win.isWindowModified()

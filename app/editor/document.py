@@ -56,6 +56,51 @@ def recoverable(path: Path | None) -> Path | None:
     return side
 
 
+def write_side_copy(art: ArtSet, folder: Path, written: dict) -> None:
+    """Write ``art`` as a complete art-set folder, fast: only images not already written (by
+    identity: the model never changes an array in place), light PNG compression, manifest last.
+
+    ``written`` maps file -> the array last written there; it is updated.
+    """
+    import json
+    import os
+    import tempfile
+
+    from PIL import Image
+
+    from art_sets.io import manifest_dict
+
+    folder.mkdir(parents=True, exist_ok=True)
+    manifest = manifest_dict(art)
+    items = list(zip(manifest["heads"], art.heads))
+    for pname, p in art.parts.items():
+        items += [(d["image"], dr.image) for d, dr in zip(manifest["parts"][pname]["drawings"], p.drawings)]
+
+    def atomic(target: Path, write) -> None:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                write(f)
+            os.replace(tmp, target)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+    for rel, img in items:
+        if written.get(rel) is img and (folder / rel).is_file():
+            continue
+        atomic(folder / rel, lambda f, img=img: Image.fromarray(img, "RGBA").save(f, format="PNG", compress_level=1))
+        written[rel] = img
+    keep = {rel for rel, _ in items}
+    for old in folder.rglob("*.png"):  # PNGs of removed drawings
+        if old.relative_to(folder).as_posix() not in keep:
+            old.unlink(missing_ok=True)
+            written.pop(old.relative_to(folder).as_posix(), None)
+    text = json.dumps(manifest, indent=1, ensure_ascii=False) + "\n"
+    atomic(folder / "artset.json", lambda f: f.write(text.encode("utf-8")))
+
+
 @dataclass
 class Issue:
     """A row of the problems panel: what is wrong and where to jump to fix it."""
@@ -120,6 +165,8 @@ class EditorDocument(QObject):
         self._autosave_poll.setInterval(50)
         self._autosave_poll.timeout.connect(self._collect_autosave)
         self._autosave_again = False
+        self._autosave_target: Path | None = None
+        self._autosave_written: dict = {}
         self.undo_stack.indexChanged.connect(self._on_stack_changed)
 
     # ------------------------------------------------------------------ documents
@@ -354,8 +401,12 @@ class EditorDocument(QObject):
         self.edit("rename character", fn)
 
     # ------------------------------------------------------------------ saving
-    def save(self, path: str | Path | None = None) -> Path:
-        """Save atomically (a crash never spoils the previous save); raises ArtSetError/OSError."""
+    def save(self, path: str | Path | None = None, runner: Callable | None = None) -> Path:
+        """Save atomically (a crash never spoils the previous save); raises ArtSetError/OSError.
+
+        ``runner(fn)`` may run the slow part (writing PNGs, validating) elsewhere, e.g. on a
+        thread while the window shows a busy dialog; it must return ``fn()``'s result or raise.
+        """
         if self.artset is None:
             raise ed.EditError("no character is open")
         target = Path(path) if path is not None else self.path
@@ -364,7 +415,19 @@ class EditorDocument(QObject):
         if target.name == "artset.json":
             target = target.parent
         self.wait_autosave()
-        saved = ed.save_safely(self.artset, target)
+        snapshot = ed.clone(self.artset)
+
+        def work():
+            from art_sets.validate import validate
+
+            saved = ed.save_safely(snapshot, target)
+            try:
+                problems = validate(target)
+            except Exception as e:  # the validator must never lose a save
+                problems = [f"validator failed: {' '.join(str(e).split())}"]
+            return saved, problems
+
+        saved, problems = runner(work) if runner is not None else work()
         # keep the file names the save chose, without an undo step
         for pname, p in saved.parts.items():
             for d, s in zip(self.artset.parts[pname].drawings, p.drawings):
@@ -380,12 +443,15 @@ class EditorDocument(QObject):
         self._autosave_timer.stop()
         for side in {old_side, autosave_dir_for(target)}:
             shutil.rmtree(side, ignore_errors=True)
-        self.refresh_problems_from(target)
+        self._autosave_written = {}
+        self._compute_issues(problems, root=target)
         self.message.emit(f"saved {target}")
         return target
 
     def discard_autosave(self) -> None:
+        self.wait_autosave()
         shutil.rmtree(autosave_dir_for(self.path), ignore_errors=True)
+        self._autosave_written = {}
 
     # ------------------------------------------------------------------ autosave
     def _on_stack_changed(self, *_):
@@ -409,19 +475,16 @@ class EditorDocument(QObject):
         snapshot = ed.clone(self.artset)
         target = autosave_dir_for(self.path)
 
+        if self._autosave_target != target:
+            self._autosave_target, self._autosave_written = target, {}
+        written = self._autosave_written
+
         def work():
-            from art_sets.io import save_artset
             from art_sets.validate import validate
 
             try:
-                target.mkdir(parents=True, exist_ok=True)
-                save_artset(snapshot, target)
-                for old in target.rglob("*.png"):  # drop PNGs of removed drawings
-                    rel = old.relative_to(target).as_posix()
-                    if rel not in set(snapshot.head_files) | {d.file for p in snapshot.parts.values() for d in p.drawings}:
-                        old.unlink(missing_ok=True)
-                problems = validate(target)
-                self._autosave_result = (str(target), problems)
+                write_side_copy(snapshot, target, written)
+                self._autosave_result = (str(target), validate(target))
             except Exception as e:  # reported in the status bar; the next edit retries
                 self._autosave_result = ("", [f"autosave failed: {' '.join(str(e).split())}"])
 

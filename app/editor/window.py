@@ -47,7 +47,7 @@ class NewCharacterDialog(QDialog):
             btn = QPushButton("Add…")
             btn.clicked.connect(lambda _=False, k=key: self._browse(k))
             clr = QPushButton("Clear")
-            clr.clicked.connect(lambda _=False, k=key: self.lists[k].clear())
+            clr.clicked.connect(lambda _=False, k=key: self._clear(k))
             col = QVBoxLayout()
             col.addWidget(btn)
             col.addWidget(clr)
@@ -68,6 +68,10 @@ class NewCharacterDialog(QDialog):
         bb.rejected.connect(self.reject)
         form.addRow(bb)
         self.paths: dict[str, list[Path]] = {k: [] for k in self.lists}
+
+    def _clear(self, key):
+        self.lists[key].clear()
+        self.paths[key] = []
 
     def _browse(self, key):
         files, _ = QFileDialog.getOpenFileNames(self, "Choose images", "", IMAGE_FILTER)
@@ -106,9 +110,9 @@ class EditorWindow(QMainWindow):
         self._build()
         self.doc.changed.connect(self._on_changed)
         self.doc.selectionChanged.connect(self._on_selection)
-        self.doc.message.connect(lambda m: self.statusBar().showMessage(m, 6000))
-        self.doc.autosaved.connect(lambda where: self.statusBar().showMessage(f"autosaved to {where}", 2500))
-        self.doc.undo_stack.cleanChanged.connect(lambda *_: self._update_title())
+        self.doc.message.connect(self._show_message)
+        self.doc.autosaved.connect(self._show_autosaved)
+        self.doc.undo_stack.cleanChanged.connect(self._update_title)
         self._on_changed()
         self._on_selection()
 
@@ -320,7 +324,13 @@ class EditorWindow(QMainWindow):
         self.addToolBar(tb)
 
     # ------------------------------------------------------------------ refresh
-    def _update_title(self):
+    def _show_message(self, text: str):
+        self.statusBar().showMessage(text, 6000)
+
+    def _show_autosaved(self, where: str):
+        self.statusBar().showMessage(f"autosaved to {where}", 2500)
+
+    def _update_title(self, *_):
         art = self.doc.artset
         name = art.name if art else "no character"
         where = f" — {self.doc.path}" if self.doc.path else " — not saved yet"
@@ -491,7 +501,7 @@ class EditorWindow(QMainWindow):
         if not d:
             return False
         folder = Path(d)
-        if any(folder.iterdir()) and not (folder / "artset.json").exists():
+        if folder.is_dir() and any(folder.iterdir()) and not (folder / "artset.json").exists():
             folder = folder / ed.slug(self.doc.artset.name)
         return self._save_to(folder)
 
@@ -499,12 +509,39 @@ class EditorWindow(QMainWindow):
         from art_sets.io import ArtSetError
 
         try:
-            self.doc.save(folder)
+            self.doc.save(folder, runner=self._run_busy)
         except (ArtSetError, OSError, ed.EditError) as e:
             QMessageBox.warning(self, "Inkface", f"Could not save: {' '.join(str(e).split())}")
             return False
         self._update_title()
         return True
+
+    def _run_busy(self, fn, text: str = "Saving…"):
+        """Run ``fn`` on a thread behind a modal busy dialog (the window keeps painting)."""
+        import threading
+
+        from PySide6.QtWidgets import QApplication, QProgressDialog
+
+        box: dict = {}
+
+        def work():
+            try:
+                box["result"] = fn()
+            except BaseException as e:  # handed back to the GUI thread below
+                box["error"] = e
+
+        t = threading.Thread(target=work, name="editor-save", daemon=True)
+        dlg = QProgressDialog(text, None, 0, 0, self)
+        dlg.setWindowModality(Qt.WindowModal)
+        dlg.setMinimumDuration(400)
+        t.start()
+        while t.is_alive():
+            QApplication.processEvents()
+            t.join(0.03)
+        dlg.close()
+        if "error" in box:
+            raise box["error"]
+        return box["result"]
 
     def add_files(self, key: str, paths) -> None:
         """Add image files as heads or drawings of a part, offering resize/crop for other sizes."""
