@@ -408,7 +408,7 @@ class Receiver:
             self.codec = None
             return
         self.neutral = (
-            self.codec.decode(hello.neutral_codes, status=LOST, frame=-1) if hello.neutral_codes is not None else None
+            self.codec.decode(hello.neutral_codes, frame=-1) if hello.neutral_codes is not None else None
         )
 
     def _sequence(self, seq: int) -> bool:

@@ -340,6 +340,8 @@ class _Drawing:
         self.puppet = None
         self.writer = None
         self.frames = 0
+        self.last_draw = 0.0
+        self.resting = False
 
     def _build(self, rx: UdpReceiver) -> None:
         args = self.args
@@ -379,13 +381,33 @@ class _Drawing:
 
             self.writer = FrameWriter(args.out, fps=hello.fps)
 
-    def draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
+    def _draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
         if self.puppet is None:
             self._build(rx)
         pf = self.puppet.step_params(frame)
         if self.writer is not None and pf is not None and getattr(pf, "rgba_pm", None) is not None:
             self.writer.write(pf.rgba_pm)
             self.frames += 1
+
+    def on_frame(self, rx: UdpReceiver, frame: FaceParams, now: float) -> None:
+        """Draw a received frame (every one, in order)."""
+        self._draw(rx, frame)
+        self.last_draw = now
+        self.resting = False
+
+    def idle(self, rx: UdpReceiver, now: float) -> None:
+        """While packets are late or have stopped, keep the timeline at the sender's rate: draw the
+        held pose, then the ease to neutral, then stop once at rest."""
+        if rx.last_frame is None or self.resting or rx.hello is None:
+            return
+        period = 1.0 / max(rx.hello.fps, 1.0)
+        while self.last_draw + 1.5 * period <= now:
+            self.last_draw += period
+            pose = rx.pose(self.last_draw)
+            self._draw(rx, pose)
+            if pose.status == LOST and pose.confidence == 0.0:
+                self.resting = True
+                return
 
     def close(self) -> str:
         if self.writer is None:
@@ -410,13 +432,15 @@ def _receive(args) -> int:
         last_note = start
         try:
             while True:
-                for f in rx.poll(0.1):
+                for f in rx.poll(0.02 if drawing is not None else 0.1):
                     got.append(f)
                     if drawing is not None:
-                        drawing.draw(rx, f)
+                        drawing.on_frame(rx, f, time.monotonic())
                     if args.frames and len(got) >= args.frames:
                         break
                 now = time.monotonic()
+                if drawing is not None:
+                    drawing.idle(rx, now)
                 if args.frames and len(got) >= args.frames:
                     break
                 if got and args.timeout and now - rx.last_arrival > args.timeout:
