@@ -410,6 +410,15 @@ def test_recutting_holes_after_moving_a_box_moves_the_hole(make_window, images):
     doc.make_holes(5)
     x, y, w, h = doc.artset.mouth.box
     assert doc.artset.heads[0][y + h // 2, x + w // 2, 3] == 0
+    # changing the feather radius right after a cut re-cuts instead of stacking holes
+    n = doc.undo_stack.count()
+    win.radius_spin.setValue(5)  # replaces the cut just made (same radius): no new undo step
+    assert doc.undo_stack.count() == n
+    win.cut_holes()
+    soft = doc.artset.heads[0][y + 4, x + w // 2, 3]
+    win.radius_spin.setValue(15)
+    assert doc.undo_stack.count() == n + 1
+    assert doc.artset.heads[0][y + 4, x + w // 2, 3] > soft
     doc.set_box("mouth", (x, y + 40, w, h))
     doc.make_holes(5)
     assert doc.artset.heads[0][y + 5, x + w // 2, 3] == 255  # the old hole is closed again
@@ -444,3 +453,36 @@ def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monk
     assert win.save()  # no folder yet: asks for one (Save as)
     assert validate(tmp_path / "busy") == [] and not win.doc.dirty
     assert "busy" in win.windowTitle() and not win.isWindowModified()
+
+
+def test_drop_image_files_on_a_part_list(make_window, images, tmp_path, qtbot):
+    from PySide6.QtCore import QMimeData, QPointF, QUrl
+    from PySide6.QtGui import QDropEvent
+
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Drop", heads, eyes, mouths)
+    extra = [_eyes(tmp_path / "src" / "angry.png", 1), tmp_path / "src" / "notes.txt"]
+    extra[1].write_text("not an image")
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(p)) for p in extra])
+    lst = win.lists["eyes"]
+    ev = QDropEvent(QPointF(10, 10), Qt.CopyAction, mime, Qt.LeftButton, Qt.NoModifier)
+    lst.dropEvent(ev)
+    assert win.doc.artset.eyes.names() == ["open", "closed", "wide", "angry"]
+    assert (win.doc.part, win.doc.drawing) == ("eyes", 3)
+    assert lst.count() == 4 and "to place" not in lst.item(3).text()
+
+
+def test_open_editor_with_parent_is_its_own_window(qtbot, tmp_path, monkeypatch):
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    from PySide6.QtWidgets import QWidget
+
+    from app.editor import open_editor
+
+    parent = QWidget()
+    qtbot.addWidget(parent)
+    win = open_editor(None, parent)
+    win.confirm_close = lambda: "discard"
+    assert win.isWindow() and win.isVisible() and win.doc.artset is None
+    win.close()

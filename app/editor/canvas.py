@@ -160,6 +160,10 @@ class LineCanvas(_ImageView):
             p.setPen(QPen(QColor(255, 255, 255), 2))
             p.setBrush(Qt.NoBrush)
             p.drawEllipse(self.to_widget(ln[2 * e], ln[2 * e + 1]), 8, 8)
+        if len(lines) == 0 and self._drag is None:
+            p.setPen(QColor(255, 255, 255))
+            p.drawText(r.adjusted(0, 0, 0, -8), Qt.AlignHCenter | Qt.AlignBottom,
+                       "Drag across a feature (a lip edge, a lid, a brow) to draw control line 0")
         p.setPen(QColor(230, 230, 230))
         nmiss = len(un)
         txt = f"{self.doc.part} ▸ {d.name}   {d.size[0]}×{d.size[1]} px   {len(lines)} line(s)"

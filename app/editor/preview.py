@@ -16,8 +16,8 @@ import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QGridLayout, QHBoxLayout, QLabel, QPushButton, QSizePolicy, QSlider,
-    QTabWidget, QVBoxLayout, QWidget,
+    QComboBox, QGridLayout, QHBoxLayout, QLabel, QPushButton, QSizePolicy, QSlider, QTabWidget,
+    QVBoxLayout, QWidget,
 )
 
 from art_sets import editing as ed
@@ -199,11 +199,9 @@ class PreviewPanel(QWidget):
         self.live = None
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
-        row = QHBoxLayout()
         self.morph_view = ImageLabel("morph")
-        self.dissolve_view = ImageLabel("cross-dissolve (for comparison)")
-        row.addWidget(self.morph_view, 3)
-        lay.addLayout(row, 3)
+        self.dissolve_view = ImageLabel("cross-dissolve, for comparison: doubled strokes = ghosting")
+        lay.addWidget(self.morph_view, 3)
         lay.addWidget(self.dissolve_view, 2)
         self.note = QLabel("")
         self.note.setWordWrap(True)

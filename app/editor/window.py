@@ -186,6 +186,8 @@ class EditorWindow(QMainWindow):
         self.radius_spin.setRange(0, 100)
         self.radius_spin.setValue(8)
         self.radius_spin.setSuffix(" px")
+        self.radius_spin.setToolTip("how far inside each box the hole fades in; changing it right after cutting re-cuts")
+        self.radius_spin.valueChanged.connect(self._radius_changed)
         hb.addWidget(self.radius_spin)
         self.holes_button = QPushButton("Cut holes from boxes")
         self.holes_button.setToolTip("open each part box in every head, soft-edged over the feather radius")
@@ -634,6 +636,12 @@ class EditorWindow(QMainWindow):
     def cut_holes(self):
         if self.doc.artset is not None:
             self.doc.make_holes(self.radius_spin.value())
+
+    def _radius_changed(self, _value):
+        st = self.doc.undo_stack
+        if st.index() > 0 and st.command(st.index() - 1).text().startswith("cut holes"):
+            st.undo()  # replace the cut just made, so trying radii does not stack up undo steps
+            self.cut_holes()
 
     def _set_head_mode(self, mode):
         self.head_canvas.mode = mode
