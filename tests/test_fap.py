@@ -150,3 +150,21 @@ def test_bad_files_give_one_line_errors(tmp_path, body, message):
     with pytest.raises(FapError, match=message) as e:
         read_fap(path)
     assert "\n" not in str(e.value) and "bad.fap" in str(e.value)
+
+
+def test_command_line_converts_both_ways(tmp_path, capsys):
+    from tracker.fap import main
+    from tracker.params import read_csv, write_csv
+
+    rows = track(20, seed=3)
+    src = tmp_path / "in.csv"
+    write_csv(src, rows)
+    assert main([str(src), str(tmp_path / "out.fap"), "--ipd", "80"]) == 0
+    assert main([str(tmp_path / "out.fap"), str(tmp_path / "back.csv")]) == 0
+    back = read_csv(tmp_path / "back.csv")
+    assert len(back) == 20
+    assert max(abs(a.mouth_width - b.mouth_width) for a, b in zip(rows, back)) < 0.05
+    capsys.readouterr()
+    assert main([str(tmp_path / "missing.csv"), str(tmp_path / "x.fap")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "missing.csv" in err[0]

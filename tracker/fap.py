@@ -376,3 +376,56 @@ def read_fap(
     if nframes and len(rows) != nframes:
         raise FapError(f"{path}: header says {nframes} frames, file has {len(rows)}")
     return FapTrack(rows=rows, faps=all_faps, fapu=fapu, neutral=neutral, fps=fps, name=parts[1], mirrored=mirrored)
+
+
+# ---------------------------------------------------------------------------------------------
+# python -m tracker.fap IN OUT
+
+
+def _track_neutral(rows: Sequence[FaceParams]) -> FaceParams:
+    """The per-value median of the frames that were tracked: a stand-in for a calibrated neutral face."""
+    import numpy as np
+
+    from tracker.params import params_array
+
+    vals = params_array(r for r in rows if r.status != LOST)
+    if len(vals) == 0:
+        raise FapError("the track has no tracked frames")
+    return FaceParams.from_values(np.nanmedian(vals, axis=0))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tracker.fap IN.csv OUT.fap [--ipd PX]`` or ``python -m tracker.fap IN.fap OUT.csv``."""
+    import argparse
+    import sys
+
+    from tracker.params import TrackFormatError, read_csv, write_csv
+
+    ap = argparse.ArgumentParser(prog="python -m tracker.fap", description="Convert a track CSV to MPEG-4 FAPs or back.")
+    ap.add_argument("src", help="a track CSV, or a .fap file")
+    ap.add_argument("dst", help="the .fap file to write, or the CSV")
+    ap.add_argument("--ipd", type=float, help="inter-pupil distance in pixels (CSV -> FAP; default: mouth width / 0.8)")
+    ap.add_argument("--fps", type=float, default=30.0, help="frame rate written to the FAP file (default 30)")
+    ap.add_argument("--mirrored", action="store_true", help="the video was mirrored (a selfie view)")
+    args = ap.parse_args(argv)
+    try:
+        if Path(args.src).suffix.lower() == ".fap":
+            fap = read_fap(args.src)
+            write_csv(args.dst, fap.rows)
+            print(f"wrote {args.dst} ({len(fap.rows)} frames)")
+        else:
+            rows = read_csv(args.src)
+            neutral = _track_neutral(rows)
+            ipd = args.ipd if args.ipd else neutral.mouth_width / 0.8
+            if not (math.isfinite(ipd) and ipd > 0):
+                raise FapError(f"{args.src}: cannot tell the inter-pupil distance; pass --ipd PX")
+            write_fap(args.dst, rows, neutral, ipd, fps=args.fps, name=Path(args.src).stem, mirrored=args.mirrored)
+            print(f"wrote {args.dst} ({len(rows)} frames; neutral = the track's median, ipd {ipd:.1f} px)")
+    except (FapError, TrackFormatError, OSError, ValueError) as e:
+        print(f"inkface: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
