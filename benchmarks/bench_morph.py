@@ -156,3 +156,191 @@ def generated_artset():
         parts[pname] = Part(pname, boxes[pname], drawings)
     heads = [make_head(canvas, boxes, v) for v in range(2)]
     return ArtSet("Generated", canvas, (256.0, 300.0), heads, parts, head_files=["head-1.png", "head-2.png"])
+
+
+# ---------------------------------------------------------------- the benchmark
+
+
+def _artsets(quick: bool) -> list:
+    """Bundled art sets when they load (one in quick mode), else the generated one."""
+    out = []
+    try:
+        from art_sets.io import load_artset
+        from art_sets.library import list_bundled
+
+        for _, path in list_bundled():
+            try:
+                out.append(load_artset(path))
+            except Exception:  # a half-finished bundled set must not stop the benchmark
+                continue
+            if quick:
+                break
+    except ImportError:
+        pass
+    return out or [generated_artset()]
+
+
+def _triples(n: int, count: int, rng: np.random.Generator) -> list[tuple[tuple[int, int, int], np.ndarray]]:
+    """Random distinct index triples with weights inside the triangle (each >= 0.1)."""
+    out = []
+    for _ in range(count):
+        idx = tuple(int(i) for i in rng.choice(n, size=min(3, n), replace=False))
+        w = 0.1 + 0.7 * rng.dirichlet(np.ones(len(idx)))
+        out.append((idx, w / w.sum()))
+    return out
+
+
+def _err_stats(errs: list[np.ndarray]) -> list[str]:
+    e = np.concatenate([x.ravel() for x in errs])
+    return [f"{e.mean():.3f}", f"{np.percentile(e, 99):.3f}", f"{e.max():.3f}"]
+
+
+@benchmark("morph")
+def run(ctx):
+    from morph import beier_neely as bn
+    from morph.detail import high_pass_energy
+    from morph.polymorph import PartMorpher
+    from morph.renderer import CharacterRenderer
+
+    rng = np.random.default_rng(0)
+    arts = _artsets(ctx.quick)
+    art = arts[0]
+    tables = []
+
+    # -- accuracy and speed of the mesh polymorph against the exact per-pixel polymorph
+    acc = Table(
+        f"Mesh polymorph vs exact per-pixel Beier–Neely ({art.name}; field error in px over all pixels of the part)",
+        ["part", "size", "lines", "comparison", "mean px", "p99 px", "max px"],
+    )
+    spd = Table(f"Mesh polymorph speed vs exact ({art.name}, 3 drawings, random weights)",
+                ["part", "method", *TIMING_COLUMNS, "speed-up"])
+    pix = Table(f"Final image difference, mesh vs exact polymorph ({art.name}; RGBA 0–255)",
+                ["part", "weights", "mean |diff|", "p99 |diff|", "pixels > 32"])
+    count = 2 if ctx.quick else 6
+    for pname, part in art.parts.items():
+        imgs = [d.image for d in part.drawings]
+        lines = [d.lines for d in part.drawings]
+        m = PartMorpher(imgs, lines)
+        w_, h_ = m.size
+        trip = _triples(len(imgs), count, rng)
+        mesh_only, approx_vs_exact, two_way = [], [], []
+        pix_d3, pix_d2 = [], []
+        for idx, w in trip:
+            target = sum(wi * lines[i] for i, wi in zip(idx, w))
+            for ia, _, mesh in m.meshes(idx, w):
+                ex = np.dstack(bn.field_map(target, lines[ia], m.size))
+                ap = np.dstack(m.grid.upsample(mesh))
+                ex_mesh = np.dstack(m.grid.upsample(m.grid.sample(target, lines[ia])))
+                approx_vs_exact.append(np.hypot(*(ap - ex).transpose(2, 0, 1)))
+                mesh_only.append(np.hypot(*(ex_mesh - ex).transpose(2, 0, 1)))
+            # two-way morphs (A, B) at an α between the table steps: mesh + α-interpolation error
+            a_, b_ = idx[0], idx[1]
+            al = float(rng.uniform(0.05, 0.95))
+            t2 = (1 - al) * lines[a_] + al * lines[b_]
+            ex2 = np.dstack(bn.field_map(t2, lines[a_], m.size))
+            ap2 = m.vertices + m.displacement(a_, b_, al)
+            two_way.append(np.hypot(*(np.dstack(m.grid.upsample(ap2)) - ex2).transpose(2, 0, 1)))
+            got3 = m.render(idx, w).astype(np.int16)
+            want3 = bn.polymorph_exact([imgs[i] for i in idx], [lines[i] for i in idx], w).astype(np.int16)
+            pix_d3.append(np.abs(got3 - want3))
+            got2 = m.render((a_, b_), (1 - al, al)).astype(np.int16)
+            want2 = bn.polymorph_exact([imgs[a_], imgs[b_]], [lines[a_], lines[b_]], [1 - al, al]).astype(np.int16)
+            pix_d2.append(np.abs(got2 - want2))
+        nl = len(lines[0])
+        acc.add(pname, f"{w_}×{h_}", nl, "30×30 mesh of the exact 3-way field", *_err_stats(mesh_only))
+        acc.add(pname, f"{w_}×{h_}", nl, "two-way morph: mesh + α tables", *_err_stats(two_way))
+        acc.add(pname, f"{w_}×{h_}", nl, "three-way: sum of two-way (paper) on mesh", *_err_stats(approx_vs_exact))
+        for label, ds in (("3-way", pix_d3), ("2-way", pix_d2)):
+            d = np.concatenate([x.ravel() for x in ds])
+            pix.add(pname, label, f"{d.mean():.3f}", f"{np.percentile(d, 99):.1f}", f"{(d > 32).mean() * 100:.2f} %")
+        idx, w = trip[0]
+        sel_i, sel_l = [imgs[i] for i in idx], [lines[i] for i in idx]
+        t_exact = time_call(lambda: bn.polymorph_exact(sel_i, sel_l, w), ctx.runs(5, 1), warmup=0)
+        t_mesh = time_call(lambda: m.render(idx, w), ctx.runs(500, 30))
+        spd.add(pname, "exact per-pixel polymorph", *t_exact.cells(), "1×")
+        spd.add(pname, "mesh + α tables", *t_mesh.cells(), f"{t_exact.median / t_mesh.median:.0f}×")
+    acc.note = ("goal (mesh sampling): ≤ 0.5 px mean, ≤ 2 px max. The last row adds the paper's approximation "
+                "W_ABC ≈ W_AB + W_AC, which the paper accepts; see the next table.")
+    tables += [acc, spd, pix]
+
+    # -- the paper's approximation on its own: sum of two-way vs exact three-way (both exact per pixel)
+    appr = Table("Paper's sum-of-two-way warp vs exact three-way warp (per-pixel fields, no mesh)",
+                 ["art set", "part", "triangles", "mean px", "p99 px", "max px"])
+    for a in arts:
+        for pname, part in a.parts.items():
+            lines = [d.lines for d in part.drawings]
+            size = part.size
+            errs = []
+            for idx, w in _triples(len(lines), 2 if ctx.quick else 5, rng):
+                target = sum(wi * lines[i] for i, wi in zip(idx, w))
+                for k, ia in enumerate(idx):
+                    ex = np.dstack(bn.field_map(target, lines[ia], size))
+                    ys, xs = np.mgrid[0:size[1], 0:size[0]]
+                    ident = np.dstack([xs, ys]).astype(np.float32)
+                    summed = ident.copy()
+                    for j, ib in enumerate(idx):
+                        if ib != ia:
+                            two = (1 - w[j]) * lines[ia] + w[j] * lines[ib]
+                            summed += np.dstack(bn.field_map(two, lines[ia], size)) - ident
+                    errs.append(np.hypot(*(summed - ex).transpose(2, 0, 1)))
+            appr.add(a.name, pname, 2 if ctx.quick else 5, *_err_stats(errs))
+    appr.note = "weights drawn inside the triangle (each ≥ 0.1); error of the backward map of each corner drawing"
+    tables.append(appr)
+
+    # -- whole-frame render speed, start-up, detail blend
+    rend = Table("Render eyes + mouth + head + tilt into the canvas (one core)",
+                 ["art set", "canvas", "stage", *TIMING_COLUMNS])
+    start = Table("Start-up: precomputing α tables (11 steps, 30×30 mesh)", ["art set", "what", *TIMING_COLUMNS])
+    sharp = Table("Detail-keeping blend vs plain blend (even 3-way weights; high-pass energy, σ = 1 px)",
+                  ["art set", "part", "drawings (mean)", "plain blend", "detail blend", "detail / plain"])
+    for a in arts:
+        t0 = time.perf_counter()
+        r = CharacterRenderer(a)
+        load_ms = (time.perf_counter() - t0) * 1000.0
+        ne, nm = len(a.eyes.drawings), len(a.mouth.drawings)
+        frames = []
+        for k in range(ctx.runs(400, 40)):
+            ei, ew = _triples(ne, 1, rng)[0]
+            mi, mw = _triples(nm, 1, rng)[0]
+            pose = (float(rng.normal(0, 8)), float(rng.normal(0, 8)), float(rng.normal(0, 10)))
+            frames.append((ei, ew, mi, mw, pose, k))
+        t_all = _time_frames(lambda f: r.render(eyes=(f[0], f[1]), mouth=(f[2], f[3]), pose=f[4], frame_no=f[5]), frames)
+        canvas = f"{a.canvas[0]}×{a.canvas[1]}"
+        rend.add(a.name, canvas, "whole frame (goal ≤ 3 ms; paper 8 ms)", *t_all.cells())
+        em, mm = r.morphers["eyes"], r.morphers["mouth"]
+        rend.add(a.name, canvas, f"eyes part {em.size[0]}×{em.size[1]}",
+                 *_time_frames(lambda f: em.render(f[0], f[1]), frames).cells())
+        rend.add(a.name, canvas, f"mouth part {mm.size[0]}×{mm.size[1]}",
+                 *_time_frames(lambda f: mm.render(f[2], f[3]), frames).cells())
+        parts = {"eyes": em.render(*frames[0][:2]), "mouth": mm.render(*frames[0][2:4])}
+        rend.add(a.name, canvas, "compose head + tilt",
+                 *_time_frames(lambda f: r.compositor.compose(parts, f[4], f[5]), frames).cells())
+        rend.add(a.name, canvas, "whole frame, detail blend",
+                 *_time_frames(lambda f: em.render(f[0], f[1], detail=True) is not None and mm.render(f[2], f[3], detail=True) is not None
+                               and r.compositor.compose(parts, f[4], f[5]), frames[: max(10, len(frames) // 4)]).cells())
+        mouth = a.mouth
+        six = min(6, nm)
+        t6 = time_call(lambda: PartMorpher([d.image for d in mouth.drawings[:six]], [d.lines for d in mouth.drawings[:six]]),
+                       ctx.runs(5, 1), warmup=0)
+        start.add(a.name, f"mouth part, {six} drawings ({six * (six - 1)} ordered pairs)", *t6.cells())
+        start.add(a.name, "whole CharacterRenderer (all parts, heads)", "1", f"{load_ms:.1f}", f"{load_ms:.1f}–{load_ms:.1f}")
+        for pname, m in r.morphers.items():
+            n = m.n
+            own, plain, crisp = [], [], []
+            for idx, _ in _triples(n, 3 if ctx.quick else 8, rng):
+                w = np.full(len(idx), 1.0 / len(idx))
+                plain.append(high_pass_energy(m.render(idx, w)))
+                crisp.append(high_pass_energy(m.render(idx, w, detail=True)))
+            own = [high_pass_energy(p) for p in m.pm]
+            sharp.add(a.name, pname, f"{np.mean(own):.2f}", f"{np.mean(plain):.2f}", f"{np.mean(crisp):.2f}",
+                      f"{np.mean(crisp) / np.mean(plain):.2f}×")
+    rend.note = ("random weights inside the triangles, random pose (σ 8 px, 10°), heads cycling; "
+                 "the per-stage rows time each stage alone")
+    tables += [rend, start, sharp]
+    return tables
+
+
+def _time_frames(fn, frames):
+    from benchmarks.harness import time_each
+
+    return time_each(fn, frames, warmup=3)

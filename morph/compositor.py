@@ -4,7 +4,7 @@ Everything is premultiplied RGBA uint8 (see ``morph``). Per frame the head (a pr
 premultiplied copy) is copied, and only inside the part boxes is ``head + parts·(1 − α_head)``
 computed, so the soft alpha of the head's holes feathers the parts in. The whole character is
 then rotated about the art set's pivot and translated with one ``cv2.warpAffine`` restricted to
-the rectangle that holds any content.
+the bounding box of the moved convex hull of everything that can be non-transparent.
 """
 
 from __future__ import annotations
@@ -78,21 +78,29 @@ class Compositor:
              for name, ((x, y, bw, bh), _) in self._clip.items()}
             for hd in self.heads
         ]
-        self._content = self._content_rect()
-        self._flat = np.empty((self.h, self.w, 4), np.uint8)
+        self._hull = self._content_hull()
+        # One flat canvas per head: outside the boxes it always equals the head, so a frame
+        # only rewrites the boxes.
+        self._flats = [hd.copy() for hd in self.heads]
         self._overlaps = self._any_overlap()
 
-    def _content_rect(self) -> Box:
-        """Bounding rectangle of everything that can be non-transparent (heads ∪ boxes)."""
-        alpha = np.zeros((self.h, self.w), bool)
+    def _content_hull(self) -> np.ndarray:
+        """Convex hull ``(k, 2)`` of every pixel that can be non-transparent (heads ∪ boxes).
+
+        Pixel corners are used (a pixel at x covers x−0.5..x+0.5) so the hull encloses the
+        pixels' area; the affine warp need not touch output pixels outside it.
+        """
+        alpha = np.zeros((self.h, self.w), np.uint8)
         for hd in self.heads:
-            alpha |= hd[:, :, 3] > 0
+            alpha |= (hd[:, :, 3] > 0).astype(np.uint8)
         for (x, y, bw, bh), _ in self._clip.values():
-            alpha[y:y + bh, x:x + bw] = True
-        ys, xs = np.nonzero(alpha)
-        if len(xs) == 0:
-            return (0, 0, 1, 1)
-        return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
+            alpha[y:y + bh, x:x + bw] = 1
+        pts = cv2.findNonZero(alpha)
+        if pts is None:
+            return np.zeros((0, 2))
+        hull = cv2.convexHull(pts).reshape(-1, 2).astype(np.float64)
+        corners = (hull[:, None, :] + np.array([[-0.5, -0.5], [0.5, -0.5], [-0.5, 0.5], [0.5, 0.5]])).reshape(-1, 2)
+        return cv2.convexHull(corners.astype(np.float32)).reshape(-1, 2).astype(np.float64)
 
     def _any_overlap(self) -> bool:
         rects = [r for r, _ in self._clip.values()]
@@ -117,10 +125,12 @@ class Compositor:
         """The untransformed character: parts under the head (an internal buffer, reused)."""
         k = self.head_index(frame_no)
         head = self.heads[k]
-        out = self._flat
-        np.copyto(out, head)
+        out = self._flats[k]
         if self._overlaps:
             return self._flat_overlapping(parts, head, out)
+        for name, ((x, y, bw, bh), _) in self._clip.items():
+            if name not in parts:
+                out[y:y + bh, x:x + bw] = head[y:y + bh, x:x + bw]
         for name, part in parts.items():
             if name not in self._clip:
                 if name in self.boxes:
@@ -171,30 +181,29 @@ class Compositor:
     def transform(self, flat: np.ndarray, pose: Sequence[float]) -> np.ndarray:
         """``flat`` (canvas-sized, premultiplied) moved by ``pose`` × gain, as a new array.
 
-        Only the rectangle that can hold content is warped (``cv2.warpAffine``, bilinear).
+        Only the bounding box of the moved content is computed (``cv2.warpAffine``, bilinear).
         """
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if dx == 0.0 and dy == 0.0 and roll == 0.0:
             return flat.copy()
-        m = self.matrix(pose)
-        cx, cy, cw, ch = self._content
-        corners = np.array([[cx, cy], [cx + cw, cy], [cx, cy + ch], [cx + cw, cy + ch]], np.float64)
-        moved = corners @ m[:, :2].T + m[:, 2]
-        x0 = max(0, int(math.floor(moved[:, 0].min())) - 1)
-        y0 = max(0, int(math.floor(moved[:, 1].min())) - 1)
-        x1 = min(self.w, int(math.ceil(moved[:, 0].max())) + 2)
-        y1 = min(self.h, int(math.ceil(moved[:, 1].max())) + 2)
+        return self._warp_content(flat, self.matrix(pose))
+
+    def _warp_content(self, flat: np.ndarray, m: np.ndarray) -> np.ndarray:
+        """One ``warpAffine`` over the bounding box of the moved content hull."""
         out = np.zeros((self.h, self.w, 4), np.uint8)
+        if len(self._hull) == 0:
+            return out
+        poly = self._hull @ m[:, :2].T + m[:, 2]
+        x0 = max(0, int(math.floor(poly[:, 0].min())) - 1)
+        y0 = max(0, int(math.floor(poly[:, 1].min())) - 1)
+        x1 = min(self.w, int(math.ceil(poly[:, 0].max())) + 2)
+        y1 = min(self.h, int(math.ceil(poly[:, 1].max())) + 2)
         if x1 <= x0 or y1 <= y0:
             return out
-        # Source: the content rectangle; destination: the rectangle [x0, x1) × [y0, y1).
-        shift_src = np.array([[1, 0, cx], [0, 1, cy], [0, 0, 1]], np.float64)
-        shift_dst = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], np.float64)
-        full = np.vstack([m, [0, 0, 1]])
-        local = (shift_dst @ full @ shift_src)[:2]
-        src = flat[cy:cy + ch, cx:cx + cw]
-        dst = out[y0:y1, x0:x1]
-        cv2.warpAffine(src, local, (x1 - x0, y1 - y0), dst=dst, flags=cv2.INTER_LINEAR,
+        local = m.copy()
+        local[0, 2] -= x0
+        local[1, 2] -= y0
+        cv2.warpAffine(flat, local, (x1 - x0, y1 - y0), dst=out[y0:y1, x0:x1], flags=cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
         return out
 

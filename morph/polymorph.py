@@ -169,12 +169,28 @@ class PartMorpher:
 
 
 def blend_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:
-    """``Σ w_i · I_i`` of uint8 images computed in float and rounded once (cv2, fast)."""
+    """``Σ w_i · I_i`` of uint8 images (cv2, fast); within 1 of the exact sum, never above alpha."""
     if len(images) == 1:
         return cv2.addWeighted(images[0], float(weights[0]), images[0], 0.0, 0.0)
     if len(images) == 2:
         return cv2.addWeighted(images[0], float(weights[0]), images[1], float(weights[1]), 0.0)
+    if len(images) == 3:
+        return _blend3_u8(images, weights)
     acc = cv2.addWeighted(images[0], float(weights[0]), images[1], float(weights[1]), 0.0, dtype=cv2.CV_32F)
     for img, wt in zip(images[2:-1], weights[2:-1]):
         acc = cv2.addWeighted(acc, 1.0, img, float(wt), 0.0, dtype=cv2.CV_32F)
     return cv2.addWeighted(acc, 1.0, images[-1], float(weights[-1]), 0.0, dtype=cv2.CV_8U)
+
+
+def _blend3_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:
+    """Three-image weighted sum in two uint8 passes (twice as fast as a float accumulator).
+
+    Rounding twice can lose 1 only when the first partial sum ends in exactly .5; the image
+    whose ``255·w`` is farthest from ``k + .5`` goes last, so weights summing to 1 keep opaque
+    pixels at exactly 255. Rounding is monotonic, so colour <= alpha still holds.
+    """
+    frac = [abs((255.0 * float(w)) % 1.0 - 0.5) for w in weights]
+    last = int(np.argmax(frac))
+    i, j = (k for k in range(3) if k != last)
+    pair = cv2.addWeighted(images[i], float(weights[i]), images[j], float(weights[j]), 0.0)
+    return cv2.addWeighted(pair, 1.0, images[last], float(weights[last]), 0.0)

@@ -136,3 +136,32 @@ def test_over_background_colour_and_image():
     assert tuple(out[1, 1]) == (64, 127, 0)
     bg = np.full((4, 4, 3), 10, np.uint8)
     assert tuple(over_background(pm, bg)[3, 3]) == (10, 10, 10)
+
+
+def test_frames_do_not_leak_into_each_other():
+    head = _clear_head()
+    head[:, :, 3] = 255
+    head[30:40, 30:40, 3] = 0
+    c = Compositor(CANVAS, (60, 50), [head], {"m": (30, 30, 10, 10)})
+    first = c.compose({"m": _part(10, 10, (0, 255, 0, 255))})
+    kept = first.copy()
+    second = c.compose({})  # no part: the hole is empty again
+    assert second[35, 35, 3] == 0
+    assert np.array_equal(first, kept)  # earlier results are not reused buffers
+    tilted = c.compose({"m": _part(10, 10, (0, 0, 255, 255))}, pose=(1, 2, 3))
+    assert tilted is not c.compose({"m": _part(10, 10, (0, 0, 255, 255))}, pose=(1, 2, 3))
+
+
+def test_content_bounding_box_warp_matches_a_full_warp():
+    import cv2
+
+    rng = np.random.default_rng(0)
+    head = _clear_head()
+    head[10:90, 20:100] = rng.integers(0, 256, (80, 80, 4), dtype=np.uint8)
+    head[..., :3] = np.minimum(head[..., :3], head[..., 3:])
+    c = Compositor(CANVAS, (60, 50), [head], {}, heads_premultiplied=True)
+    for pose in ((3.3, -2.1, 17.0), (-30, 12, -40), (200, 0, 0)):
+        got = c.compose({}, pose=pose)
+        want = cv2.warpAffine(head, c.matrix(pose), CANVAS, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+        d = np.abs(got.astype(int) - want.astype(int))
+        assert np.mean(d) < 0.05 and d.max() <= 16

@@ -159,3 +159,14 @@ def test_blend_u8_is_the_weighted_sum():
     imgs = [np.full((3, 3, 4), v, np.uint8) for v in (250, 100, 10)]
     out = blend_u8(imgs, [0.2, 0.5, 0.3])
     assert (out == round(0.2 * 250 + 0.5 * 100 + 0.3 * 10)).all()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(0.0, 1.0), min_size=3, max_size=3).filter(lambda w: sum(w) > 1e-6))
+def test_blend_u8_keeps_full_alpha_for_any_weights(w):
+    w = np.array(w) / np.sum(w)
+    imgs = [np.full((2, 2, 4), 255, np.uint8), np.full((2, 2, 4), 255, np.uint8), np.full((2, 2, 4), 255, np.uint8)]
+    assert (blend_u8(imgs, w) == 255).all()
+    # the exact tie the ordering guards against: a partial sum of exactly k + 0.5
+    tie = [0.5 / 255 * 3, 0.5 - 0.5 / 255 * 3, 0.5]
+    assert (blend_u8(imgs, tie) == 255).all()
