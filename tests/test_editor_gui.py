@@ -486,3 +486,24 @@ def test_open_editor_with_parent_is_its_own_window(qtbot, tmp_path, monkeypatch)
     win.confirm_close = lambda: "discard"
     assert win.isWindow() and win.isVisible() and win.doc.artset is None
     win.close()
+
+
+def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Live", heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(5)
+    pv = win.preview
+    pv.tabs.setCurrentIndex(2)
+    pv.live_button.setChecked(True)
+    if pv.live is None:  # the puppet (training) or tracker has not landed: a one-line reason
+        assert not pv.live_button.isChecked()
+        assert pv.live_status.text().startswith("Live preview is not available:")
+        assert "\n" not in pv.live_status.text()
+        return
+    qtbot.waitUntil(lambda: pv.morph_view.caption == "live" or "stopped" in pv.live_status.text(), timeout=20000)
+    assert "stopped" not in pv.live_status.text(), pv.live_status.text()
+    pv.live_button.setChecked(False)
+    assert pv.live is None

@@ -240,9 +240,12 @@ class PreviewPanel(QWidget):
         # live
         livew = QWidget()
         lv = QVBoxLayout(livew)
+        self.live_source = QComboBox()
+        self.live_source.addItems(["bundled performance", "camera 0"])
+        lv.addWidget(self.live_source)
         self.live_button = QPushButton("Start live preview")
         self.live_button.setCheckable(True)
-        self.live_status = QLabel("The tracker drives the whole character (camera, or the synthetic performer when there is no camera).")
+        self.live_status = QLabel("The tracker drives the whole character being edited, from the bundled performance or a camera.")
         self.live_status.setWordWrap(True)
         lv.addWidget(self.live_button)
         lv.addWidget(self.live_status)
@@ -336,7 +339,8 @@ class PreviewPanel(QWidget):
             self.live_button.setText("Start live preview")
             return
         try:
-            self.live = LivePreview(self.doc, self._show_live)
+            src = "camera" if self.live_source.currentIndex() == 1 else "performance"
+            self.live = LivePreview(self.doc, self._show_live, src)
         except Exception as e:
             self.live = None
             self.live_status.setText(f"Live preview is not available: {_one_line(e)}")
@@ -357,74 +361,81 @@ class PreviewPanel(QWidget):
 
 
 class LivePreview:
-    """Feeds frames from a camera (or the synthetic performer) through a ``training.puppet.Puppet``
-    built on the art set being edited, at about 15 fps on the GUI thread."""
+    """Feeds frames through a ``training.puppet.Puppet`` built on the art set being edited, at
+    about 15 fps on the GUI thread. The source is the bundled performance (the synthetic
+    performer, calibrated from its own clicks) or camera 0. After an edit the puppet is rebuilt
+    once the edits have paused for a moment (building α tables takes a while)."""
 
-    def __init__(self, doc: EditorDocument, show):
-        from training.puppet import Puppet  # ImportError -> "not available"
+    REBUILD_PAUSE_S = 0.8
 
-        self.doc, self.show = doc, show
-        self.source, self.what = self._open_source()
+    def __init__(self, doc: EditorDocument, show, source: str = "performance"):
+        from app import workers  # the window's helpers: sources with fallbacks, puppet building
+
+        self.doc, self.show, self.workers = doc, show, workers
+        self.calibration = None
+        if source == "camera":
+            self.source = workers.open_source(workers.SourceSpec(kind="camera", camera=0))
+            self.what = "camera 0"
+        else:
+            self.source = workers.open_source(workers.SourceSpec(kind="performance"))
+            self.what = "the bundled performance"
+            try:
+                self.calibration = workers.performance_calibration(workers.bundled_performance())
+            except Exception:
+                self.calibration = None
         self.frames = iter(self.source)
-        self._Puppet = Puppet
-        self._art_id = None
         self.puppet = None
+        self._art = None
+        self._changed_at = 0.0
+        doc.changed.connect(self._on_changed)
+        self._build()  # raises (CoreMissing …) when the puppet is not available
         self.timer = QTimer()
         self.timer.setInterval(66)
         self.timer.timeout.connect(self.tick)
         self.timer.start()
 
-    def _open_source(self):
-        from tracker.sources import CameraSource, SyntheticSource
-
-        try:
-            src = CameraSource(0)
-            return src, "camera 0"
-        except Exception:
-            from tracker.synthetic import Performance
-
-            return SyntheticSource(Performance(seconds=20)), "the synthetic performer (no camera found)"
-
     def describe(self) -> str:
         return f"live from {self.what}"
 
-    def _ensure_puppet(self):
-        art = self.doc.artset
-        key = id(art)
-        if self.puppet is None or key != self._art_id:
-            session = None
-            try:
-                from training.defaults import default_session
+    def _on_changed(self):
+        import time
 
-                session = default_session(art)
-            except Exception:
-                session = None
-            self.puppet = self._Puppet(art, session=session)
-            self._art_id = key
+        self._changed_at = time.monotonic()
+
+    def _build(self):
+        art = self.doc.artset
+        spec = self.workers.PuppetSpec(calibration=self.calibration, fps=15)
+        self.puppet = self.workers.make_puppet(art, spec)
+        self._art = art
 
     def tick(self):
+        import time
+
         try:
-            fr = next(self.frames)
-        except StopIteration:
-            self.frames = iter(self.source)
-            return
-        except Exception as e:
-            self.stop()
-            self.show(np.zeros((2, 2, 4), np.uint8), f"live preview stopped: {_one_line(e)}")
-            return
-        try:
-            self._ensure_puppet()
+            if self.doc.artset is not self._art and time.monotonic() - self._changed_at > self.REBUILD_PAUSE_S:
+                self._build()
+            try:
+                fr = next(self.frames)
+            except StopIteration:
+                self.frames = iter(self.source)
+                return
             out = self.puppet.step(fr.image, fr.index, fr.time)
-        except Exception as e:
+        except Exception as e:  # anything from the core: stop and say why, in one line
             self.stop()
             self.show(np.zeros((2, 2, 4), np.uint8), f"live preview stopped: {_one_line(e)}")
             return
-        ms = sum(getattr(out, "timings_ms", {}).values()) if hasattr(out, "timings_ms") else 0.0
+        ms = sum(getattr(out, "timings_ms", {}).values())
         status = getattr(getattr(out, "params", None), "status", "")
-        self.show(out.rgba_pm, f"live from {self.what} — {status} — {ms:.1f} ms a frame")
+        stale = "  (showing the set before your last edit)" if self.doc.artset is not self._art else ""
+        self.show(out.rgba_pm, f"live from {self.what} — {status} — {ms:.1f} ms a frame{stale}")
 
     def stop(self):
-        self.timer.stop()
+        if getattr(self, "timer", None) is not None:
+            self.timer.stop()
+        try:
+            self.doc.changed.disconnect(self._on_changed)
+        except (RuntimeError, TypeError):
+            pass
         try:
             self.source.close()
         except Exception:
