@@ -59,6 +59,8 @@ class ClickView(QWidget):
         self.image = bgr_to_qimage(frame_bgr)
         self.points: dict[str, tuple[float, float]] = {}
         self._drag: str | None = None
+        self._zoom = 1.0
+        self._centre = (frame_bgr.shape[1] / 2.0, frame_bgr.shape[0] / 2.0)
         self.setMouseTracking(True)
         self.setMinimumSize(480, 360)
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
@@ -68,7 +70,27 @@ class ClickView(QWidget):
         return next((k for k in POINTS if k not in self.points), None)
 
     def _rect(self) -> QRectF:
-        return fit_rect(self.image.width(), self.image.height(), QRectF(self.rect()).adjusted(4, 4, -4, -4))
+        """Where the whole frame is drawn: fitted to the widget, then zoomed about ``_centre``."""
+        base = fit_rect(self.image.width(), self.image.height(), QRectF(self.rect()).adjusted(4, 4, -4, -4))
+        if self._zoom <= 1.0:
+            return base
+        s = base.width() / self.image.width() * self._zoom
+        cx, cy = self._centre
+        w, h = self.image.width() * s, self.image.height() * s
+        return QRectF(base.center().x() - (cx + 0.5) * s, base.center().y() - (cy + 0.5) * s, w, h)
+
+    def wheelEvent(self, ev) -> None:
+        """Zoom in and out about the cursor (for precise clicks on small faces)."""
+        before = self.to_frame(ev.position())
+        step = 1.25 if ev.angleDelta().y() > 0 else 1 / 1.25
+        self._zoom = float(np.clip(self._zoom * step, 1.0, 8.0))
+        if self._zoom > 1.0:
+            # keep the frame point under the cursor where it was
+            base = fit_rect(self.image.width(), self.image.height(), QRectF(self.rect()).adjusted(4, 4, -4, -4))
+            s = base.width() / self.image.width() * self._zoom
+            self._centre = (before[0] + 0.5 - (ev.position().x() - base.center().x()) / s - 0.5,
+                            before[1] + 0.5 - (ev.position().y() - base.center().y()) / s - 0.5)
+        self.update()
 
     def to_view(self, x: float, y: float) -> QPointF:
         r = self._rect()
@@ -126,10 +148,11 @@ class ClickView(QWidget):
         p.fillRect(self.rect(), QColor("#141518"))
         r = self._rect()
         path = QPainterPath()
-        path.addRoundedRect(r, 8, 8)
+        path.addRoundedRect(r.intersected(QRectF(self.rect()).adjusted(4, 4, -4, -4)), 8, 8)
         p.setClipPath(path)
         p.drawImage(r, self.image)
         p.setClipping(False)
+        p.setClipRect(self.rect())
         f = QFont(p.font())
         f.setPointSizeF(9)
         f.setBold(True)
@@ -403,7 +426,7 @@ class CalibrationWindow(QDialog):
         nxt = self.view.next_point()
         n = len(self.view.points)
         if nxt is not None:
-            self.prompt.setText(f"{n + 1} of 5 — {PROMPTS[nxt]}")
+            self.prompt.setText(f"{n + 1} of 5 — {PROMPTS[nxt]}  (mouse wheel zooms)")
             self.calibration = None
             self.accept_btn.setEnabled(False)
             for mv in self.mask_views:

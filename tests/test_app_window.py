@@ -175,6 +175,14 @@ def test_calibration_click_by_mouse_and_drag(qtbot, performer):
     assert "left_pupil" in v.points
     x, y = v.points["left_pupil"]
     assert abs(x - 300) < 2 and abs(y - 200) < 2
+    # zoomed in, clicks still land on the frame pixel under the cursor
+    v._zoom, v._centre = 4.0, (330.0, 220.0)
+    p = v.to_view(340.0, 210.0)
+    fx, fy = v.to_frame(p)
+    assert abs(fx - 340) < 1e-6 and abs(fy - 210) < 1e-6
+    qtbot.mouseClick(v, Qt.MouseButton.LeftButton, pos=p.toPoint())
+    x, y = v.points["right_pupil"]
+    assert abs(x - 340) < 0.5 and abs(y - 210) < 0.5
 
 
 def test_training_window_assigns_a_frame_and_saves(qtbot, performer):
