@@ -425,7 +425,6 @@ class MainWindow(QMainWindow):
         self.strip.select_path(path)
         self.settings.set("art/current", path)
         self._session = self._load_session(path)
-        self.char_view.cross_fade()
         self.pipeline.worker.request(art=path, session=self._session)
 
     def current_art(self) -> str:
@@ -758,7 +757,7 @@ class MainWindow(QMainWindow):
         if fr.video is not None:
             self.video_view.set_frame(fr.video, fr.overlay, fr.params)
         if fr.character is not None:
-            self.char_view.set_image(fr.character)
+            self.char_view.set_image(fr.character, fr.art)
             self.char_view.placeholder = "Loading the character…"
         if self.recorder is not None:
             self.recorder.add(fr, self.char_view.background_colour())

@@ -346,6 +346,8 @@ class CharacterView(QWidget):
         self.green = QColor(0, 177, 64)
         self.placeholder = "Loading the character…"
         self.fade_ms = 450
+        self.fades = 0  # cross-fades started (for tests and curiosity)
+        self._key = ""
         self._checker = checker_brush()
         self._anim = QVariantAnimation(self)
         self._anim.setStartValue(1.0)
@@ -365,18 +367,18 @@ class CharacterView(QWidget):
             return None
         return self.green if self.background == "green" else self.colour
 
-    def set_image(self, image: QImage | None) -> None:
+    def set_image(self, image: QImage | None, key: str = "") -> None:
+        """Show ``image``; when ``key`` (the character) changes, cross-fade from the last picture."""
+        if key and self._key and key != self._key and self.image is not None and image is not None:
+            self._old = self.image
+            self.fades += 1
+            self._anim.stop()
+            self._anim.setDuration(self.fade_ms)
+            self._anim.start()
+        if key:
+            self._key = key
         self.image = image
         self.update()
-
-    def cross_fade(self) -> None:
-        """Start fading from the current picture to whatever comes next."""
-        if self.image is None:
-            return
-        self._old = self.image
-        self._anim.stop()
-        self._anim.setDuration(self.fade_ms)
-        self._anim.start()
 
     @property
     def fading(self) -> bool:

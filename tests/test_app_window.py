@@ -97,8 +97,8 @@ def test_switching_characters_and_rates(qtbot, window):
     _wait_frames(qtbot, window, 3)
     if len(arts) > 1:
         window.set_art(arts[1])
-        assert window.char_view.fading
         _wait_frames(qtbot, window, 3, lambda: window.last.art == arts[1])
+        assert window.char_view.fades == 1
         assert Settings().get("art/current") == arts[1]
     for r in (10, 15, 30):
         window.set_rate(r)
