@@ -64,7 +64,7 @@ def sparsify(w: np.ndarray, labels: np.ndarray | None = None) -> tuple[np.ndarra
     return idx.astype(np.intp), ww
 
 
-def _pca_reduce(pts: np.ndarray, rel_tol: float = 1e-5, max_dims: int | None = None):
+def _pca_reduce(pts: np.ndarray, rel_tol: float = 1e-3, max_dims: int | None = None):
     """Mean and basis of the principal axes whose variance exceeds ``rel_tol`` of the largest."""
     mean = pts.mean(axis=0)
     c = pts - mean
@@ -122,17 +122,19 @@ def _bspline3(t: np.ndarray) -> np.ndarray:
 class CardinalRBFMapper(_DenseMapper):
     """Cardinal-basis RBF: w_i(p) = Σ_l a_il A_l(p) + Σ_j r_ji B(‖p − p_j‖ / α_j).
 
-    ``p`` are the PCA coordinates of the features (axes with variance below 1e-5 of the largest
-    dropped); ``A = (1, p)``; α_j is the distance from example j to its nearest other example.
+    ``p`` are the PCA coordinates of the features; axes with variance below ``rel_tol`` of the
+    largest are dropped (the 2007 paper drops eigenvalues under 1e-5 in its units; relative 1e-3
+    here, because the linear part extrapolates steeply along a nearly empty axis, so tracker noise
+    along it would swing the weights); ``A = (1, p)``; α_j is the distance from example j to its nearest other example.
     The dense weights sum to one (the constant is in the linear basis) and are exact at the
     examples; they can be negative, hence :func:`sparsify`.
     """
 
-    def __init__(self, points, labels=None):
+    def __init__(self, points, labels=None, rel_tol: float = 1e-3):
         pts, self.labels = _check_points(points, labels)
         self.points = pts
         n = len(pts)
-        self.mean, self.basis = _pca_reduce(pts)
+        self.mean, self.basis = _pca_reduce(pts, rel_tol)
         p = (pts - self.mean) @ self.basis.T
         A = np.hstack([np.ones((n, 1)), p])
         eye = np.eye(n)

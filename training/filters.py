@@ -204,6 +204,11 @@ class ChaiFilter:
     estimates from the ``delay + 1`` most recent windows are cross-faded with raised-cosine
     weights by their position in the window. Until ``window`` frames have arrived the input
     passes through.
+
+    ``channels`` (indices) limits the data-driven part to those channels, e.g. the expression
+    values: head position differs from take to take, so windows of it rarely have near
+    neighbours in the database. The other channels go through ``others`` (default: a One-Euro
+    filter).
     """
 
     name = "chai"
@@ -212,12 +217,20 @@ class ChaiFilter:
         self,
         database: np.ndarray,
         window: int = 10,
-        k: int = 60,
+        k: int = 100,
         variance: float = 0.99,
-        delay: int = 2,
+        delay: int = 1,
         db_smooth: float = 1.0,
+        channels: Sequence[int] | None = None,
+        others=None,
     ):
         db = np.asarray(database, dtype=np.float64)
+        self.n_in = db.shape[1] if db.ndim == 2 else 0
+        self.channels = None if channels is None else np.asarray(channels, dtype=np.intp)
+        if self.channels is not None:
+            db = db[:, self.channels]
+            self.others = others if others is not None else OneEuroFilter()
+            self._rest = np.setdiff1d(np.arange(self.n_in), self.channels)
         if db.ndim != 2 or len(db) < window + 2:
             raise ValueError(f"the Chai filter needs a training clip of at least {window + 2} frames, got {len(db)}")
         db = db[np.all(np.isfinite(db), axis=1)]
@@ -241,6 +254,8 @@ class ChaiFilter:
     def reset(self) -> None:
         self._buf: deque = deque(maxlen=self.window)
         self._recs: deque = deque(maxlen=self.delay + 1)
+        if self.channels is not None:
+            self.others.reset()
 
     def _reconstruct(self, x: np.ndarray) -> np.ndarray:
         d2 = self._wnorm - 2.0 * (self._windows @ x)
@@ -259,6 +274,14 @@ class ChaiFilter:
 
     def step(self, z: np.ndarray, t: float | None = None) -> np.ndarray:
         z = np.asarray(z, dtype=np.float64)
+        if self.channels is None:
+            return self._step(z)
+        out = np.empty_like(z)
+        out[self.channels] = self._step(z[self.channels])
+        out[self._rest] = self.others.step(z[self._rest], t)
+        return out
+
+    def _step(self, z: np.ndarray) -> np.ndarray:
         self._buf.append(z.copy())
         if len(self._buf) < self.window:
             return z.copy()
@@ -317,5 +340,6 @@ def make_filter(name: str, fps: float = 30.0, database: np.ndarray | None = None
     if name == "chai":
         if database is None or len(database) < 12:
             return OneEuroFilter(fps=fps)
-        return ChaiFilter(database)
+        # expression channels only (see ChaiFilter): pose through One-Euro
+        return ChaiFilter(database, channels=range(3, 10), others=OneEuroFilter(fps=fps))
     raise ValueError(f"unknown filter {name!r} (choose from {', '.join(FILTERS)})")
