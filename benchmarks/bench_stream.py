@@ -98,6 +98,27 @@ def run(ctx):
         "header and IP/UDP 28 bytes; the file format adds 2 bytes a frame."
     )
 
+    loss_t = Table(f"Frames decoded under random packet loss (truth 'default', {seconds:g} s; {3 if ctx.quick else 10} loss patterns each)",
+                   ["loss", "plain", "compressed key 15", "compressed key 30", "compressed key 60"])  # fmt: skip
+    rng = np.random.default_rng(0)
+    perf, rows = _truth("default", 0, seconds)
+    codec = ParamCodec(perf.frame_size, perf.ipd)
+    sample = [codec.encode(r) for r in rows]
+    coded_k = {k: compress_frames(sample, k) for k in (15, 30, 60)}
+    for loss in (0.001, 0.01, 0.05):
+        shown = {"plain": [], 15: [], 30: [], 60: []}
+        for _ in range(3 if ctx.quick else 10):
+            keep = rng.random(len(sample)) >= loss
+            shown["plain"].append(keep.mean())
+            for k in (15, 30, 60):
+                dec = StreamDecoder()
+                ok = sum(dec.decode(kk, p, seq=i) is not None
+                         for i, ((kk, p), kept) in enumerate(zip(coded_k[k], keep)) if kept)  # fmt: skip
+                shown[k].append(ok / len(sample))
+        loss_t.add(f"{100 * loss:g}%", *(f"{100 * np.mean(v):.1f}%" for v in shown.values()))
+    loss_t.note = ("a delta frame needs its predecessor, so after a loss the compressed stream holds until the next key "
+                   "frame (about key/2 frames per loss); on lossy links send plain or lower --key-interval")
+
     enc_t = Table("Stream coder speed per frame (key interval 30, truth track 'default')",
                   ["operation", "runs", "median µs", "min–max µs"])  # fmt: skip
     enc = StreamEncoder(30)
@@ -108,4 +129,4 @@ def run(ctx):
         us = [1000.0 * v for v in timing.samples_ms]
         enc_t.add(name, str(len(us)), f"{np.median(us):.1f}", f"{min(us):.1f}–{max(us):.1f}")
     enc_t.note = "pure Python; decoding must see every frame in order, so it is not warmed up"
-    return [t, enc_t]
+    return [t, loss_t, enc_t]
