@@ -18,19 +18,27 @@ def column_profile(grey: np.ndarray, x: float, y0: int, y1: int, half_width: int
     """Mean grey value of rows ``y0..y1-1`` over columns ``x ± half_width`` (float32, y order).
 
     The strip's two edge columns are weighted by the sub-pixel position of ``x`` so the
-    profile moves smoothly with it. Rows outside the image repeat the border.
+    profile moves smoothly with it. Rows and columns outside the image repeat the border.
     """
     h, w = grey.shape
     xi = int(np.floor(x))
     f = float(x - xi)
-    c0, c1 = xi - half_width, xi + half_width + 1  # columns c0..c1 inclusive get weights
-    cols = np.clip(np.arange(c0, c1 + 1), 0, w - 1)
-    wts = np.ones(len(cols), dtype=np.float32)
+    c0, c1 = xi - half_width, xi + half_width + 2  # columns c0..c1-1 get weights
+    wts = np.ones(c1 - c0, dtype=np.float32)
     wts[0] = 1.0 - f
     wts[-1] = f
-    rows = np.clip(np.arange(y0, y1), 0, h - 1)
-    strip = grey[rows[:, None], cols[None, :]]
-    return (strip @ wts) / wts.sum()
+    wts /= wts.sum()
+    a, b = max(y0, 0), min(y1, h)
+    ca, cb = max(c0, 0), min(c1, w)
+    if a >= b or ca >= cb:
+        return np.full(max(y1 - y0, 0), float(grey.mean()), dtype=np.float32)
+    strip = grey[a:b, ca:cb]
+    if ca != c0 or cb != c1:
+        strip = np.pad(strip, ((0, 0), (ca - c0, c1 - cb)), mode="edge")
+    prof = strip @ wts
+    if a != y0 or b != y1:
+        prof = np.pad(prof, (a - y0, y1 - b), mode="edge")
+    return prof
 
 
 def brow_centre(profile: np.ndarray, guess: int, radius: int) -> float:

@@ -89,20 +89,25 @@ class FaceFrame:
             scale=work_ipd / max(ipd, 1e-6),
         )
 
+    def __post_init__(self) -> None:
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        self._u = np.array([c, -s])
+        self._d = np.array([s, c])
+        self._m = np.array([float(self.mid[0]), float(self.mid[1])])
+        # frame px = mid + (face x, face y) @ _back
+        self._back = np.array([self._u, self._d]) / self.scale
+
     def axes(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit vectors (frame px) of the face's x and down axes."""
-        c, s = math.cos(self.angle), math.sin(self.angle)
-        return np.array([c, -s]), np.array([s, c])
+        return self._u, self._d
 
     def matrix(self, origin: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
         """2×3 affine from frame px to crop px, where a crop's (0,0) is face point ``origin``."""
-        u, d = self.axes()
-        k = self.scale
-        m = np.array([self.mid[0], self.mid[1]])
+        u, d, k, m = self._u, self._d, self.scale, self._m
         return np.array(
             [
-                [k * u[0], k * u[1], -k * float(m @ u) - origin[0]],
-                [k * d[0], k * d[1], -k * float(m @ d) - origin[1]],
+                [k * u[0], k * u[1], -k * (m[0] * u[0] + m[1] * u[1]) - origin[0]],
+                [k * d[0], k * d[1], -k * (m[0] * d[0] + m[1] * d[1]) - origin[1]],
             ]
         )
 
@@ -115,16 +120,12 @@ class FaceFrame:
 
     def to_image(self, pts: np.ndarray) -> np.ndarray:
         """Face coordinates ``(n, 2)`` to frame px."""
-        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-        u, d = self.axes()
-        k = 1.0 / self.scale
-        return np.array(self.mid) + k * (p[:, 0:1] * u + p[:, 1:2] * d)
+        return self._m + np.asarray(pts, dtype=np.float64).reshape(-1, 2) @ self._back
 
     def to_face(self, pts: np.ndarray) -> np.ndarray:
         """Frame px ``(n, 2)`` to face coordinates."""
-        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2) - np.array(self.mid)
-        u, d = self.axes()
-        return self.scale * np.stack([p @ u, p @ d], axis=1)
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2) - self._m
+        return self.scale * (p @ np.array([self._u, self._d]).T)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -267,36 +268,42 @@ def _odd(v: float, lo: int = 3) -> int:
 
 
 def _refine_pupil(grey: np.ndarray, click: tuple[float, float], ipd: float) -> tuple[tuple[float, float], float]:
-    """Snap a clicked pupil to the centre of the dark disc under it; also return its radius (px)."""
+    """Snap a clicked pupil to the centre of the dark disc under it; also return its radius (px).
+
+    First the darkest disc of radius ~0.04 ipd within 0.1 ipd of the click (box-filtered
+    mean), then the darkness-weighted centroid of the pixels darker than half-way between
+    that disc and the ring around it — so a dark iris or dark skin does not pull it off.
+    """
     h, w = grey.shape
-    r = max(int(round(0.14 * ipd)), 4)
-    x, y = click
-    radius = 0.05 * ipd
-    for _ in range(3):
-        xi, yi = int(round(x)), int(round(y))
-        x0, x1 = max(xi - r, 0), min(xi + r + 1, w)
-        y0, y1 = max(yi - r, 0), min(yi + r + 1, h)
-        win = cv2.GaussianBlur(grey[y0:y1, x0:x1], (3, 3), 0)
-        yy, xx = np.mgrid[y0:y1, x0:x1]
-        near = (xx - x) ** 2 + (yy - y) ** 2 <= (0.6 * r) ** 2
-        if not near.any():
-            break
-        dark = float(win[near].min())
-        bright = float(np.percentile(win, 75))
-        thr = dark + 0.5 * (bright - dark)
-        mask = (win < thr).astype(np.uint8)
-        n, lab = cv2.connectedComponents(mask, connectivity=8)
-        # the component holding the darkest pixel near the click
-        cand = np.where(near, win, np.inf)
-        k = np.unravel_index(int(np.argmin(cand)), cand.shape)
-        comp = lab == lab[k]
-        wgt = np.clip(thr - win, 0, None) * comp
-        if wgt.sum() <= 0:
-            break
-        x = float((wgt * xx).sum() / wgt.sum())
-        y = float((wgt * yy).sum() / wgt.sum())
-        radius = math.sqrt(comp.sum() / math.pi)
-    return (x, y), radius
+    r = max(int(round(0.16 * ipd)), 5)
+    xi, yi = int(round(click[0])), int(round(click[1]))
+    x0, x1 = max(xi - r, 0), min(xi + r + 1, w)
+    y0, y1 = max(yi - r, 0), min(yi + r + 1, h)
+    win = grey[y0:y1, x0:x1]
+    rp = max(0.04 * ipd, 1.0)
+    kd = _odd(2 * rp, 3)
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kd, kd)).astype(np.float32)
+    disc /= disc.sum()
+    mean = cv2.filter2D(win, -1, disc, borderType=cv2.BORDER_REPLICATE)
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    near = (xx - click[0]) ** 2 + (yy - click[1]) ** 2 <= (0.1 * ipd + 1) ** 2
+    cand = np.where(near, mean, np.inf)
+    ky, kx = np.unravel_index(int(np.argmin(cand)), cand.shape)
+    cx, cy = float(xx[ky, kx]), float(yy[ky, kx])
+    d2 = (xx - cx) ** 2 + (yy - cy) ** 2
+    dark = float(mean[ky, kx])
+    ring = (d2 >= (1.6 * rp) ** 2) & (d2 <= (2.6 * rp) ** 2)
+    around = float(np.median(win[ring])) if ring.any() else float(win.max())
+    thr = dark + 0.5 * (around - dark)
+    mask = ((win < thr) & (d2 <= (2.0 * rp) ** 2)).astype(np.uint8)
+    n, lab = cv2.connectedComponents(mask, connectivity=8)
+    comp = lab == lab[ky, kx]
+    if not mask[ky, kx] or comp.sum() < 2:
+        return (cx, cy), rp
+    wgt = np.clip(thr - win, 0, None) * comp
+    x = float((wgt * xx).sum() / wgt.sum())
+    y = float((wgt * yy).sum() / wgt.sum())
+    return (x, y), math.sqrt(comp.sum() / math.pi)
 
 
 def _patch(img: np.ndarray, cx: float, cy: float, hw: float, hh: float) -> np.ndarray:
@@ -384,8 +391,10 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     skin_px = np.concatenate(skin_parts)
     mx, my = at(*mouth_f)
     ring = _ellipse_pixels(crop, mx, my, 0.75 * wi, 0.42 * wi, inner=0.72)
-    # along the pupil line, pupil to near the eye's corners: pupil, iris and white
-    eye_interior = np.concatenate([_patch(crop, px, py, 0.18 * wi, 1) for px, py in pupils])
+    # along the pupil line, from beyond the pupil to near the eye's corners: iris and white
+    eye_interior = np.concatenate(
+        [_patch(crop, px + s * (1.5 * prad + 0.09 * wi), py, 0.09 * wi, 1) for px, py in pupils for s in (-1, 1)]
+    )
     pupil_px = np.concatenate([_ellipse_pixels(crop, px, py, 0.7 * prad, 0.7 * prad) for px, py in pupils])
     eye_box = np.concatenate(
         [_ellipse_pixels(crop, px, py, 0.3 * wi, 0.2 * wi, inner=min(0.9, 1.8 * prad / (0.2 * wi))) for px, py in pupils]
@@ -394,9 +403,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
 
     try:
         pupil_cls = ColourClassifier(pupil_px, np.concatenate([eye_box, skin_px, brow_px]), y_weight=4.0, name="pupil")
-        eye_cls = ColourClassifier(
-            np.concatenate([eye_interior, pupil_px]), np.concatenate([skin_px, brow_px]), y_weight=3.0, name="eye"
-        )
+        eye_cls = ColourClassifier(eye_interior, np.concatenate([skin_px, brow_px]), y_weight=3.0, name="eye")
     except ValueError as e:
         raise CalibrationError(f"calibration: {e}") from None
 

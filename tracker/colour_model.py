@@ -13,6 +13,7 @@ as long as the two differ somewhat in chroma or brightness on the calibration fr
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 BITS = 6
@@ -107,10 +108,19 @@ def _bin_colours() -> np.ndarray:
     return _GRID_CACHE
 
 
+_INDEX_WEIGHTS = np.array([[1 << (2 * BITS), 1 << BITS, 1]], dtype=np.float32)
+
+
 def lut_index(bgr: np.ndarray) -> np.ndarray:
     """Table index of every pixel of a ``(..., 3)`` uint8 BGR array (int32, same leading shape)."""
-    q = (bgr >> _SHIFT).astype(np.int32)
-    return (q[..., 0] << (2 * BITS)) | (q[..., 1] << BITS) | q[..., 2]
+    q = np.right_shift(bgr, _SHIFT).astype(np.float32)
+    if q.ndim == 2:
+        q = q.reshape(1, -1, 3)
+        return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32).reshape(bgr.shape[:-1])
+    if q.ndim != 3:
+        q = q.reshape(-1, 1, 3)
+        return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32).reshape(bgr.shape[:-1])
+    return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32)
 
 
 class ColourClassifier:
@@ -165,7 +175,7 @@ class ColourClassifier:
 
     def prob_u8(self, bgr: np.ndarray) -> np.ndarray:
         """Target score of every pixel as uint8 0..255 (same leading shape as ``bgr``)."""
-        return self.table[lut_index(bgr)]
+        return self.table.take(lut_index(bgr))
 
     def prob(self, bgr: np.ndarray) -> np.ndarray:
         return self.prob_u8(bgr).astype(np.float32) * (1.0 / 255.0)

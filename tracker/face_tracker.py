@@ -41,7 +41,8 @@ class Overlay:
     ``pupils`` (2,2) left/right; ``brows`` (2,2) points on the brow middle lines;
     ``lids`` (4,2) left upper, left lower, right upper, right lower; ``lip_polygon`` (k,2)
     the snake outline and ``lip_raw_polygon`` the radial polygon before it;
-    ``blob_contour`` (m,2) the outline of the lip blob; ``mouth_corners`` (2,2);
+    ``blob`` the lip blob (bool mask of the mouth crop; :meth:`blob_contour` gives its
+    outline in frame px); ``mouth_corners`` (2,2);
     ``mouth_centre`` (2,); ``lip_points`` (2,2) outer edges of the upper and lower lip;
     ``rois`` a list of 4-corner polygons (4,2); ``status`` the frame's status.
     """
@@ -51,12 +52,24 @@ class Overlay:
     lids: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan))
     lip_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     lip_raw_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    blob_contour: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    blob: np.ndarray | None = None
+    blob_origin: tuple | None = field(default=None, repr=False)
     mouth_corners: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     mouth_centre: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
     lip_points: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     rois: list = field(default_factory=list)
     status: str = OK
+
+    def blob_contour(self) -> np.ndarray:
+        """Outline (m,2) of the lip blob in frame px (empty without a blob)."""
+        if self.blob is None or self.blob_origin is None:
+            return np.zeros((0, 2))
+        cnts, _ = cv2.findContours(self.blob.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        if not cnts:
+            return np.zeros((0, 2))
+        ff, (ox, oy) = self.blob_origin
+        c = max(cnts, key=len).reshape(-1, 2).astype(np.float64) + (ox, oy)
+        return ff.to_image(c)
 
     def draw(self, frame_bgr: np.ndarray) -> np.ndarray:
         """A copy of ``frame_bgr`` with the overlay drawn on it."""
@@ -71,8 +84,9 @@ class Overlay:
 
         for roi in self.rois:
             cv2.polylines(img, [np.round(roi * (1 << S)).astype(np.int32)], True, (200, 200, 0), 1, cv2.LINE_AA, S)
-        if len(self.blob_contour):
-            cv2.polylines(img, [np.round(self.blob_contour * (1 << S)).astype(np.int32)], True, (0, 160, 255), 1, cv2.LINE_AA, S)
+        bc = self.blob_contour()
+        if len(bc):
+            cv2.polylines(img, [np.round(bc * (1 << S)).astype(np.int32)], True, (0, 160, 255), 1, cv2.LINE_AA, S)
         if len(self.lip_polygon):
             cv2.polylines(img, [np.round(self.lip_polygon * (1 << S)).astype(np.int32)], True, (0, 255, 0), 1, cv2.LINE_AA, S)
         colour = {OK: (0, 255, 0), EYES_CLOSED: (0, 200, 255), MOUTH_LOST: (0, 128, 255), LOST: (0, 0, 255)}.get(self.status, (255, 255, 255))
@@ -129,7 +143,7 @@ class FaceTracker:
         self.brow_finders = [
             BrowFinder(p, c, BROW_LO * h, BROW_HI * h) for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights)
         ]
-        self.lid_finder = LidFinder(cal.eye, LID_UP * wi, LID_DOWN * wi)
+        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius)
         self.mouth_finder = MouthFinder()
         # eye crops (face coordinates): both pupil search windows with template margins, the
         # brows' search range above, the lid walks below; a wider one for re-acquisition
@@ -272,10 +286,8 @@ class FaceTracker:
             ov.lip_points = ff.to_image(np.array([[centre_f[0], centre_f[1] - mouth_res.lip_upper], [centre_f[0], centre_f[1] + mouth_res.lip_lower]]))
             ov.lip_polygon = ff.to_image(mouth_res.polygon + mo)
             ov.lip_raw_polygon = ff.to_image(mouth_res.raw_polygon + mo)
-            cnts, _ = cv2.findContours(mouth_res.blob.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-            if cnts:
-                c = max(cnts, key=len).reshape(-1, 2).astype(np.float64)
-                ov.blob_contour = ff.to_image(c + mo)
+            ov.blob = mouth_res.blob
+            ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             # the mouth centre relative to the measured pupils, for the next frame's crop
             ff_meas = FaceFrame.from_pupils(tuple(pupils_img[0]), tuple(pupils_img[1]), wi)
             self.mouth_face = ff_meas.to_face(ov.mouth_centre[None])[0]

@@ -17,14 +17,13 @@ from tracker.colour_model import ColourClassifier
 
 
 def _first_run(tags: np.ndarray, run: int) -> int:
-    """Index of the first position starting ``run`` consecutive True values, or −1."""
-    n = len(tags)
-    if n < run:
+    """Index of the first position starting ``run`` (1 or 2) consecutive True values, or −1."""
+    if run >= 2:
+        tags = tags[:-1] & tags[1:]
+    if not len(tags):
         return -1
-    t = tags.astype(np.int16)
-    c = np.convolve(t, np.ones(run, dtype=np.int16), mode="valid")
-    hit = np.nonzero(c == run)[0]
-    return int(hit[0]) if len(hit) else -1
+    k = int(tags.argmax())
+    return k if tags[k] else -1
 
 
 def _edge(lum: np.ndarray, prob: np.ndarray, k: int, min_contrast: float = 24.0) -> float:
@@ -48,38 +47,60 @@ def _edge(lum: np.ndarray, prob: np.ndarray, k: int, min_contrast: float = 24.0)
 
 
 class LidFinder:
-    """``interior`` scores eye-interior pixels; walks go ``up_max`` crop px up and ``down_max`` down."""
+    """Walks up and down from the pupil to the lids.
 
-    def __init__(self, interior: ColourClassifier, up_max: float, down_max: float, run: int = 2):
+    ``interior`` scores the eye's inside (iris and white), ``pupil`` the pupil; a walk first
+    leaves the pupil (``pupil_radius`` crop px, give or take), then stops at the first run of
+    pixels that are not inside. If nothing next to the pupil is inside, the lid cuts the
+    pupil and the walk ends where the pupil's colour does.
+    Walks go ``up_max`` crop px up and ``down_max`` down.
+    """
+
+    def __init__(
+        self, interior: ColourClassifier, pupil: ColourClassifier, up_max: float, down_max: float,
+        pupil_radius: float = 3.0, run: int = 2,
+    ):
         self.interior = interior
+        self.skip = int(np.ceil(1.7 * pupil_radius)) + 1
+        self.pupil = pupil
         self.up_max = int(np.ceil(up_max))
         self.down_max = int(np.ceil(down_max))
         self.run = int(run)
 
-    def _walk(self, bgr: np.ndarray, grey: np.ndarray, x: float, y: float, direction: int, length: int) -> float:
-        h, w = grey.shape
-        xi = int(np.clip(round(x), 0, w - 1))
-        x0, x1 = max(xi - 1, 0), min(xi + 2, w)
-        start = y
-        steps = np.arange(length + 1)
-        ys = start + direction * steps
-        yi = np.clip(np.rint(ys).astype(np.int32), 0, h - 1)
-        cols = bgr[yi, x0:x1]  # (n, k, 3)
-        p = self.interior.prob_u8(cols).astype(np.float32).mean(axis=1)
-        # luminance sampled at the sub-pixel positions (linear in y) through the same column
-        fy = np.clip(ys, 0, h - 1)
-        y_lo = np.floor(fy).astype(np.int32)
-        y_hi = np.minimum(y_lo + 1, h - 1)
-        t = fy - y_lo
-        g = grey[:, x0:x1].mean(axis=1)
-        lum = g[y_lo] * (1 - t) + g[y_hi] * t
-        k = _first_run(p < 128, self.run)
-        if k < 0:
-            return float(length)
-        return _edge(lum, p, k)
-
     def find(self, bgr: np.ndarray, grey: np.ndarray, pupil: tuple[float, float]) -> tuple[float, float]:
-        """``(upper, lower)``: crop px from the pupil to the upper and to the lower lid."""
-        up = self._walk(bgr, grey, pupil[0], pupil[1], -1, self.up_max)
-        down = self._walk(bgr, grey, pupil[0], pupil[1], +1, self.down_max)
-        return up, down
+        """``(upper, lower)``: crop px from the pupil to the upper and to the lower lid.
+
+        One strip of three columns through the pupil is classified at once; each walk starts
+        at the pupil's row. A walk that finds no lid returns its full length.
+        """
+        h, w = grey.shape
+        xi = min(max(int(round(pupil[0])), 1), w - 2)
+        yi = min(max(int(round(pupil[1])), 0), h - 1)
+        y0, y1 = max(yi - self.up_max, 0), min(yi + self.down_max + 1, h)
+        strip = bgr[y0:y1, xi - 1 : xi + 2]
+        p = self.interior.prob_u8(strip).mean(axis=1)
+        q = self.pupil.prob_u8(strip[:, 1])
+        lum = grey[y0:y1, xi - 1 : xi + 2].mean(axis=1)
+        c = yi - y0
+        dy = yi - pupil[1]  # sample j of a walk sits j ∓ dy from the pupil
+        up = self._walk(p[c::-1], q[c::-1], lum[c::-1]) - dy
+        down = self._walk(p[c:], q[c:], lum[c:]) + dy
+        return max(up, 0.0), max(down, 0.0)
+
+    def _walk(self, p: np.ndarray, q: np.ndarray, lum: np.ndarray) -> float:
+        n = len(p)
+        inside = p >= 128
+        lim = min(self.skip, n)
+        if inside[:lim].any():
+            s = int(inside[:lim].argmax())  # the walk leaves the pupil into iris or white
+            inside[:s] = True
+            k = _first_run(~inside, self.run)
+            if k < 0:
+                return float(max(n - 1, 0))
+            pp = np.where(inside, np.maximum(p, 128.0), p)
+            return _edge(lum, pp, k)
+        # no iris or white next to the pupil: the lid crosses the pupil (or the eye is shut)
+        s = 0
+        while s < lim and q[s] >= 64:
+            s += 1
+        return max(s - 0.5, 0.0)

@@ -53,9 +53,9 @@ class MouthResult:
 
 
 class MouthFinder:
-    """Precomputed ray directions and snake matrices for ``n_rays`` rays."""
+    """Precomputed ray directions, sample offsets and snake matrix for ``n_rays`` rays."""
 
-    def __init__(self, n_rays: int = 72, alpha: float = 0.6, search: float = 3.0, step: float = 0.5):
+    def __init__(self, n_rays: int = 48, alpha: float = 0.5, search: float = 2.5, step: float = 0.5):
         self.n = int(n_rays)
         ang = np.arange(self.n) * (2 * math.pi / self.n)
         self.dirs = np.stack([np.cos(ang), np.sin(ang)], axis=1)
@@ -69,79 +69,88 @@ class MouthFinder:
             d2[i, i] -= 2.0
             d2[i, (i + 1) % n] += 1.0
         self._dtd = self.alpha * d2.T @ d2
+        self._rows = np.arange(n)
+        self._ray_cache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     # ------------------------------------------------------------------ blob
     @staticmethod
-    def blob(score_u8: np.ndarray, seed: tuple[float, float] | None = None, min_area: int = 6) -> np.ndarray | None:
-        """The cleaned largest 4-connected lip blob (bool mask), or None.
+    def blob(
+        score_u8: np.ndarray, seed: tuple[float, float] | None = None, min_area: int = 6
+    ) -> tuple[np.ndarray, np.ndarray, int] | None:
+        """The cleaned lip blob: ``(mask bool, stats row, area)`` or None.
 
-        With ``seed`` given, a component containing or near it wins ties of similar size.
+        Tags (score ≥ 128) are opened and closed with a 3×3 cross; of the 4-connected
+        components the largest wins, discounted by its distance from ``seed`` if given.
+        Holes are not filled: the radial spanning takes each ray's farthest blob pixel, so
+        an open mouth's ring of lip gives its outer outline all the same.
         """
-        tags = (score_u8 >= 128).astype(np.uint8)
+        tags = (score_u8 >= 128).view(np.uint8)
         tags = cv2.morphologyEx(tags, cv2.MORPH_OPEN, _CROSS)
         tags = cv2.morphologyEx(tags, cv2.MORPH_CLOSE, _CROSS)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
         if n <= 1:
             return None
         areas = stats[1:, cv2.CC_STAT_AREA].astype(np.float64)
-        score = areas.copy()
+        score = areas
         if seed is not None:
             d = np.hypot(cents[1:, 0] - seed[0], cents[1:, 1] - seed[1])
             diag = math.hypot(*score_u8.shape[:2])
-            score = areas * (1.0 - 0.5 * np.clip(d / (0.5 * diag), 0, 1))
+            score = areas * (1.0 - 0.5 * np.minimum(d / (0.5 * diag), 1.0))
         best = int(np.argmax(score))
         if areas[best] < min_area:
             return None
-        m = (lab == best + 1).astype(np.uint8)
-        # fill holes: flood the background from outside, whatever is not reached is inside
-        cnts, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        cv2.drawContours(m, cnts, -1, 1, thickness=cv2.FILLED)
-        return m.astype(bool)
+        return lab == best + 1, stats[best + 1], int(areas[best])
 
     # ------------------------------------------------------------------ polygon
+    def _rays(self, max_r: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        key = int(math.ceil(max_r))
+        if key not in self._ray_cache:
+            rs = np.arange(0.0, key + 1e-9, 0.5)
+            ox = (self.dirs[:, 0:1] * rs[None, :]).astype(np.float32)
+            oy = (self.dirs[:, 1:2] * rs[None, :]).astype(np.float32)
+            self._ray_cache[key] = (rs, ox, oy)
+        return self._ray_cache[key]
+
     def radial(self, mask: np.ndarray, centre: tuple[float, float], max_r: float) -> np.ndarray:
-        """Radius (crop px) of the farthest mask pixel on each ray from ``centre``."""
-        h, w = mask.shape
-        rs = np.arange(0.0, max_r, 0.5)
-        px = centre[0] + self.dirs[:, 0:1] * rs[None, :]
-        py = centre[1] + self.dirs[:, 1:2] * rs[None, :]
-        xi = np.clip(np.rint(px).astype(np.int32), 0, w - 1)
-        yi = np.clip(np.rint(py).astype(np.int32), 0, h - 1)
-        inside = mask[yi, xi]
-        inside &= (px >= -0.5) & (px <= w - 0.5) & (py >= -0.5) & (py <= h - 0.5)
+        """Radius (crop px) of the farthest mask pixel on each ray from ``centre`` (0.5 px steps)."""
+        rs, ox, oy = self._rays(max_r)
+        inside = cv2.remap(
+            mask.view(np.uint8), ox + np.float32(centre[0]), oy + np.float32(centre[1]), cv2.INTER_NEAREST,
+            borderMode=cv2.BORDER_CONSTANT, borderValue=0,
+        ).astype(bool)
         last = len(rs) - 1 - np.argmax(inside[:, ::-1], axis=1)
         r = rs[last] + 0.5  # to the pixel's outer edge
         r[~inside.any(axis=1)] = 0.5
         return r
 
-    def snake(self, score: np.ndarray, centre: tuple[float, float], r0: np.ndarray, iters: int = 2) -> np.ndarray:
-        """Refine radii ``r0`` to the lip boundary of the float score image ``score``.
+    def snake(self, score: np.ndarray, centre: tuple[float, float], r0: np.ndarray, iters: int = 1) -> np.ndarray:
+        """Refine radii ``r0`` to the lip boundary of the float image ``score`` (lip high).
 
         External term: on each ray the sub-pixel position of the steepest fall of the score
         within ``search`` px of the current radius, weighted by its steepness. Internal
-        term: ``alpha`` × squared second differences of the radii around the loop.
+        term: ``alpha`` × squared second differences of the radii around the loop. Each
+        iteration solves the resulting linear system exactly.
         """
-        r = r0.astype(np.float64).copy()
-        cx, cy = centre
-        off = self.offsets
+        r = r0.astype(np.float64)
+        cx, cy = np.float32(centre[0]), np.float32(centre[1])
+        dx, dy = self.dirs[:, 0:1].astype(np.float32), self.dirs[:, 1:2].astype(np.float32)
+        off = self.offsets.astype(np.float32)
+        rows = self._rows
         for _ in range(iters):
-            rr = np.maximum(r[:, None] + off[None, :], 0.0)
-            mx = (cx + self.dirs[:, 0:1] * rr).astype(np.float32)
-            my = (cy + self.dirs[:, 1:2] * rr).astype(np.float32)
-            prof = cv2.remap(score, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            fall = -(prof[:, 2:] - prof[:, :-2]) / (2 * self.step)  # centred derivative, positive on falling edges
-            j = np.argmax(fall, axis=1)
-            jj = np.clip(j, 1, fall.shape[1] - 2)
-            rows = np.arange(self.n)
-            a, b, c = fall[rows, jj - 1], fall[rows, jj], fall[rows, jj + 1]
+            rr = np.maximum(r.astype(np.float32)[:, None] + off[None, :], 0.0)
+            prof = cv2.remap(score, cx + dx * rr, cy + dy * rr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            fall = prof[:, :-2] - prof[:, 2:]  # ∝ −d/dr, positive where the lip ends
+            j = np.argmax(fall[:, 1:-1], axis=1) + 1
+            a, b, c = fall[rows, j - 1], fall[rows, j], fall[rows, j + 1]
             den = a - 2 * b + c
-            frac = np.where(np.abs(den) > 1e-9, 0.5 * (a - c) / np.where(np.abs(den) > 1e-9, den, 1.0), 0.0)
-            frac = np.clip(frac, -0.5, 0.5)
-            edge = rr[rows, jj + 1] + frac * self.step
-            strength = np.clip(b, 0.0, None)
-            wgt = strength / (strength.max() + 1e-9)
+            den = np.where(np.abs(den) > 1e-9, den, -1e-9)
+            frac = np.clip(0.5 * (a - c) / den, -0.5, 0.5)
+            edge = rr[rows, j + 1] + frac * self.step
+            wgt = np.maximum(b, 0.0) / (float(b.max()) + 1e-9)
             wgt = np.where(wgt > 0.15, wgt, 0.0) + 1e-3
-            r = np.linalg.solve(np.diag(wgt) + self._dtd, wgt * edge)
+            A = self._dtd.copy()
+            A[rows, rows] += wgt
+            r = np.linalg.solve(A, wgt * edge)
         return np.maximum(r, 0.0)
 
     def polygon(self, centre: tuple[float, float], r: np.ndarray) -> np.ndarray:
@@ -151,54 +160,53 @@ class MouthFinder:
     @staticmethod
     def _crossing_y(poly: np.ndarray, x: float, centre_y: float) -> tuple[float, float]:
         """Smallest and largest y where the closed polygon crosses the vertical line ``x``."""
-        p0 = poly
         p1 = np.roll(poly, -1, axis=0)
-        x0, x1 = p0[:, 0], p1[:, 0]
-        hit = ((x0 <= x) & (x1 > x)) | ((x1 <= x) & (x0 > x))
+        x0, x1 = poly[:, 0], p1[:, 0]
+        hit = (x0 <= x) != (x1 <= x)
         if not hit.any():
             return centre_y, centre_y
         t = (x - x0[hit]) / (x1[hit] - x0[hit])
-        ys = p0[hit, 1] + t * (p1[hit, 1] - p0[hit, 1])
+        ys = poly[hit, 1] + t * (p1[hit, 1] - poly[hit, 1])
         return float(ys.min()), float(ys.max())
 
     @staticmethod
-    def _corner(score: np.ndarray, poly: np.ndarray, side: int) -> tuple[float, float]:
+    def _corner(norm: np.ndarray, poly: np.ndarray, side: int) -> tuple[float, float]:
         """Sub-pixel mouth corner on ``side`` (−1 left, +1 right).
 
-        Starts at the polygon's extreme vertex and scans the rows within two pixels of it for
-        the farthest point where the lip score crosses 0.5 going outwards.
+        Starts at the polygon's extreme vertex and scans the rows within two pixels of it
+        for the farthest point where the normalised lip value falls through 0.5 going
+        outwards.
         """
         k = int(np.argmax(poly[:, 0] * side))
-        vx, vy = poly[k]
-        h, w = score.shape
-        best_x, best_y = float(vx), float(vy)
+        vx, vy = float(poly[k, 0]), float(poly[k, 1])
+        h, w = norm.shape
+        a = min(max(int(round(vx - side * 6)), 0), w - 1)
+        b = min(max(int(round(vx + side * 5)), 0), w - 1)
+        lo, hi = min(a, b), max(a, b)
         y0 = int(round(vy))
-        xs = int(np.clip(round(vx - side * 6), 0, w - 1))
-        xe = int(np.clip(round(vx + side * 5), 0, w - 1))
-        lo, hi = min(xs, xe), max(xs, xe)
-        if hi - lo < 2:
-            return best_x, best_y
-        found = None
-        for y in range(max(0, y0 - 2), min(h, y0 + 3)):
-            row = score[y, lo : hi + 1]
-            if side < 0:
-                row = row[::-1]
-            above = row >= 0.5
-            if not above.any():
-                continue
-            idx = np.nonzero(above)[0]
-            i = int(idx[-1])  # last tagged sample going outwards
-            if i + 1 >= len(row):
-                continue
-            a, b = float(row[i]), float(row[i + 1])
-            t = (a - 0.5) / (a - b) if a != b else 0.0
-            pos = i + t
-            xx = (lo + pos) if side > 0 else (hi - pos)
-            if found is None or xx * side > found[0] * side:
-                found = (xx, float(y))
-        if found is not None:
-            best_x, best_y = found
-        return best_x, best_y
+        ya, yb = max(y0 - 2, 0), min(y0 + 3, h)
+        if hi - lo < 2 or ya >= yb:
+            return vx, vy
+        block = norm[ya:yb, lo : hi + 1]
+        if side < 0:
+            block = block[:, ::-1]
+        above = block >= 0.5
+        has = above.any(axis=1)
+        if not has.any():
+            return vx, vy
+        m = block.shape[1]
+        last = m - 1 - np.argmax(above[:, ::-1], axis=1)  # last lip sample going outwards
+        ok = has & (last < m - 1)
+        if not ok.any():
+            return vx, vy
+        rows = np.nonzero(ok)[0]
+        i = last[rows]
+        va, vb = block[rows, i], block[rows, i + 1]
+        t = np.where(va != vb, (va - 0.5) / np.where(va != vb, va - vb, 1.0), 0.0)
+        pos = i + t
+        best = int(np.argmax(pos))
+        xx = lo + pos[best] if side > 0 else hi - pos[best]
+        return float(xx), float(ya + rows[best])
 
     @staticmethod
     def _refine_vertical(norm: np.ndarray, x: float, y_est: float, direction: int, reach: float = 3.0) -> float:
@@ -208,13 +216,9 @@ class MouthFinder:
         the outermost crossing from lip (≥ 0.5) to skin; ``y_est`` if there is none.
         """
         h, w = norm.shape
-        ys = y_est + np.arange(-reach, reach + 1e-9, 0.25) * direction
-        ys = np.clip(ys, 0, h - 1)
-        xs = np.full_like(ys, np.clip(x, 0, w - 1))
-        vals = cv2.remap(
-            norm, xs.astype(np.float32).reshape(1, -1), ys.astype(np.float32).reshape(1, -1), cv2.INTER_LINEAR,
-            borderMode=cv2.BORDER_REPLICATE,
-        ).ravel()
+        ys = np.clip(y_est + _VSTEPS * direction, 0, h - 1).astype(np.float32)
+        xs = np.full_like(ys, min(max(x, 0.0), w - 1.0))
+        vals = cv2.remap(norm, xs.reshape(1, -1), ys.reshape(1, -1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
         inside = vals >= 0.5
         idx = np.nonzero(inside[:-1] & ~inside[1:])[0]
         if len(idx) == 0:
@@ -230,37 +234,38 @@ class MouthFinder:
         value: np.ndarray | None = None,
         seed: tuple[float, float] | None = None,
         min_area: int = 6,
-        max_r: float | None = None,
     ) -> MouthResult | None:
         """Run all steps on a crop of lip scores; None when no lip blob is found.
 
         ``value`` (float32, crop size) is an optional lip value that is linear in colour
         mixtures (high on lip, low on skin, e.g. a projection of BGR); edges are then placed
-        where it crosses half-way between the lip's and the surrounding skin's levels, which
-        is exact for anti-aliased or blurred edges. Without it the smoothed score is used.
+        where it crosses half-way between the lip's level and the level along the crop's
+        border (skin), which is exact for anti-aliased or blurred edges. Without it the
+        smoothed score is used.
         """
-        blob = self.blob(score_u8, seed, min_area)
-        if blob is None:
+        found = self.blob(score_u8, seed, min_area)
+        if found is None:
             return None
-        area = int(blob.sum())
-        m = cv2.moments(blob.view(np.uint8), binaryImage=True)
-        centre = (m["m10"] / m["m00"], m["m01"] / m["m00"])
-        ys, xs = np.nonzero(blob)
-        if max_r is None:
-            max_r = 0.5 * math.hypot(xs.max() - xs.min() + 1, ys.max() - ys.min() + 1) + 3.0
+        blob, st, area = found
+        x0, y0, bw, bh = (int(v) for v in st[:4])
+        sub = blob[y0 : y0 + bh, x0 : x0 + bw]
+        ys, xs = np.nonzero(sub)
+        centre = (float(xs.mean()) + x0, float(ys.mean()) + y0)
+        max_r = 0.5 * math.hypot(bw, bh) + 3.0
         r0 = self.radial(blob, centre, max_r)
         raw = self.polygon(centre, r0)
         if value is not None:
-            lipish = blob & (score_u8 >= 128)
-            lo_level = float(np.median(value[~blob])) if (~blob).any() else 0.0
-            hi_level = float(np.median(value[lipish])) if lipish.any() else lo_level + 1.0
+            border = np.concatenate([value[0], value[-1], value[1:-1, 0], value[1:-1, -1]])
+            lo_level = float(np.median(border))
+            lip_vals = value[y0 : y0 + bh, x0 : x0 + bw][sub & (score_u8[y0 : y0 + bh, x0 : x0 + bw] >= 128)]
+            hi_level = float(np.median(lip_vals)) if len(lip_vals) else lo_level + 1.0
             span = hi_level - lo_level
             if abs(span) < 1e-6:
                 span = 1.0
-            norm = (value.astype(np.float32) - np.float32(lo_level)) * np.float32(1.0 / span)
-            norm = cv2.GaussianBlur(norm, (3, 3), 0.6)
+            norm = cv2.GaussianBlur(value, (3, 3), 0.6)
+            norm = (norm - np.float32(lo_level)) * np.float32(1.0 / span)
         else:
-            norm = cv2.GaussianBlur(score_u8.astype(np.float32) * (1.0 / 255.0), (5, 5), 0.8)
+            norm = cv2.GaussianBlur(score_u8.astype(np.float32) * np.float32(1.0 / 255.0), (5, 5), 0.8)
         r = self.snake(norm, centre, r0)
         poly = self.polygon(centre, r)
         left = self._corner(norm, poly, -1)
@@ -281,3 +286,6 @@ class MouthFinder:
             blob=blob,
             area=area,
         )
+
+
+_VSTEPS = np.arange(-3.0, 3.0 + 1e-9, 0.25)

@@ -89,13 +89,14 @@ class PupilFinder:
         tags = self.classifier.prob_u8(bgr[y0 : y1 + 1, x0 : x1 + 1]) >= 128
         n_tagged = int(np.count_nonzero(tags))
         used = n_tagged > 0
-        if not used:
-            prev = previous if previous is not None else predicted
-            qx, qy = int(round(prev[0])) - x0, int(round(prev[1])) - y0
-            tags = np.zeros_like(tags)
-            tags[max(qy - self.near, 0) : max(qy + self.near + 1, 0), max(qx - self.near, 0) : max(qx + self.near + 1, 0)] = True
-            if not tags.any():
-                tags[:] = True
+        # the neighbourhood of the previous pupil is always a candidate as well: a pupil
+        # whose colour the classifier gave up on (claimed by two classes) is still found
+        prev = previous if previous is not None else predicted
+        qx, qy = int(round(prev[0])) - x0, int(round(prev[1])) - y0
+        nb = self.near
+        tags[max(qy - nb, 0) : max(qy + nb + 1, 0), max(qx - nb, 0) : max(qx + nb + 1, 0)] = True
+        if not tags.any():
+            tags[:] = True
         masked = np.where(tags, score, -2.0)
         j, i = np.unravel_index(int(np.argmax(masked)), masked.shape)
         best = float(score[j, i])
