@@ -66,6 +66,8 @@ def images(tmp_path):
 @pytest.fixture
 def make_window(qtbot, tmp_path, monkeypatch):
     monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
+    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user_art"))
     from app.editor.window import EditorWindow
 
     def make():
@@ -315,12 +317,12 @@ def test_problems_panel_and_line_selection(make_window, images, qtbot):
     qtbot.waitUntil(lambda: any(i.severity == "error" for i in doc.issues), timeout=10000)
     texts = [win.problems.item(k).text() for k in range(win.problems.count())]
     assert any("at least 3" in t and "eyes" in t for t in texts)  # the validator's problem
-    todo = [k for k, i in enumerate(doc.issues) if i.line == 1 and i.part == "mouth" and "ah" in i.message]
+    todo = [k for k, i in enumerate(doc.issues) if i.part == "mouth" and "lines 0, 1 not placed yet in 'ah'" in i.message]
     assert todo
     row = next(r for r in range(win.problems.count()) if win.problems.item(r).data(Qt.UserRole) == todo[0])
     doc.select(part="eyes")
     win.problems.itemClicked.emit(win.problems.item(row))
-    assert (doc.part, doc.drawing, doc.line) == ("mouth", 2, 1)
+    assert (doc.part, doc.drawing, doc.line) == ("mouth", 2, 0)
     assert doc.artset.mouth.drawings[doc.drawing].name == "ah"
     # the lines list shows where each line is missing and selects it everywhere
     assert "to place in smile, ah" in win.lines_list.item(0).text()
@@ -453,6 +455,17 @@ def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monk
     assert win.save()  # no folder yet: asks for one (Save as)
     assert validate(tmp_path / "busy") == [] and not win.doc.dirty
     assert "busy" in win.windowTitle() and not win.isWindowModified()
+    from app.settings import Settings
+
+    assert str((tmp_path / "busy").resolve()) in Settings().user_art_dirs()
+    # picking the user art folder itself saves into a sub-folder named after the character,
+    # where the performance window's character strip finds it
+    from art_sets.library import list_user
+
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(tmp_path / "user_art"))
+    assert win.save_as()
+    assert win.doc.path == tmp_path / "user_art" / "busy"
+    assert [n for n, _ in list_user()] == ["Busy"]
 
 
 def test_drop_image_files_on_a_part_list(make_window, images, tmp_path, qtbot):

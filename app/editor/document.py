@@ -542,10 +542,11 @@ class EditorDocument(QObject):
                 d = p.drawings[di]
                 todo.append(Issue("todo", d.file, f"{d.size[0]}x{d.size[1]} but the {pname} box is {p.size[0]}x{p.size[1]}: resize or crop it", pname, di))
             miss = ed.missing_lines(art, pname)
-            for i, names in miss.items():
-                for n in names:
-                    di = p.index(n)
-                    todo.append(Issue("todo", p.drawings[di].file, f"{pname} line {i} not placed yet in {n!r}", pname, di, i))
+            for di, d in enumerate(p.drawings):
+                idx = [i for i, names in miss.items() if d.name in names]
+                if idx:
+                    which = f"line {idx[0]}" if len(idx) == 1 else f"lines {', '.join(map(str, idx))}"
+                    todo.append(Issue("todo", d.file, f"{pname} {which} not placed yet in {d.name!r} (dashed)", pname, di, idx[0]))
             if not p.drawings:
                 todo.append(Issue("todo", "", f"{pname}: add drawings (drop image files on the {pname} list)", pname))
             elif ed.line_count(p) == 0:

@@ -25,6 +25,43 @@ from .preview import PreviewPanel
 IMAGE_FILTER = "Images (*.png *.jpg *.jpeg *.bmp *.gif *.tif *.tiff *.webp)"
 
 
+def _user_art_dir() -> Path | None:
+    """Where the program looks for the user's characters (``art_sets.library.user_dir``), created."""
+    try:
+        from art_sets.library import user_dir
+
+        d = Path(user_dir())
+        d.mkdir(parents=True, exist_ok=True)
+        return d
+    except Exception:  # library missing or the folder cannot be made: let the dialog start anywhere
+        return None
+
+
+def _is_bundled(folder: Path) -> bool:
+    try:
+        from art_sets.library import bundled_dir
+
+        Path(folder).resolve().relative_to(Path(bundled_dir()).resolve())
+        return True
+    except Exception:
+        return False
+
+
+def _remember_user_folder(folder: Path) -> None:
+    """Tell the performance window about a character saved outside the user art folder."""
+    base = _user_art_dir()
+    try:
+        if base is not None and folder.resolve().parent == base.resolve():
+            return
+        from app.settings import Settings
+
+        st = Settings()
+        st.add_user_art_dir(folder)
+        st.sync()
+    except Exception:  # remembering is a convenience; the save itself succeeded
+        pass
+
+
 class NewCharacterDialog(QDialog):
     """Name, author and the image files of a new character (file dialogs or drag-and-drop)."""
 
@@ -492,19 +529,32 @@ class EditorWindow(QMainWindow):
     def save(self) -> bool:
         if self.doc.artset is None:
             return False
-        if self.doc.path is None:
+        if self.doc.path is None or _is_bundled(self.doc.path):
+            if self.doc.path is not None:
+                self.statusBar().showMessage("bundled characters are not changed in place: choose a folder for your copy", 8000)
             return self.save_as()
         return self._save_to(self.doc.path)
 
     def save_as(self) -> bool:
         if self.doc.artset is None:
             return False
-        d = QFileDialog.getExistingDirectory(self, "Save the character in a folder (a new, empty one is best)")
+        start = _user_art_dir()
+        d = QFileDialog.getExistingDirectory(self, "Save the character in a folder (a new, empty one is best)", str(start or ""))
         if not d:
             return False
         folder = Path(d)
-        if folder.is_dir() and any(folder.iterdir()) and not (folder / "artset.json").exists():
+        has_set = (folder / "artset.json").exists()
+        if not has_set and folder.is_dir() and (any(folder.iterdir()) or (start is not None and folder.resolve() == start.resolve())):
             folder = folder / ed.slug(self.doc.artset.name)
+            has_set = (folder / "artset.json").exists()
+        if _is_bundled(folder):
+            QMessageBox.information(self, "Inkface", "Bundled characters are not changed in place; choose another folder.")
+            return False
+        if has_set and folder != self.doc.path:
+            ans = QMessageBox.question(self, "Replace character?", f"{folder} already holds a character. Replace it?",
+                                       QMessageBox.Yes | QMessageBox.No, QMessageBox.No)
+            if ans != QMessageBox.Yes:
+                return False
         return self._save_to(folder)
 
     def _save_to(self, folder) -> bool:
@@ -516,6 +566,7 @@ class EditorWindow(QMainWindow):
             QMessageBox.warning(self, "Inkface", f"Could not save: {' '.join(str(e).split())}")
             return False
         self._update_title()
+        _remember_user_folder(Path(folder))
         return True
 
     def _run_busy(self, fn, text: str = "Saving…"):
