@@ -171,6 +171,8 @@ class Sender:
 
     ``frame_size`` and ``ipd`` fix the 8-bit quantisation (see :class:`tracker.params.ParamCodec`);
     ``neutral`` (the calibrated neutral face) lets the receiver ease to it when packets stop.
+    Values the tracker could not measure (NaN) are sent as the last value sent (or neutral), and
+    the frame's status says what happened.
     """
 
     def __init__(
@@ -202,6 +204,8 @@ class Sender:
         self.hello_every = max(1, int(hello_every))
         self.stats = SendStats()
         self._seq = 0
+        self._last_values: np.ndarray | None = None
+        self._neutral_values = neutral.values() if neutral is not None else None
         self._sock = socket.socket(family, socket.SOCK_DGRAM)
 
     def _send(self, data: bytes) -> None:
@@ -220,7 +224,13 @@ class Sender:
         before = self.stats.bytes
         if self._seq % self.hello_every == 0:
             self.send_hello()
-        codes = self.codec.encode(params)
+        vals = params.values()
+        bad = ~np.isfinite(vals)
+        if bad.any():  # a value the tracker could not measure: hold the last one sent (or neutral)
+            fill = self._last_values if self._last_values is not None else self._neutral_values
+            vals = np.where(bad, fill, vals) if fill is not None else vals
+        self._last_values = np.where(np.isfinite(vals), vals, self._last_values if self._last_values is not None else 0.0)
+        codes = self.codec.quantise(vals).tobytes()
         ts = int(round(params.time * 1000.0)) if math.isfinite(params.time) else 0
         if self.encoder is None:
             payload, data = codes, encode_packet(codes, self._seq, ts, params.status)

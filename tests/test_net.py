@@ -344,3 +344,21 @@ def test_send_video_through_the_tracker(tmp_path):
     truth = perf.truth(10)
     f = next(g for g in got if g.frame == 10)
     assert abs(f.mid_x - truth.mid_x) < 3 and abs(f.mid_y - truth.mid_y) < 3
+
+
+def test_unmeasured_values_travel_as_the_last_value_sent():
+    with UdpReceiver(0) as rx, Sender(("127.0.0.1", rx.address[1]), FRAME, IPD, neutral=NEUTRAL) as tx:
+        rows = track(3)
+        rows[1] = rows[1].replace(mouth_width=float("nan"), lip_lower=float("nan"), status="mouth_lost")
+        for r in rows:
+            tx.send(r)
+        got: list[FaceParams] = []
+        deadline = time.monotonic() + 5
+        while len(got) < 3 and time.monotonic() < deadline:
+            got += rx.poll(0.05)
+    codec = ParamCodec(FRAME, IPD)
+    by = {f.frame: f for f in got}
+    assert 0 in by and 1 in by  # three datagrams on loopback
+    assert by[1].status == "mouth_lost"
+    assert by[1].mouth_width == by[0].mouth_width and by[1].lip_lower == by[0].lip_lower
+    assert codec.encode(by[1].replace(mouth_width=0, lip_lower=0)) != codec.encode(by[0].replace(mouth_width=0, lip_lower=0))
