@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, Signal
-from PySide6.QtGui import QColor, QIcon, QImage, QPainter, QPen, QPixmap
+from PySide6.QtGui import QColor, QIcon, QPainter, QPen, QPixmap
 from PySide6.QtWidgets import QListWidget, QListWidgetItem, QSizePolicy, QWidget
 
 from art_sets import editing as ed
@@ -81,7 +81,7 @@ class PartStrip(QWidget):
         self.doc = doc
         self.setMinimumHeight(96)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Preferred)
-        self._cache: dict[int, QImage] = {}
+        self._cache: dict[int, tuple] = {}
         self._checker = checker_brush(4)
         doc.changed.connect(self.update)
         doc.selectionChanged.connect(self.update)
@@ -107,13 +107,12 @@ class PartStrip(QWidget):
         return out
 
     def _qimage(self, arr):
-        key = id(arr)
-        img = self._cache.get(key)
-        if img is None or img.width() != arr.shape[1]:
+        hit = self._cache.get(id(arr))
+        if hit is None or hit[0] is not arr:  # the array itself is kept, so an id is never reused
             if len(self._cache) > 64:
                 self._cache.clear()
-            img = self._cache[key] = rgba_to_qimage(arr)
-        return img
+            hit = self._cache[id(arr)] = (arr, rgba_to_qimage(arr))
+        return hit[1]
 
     def paintEvent(self, ev):
         p = QPainter(self)

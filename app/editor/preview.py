@@ -200,7 +200,7 @@ class PreviewPanel(QWidget):
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
         self.morph_view = ImageLabel("morph")
-        self.dissolve_view = ImageLabel("cross-dissolve, for comparison: doubled strokes = ghosting")
+        self.dissolve_view = ImageLabel("cross-dissolve (doubled strokes = ghosting)")
         lay.addWidget(self.morph_view, 3)
         lay.addWidget(self.dissolve_view, 2)
         self.note = QLabel("")
