@@ -354,6 +354,20 @@ def replace_drawing_image(artset: ArtSet, part: str, index: int, image: np.ndarr
     p.drawings[index] = replace(d, image=nd.image)
 
 
+def head_mismatches(artset: ArtSet) -> list[int]:
+    """Indices of heads whose size is not the canvas size."""
+    return [i for i, h in enumerate(artset.heads) if (h.shape[1], h.shape[0]) != tuple(artset.canvas)]
+
+
+def fit_heads(artset: ArtSet, mode: str = "resize") -> None:
+    """Make every head the canvas size (``mode`` "resize" or "crop")."""
+    if mode not in FIT_MODES:
+        raise EditError(f"fit mode must be one of {FIT_MODES}, got {mode!r}")
+    for i in head_mismatches(artset):
+        h = artset.heads[i]
+        artset.heads[i] = resize_image(h, artset.canvas) if mode == "resize" else crop_image(h, artset.canvas)[0]
+
+
 def fit_part(artset: ArtSet, part: str, mode: str = "resize", indices: Iterable[int] | None = None) -> None:
     """Make the given (default: all mismatching) drawings of ``part`` the box's size."""
     p = artset.parts[part]
@@ -766,11 +780,16 @@ def compose_preview(
 
 
 def cross_dissolve(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:
-    """Weighted average of same-size straight RGBA images (what a morph should beat)."""
-    acc = np.zeros(np.asarray(images[0]).shape[:2] + (4,), np.float32)
+    """Weighted average of straight RGBA images (what a morph should beat); images of another
+    size than the first are resized to it."""
+    h0, w0 = np.asarray(images[0]).shape[:2]
+    acc = np.zeros((h0, w0, 4), np.float32)
     wsum = float(sum(weights)) or 1.0
     for img, w in zip(images, weights):
-        a = as_rgba(img).astype(np.float32)
+        img = as_rgba(img)
+        if img.shape[:2] != (h0, w0):
+            img = resize_image(img, (w0, h0))
+        a = img.astype(np.float32)
         acc[:, :, :3] += a[:, :, :3] * (a[:, :, 3:4] / 255.0) * w
         acc[:, :, 3] += a[:, :, 3] * w
     acc /= wsum

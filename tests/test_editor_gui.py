@@ -520,3 +520,28 @@ def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
     assert "stopped" not in pv.live_status.text(), pv.live_status.text()
     pv.live_button.setChecked(False)
     assert pv.live is None
+
+
+def test_opening_a_set_with_wrong_sizes_offers_to_fit(make_window, images, tmp_path):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Odd", heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(5)
+    folder = tmp_path / "odd"
+    win.doc.save(folder)
+    # an artist replaces a drawing and a head with bigger scans outside the editor
+    _mouth(folder / win.doc.artset.mouth.drawings[1].file, 1, size=(180, 88))
+    Image.fromarray(np.zeros((300, 260, 4), np.uint8)).save(folder / win.doc.artset.head_files[1])
+    assert any("box is" in p.message for p in validate(folder))
+    win2 = make_window()
+    asked = []
+    win2.ask_fit = lambda key, names: asked.append((key, names)) or "resize"
+    assert win2.open_path(folder)
+    assert asked == [("heads", [win.doc.artset.head_files[1]]), ("mouth", ["smile"])]
+    art = win2.doc.artset
+    assert not ed.head_mismatches(art) and not ed.size_mismatches(art.mouth)
+    win2.doc.undo_stack.undo()  # the fit is an undoable edit
+    assert ed.size_mismatches(win2.doc.artset.mouth) == [1]
+    assert any("resize or crop" in i.message for i in win2.doc.issues)

@@ -100,6 +100,25 @@ def write_side_copy(art: ArtSet, folder: Path, written: dict) -> None:
     atomic(folder / "artset.json", lambda f: f.write(text.encode("utf-8")))
 
 
+_SIZE_PROBLEM = re.compile(r"is \d+x\d+, the .* is \d+x\d+$")
+
+
+def load_tolerant(path: Path) -> ArtSet:
+    """Load an art set for editing: half-finished control lines and drawings or heads of the wrong
+    size are let through (the editor offers to fix them); anything else raises ``ArtSetError``."""
+    from art_sets.io import ArtSetError, load_artset, scan
+
+    try:
+        return load_artset(path, strict=False)
+    except ArtSetError as first:
+        art, problems = scan(path, strict_geometry=False)
+        if art is None or not problems or not all(_SIZE_PROBLEM.search(p.message) for p in problems):
+            raise first from None
+        if len(art.heads) == 0:
+            raise first from None
+        return art
+
+
 @dataclass
 class Issue:
     """A row of the problems panel: what is wrong and where to jump to fix it."""
@@ -192,13 +211,11 @@ class EditorDocument(QObject):
 
     def open(self, path: str | Path, recover: bool = False) -> ArtSet:
         """Open the set at ``path`` (its side copy instead when ``recover``); ArtSetError if unreadable."""
-        from art_sets.io import load_artset
-
         path = Path(path)
         if path.name == "artset.json":
             path = path.parent
         src = autosave_dir_for(path) if recover else path
-        art = load_artset(src, strict=False)
+        art = load_tolerant(src)
         for pname in art.parts:
             ed.make_consistent(art, pname)
         art.path = path
@@ -213,9 +230,7 @@ class EditorDocument(QObject):
 
     def open_recovered_untitled(self) -> ArtSet:
         """Reopen the side copy of a character that was never saved."""
-        from art_sets.io import load_artset
-
-        art = load_artset(autosave_dir_for(None), strict=False)
+        art = load_tolerant(autosave_dir_for(None))
         art.path = None
         self._set_document(art, None)
         self._push_dirty_marker()
@@ -340,6 +355,9 @@ class EditorDocument(QObject):
 
     def fit_part(self, part: str, mode: str) -> None:
         self.edit(f"{mode} {part} drawings to the box", lambda art: ed.fit_part(art, part, mode))
+
+    def fit_heads(self, mode: str) -> None:
+        self.edit(f"{mode} heads to the canvas", lambda art: ed.fit_heads(art, mode))
 
     def add_line(self, part: str, drawing: int, line) -> int:
         return self.edit("add line", lambda art: ed.add_line(art, part, drawing, line),
@@ -537,6 +555,11 @@ class EditorDocument(QObject):
         if problems is not None:
             self._validator_issues = [self._issue_from_problem(p, root) for p in problems]
         todo: list[Issue] = []
+        for hi in ed.head_mismatches(art):
+            h = art.heads[hi]
+            todo.append(Issue("todo", art.head_files[hi] if hi < len(art.head_files) else "",
+                              f"head is {h.shape[1]}x{h.shape[0]} but the canvas is {art.canvas[0]}x{art.canvas[1]}: resize or crop it",
+                              head=hi))
         for pname, p in art.parts.items():
             for di in ed.size_mismatches(p):
                 d = p.drawings[di]

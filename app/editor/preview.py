@@ -58,6 +58,11 @@ class MorphEngine:
         for i, w in zip(idx, weights):
             wmap[i] += float(w)
         w = [wmap[i] for i in uniq]
+        if len({im.shape for im in images}) != 1:
+            self.note = "drawings of different sizes: resize or crop them to the box (Edit menu)"
+            size = part.size
+            images = [im if (im.shape[1], im.shape[0]) == size else ed.resize_image(im, size) for im in images]
+            return ed.cross_dissolve(images, w), False
         if len({len(l) for l in lines}) != 1:
             self.note = "line counts differ: showing a cross-dissolve"
             return ed.cross_dissolve(images, w), False

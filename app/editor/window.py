@@ -348,6 +348,7 @@ class EditorWindow(QMainWindow):
         e.addAction("Accept dashed lines in this drawing", lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
         e.addAction("Resize drawings to the box", lambda: self.doc.fit_part(self.doc.part, "resize"))
         e.addAction("Crop drawings to the box", lambda: self.doc.fit_part(self.doc.part, "crop"))
+        e.addAction("Resize heads to the canvas", lambda: self.doc.fit_heads("resize"))
         a = mb.addMenu("&Add")
         a.addAction("Head images…", lambda: self._browse_add("heads"))
         a.addAction("Eye drawings…", lambda: self._browse_add("eyes"))
@@ -490,7 +491,25 @@ class EditorWindow(QMainWindow):
         if side and not recover:
             self.doc.discard_autosave()
         self.tabs.setCurrentIndex(0)
+        self.offer_fit()
         return True
+
+    def offer_fit(self) -> None:
+        """Offer to resize or crop heads and drawings whose size does not match (as on opening)."""
+        art = self.doc.artset
+        if art is None:
+            return
+        odd = ed.head_mismatches(art)
+        if odd:
+            mode = self.ask_fit("heads", [art.head_files[i] for i in odd])
+            if mode:
+                self.doc.fit_heads(mode)
+        for pname, part in self.doc.artset.parts.items():
+            odd = ed.size_mismatches(part)
+            if odd:
+                mode = self.ask_fit(pname, [part.drawings[i].name for i in odd])
+                if mode:
+                    self.doc.fit_part(pname, mode)
 
     def offer_untitled_recovery(self) -> bool:
         """If a never-saved character was autosaved, offer to reopen it (True if reopened)."""
