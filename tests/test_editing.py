@@ -262,3 +262,45 @@ def test_resave_never_overwrites_files_the_old_manifest_uses(tmp_path, monkeypat
     assert ed.same_artset(load_artset(folder), again)
     assert again.mouth.drawings[0].file != "mouth/neutral.png"  # the other name of the pair
     assert not (folder / "mouth" / "neutral.png").exists()  # stale file removed after the swap
+
+
+_op = st.one_of(
+    st.tuples(st.just("add"), st.integers(0, 2), st.lists(st.floats(0, 59), min_size=4, max_size=4)),
+    st.tuples(st.just("move"), st.integers(0, 2), st.integers(0, 5), st.lists(st.floats(-10, 70), min_size=4, max_size=4)),
+    st.tuples(st.just("delete"), st.integers(0, 5)),
+    st.tuples(st.just("copy"), st.integers(0, 2), st.integers(0, 2)),
+    st.tuples(st.just("accept"), st.integers(0, 2)),
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(ops=st.lists(_op, max_size=12))
+def test_any_sequence_of_line_edits_keeps_the_part_consistent(ops):
+    art = small_set()
+    snap = ed.clone(art)
+    for op in ops:
+        n = ed.line_count(art.mouth)
+        try:
+            if op[0] == "add":
+                ed.add_line(art, "mouth", op[1], op[2])
+            elif op[0] == "move" and op[2] < n:
+                ed.move_line(art, "mouth", op[1], op[2], op[3])
+            elif op[0] == "delete" and op[1] < n:
+                ed.delete_line(art, "mouth", op[1])
+            elif op[0] == "copy":
+                ed.copy_lines(art, "mouth", op[1], op[2])
+            elif op[0] == "accept":
+                ed.mark_placed(art, "mouth", op[1])
+        except ed.EditError:
+            pass
+        counts = {len(d.lines) for d in art.mouth.drawings}
+        assert len(counts) == 1
+        n = counts.pop()
+        w, h = art.mouth.size
+        for di, d in enumerate(art.mouth.drawings):
+            assert d.lines.shape == (n, 4) and d.lines.dtype == np.float64
+            assert np.all((d.lines[:, 0::2] >= 0) & (d.lines[:, 0::2] <= w - 1))
+            assert np.all((d.lines[:, 1::2] >= 0) & (d.lines[:, 1::2] <= h - 1))
+            assert all(0 <= i < n for i in ed.unplaced(art, "mouth", di))
+        assert set(ed.missing_lines(art, "mouth")) == set(range(n))
+    assert ed.same_artset(snap, small_set())  # the starting snapshot was never touched
