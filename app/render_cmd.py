@@ -1,0 +1,345 @@
+"""``python -m app render``: drive a character from a video (or a recorded track) headless.
+
+    python -m app render --video IN --art NAME --out OUT.mp4 [--init CLICKS.json]
+        [--training SESSION] [--fps 10|15|30] [--side-by-side] [--params TRACK.csv]
+
+The output kind follows ``--out``: ``.mp4`` / ``.avi`` (mp4v / MJPG, character over a paper
+background), ``.gif`` (Pillow) or a folder (no suffix, or an existing directory) of numbered PNGs
+with alpha. Without ``--init`` the clicks file ``<video stem>.clicks.json`` beside the video is
+used if present, else the face is found automatically. ``--params`` takes the ten values from a
+track CSV instead of tracking (the video, if given, still provides the calibration and the
+left half of ``--side-by-side``). Prints a progress line; errors are one line, exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+PAPER = (250, 248, 243)  # RGB behind the character where the output has no alpha
+
+
+class RenderError(Exception):
+    """An expected problem with the inputs or the output; the message is one line."""
+
+
+def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
+    parser.add_argument("--video", metavar="IN", help="input video (the performer)")
+    parser.add_argument("--art", metavar="NAME|DIR", required=True, help="character: a bundled name or an art-set folder")
+    parser.add_argument("--out", metavar="OUT", required=True, help="output .mp4, .avi, .gif or a folder for PNGs")
+    parser.add_argument("--init", metavar="CLICKS.json", help="calibration clicks (default: <video stem>.clicks.json, else automatic)")
+    parser.add_argument("--training", metavar="SESSION", help="training session folder (default: automatic default training)")
+    parser.add_argument("--fps", type=int, choices=(10, 15, 30), default=30, help="output rate; 10 / 15 average 3 / 2 frames (default 30)")
+    parser.add_argument("--side-by-side", action="store_true", help="the performer's frame on the left, the character on the right")
+    parser.add_argument("--params", metavar="TRACK.csv", help="take the ten values from this track instead of tracking the video")
+    parser.add_argument("--filter", default="one_euro", help="temporal filter: none, one_euro, gate, gate+one_euro, chai (default one_euro)")
+    parser.add_argument("--strength", type=float, default=0.5, help="filter strength 0..1 (default 0.5)")
+    parser.add_argument("--mapper", default="delaunay", help="expression mapper: delaunay (the paper's), cardinal, ridge, convex")
+    parser.add_argument("--gain", type=float, default=1.0, help="head motion gain (0 = still head)")
+    parser.add_argument("--overlay", action="store_true", help="draw the tracker's findings on the performer's frame")
+    parser.add_argument("--max-frames", type=int, default=0, metavar="N", help="stop after N input frames")
+
+
+# ---------------------------------------------------------------------------------- output
+def _kind(out: Path) -> str:
+    suf = out.suffix.lower()
+    if suf in (".mp4", ".m4v", ".mov"):
+        return "mp4"
+    if suf in (".avi", ".mkv"):
+        return "avi"
+    if suf == ".gif":
+        return "gif"
+    if suf == "" or out.is_dir():
+        return "png"
+    raise RenderError(f"{out}: unknown output type {suf!r} (use .mp4, .avi, .gif or a folder)")
+
+
+def _over(rgba_pm: np.ndarray, rgb=PAPER) -> np.ndarray:
+    """Premultiplied RGBA over a flat colour -> RGB uint8."""
+    a = rgba_pm[..., 3:4].astype(np.uint16)
+    out = rgba_pm[..., :3].astype(np.uint16) + (np.asarray(rgb, np.uint16) * (255 - a) + 127) // 255
+    return np.minimum(out, 255).astype(np.uint8)
+
+
+def _straight(rgba_pm: np.ndarray) -> np.ndarray:
+    a = rgba_pm[..., 3:4].astype(np.uint32)
+    rgb = np.where(a > 0, (rgba_pm[..., :3].astype(np.uint32) * 255 + a // 2) // np.maximum(a, 1), 0)
+    return np.concatenate([np.minimum(rgb, 255).astype(np.uint8), rgba_pm[..., 3:4]], axis=2)
+
+
+class _Writer:
+    """Collects RGB (or, for PNG folders, straight RGBA) frames and writes them atomically."""
+
+    def __init__(self, out: Path, fps: int):
+        self.out = out
+        self.fps = fps
+        self.kind = _kind(out)
+        self.count = 0
+        self._vw = None
+        self._gif: list = []
+        self._tmp: Path | None = None
+        if self.kind == "png":
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+            except OSError as e:
+                raise RenderError(f"{out}: cannot create folder ({e.strerror or e})") from None
+        elif not out.parent.exists():
+            raise RenderError(f"{out}: folder {out.parent} does not exist")
+
+    def write(self, image: np.ndarray) -> None:
+        """``image``: RGB uint8, or RGBA straight uint8 (PNG folders keep the alpha)."""
+        if self.kind == "png":
+            from PIL import Image
+
+            mode = "RGBA" if image.shape[2] == 4 else "RGB"
+            target = self.out / f"frame_{self.count:05d}.png"
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=self.out)
+            with os.fdopen(fd, "wb") as f:
+                Image.fromarray(image, mode).save(f, format="PNG")
+            os.replace(tmp, target)
+        elif self.kind == "gif":
+            from PIL import Image
+
+            self._gif.append(Image.fromarray(np.ascontiguousarray(image[..., :3]), "RGB").quantize(colors=255, dither=Image.Dither.NONE))
+        else:
+            import cv2
+
+            bgr = np.ascontiguousarray(image[..., 2::-1])
+            if self._vw is None:
+                fourcc = "mp4v" if self.kind == "mp4" else ("FFV1" if self.out.suffix.lower() == ".mkv" else "MJPG")
+                fd, tmp = tempfile.mkstemp(prefix=f".{self.out.stem}.", suffix=self.out.suffix, dir=self.out.parent)
+                os.close(fd)
+                self._tmp = Path(tmp)
+                self._vw = cv2.VideoWriter(str(self._tmp), cv2.VideoWriter_fourcc(*fourcc), float(self.fps), (bgr.shape[1], bgr.shape[0]))
+                if not self._vw.isOpened():
+                    self._tmp.unlink(missing_ok=True)
+                    raise RenderError(f"{self.out}: the {fourcc} video encoder could not be opened")
+            self._vw.write(bgr)
+        self.count += 1
+
+    def close(self, ok: bool = True) -> None:
+        if self.kind == "gif" and ok and self._gif:
+            fd, tmp = tempfile.mkstemp(prefix=f".{self.out.stem}.", suffix=".gif", dir=self.out.parent)
+            with os.fdopen(fd, "wb") as f:
+                self._gif[0].save(f, format="GIF", save_all=True, append_images=self._gif[1:],
+                                  duration=round(1000 / self.fps), loop=0, disposal=1)
+            os.replace(tmp, self.out)
+        if self._vw is not None:
+            self._vw.release()
+            if ok:
+                os.replace(self._tmp, self.out)
+            else:
+                self._tmp.unlink(missing_ok=True)
+
+
+# ----------------------------------------------------------------------------------- inputs
+class _Video:
+    """Frames of a video file, by index (sequential reads)."""
+
+    def __init__(self, path: Path):
+        import cv2
+
+        if not path.is_file():
+            raise RenderError(f"{path}: no such video")
+        self.cap = cv2.VideoCapture(str(path))
+        if not self.cap.isOpened():
+            raise RenderError(f"{path}: cannot open video")
+        fps = self.cap.get(cv2.CAP_PROP_FPS)
+        self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else 30.0
+        self.count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        self.path = path
+        self._next = 0
+
+    def read(self) -> np.ndarray | None:
+        ok, frame = self.cap.read()
+        self._next += 1
+        return frame if ok else None
+
+    def frame(self, index: int) -> np.ndarray | None:
+        """Frame ``index`` (only forward seeking by reading)."""
+        import cv2
+
+        if index < self._next:
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, index)
+            self._next = index
+        frame = None
+        while self._next <= index:
+            frame = self.read()
+            if frame is None:
+                return None
+        return frame
+
+    def rewind(self) -> None:
+        import cv2
+
+        if self._next:
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+            self._next = 0
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+def _calibration(video: _Video, init: str | None, need: bool):
+    """Calibration from the clicks (given, beside the video, or automatic); None if not ``need``ed
+    and none is available."""
+    from tracker.calibration import calibrate
+    from tracker.clicks import Clicks
+
+    clicks_path = Path(init) if init else video.path.with_name(video.path.stem + ".clicks.json")
+    if init and not clicks_path.is_file():
+        raise RenderError(f"{clicks_path}: no such clicks file")
+    if clicks_path.is_file():
+        clicks = Clicks.load(clicks_path)
+        frame = video.frame(clicks.frame)
+        if frame is None:
+            raise RenderError(f"{clicks_path}: frame {clicks.frame} is not in {video.path}")
+        return calibrate(frame, clicks)
+    frame = video.frame(0)
+    if frame is None:
+        raise RenderError(f"{video.path}: the video has no frames")
+    try:
+        from tracker.auto_init import auto_clicks
+    except ImportError:
+        if need:
+            raise RenderError(f"{video.path}: no clicks file {clicks_path.name} beside it; pass --init CLICKS.json") from None
+        return None
+    try:
+        return calibrate(frame, auto_clicks(frame))
+    except Exception as e:
+        if need:
+            raise RenderError(f"{video.path}: could not find the face automatically ({_one_line(e)}); pass --init CLICKS.json") from None
+        return None
+
+
+def _side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np.ndarray:
+    import cv2
+
+    ch = character_rgb.shape[0]
+    if frame_bgr is None:
+        left = np.full((ch, ch * 4 // 3, 3), 40, np.uint8)
+    else:
+        h, w = frame_bgr.shape[:2]
+        left = cv2.resize(frame_bgr, (max(1, round(w * ch / h)), ch), interpolation=cv2.INTER_AREA)[..., ::-1]
+    gap = np.full((ch, 8, 3), 30, np.uint8)
+    return np.ascontiguousarray(np.concatenate([left, gap, character_rgb], axis=1))
+
+
+def _one_line(e: BaseException) -> str:
+    lines = str(e).strip().splitlines()
+    return lines[0] if lines else type(e).__name__
+
+
+# ------------------------------------------------------------------------------------- run
+def render(args, progress=True) -> int:
+    """Do the render; returns the number of frames written. Raises RenderError and the core's
+    one-line errors for bad input."""
+    from art_sets.io import load_artset
+    from art_sets.library import find_artset
+    from training.puppet import Puppet
+
+    if not args.video and not args.params:
+        raise RenderError("give --video IN (and/or --params TRACK.csv)")
+    out = Path(args.out)
+    _kind(out)
+    artset = load_artset(find_artset(args.art))
+    session = None
+    if args.training:
+        from training.session import TrainingSession
+
+        session = TrainingSession.load(args.training, artset=artset, autosave=False)
+
+    video = _Video(Path(args.video)) if args.video else None
+    rows = None
+    if args.params:
+        from tracker.params import read_csv
+
+        rows = read_csv(args.params)
+        if not rows:
+            raise RenderError(f"{args.params}: the track has no frames")
+    try:
+        cal = _calibration(video, args.init, need=rows is None) if video is not None else None
+        in_fps = video.fps if video is not None else 30.0
+        if rows is not None and video is None and len(rows) > 1 and rows[1].time > rows[0].time:
+            in_fps = 1.0 / (rows[1].time - rows[0].time)
+        puppet = Puppet(artset, calibration=cal, session=session, fps=args.fps, filter=args.filter,
+                        strength=args.strength, mapper=args.mapper, gain=args.gain, input_fps=in_fps)
+        total = len(rows) if rows is not None else video.count
+        if args.max_frames > 0:
+            total = min(total, args.max_frames) if total > 0 else args.max_frames
+        writer = _Writer(out, args.fps)
+        ok = False
+        t0 = time.perf_counter()
+        try:
+            if video is not None:
+                video.rewind()
+            i = 0
+            while True:
+                if args.max_frames > 0 and i >= args.max_frames:
+                    break
+                frame = video.read() if video is not None else None
+                if rows is not None:
+                    if i >= len(rows):
+                        break
+                    pf = puppet.step_params(rows[i])
+                else:
+                    if frame is None:
+                        break
+                    pf = puppet.step(frame, i, i / in_fps)
+                i += 1
+                if pf.fresh and pf.rgba_pm is not None:
+                    if args.side_by_side:
+                        left = frame
+                        if left is not None and args.overlay and pf.overlay is not None and hasattr(pf.overlay, "draw"):
+                            left = pf.overlay.draw(left.copy())
+                        writer.write(_side_by_side(left, _over(pf.rgba_pm)))
+                    elif writer.kind == "png":
+                        writer.write(_straight(pf.rgba_pm))
+                    else:
+                        writer.write(_over(pf.rgba_pm))
+                if progress and (i % 10 == 0 or i == total):
+                    dt = time.perf_counter() - t0
+                    of = f"/{total}" if total > 0 else ""
+                    print(f"\rrender: frame {i}{of}, {writer.count} written, {i / max(dt, 1e-9):.0f} frames/s", end="", file=sys.stderr, flush=True)
+            ok = writer.count > 0
+            if not ok:
+                raise RenderError("no frames were rendered (is the input empty?)")
+        finally:
+            writer.close(ok)
+        if progress:
+            print(file=sys.stderr)
+        print(f"wrote {out} ({writer.count} frames at {args.fps} fps)")
+        return writer.count
+    finally:
+        if video is not None:
+            video.close()
+
+
+def run(args) -> int:
+    from art_sets.io import ArtSetError
+    from tracker.clicks import ClicksError
+    from tracker.params import TrackFormatError
+    from training.session import SessionError
+
+    expected = [RenderError, ArtSetError, ClicksError, TrackFormatError, SessionError]
+    try:
+        from tracker.calibration import CalibrationError
+
+        expected.append(CalibrationError)
+    except ImportError:
+        pass
+    try:
+        render(args)
+    except tuple(expected) as e:
+        print(f"inkface: {_one_line(e)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ninkface: interrupted", file=sys.stderr)
+        return 130
+    return 0
