@@ -391,8 +391,17 @@ def set_box(artset: ArtSet, part: str, box: Sequence[float], mode: str = "resize
 # ----------------------------------------------------------------------------- control lines
 
 
+_LINE_COLOURS = (
+    (230, 25, 75), (0, 130, 200), (60, 180, 75), (245, 130, 48), (145, 30, 180), (70, 200, 220),
+    (240, 50, 230), (150, 190, 20), (170, 110, 40), (0, 0, 128), (0, 128, 128), (128, 0, 0),
+)
+
+
 def line_color(i: int) -> tuple[int, int, int]:
-    """The RGB colour of line ``i`` (the same in every drawing): golden-angle hues, easy to tell apart."""
+    """The RGB colour of line ``i`` (the same in every drawing): twelve well-separated colours,
+    then golden-angle hues."""
+    if 0 <= i < len(_LINE_COLOURS):
+        return _LINE_COLOURS[i]
     h = (i * 0.618033988749895 + 0.05) % 1.0
     r, g, b = colorsys.hsv_to_rgb(h, 0.85, 0.95 if i % 2 == 0 else 0.8)
     return int(r * 255), int(g * 255), int(b * 255)

@@ -205,8 +205,10 @@ def test_triangle_weights():
 
 
 def test_line_colours_distinct():
-    cols = [ed.line_color(i) for i in range(12)]
-    assert len(set(cols)) == 12
+    cols = np.array([ed.line_color(i) for i in range(12)], float)
+    d = np.linalg.norm(cols[:, None] - cols[None, :], axis=2) + np.eye(12) * 1e9
+    assert d.min() > 60  # no two of the first twelve lines look alike
+    assert len({ed.line_color(i) for i in range(40)}) == 40
 
 
 def _finish(art):
