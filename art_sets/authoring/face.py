@@ -205,19 +205,20 @@ class Character:
     author: str = "Inkface art-set authoring code"
     canvas: tuple[int, int] = (512, 512)
     pivot: tuple[float, float] = (256.0, 440.0)
-    eyes_box: tuple[int, int, int, int] = (116, 160, 280, 132)
-    mouth_box: tuple[int, int, int, int] = (176, 316, 160, 114)
-    eye_centers: tuple[tuple[float, float], tuple[float, float]] = ((196.0, 240.0), (316.0, 240.0))
-    eye_hw: float = 34.0
-    mouth_center: tuple[float, float] = (256.0, 358.0)
-    mouth_scale: float = 38.0
+    eyes_box: tuple[int, int, int, int] = (100, 144, 312, 136)
+    mouth_box: tuple[int, int, int, int] = (166, 316, 180, 128)
+    eye_centers: tuple[tuple[float, float], tuple[float, float]] = ((194.0, 228.0), (318.0, 228.0))
+    eye_hw: float = 36.0
+    mouth_center: tuple[float, float] = (256.0, 362.0)
+    mouth_scale: float = 40.0
     skin: tuple[float, float, float] = (1.0, 0.9, 0.8)
+    mouth_skin: tuple[float, float, float] | None = None  # background of the mouth drawings, when not skin
     ss: int = 3
     seed: int = 1
     heads: int = 3
     paper_amount: float = 0.015
     grain: float = 0.0
-    feather: float = 7.0
+    feather: float = 4.5
     eyes: dict = field(default_factory=lambda: dict(DEFAULT_EYES))
     mouths: dict = field(default_factory=lambda: dict(DEFAULT_MOUTHS))
     eye_kw: dict = field(default_factory=dict)
@@ -236,7 +237,7 @@ class Character:
         """Full-surface feathered mask (1 = see-through) for the eye and mouth holes."""
         m = np.zeros((s.H, s.W), np.float32)
         for box, rnd in ((self.eyes_box, 0.45), (self.mouth_box, 0.5)):
-            m = np.maximum(m, s.mask(rounded_rect(box, 2.2 * self.feather, rnd), blur=self.feather))
+            m = np.maximum(m, s.mask(rounded_rect(box, 2.6 * self.feather, rnd), blur=self.feather))
         return m
 
     # --- building ---------------------------------------------------------------------------
@@ -257,7 +258,8 @@ class Character:
             drawings = []
             for i, (dname, pose) in enumerate(poses.items()):
                 rng = np.random.default_rng([self.seed, 1 if pname == "eyes" else 2, i])
-                s = Surface(box[:2], box[2:], tex, background=self.skin)
+                bg = self.mouth_skin if pname == "mouth" and self.mouth_skin else self.skin
+                s = Surface(box[:2], box[2:], tex, background=bg)
                 if pname == "eyes":
                     geoms = self.eye_geoms(pose)
                     for g in geoms:

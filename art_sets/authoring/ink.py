@@ -60,9 +60,9 @@ class Textures:
              grain_contrast: float = 0.0) -> "Textures":
         rng = np.random.default_rng(seed)
         w, h = canvas
-        fibres = fractal_noise((h, w), [48, 12, 3], rng)
+        fibres = fractal_noise((h, w), [9, 3, 1.5], rng)
         speck = rng.normal(0, 1, (h, w)).astype(np.float32)
-        paper = 1.0 + paper_amount * (0.7 * fibres + 0.3 * speck)
+        paper = 1.0 + paper_amount * (0.85 * fibres + 0.15 * speck)
         if grain_contrast > 0:
             g = fractal_noise((h * ss, w * ss), [6.0 * ss / 3, 1.6 * ss / 3], rng)
             grain = np.clip(0.55 + grain_contrast * 0.35 * g, 0, 1).astype(np.float32)
@@ -171,6 +171,9 @@ class Surface:
         about ``wobble_len`` px; ``jitter`` = random offset (px) of the whole stroke.
         """
         rng = rng or np.random.default_rng(0)
+        if pressure == 0 and wobble == 0 and tuple(taper) == (0, 0):
+            self._plain_line(np.asarray(pts, np.float64).reshape(-1, 2), width, color, rng, jitter, opacity, grain, blur, clip)
+            return
         p = resample(np.asarray(pts, np.float64).reshape(-1, 2), 0.75)
         if len(p) < 2:
             return
@@ -186,7 +189,7 @@ class Surface:
             off = np.zeros(len(p))
             for k in range(3):
                 wl = wobble_len * (0.55 + 0.9 * rng.random()) / (1 + k)
-                off += wobble / (1 + k) * np.sin(2 * np.pi * s / wl + rng.uniform(0, 2 * np.pi))
+                off += wobble / (1 + k) ** 2 * np.sin(2 * np.pi * s / wl + rng.uniform(0, 2 * np.pi))
             p = p + n * off[:, None]
         u = s / L
         prof = np.ones_like(u)
@@ -218,6 +221,42 @@ class Surface:
         for i in (0, len(q) - 1):
             r = hq[i]
             d.ellipse([q[i, 0] - r, q[i, 1] - r, q[i, 0] + r, q[i, 1] + r], fill=255)
+        if blur > 0:
+            m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
+        self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
+
+    def hatch(self, region, angle: float, spacing: float, width: float, color: Color, rng: np.random.Generator,
+              opacity: float = 0.7, grain: float = 0.0, clip_blur: float = 0.0, **kw) -> None:
+        """Parallel pencil strokes at ``angle`` degrees, ``spacing`` px apart, clipped to ``region``."""
+        clip = self.mask(region, blur=clip_blur)
+        p = np.asarray(region, np.float64)
+        c = p.mean(0)
+        r = np.hypot(*(p - c).T).max()
+        d = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle))])
+        nrm = np.array([-d[1], d[0]])
+        for o in np.arange(-r, r, spacing):
+            o2 = o + rng.normal(0, spacing * 0.12)
+            a = c + nrm * o2 - d * r * (1 + 0.1 * rng.random())
+            b = c + nrm * o2 + d * r * (1 + 0.1 * rng.random())
+            self.stroke([a, b], width * (0.8 + 0.4 * rng.random()), color, rng=rng, opacity=opacity, grain=grain,
+                        clip=clip, taper=(0.0, 0.0), **kw)
+
+    def _plain_line(self, p, width, color, rng, jitter, opacity, grain, blur, clip) -> None:
+        """Constant-width polyline (fast path for hatching and outlines)."""
+        if jitter > 0:
+            p = p + rng.normal(0, jitter, 2)
+        q = self.px(p)
+        r = max(width * self.ss / 2, 0.5)
+        bb = self._bbox(q, r + 3 * blur * self.ss + 2)
+        if bb is None:
+            return
+        x0, y0, x1, y1 = bb
+        q = q - (x0, y0)
+        m = Image.new("L", (x1 - x0, y1 - y0), 0)
+        d = ImageDraw.Draw(m)
+        d.line([tuple(v) for v in q], fill=255, width=max(1, int(round(2 * r))), joint="curve")
+        for v in (q[0], q[-1]):
+            d.ellipse([v[0] - r, v[1] - r, v[0] + r, v[1] + r], fill=255)
         if blur > 0:
             m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
         self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)

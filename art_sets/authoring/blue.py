@@ -1,0 +1,180 @@
+"""Bleu — the "Blue" style: a blue-pencil sketch on cream paper, grainy strokes and hatching."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from art_sets.authoring.face import DEFAULT_EYES, Character, EyeGeom, EyePose, MouthGeom, closed, head_outline
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, point_at, sub_curve
+
+PAPER = hex_rgb("#f6f0e1")
+BLUE = hex_rgb("#23449a")
+LIGHT = hex_rgb("#6f8fd4")
+DARK = hex_rgb("#142a6b")
+
+BLUE_EYES = dict(DEFAULT_EYES)
+BLUE_EYES.update({"open": EyePose(up=0.6, dn=0.42), "wide": EyePose(up=0.84, dn=0.56, brow=0.42, brow_arch=0.28)})
+
+
+@dataclass
+class Blue(Character):
+    eyes: dict = field(default_factory=lambda: dict(BLUE_EYES))
+
+    def pen(self, s: Surface, pts, w: float, rng, color=BLUE, passes: int = 2, **kw) -> None:
+        """Pencil: grainy passes that do not quite coincide, the first a light construction line."""
+        pts = np.asarray(pts, np.float64)
+        for i in range(passes):
+            opts = dict(taper=(0.3, 0.3), tip=0.1, pressure=0.25, wobble=0.5, wobble_len=90, jitter=0.45,
+                        grain=0.8, opacity=0.8 if i else 0.55)
+            opts.update(kw)
+            c = LIGHT if (i == 0 and passes > 1) else color
+            s.stroke(pts, w * (1.15 if i == 0 else 1.0), c, rng=rng, **opts)
+
+    def scribble_fill(self, s: Surface, poly, rng, color=BLUE, angle=60.0, spacing=2.6, opacity=0.55, clip_blur=0.0):
+        s.hatch(poly, angle, spacing, 1.2, color, rng, opacity=opacity, grain=0.8, clip_blur=clip_blur)
+
+    # --- eyes ----------------------------------------------------------------------------------
+    def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        hw = g.hw
+        if not g.closed:
+            opening = g.opening()
+            clip = s.mask(opening)
+            iris = ellipse(g.iris_c, g.iris_r, g.iris_r)
+            s.fill(iris, LIGHT, opacity=0.35, clip=clip, grain=0.7)
+            for a in np.linspace(0, 2 * np.pi, 22, endpoint=False):
+                d = np.array([np.cos(a), np.sin(a)])
+                s.stroke([g.iris_c + d * g.iris_r * 0.5, g.iris_c + d * g.iris_r * 0.95], 1.0, BLUE, rng=rng,
+                         opacity=0.6, grain=0.6, clip=clip, taper=(0.2, 0.5))
+            s.stroke(closed(iris), 1.6, BLUE, rng=rng, clip=clip, grain=0.6, taper=(0, 0), opacity=0.85)
+            s.fill(ellipse(g.iris_c, g.iris_r * 0.45, g.iris_r * 0.45), DARK, clip=clip, grain=0.5)
+            s.fill(ellipse(g.iris_c + (-0.35 * g.iris_r, -0.35 * g.iris_r), g.iris_r * 0.18, g.iris_r * 0.18), PAPER, clip=clip)
+            self.pen(s, g.upper, 4.0, rng, taper=(0.1, 0.15))
+            self.pen(s, sub_curve(g.lower, 0.1, 0.95), 1.5, rng, passes=1, opacity=0.7)
+            self.pen(s, sub_curve(offset(g.upper, 0.3 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)
+        else:
+            self.pen(s, g.upper, 3.0, rng)
+            self.pen(s, sub_curve(offset(g.upper, 0.35 * hw), 0.25, 0.8), 1.2, rng, passes=1, opacity=0.45)
+        for u in (0.72, 0.84, 0.95):  # lashes at the outer corner
+            p = point_at(g.upper, u)
+            d = np.array([-g.sgn * 0.16 * hw, -0.2 * hw if not g.closed else 0.18 * hw])
+            s.stroke([p, p + d], 1.6, BLUE, rng=rng, grain=0.6, taper=(0.0, 0.9), opacity=0.85)
+        # brow: a band of short diagonal strokes
+        n = 16
+        for i, u in enumerate(np.linspace(0.02, 0.98, n)):
+            p = point_at(g.brow, u)
+            h = 0.22 * hw * (0.55 + 0.45 * np.sin(np.pi * min(1.0, u * 1.1)))
+            d = np.array([-g.sgn * 0.08 * hw, -h])
+            s.stroke([p - d * 0.5, p + d * 0.5], 1.7, BLUE, rng=rng, grain=0.7, taper=(0.2, 0.4), opacity=0.85, jitter=0.3)
+        self.pen(s, g.brow, 1.4, rng, passes=1, opacity=0.6)
+
+    # --- mouth ---------------------------------------------------------------------------------
+    def draw_mouth(self, s: Surface, g: MouthGeom, rng) -> None:
+        p, sc = g.pose, g.scale
+        if g.open > 2:
+            interior = g.interior()
+            clip = s.mask(interior)
+            s.fill(interior, BLUE, opacity=0.55, grain=0.7)
+            self.scribble_fill(s, interior, rng, color=DARK, angle=35, spacing=2.2, opacity=0.5)
+            if p.tongue:
+                c = point_at(g.inner_dn, 0.5)
+                s.fill(ellipse(c + (0, -0.05 * sc), 0.5 * (g.right[0] - g.left[0]) / 2 + 4, 0.3 * g.open + 3), PAPER, clip=clip, opacity=0.75)
+                s.stroke(closed(ellipse(c + (0, -0.05 * sc), 0.5 * (g.right[0] - g.left[0]) / 2 + 4, 0.3 * g.open + 3)), 1.2,
+                         BLUE, rng=rng, clip=clip, grain=0.6, taper=(0, 0))
+            for amount, edge0, sgn in ((p.teeth_up, g.inner_up, 1), (p.teeth_dn, g.inner_dn, -1)):
+                if amount > 0:
+                    edge = edge0 + (0, sgn * amount * g.open)
+                    s.fill(np.concatenate([edge0 - (0, sgn * 2), edge[::-1]]), PAPER, clip=clip)
+                    s.stroke(edge, 1.2, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.8)
+                    for u in np.linspace(0.2, 0.8, 6):
+                        a = point_at(edge0, u)
+                        s.stroke([a, point_at(edge, u)], 0.9, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.5, taper=(0, 0.5))
+            self.pen(s, g.inner_up, 3.0, rng, taper=(0.08, 0.08))
+            self.pen(s, g.inner_dn, 2.2, rng, taper=(0.08, 0.08))
+        else:
+            self.pen(s, g.seam, 3.2, rng, taper=(0.15, 0.15))
+        self.pen(s, sub_curve(g.outer_dn, 0.32, 0.68), 1.5, rng, passes=1, opacity=0.7)
+        lower = np.concatenate([sub_curve(g.outer_dn, 0.3, 0.7), sub_curve(g.outer_dn, 0.3, 0.7)[::-1] - (0, 0.12 * sc)])
+        s.hatch(lower, 80, 2.4, 1.0, LIGHT, rng, opacity=0.5, grain=0.7)
+        if abs(p.smile) > 0.2:
+            for end, sgn in ((g.left, -1), (g.right, 1)):
+                d = np.sign(p.smile)
+                self.pen(s, bez(end + (sgn * 0.02 * sc, d * 0.14 * sc), end + (sgn * 0.13 * sc, 0), end + (sgn * 0.07 * sc, -d * 0.16 * sc)),
+                         1.6, rng, passes=1)
+
+    # --- head ----------------------------------------------------------------------------------
+    def draw_head(self, s: Surface, rng, k: int) -> None:
+        cx = 256.0
+        jit = lambda sd=1.0: rng.normal(0, sd, 2)
+        face = head_outline(cx, 262, 178, 214, chin=0.22) + jit()
+        hair, strands = messy_hair(rng)
+        neck = np.array([(196, 420), (188, 512), (324, 512), (316, 420)])
+        for poly in [neck, face] + [ellipse((cx + sg * 178, 262), 24, 36) for sg in (-1, 1)]:
+            s.fill(poly, PAPER)
+        # neck and its hatched shadow under the jaw
+        self.pen(s, [(200, 420), (192, 512)], 2.2, rng)
+        self.pen(s, [(312, 420), (320, 512)], 2.2, rng)
+        s.hatch(np.array([(196, 430), (316, 430), (318, 470), (194, 470)]), 60, 3.2, 1.2, BLUE, rng, opacity=0.55, grain=0.8, clip_blur=6)
+        for sgn in (-1, 1):
+            ear = ellipse((cx + sgn * 178, 262), 24, 36) + jit()
+            self.pen(s, closed(ear)[::-1] if sgn > 0 else closed(ear), 2.2, rng)
+            self.pen(s, bez((cx + sgn * 182, 246), (cx + sgn * 168, 260), (cx + sgn * 184, 282)), 1.4, rng, passes=1)
+        # hatched shade along the image-right cheek, then the outline
+        s.hatch(face, 62, 3.4, 1.1, BLUE, rng, opacity=0.45, grain=0.8)
+        s.fill(head_outline(cx - 18, 254, 168, 208, chin=0.22), PAPER, blur=5.0, clip=s.mask(face))
+        self.pen(s, closed(face), 2.8, rng, taper=(0.02, 0.02))
+        # freckles and nose
+        for sgn in (-1, 1):
+            for _ in range(9):
+                p = np.array([cx + sgn * 110, 300]) + rng.normal(0, [14, 7])
+                s.dot(p, rng.uniform(1.0, 1.8), BLUE, opacity=0.6)
+        self.pen(s, bez((250, 272), (244, 292), (240, 300), (256, 304)), 2.2, rng)
+        self.pen(s, bez((262, 296), (268, 302), (264, 306)), 1.6, rng, passes=1)
+        # messy hair: an opaque mass lightly hatched, then strands fanning out from the crown
+        s.fill(hair, PAPER, blur=1.0)
+        s.hatch(hair, 100, 3.6, 1.1, LIGHT, rng, opacity=0.4, grain=0.8, clip_blur=2.0)
+        self.pen(s, hair[:40], 2.0, rng, taper=(0.1, 0.1))
+        for i, (root, tip, bend) in enumerate(strands * 2):
+            d = tip - root
+            perp = np.array([-d[1], d[0]])
+            mid = (root + tip) / 2 + perp * bend * (0.7 + 0.6 * rng.random()) + rng.normal(0, 3, 2)
+            self.pen(s, bez(root, mid, tip + rng.normal(0, 2.5, 2)), rng.uniform(1.2, 2.3) if i < len(strands) else 1.0,
+                     rng, passes=1, taper=(0.5, 0.3), tip=0.05, opacity=0.9 if i < len(strands) else 0.6)
+        # a few light construction lines, as if left from the sketch
+        self.pen(s, bez((cx - 170, 100), (cx, 60), (cx + 170, 100)), 1.0, rng, passes=1, color=LIGHT, opacity=0.4)
+        self.pen(s, [(cx, 460), (cx + 2, 492)], 1.0, rng, passes=1, color=LIGHT, opacity=0.4)
+
+
+def messy_hair(rng) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, float]]]:
+    """A mop of hair: the smooth mass (polygon) and strands (root, tip, bend) fanning from the crown.
+
+    Outer strands overshoot the mass as loose tufts; fringe strands end in pointed locks on the forehead.
+    """
+    th = np.linspace(np.pi * 0.97, np.pi * 2.03, 40)
+    top = np.stack([256 + 196 * np.cos(th), 252 + 212 * np.sin(th)], 1)
+    fringe = np.concatenate([bez((448, 264), (424, 150), (336, 126), (256, 132), n=20),
+                             bez((256, 132), (176, 126), (88, 150), (64, 264), n=20)[1:]])
+    poly = np.concatenate([top, fringe])
+    crown = np.array([236.0, 66.0])
+    strands = []
+    for t in np.linspace(0.0, 1.0, 34):  # over the top, overshooting the mass
+        p = top[int(round(t * (len(top) - 1)))]
+        d = p - crown
+        tip = p + d / np.hypot(*d) * rng.uniform(4, 22)
+        strands.append((crown + rng.normal(0, 8, 2), tip, 0.12 * np.sign(d[0] + 1e-6)))
+    for t in np.linspace(0.04, 0.96, 15):  # fringe locks
+        p = fringe[int(round(t * (len(fringe) - 1)))]
+        tip = p + (rng.normal(0, 4), rng.uniform(10, 20) if abs(p[0] - 256) < 150 else rng.uniform(8, 26))
+        if abs(tip[0] - 256) < 150:
+            tip[1] = min(tip[1], 150)
+        strands.append((crown + rng.normal(0, 10, 2), tip, 0.18 * np.sign(tip[0] - crown[0] + 1e-6)))
+    return poly, strands
+
+
+def character() -> Blue:
+    return Blue(slug="bleu", name="Bleu", style="blue",
+                description="A blue-pencil sketch on cream paper: grainy strokes, hatching, construction lines (the paper's 'Blue').",
+                seed=37, skin=PAPER, paper_amount=0.03, grain=1.0, eye_hw=35.0,
+                eye_centers=((198.0, 226.0), (314.0, 226.0)), eyes_box=(110, 146, 292, 132),
+                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 356.0), mouth_scale=42.0)
