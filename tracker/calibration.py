@@ -163,6 +163,8 @@ class Calibration:
     eye: ColourClassifier
     lip_axis: np.ndarray
     neutral: FaceParams = field(default_factory=FaceParams)
+    eye_ref: tuple[float, float, float] | None = None
+    mouth_ref: tuple[float, float, float] | None = None
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -189,6 +191,8 @@ class Calibration:
             "classifiers": {"pupil": self.pupil.to_dict(), "lip": self.lip.to_dict(), "eye": self.eye.to_dict()},
             "lip_axis": [float(v) for v in self.lip_axis],
             "neutral": {k: v for k, v in self.neutral.as_dict().items()},
+            "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
+            "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
         }
 
     def save(self, path: str | os.PathLike) -> None:
@@ -248,6 +252,8 @@ class Calibration:
                 eye=ColourClassifier.from_dict(d["classifiers"]["eye"]),
                 lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
                 neutral=FaceParams(**neutral_d),
+                eye_ref=tuple(float(v) for v in d["eye_ref"]) if d.get("eye_ref") is not None else None,
+                mouth_ref=tuple(float(v) for v in d["mouth_ref"]) if d.get("mouth_ref") is not None else None,
             )
         except CalibrationError:
             raise
@@ -492,4 +498,5 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     cal.lid_up = list(r.debug.get("lid_up", [0.0, 0.0]))
     cal.lid_down = list(r.debug.get("lid_down", [0.0, 0.0]))
     cal.neutral = r.params.replace(status="ok")
+    cal.eye_ref, cal.mouth_ref = tr.colour_refs()
     return cal

@@ -177,6 +177,32 @@ class FaceTracker:
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
+        self._refs = (None, None)
+
+    # -------------------------------------------------------------- colour constancy
+    @staticmethod
+    def _level(crop: np.ndarray) -> np.ndarray:
+        """Median B, G, R of a crop (subsampled): mostly skin, whatever the expression."""
+        return np.median(crop[::3, ::3].reshape(-1, 3), axis=0)
+
+    def _balance(self, crop: np.ndarray, ref) -> np.ndarray:
+        """Undo a global gain / colour cast relative to the calibration frame.
+
+        The calibrated classifiers were learned under the calibration frame's light; a
+        per-channel gain that brings the crop's median colour back to the calibrated one
+        keeps them valid under slow lighting drift or auto exposure.
+        """
+        if ref is None:
+            return crop
+        g = np.asarray(ref) / np.maximum(self._level(crop), 1.0)
+        g = np.clip(g, 0.5, 2.0)
+        if np.all(np.abs(g - 1.0) < 0.03):
+            return crop
+        return cv2.transform(crop, np.diag(g).astype(np.float32))
+
+    def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
+        """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
+        return self._refs
 
     # -------------------------------------------------------------- helpers
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
@@ -188,7 +214,8 @@ class FaceTracker:
 
     def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int]):
         """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
-        crop = ff.crop(frame, rect)
+        crop = self._balance(ff.crop(frame, rect), self.cal.eye_ref)
+        self._last_eye_level = crop
         grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
         ox, oy = rect[0], rect[1]
         preds = [(-0.5 * self.wi - ox, -oy), (0.5 * self.wi - ox, -oy)]
@@ -306,6 +333,10 @@ class FaceTracker:
         self.velocity = new - self.pupils
         self.pupils = new
         self.last = params
+        self._refs = (
+            tuple(float(v) for v in self._level(self._last_eye_level)),
+            tuple(float(v) for v in self._level(self._last_mouth_crop)),
+        )
         debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down]}
         return TrackResult(params, ov, debug)
 
@@ -314,7 +345,8 @@ class FaceTracker:
         mw, mh = self.mouth_size
         cx, cy = self.mouth_face
         rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
-        crop = ff.crop(frame, rect)
+        crop = self._balance(ff.crop(frame, rect), self.cal.mouth_ref)
+        self._last_mouth_crop = crop
         score = self.cal.lip.prob_u8(crop)
         value = cv2.transform(crop.astype(np.float32), self.lip_axis)
         seed = (cx - rect[0], cy - rect[1])

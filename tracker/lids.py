@@ -58,7 +58,7 @@ class LidFinder:
 
     def __init__(
         self, interior: ColourClassifier, pupil: ColourClassifier, up_max: float, down_max: float,
-        pupil_radius: float = 3.0, run: int = 2,
+        pupil_radius: float = 3.0, run: int = 1,
     ):
         self.interior = interior
         self.skip = int(np.ceil(1.7 * pupil_radius)) + 1

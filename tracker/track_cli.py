@@ -1,0 +1,177 @@
+"""``python -m tracker track VIDEO (--init CLICKS.json | --auto) --csv OUT.csv``.
+
+Calibrates on the clicked frame (or on the first frame where the face detectors find a
+face), tracks every frame of the video from the start and writes the track CSV of
+``shared/DESIGN.md`` (contract columns, then ``time``, ``status``, ``confidence``).
+Expected problems — a missing or unreadable video, a bad clicks file, a frame index past
+the end — print one line ``inkface: …`` to stderr and exit with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time as _time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tracker.auto_init import AutoInitError, auto_clicks
+from tracker.calibration import CalibrationError, calibrate
+from tracker.clicks import Clicks, ClicksError
+from tracker.face_tracker import FaceTracker
+from tracker.params import write_csv
+
+AUTO_TRIES = 10
+"""How many of the first frames ``--auto`` tries before giving up."""
+
+
+class TrackCliError(RuntimeError):
+    """An expected problem with the command's inputs (one line)."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``track`` command's arguments to ``parser``."""
+    parser.add_argument("video", metavar="VIDEO", help="video file to track")
+    start = parser.add_mutually_exclusive_group(required=True)
+    start.add_argument("--init", metavar="CLICKS.json", help="the five calibration clicks (DESIGN.md format)")
+    start.add_argument("--auto", action="store_true", help="find the face with the bundled face detectors")
+    parser.add_argument("--csv", metavar="OUT.csv", required=True, help="where to write the track")
+    parser.add_argument("--calibration", metavar="CAL.json", help="also save the calibration here (JSON + PNGs)")
+    parser.add_argument("--overlay", metavar="DIR", help="write every Nth frame with the tracked features drawn as PNG")
+    parser.add_argument("--overlay-every", type=int, default=30, metavar="N", help="overlay frame spacing (default 30)")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
+
+
+class _Video:
+    """Sequential frames of a video file, with one-line errors."""
+
+    def __init__(self, path: Path):
+        if not path.exists():
+            raise TrackCliError(f"{path}: no such video file")
+        if path.is_dir():
+            raise TrackCliError(f"{path}: is a folder, not a video file")
+        self.path = path
+        self.cap = cv2.VideoCapture(str(path))
+        if not self.cap.isOpened():
+            raise TrackCliError(f"{path}: cannot open as a video")
+        fps = self.cap.get(cv2.CAP_PROP_FPS)
+        self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else 30.0
+        n = self.cap.get(cv2.CAP_PROP_FRAME_COUNT)
+        self.count_hint = int(n) if n and np.isfinite(n) and n > 0 else 0
+
+    def frames(self):
+        i = 0
+        while True:
+            ok, img = self.cap.read()
+            if not ok or img is None:
+                break
+            if img.ndim == 2:
+                img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+            yield i, img
+            i += 1
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+def _frame_at(path: Path, index: int) -> np.ndarray:
+    v = _Video(path)
+    try:
+        n = 0
+        for i, img in v.frames():
+            if i == index:
+                return img
+            n = i + 1
+        if n == 0:
+            raise TrackCliError(f"{path}: no frames could be read")
+        raise TrackCliError(f"{path}: calibration frame {index} is past the end of the video ({n} frames)")
+    finally:
+        v.close()
+
+
+def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
+    v = _Video(path)
+    last: Exception | None = None
+    try:
+        for i, img in v.frames():
+            if i >= AUTO_TRIES:
+                break
+            try:
+                return auto_clicks(img, frame_index=i), img
+            except AutoInitError as e:
+                last = e
+    finally:
+        v.close()
+    if last is None:
+        raise TrackCliError(f"{path}: no frames could be read")
+    raise TrackCliError(f"{path}: {last}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; 0 on success, 2 on an expected error (message on stderr)."""
+    try:
+        return _run(args)
+    except (TrackCliError, ClicksError, CalibrationError, AutoInitError) as e:
+        print(f"inkface: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"inkface: {getattr(e, 'filename', '') or ''} {e.strerror or e}".strip(), file=sys.stderr)
+        return 2
+
+
+def _run(args: argparse.Namespace) -> int:
+    video = Path(args.video)
+    if args.auto:
+        clicks, cal_frame = _auto(video)
+    else:
+        clicks = Clicks.load(args.init)
+        cal_frame = _frame_at(video, clicks.frame)
+        h, w = cal_frame.shape[:2]
+        clicks.check_inside((w, h), where=str(args.init))
+    cal = calibrate(cal_frame, clicks)
+    if args.calibration:
+        cal.save(args.calibration)
+    tracker = FaceTracker(cal)
+    overlay_dir = Path(args.overlay) if args.overlay else None
+    if overlay_dir is not None:
+        overlay_dir.mkdir(parents=True, exist_ok=True)
+    v = _Video(video)
+    rows = []
+    t0 = _time.monotonic()
+    last_print = t0
+    show = not args.quiet
+    try:
+        for i, img in v.frames():
+            res = tracker.track(img, index=i, time=i / v.fps)
+            rows.append(res.params)
+            if overlay_dir is not None and i % max(args.overlay_every, 1) == 0:
+                cv2.imwrite(str(overlay_dir / f"track_{i:06d}.png"), res.overlay.draw(img))
+            now = _time.monotonic()
+            if show and now - last_print > 1.0:
+                total = f"/{v.count_hint}" if v.count_hint else ""
+                print(f"\rtracking {video.name}: frame {i + 1}{total} ({(i + 1) / (now - t0):.0f} fps)", end="", file=sys.stderr, flush=True)
+                last_print = now
+    finally:
+        v.close()
+    if show and last_print != t0:
+        print(file=sys.stderr)
+    if not rows:
+        raise TrackCliError(f"{video}: no frames could be read")
+    write_csv(args.csv, rows)
+    lost = sum(r.status == "lost" for r in rows)
+    if show:
+        print(f"{len(rows)} frames tracked ({lost} lost) → {args.csv}", file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Standalone entry: ``python -m tracker.track_cli VIDEO …``."""
+    ap = argparse.ArgumentParser(prog="python -m tracker track", description=__doc__.split("\n\n")[0])
+    add_arguments(ap)
+    return run(ap.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
