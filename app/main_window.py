@@ -164,9 +164,10 @@ class MainWindow(QMainWindow):
 
         side = QScrollArea()
         side.setWidgetResizable(True)
-        side.setFixedWidth(300)
         side.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        side.setWidget(self._build_controls())
+        controls = self._build_controls()
+        side.setWidget(controls)
+        side.setFixedWidth(max(300, controls.sizeHint().width() + side.verticalScrollBar().sizeHint().width() + 4))
 
         central = QWidget()
         h = QHBoxLayout(central)

@@ -540,6 +540,12 @@ class PipelineThread(QThread):
         self.last_error = ""
         self.render_video = True
         self.calibration = None  # the resolved Calibration the puppet uses
+        self.live_art = ""  # art set of the puppet in use ("" while none is ready)
+        self.building = False
+        self._gen = 0
+        self._built = None
+        self._build_lock = threading.Lock()
+        self._last_char: QImage | None = None
 
     # requests from the GUI thread ------------------------------------------------------
     def request(self, **changes) -> None:
@@ -558,17 +564,35 @@ class PipelineThread(QThread):
 
     # the loop --------------------------------------------------------------------------
     def _apply_pending(self) -> None:
+        """Apply the GUI's latest request; swap in a puppet a loader thread has finished."""
         with self._lock:
             spec, self._pending = self._pending, None
+            built, self._built = self._built, None
+        if built is not None:
+            gen, puppet, bspec, cal, err = built
+            if gen == self._gen:  # not superseded by a newer request
+                if err:
+                    self.puppet, self.live_art = None, ""
+                    self.last_error = err
+                    self.puppetFailed.emit(err)
+                else:
+                    self.puppet, self.live_art, self.calibration = puppet, bspec.art, cal
+                    self._last_char = None
+                    try:
+                        _tune(puppet, self.spec)
+                    except Exception:
+                        pass
+                    self.puppetReady.emit(bspec.art)
         if spec is None:
             return
         old = self.spec
+        target_puppet = self.puppet if self.live_art == old.art else None
         rebuild = (
-            self.puppet is None
+            target_puppet is None
             or spec.art != old.art
             or spec.detail != old.detail
             or not _same(spec.calibration, old.calibration)
-            or spec.session is not old.session
+            or (spec.session is not old.session and not callable(getattr(self.puppet, "set_session", None)))
             or (
                 any(getattr(spec, k) != getattr(old, k) for k in ("fps", "filter", "strength", "gain"))
                 and not _can_tune(self.puppet)
@@ -576,24 +600,45 @@ class PipelineThread(QThread):
         )
         self.spec = spec
         if not spec.art:
-            self.puppet = None
+            self._gen += 1
+            self.puppet, self.live_art = None, ""
             return
         if rebuild:
+            self._gen += 1
+            self.building = True
+            threading.Thread(target=self._build, args=(self._gen, spec), name="inkface-puppet-loader", daemon=True).start()
+            return
+        if spec.session is not old.session and spec.session is not None:
             try:
+                self.puppet.set_session(spec.session)
+            except Exception as e:
+                self.puppetFailed.emit(_one_line(e))
+        _tune(self.puppet, spec)
+
+    def _build(self, gen: int, spec: PuppetSpec) -> None:
+        """Load the art set, resolve the calibration and build the puppet (loader thread)."""
+        puppet = cal = None
+        err = ""
+        try:
+            with self._build_lock:  # one build at a time; a superseded one is skipped
+                if gen != self._gen:
+                    return
                 art = self._cache.get(spec.art)
                 if art is None:
                     art = load_artset(spec.art)
                     self._cache[spec.art] = art
                 cal = self._resolve_calibration(spec.calibration)
-                self.calibration = cal
-                self.puppet = make_puppet(art, replace(spec, calibration=cal))
-                self.puppetReady.emit(spec.art)
-            except Exception as e:
-                self.puppet = None
-                self.last_error = _one_line(e)
-                self.puppetFailed.emit(self.last_error)
-        else:
-            _tune(self.puppet, spec)
+                if gen != self._gen:
+                    return
+                puppet = make_puppet(art, replace(spec, calibration=cal))
+        except Exception as e:
+            err = _one_line(e) or type(e).__name__
+        finally:
+            if gen == self._gen:
+                self.building = False
+        with self._lock:
+            self._built = (gen, puppet, spec, cal, err)
+        self.inbox.notify_taken()
 
     def _resolve_calibration(self, cal):
         key = cal if isinstance(cal, (str, tuple)) else None
@@ -634,12 +679,18 @@ class PipelineThread(QThread):
         video = bgr_to_qimage(image) if self.render_video else None
         p = self.puppet
         if p is None:
-            return DisplayFrame(index, t, video, None, image, status="no character")
+            return DisplayFrame(index, t, video, None, image, status="loading the character" if self.building else "no character")
         pf = p.step(image, index, t)
         if pf is None:  # a puppet running at a lower output rate may skip frames
-            return DisplayFrame(index, t, video, None, image, art=self.spec.art, status="")
+            return DisplayFrame(index, t, video, None, image, art=self.live_art, status="")
         rgba = getattr(pf, "rgba_pm", None)
-        char = rgba_pm_to_qimage(rgba) if rgba is not None else None
+        if rgba is None:
+            char = None
+        elif not getattr(pf, "fresh", True) and self._last_char is not None:  # held picture (lower output rate)
+            char = self._last_char
+        else:
+            char = rgba_pm_to_qimage(rgba)
+            self._last_char = char
         params = getattr(pf, "params", None)
         return DisplayFrame(
             index,
@@ -651,7 +702,7 @@ class PipelineThread(QThread):
             overlay=getattr(pf, "overlay", None),
             weights=getattr(pf, "weights", None),
             timings_ms=dict(getattr(pf, "timings_ms", {}) or {}),
-            art=self.spec.art,
+            art=self.live_art,
             status=str(getattr(params, "status", "")) if params is not None else "",
         )
 
