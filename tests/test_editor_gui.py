@@ -295,6 +295,10 @@ def test_head_canvas_drags_boxes_and_paints_holes(make_window, images, qtbot):
     assert doc.artset.mouth.size[0] > nw and all(d.size == doc.artset.mouth.size for d in doc.artset.mouth.drawings)
     doc.undo_stack.undo()
     assert doc.artset.mouth.box == (nx, ny, nw, nh)
+    # the tilt pivot is a cross you drag
+    px, py = doc.artset.pivot
+    _drag(qtbot, hc, [(px, py), (px + 10, py + 30)])
+    assert abs(doc.artset.pivot[0] - (px + 10)) < 1.5 and abs(doc.artset.pivot[1] - (py + 30)) < 1.5
     # paint a hole in every head
     win.mode_paint.setChecked(True)
     win.brush_spin.setValue(8)
@@ -386,6 +390,7 @@ def test_edit_command_line(tmp_path, capsys):
 
 def test_open_editor_on_bundled_character(qtbot, tmp_path, monkeypatch):
     monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
     try:
         from art_sets.library import list_bundled
 
@@ -489,6 +494,7 @@ def test_drop_image_files_on_a_part_list(make_window, images, tmp_path, qtbot):
 
 def test_open_editor_with_parent_is_its_own_window(qtbot, tmp_path, monkeypatch):
     monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
     from PySide6.QtWidgets import QWidget
 
     from app.editor import open_editor

@@ -152,6 +152,32 @@ class EditorWindow(QMainWindow):
         self.doc.undo_stack.cleanChanged.connect(self._update_title)
         self._on_changed()
         self._on_selection()
+        self._restore_geometry()
+
+    def _settings(self):
+        try:
+            from app.settings import Settings
+
+            return Settings()
+        except Exception:  # settings are a convenience
+            return None
+
+    def _restore_geometry(self):
+        st = self._settings()
+        if st is None:
+            return
+        g, s = st.geometry("editor"), st.geometry("editor-state")
+        if g is not None:
+            self.restoreGeometry(g)
+        if s is not None:
+            self.restoreState(s)
+
+    def _save_geometry(self):
+        st = self._settings()
+        if st is not None:
+            st.set_geometry("editor", self.saveGeometry())
+            st.set_geometry("editor-state", self.saveState())
+            st.sync()
 
     # ------------------------------------------------------------------ layout
     def _build(self):
@@ -769,6 +795,7 @@ class EditorWindow(QMainWindow):
             return
         self.preview.stop()
         self.doc.close()
+        self._save_geometry()
         ev.accept()
 
     def dragEnterEvent(self, ev):
