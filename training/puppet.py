@@ -291,15 +291,19 @@ class Puppet:
             if bad.any():
                 z[bad] = self._last_good[bad] if self._last_good is not None else 0.0
             self._last_good = z.copy()
-        z = self.filter.step(z, params.time if params.time else None) if z is not None else None
+        t = params.time if params.time else None
+        zf = self.filter.filters[0].step(z, t)
+        z = self.rate.step(zf, t)
         t1 = _time.perf_counter()
         timings["filter"] = (t1 - t0) * 1000.0
         if z is None:  # the output rate holds the previous picture
             last = self._last_frame
-            return PuppetFrame(
-                last.rgba_pm if last else None, params, overlay, last.weights if last else {},
-                timings, fresh=False, features=last.features if last else None, pose=last.pose if last else (0.0, 0.0, 0.0),
-            )
+            if last is None:  # nothing shown yet: a provisional picture, not an output frame
+                return self._draw(zf, params, overlay, timings, t1, fresh=False)
+            return PuppetFrame(last.rgba_pm, params, overlay, last.weights, timings, False, last.features, last.pose)
+        return self._draw(z, params, overlay, timings, t1, fresh=True)
+
+    def _draw(self, z: np.ndarray, params: FaceParams, overlay, timings: dict, t1: float, fresh: bool) -> PuppetFrame:
         self._last_out = z
         zg = z.copy()
         if self.expression_gain != 1.0:
@@ -316,7 +320,7 @@ class Puppet:
         self._frame_no += 1
         t3 = _time.perf_counter()
         timings["render"] = (t3 - t2) * 1000.0
-        frame = PuppetFrame(rgba, params, overlay, weights, timings, True, z, pose)
+        frame = PuppetFrame(rgba, params, overlay, weights, timings, fresh, z, pose)
         self._last_frame = frame
         return frame
 
