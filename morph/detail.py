@@ -21,17 +21,25 @@ import cv2
 import numpy as np
 
 
-def detail_blend(images_pm: Sequence[np.ndarray], weights: Sequence[float], sigma: float = 2.0) -> np.ndarray:
-    """Blend aligned premultiplied RGBA uint8 images keeping the heaviest one's fine detail."""
+def detail_blend(
+    images_pm: Sequence[np.ndarray], weights: Sequence[float], sigma: float = 2.0, plain: np.ndarray | None = None
+) -> np.ndarray:
+    """Blend aligned premultiplied RGBA uint8 images keeping the heaviest one's fine detail.
+
+    ``plain`` may pass the already computed weighted sum ``Σ w_i I_i`` (uint8).
+    """
     heaviest = int(np.argmax(weights))
-    plain = np.zeros(images_pm[0].shape, np.float32)
-    for img, wt in zip(images_pm, weights):
-        cv2.scaleAdd(img.astype(np.float32), float(wt), plain, dst=plain)
-    top = images_pm[heaviest].astype(np.float32)
-    out = cv2.GaussianBlur(plain, (0, 0), sigma) + top - cv2.GaussianBlur(top, (0, 0), sigma)
-    np.clip(out, 0.0, 255.0, out=out)
-    np.minimum(out[:, :, :3], out[:, :, 3:4], out=out[:, :, :3])
-    return np.rint(out).astype(np.uint8)
+    if plain is None:
+        plain = np.zeros(images_pm[0].shape, np.float32)
+        for img, wt in zip(images_pm, weights):
+            cv2.scaleAdd(img.astype(np.float32), float(wt), plain, dst=plain)
+        plain = np.clip(np.rint(plain), 0, 255).astype(np.uint8)
+    top = images_pm[heaviest]
+    acc = cv2.add(cv2.GaussianBlur(plain, (0, 0), sigma), top, dtype=cv2.CV_16S)
+    acc = cv2.subtract(acc, cv2.GaussianBlur(top, (0, 0), sigma), dtype=cv2.CV_16S)
+    out = cv2.convertScaleAbs(np.maximum(acc, 0))  # clamp to 0..255
+    alpha = np.ascontiguousarray(out[:, :, 3])
+    return cv2.min(out, cv2.merge((alpha, alpha, alpha, alpha)))  # colour <= alpha
 
 
 def high_pass_energy(image_pm: np.ndarray, sigma: float = 1.0) -> float:

@@ -65,16 +65,25 @@ class MeshGrid:
         mx, my = self.upsample_many(np.asarray(mesh)[None])
         return mx[0], my[0]
 
-    def upsample_many(self, meshes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def upsample_many(self, meshes: np.ndarray, reuse: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Dense maps for ``k`` meshes ``(k, n, n, 2)`` in one matrix product.
 
         Returns ``(map_x, map_y)``, each ``(k, h, w)`` float32 with contiguous ``[i]`` slices.
+        With ``reuse`` the result lives in buffers of this grid that the next call overwrites
+        (the per-frame path: no fresh megabytes to fault in every frame).
         """
         meshes = np.asarray(meshes, dtype=np.float32)
         k, n = meshes.shape[0], self.cells + 1
         comps = np.ascontiguousarray(np.moveaxis(meshes, -1, 1)).reshape(k * 2, n, n)  # (2k, n, n)
-        rows = np.matmul(self.ry, comps)  # (2k, h, n)
-        dense = rows.reshape(k * 2 * self.h, n) @ self.rx_t  # (2k*h, w)
+        if reuse:
+            if getattr(self, "_rows", None) is None or self._rows.shape[0] < 2 * k:
+                self._rows = np.empty((2 * k, self.h, n), np.float32)
+                self._dense = np.empty((2 * k * self.h, self.w), np.float32)
+            rows = np.matmul(self.ry, comps, out=self._rows[: 2 * k])
+            dense = np.matmul(rows.reshape(k * 2 * self.h, n), self.rx_t, out=self._dense[: 2 * k * self.h])
+        else:
+            rows = np.matmul(self.ry, comps)  # (2k, h, n)
+            dense = rows.reshape(k * 2 * self.h, n) @ self.rx_t  # (2k*h, w)
         dense = dense.reshape(k, 2, self.h, self.w)
         return dense[:, 0], dense[:, 1]
 

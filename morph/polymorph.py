@@ -41,7 +41,9 @@ class PartMorpher:
 
     ``images`` are straight RGBA uint8 (as in PNG) unless ``premultiplied=True``. ``a, b, p``
     are the Beier–Neely constants, ``border`` what is sampled outside a drawing
-    (``beier_neely.border_mode``).
+    (``beier_neely.border_mode``). ``exact_three_way`` samples the exact three-way field on
+    the mesh every frame instead of summing two-way tables (about 1 ms more per part; for
+    offline rendering).
     """
 
     def __init__(
@@ -56,6 +58,7 @@ class PartMorpher:
         premultiplied: bool = False,
         detail_sigma: float = 2.0,
         border: str = DEFAULT_BORDER,
+        exact_three_way: bool = False,
     ):
         if len(images) == 0 or len(images) != len(lines_list):
             raise ValueError(f"PartMorpher needs as many line sets as images (got {len(images)} and {len(lines_list)})")
@@ -79,10 +82,12 @@ class PartMorpher:
         self.alpha_steps = int(alpha_steps)
         self.params = (float(a), float(b), float(p))
         self.detail_sigma = float(detail_sigma)
+        self.exact_three_way = bool(exact_three_way)
         self.border = border_mode(border)
         self.grid = MeshGrid(self.size, cells)
         self.vertices = self.grid.vertices.astype(np.float32)
         self.tables = self._build_tables()
+        self._warped: list[np.ndarray] = []  # per-frame scratch images, reused
 
     def _build_tables(self) -> np.ndarray:
         """``(n, n, alpha_steps, m, m, 2)`` float32 displacements ``D_AB(α)`` (zero for A = B)."""
@@ -128,6 +133,8 @@ class PartMorpher:
     def meshes(self, indices: Sequence[int], weights: Sequence[float]) -> list[tuple[int, float, np.ndarray]]:
         """For each active drawing ``(index, weight, mesh)``: source positions in that drawing."""
         act = self.active(indices, weights)
+        if self.exact_three_way and len(act) > 2:
+            return self._exact_meshes(act)
         out = []
         for ia, wa in act:
             mesh = self.vertices.copy()
@@ -136,6 +143,16 @@ class PartMorpher:
                     mesh += self.displacement(ia, ib, wb)
             out.append((ia, wa, mesh))
         return out
+
+    def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
+        """The exact n-way field sampled on the mesh now (slower; no sum-of-two-way error)."""
+        target = sum(w * self.lines[i] for i, w in act)
+        src = np.stack([self.lines[i] for i, _ in act])
+        dst = np.broadcast_to(target, src.shape)
+        m = self.grid.cells + 1
+        pos = field_at_batch(self.grid.vertices.reshape(-1, 2), dst, src, *self.params)
+        pos = pos.reshape(len(act), m, m, 2).astype(np.float32)
+        return [(i, w, pos[k]) for k, (i, w) in enumerate(act)]
 
     def render(
         self,
@@ -156,16 +173,19 @@ class PartMorpher:
         stack = np.stack([mesh for _, _, mesh in parts])
         if jitter is not None:
             stack += np.asarray(jitter, dtype=np.float32)
-        maps_x, maps_y = self.grid.upsample_many(stack)
+        maps_x, maps_y = self.grid.upsample_many(stack, reuse=True)
+        while len(self._warped) < len(parts):
+            self._warped.append(np.empty_like(self.pm[0]))
         warped = [
-            cv2.remap(self.pm[ia], maps_x[k], maps_y[k], interpolation=cv2.INTER_LINEAR,
+            cv2.remap(self.pm[ia], maps_x[k], maps_y[k], dst=self._warped[k], interpolation=cv2.INTER_LINEAR,
                       borderMode=self.border, borderValue=(0, 0, 0, 0))
             for k, (ia, _, _) in enumerate(parts)
         ]
         wts = [wa for _, wa, _ in parts]
+        plain = blend_u8(warped, wts)
         if detail and len(parts) > 1:
-            return detail_blend(warped, wts, sigma=self.detail_sigma)
-        return blend_u8(warped, wts)
+            return detail_blend(warped, wts, sigma=self.detail_sigma, plain=plain)
+        return plain
 
 
 def blend_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:

@@ -170,3 +170,16 @@ def test_blend_u8_keeps_full_alpha_for_any_weights(w):
     # the exact tie the ordering guards against: a partial sum of exactly k + 0.5
     tie = [0.5 / 255 * 3, 0.5 - 0.5 / 255 * 3, 0.5]
     assert (blend_u8(imgs, tie) == 255).all()
+
+
+def test_exact_three_way_option_matches_the_exact_field(mouths):
+    imgs, lines = mouths
+    m = PartMorpher(imgs, lines, alpha_steps=3, exact_three_way=True)
+    w = (0.5, 0.3, 0.2)
+    target = sum(wi * lines[i] for i, wi in zip(range(3), w))
+    for ia, _, mesh in m.meshes((0, 1, 2), w):
+        mx, my = m.grid.upsample(mesh)
+        ex, ey = bn.field_map(target, lines[ia], m.size)
+        assert np.hypot(mx - ex, my - ey).mean() < 0.1
+    exact = bn.polymorph_exact(imgs[:3], lines[:3], w).astype(np.float32)
+    assert np.abs(m.render((0, 1, 2), w).astype(np.float32) - exact).mean() < 0.5
