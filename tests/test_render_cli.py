@@ -1,0 +1,108 @@
+"""``python -m app render`` on a short generated clip: frame counts, formats, errors."""
+
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+from PIL import Image
+
+from app.cli import run as cli
+from art_sets.library import list_bundled
+from tracker.synthetic import Performance
+
+N = 20
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    d = tmp_path_factory.mktemp("clip")
+    video, truth = d / "p.mp4", d / "p.csv"
+    Performance(seconds=N / 30.0, seed=4).write(video, truth)
+    assert (d / "p.clicks.json").is_file()
+    return video, truth
+
+
+@pytest.fixture(scope="module")
+def art():
+    return list_bundled()[0][0]
+
+
+def _frames(path):
+    cap = cv2.VideoCapture(str(path))
+    out = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        out.append(f)
+    cap.release()
+    return out
+
+
+def test_render_mp4_side_by_side(clip, art, tmp_path, capsys):
+    video, _ = clip
+    out = tmp_path / "r.mp4"
+    assert cli(["render", "--video", str(video), "--art", art, "--out", str(out), "--side-by-side"]) == 0
+    frames = _frames(out)
+    assert len(frames) == N
+    h, w = frames[0].shape[:2]
+    assert w > h  # performer left, character right
+    err = capsys.readouterr().err
+    assert "render: frame" in err
+    # the character half is not empty paper
+    assert np.std(frames[5][:, w // 2 + 10 :]) > 10
+
+
+@pytest.mark.parametrize("fps", [10, 15])
+def test_render_lower_rate_from_track(clip, art, tmp_path, fps):
+    video, truth = clip
+    out = tmp_path / "r.mp4"
+    assert cli(["render", "--video", str(video), "--params", str(truth), "--art", art, "--out", str(out), "--fps", str(fps)]) == 0
+    frames = _frames(out)
+    assert len(frames) == N // (30 // fps)
+    cap = cv2.VideoCapture(str(out))
+    assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(fps, abs=0.01)
+    cap.release()
+
+
+def test_render_png_folder_keeps_alpha_and_gif(clip, art, tmp_path):
+    video, truth = clip
+    folder = tmp_path / "pngs"
+    assert cli(["render", "--params", str(truth), "--art", art, "--out", str(folder), "--max-frames", "4"]) == 0
+    pngs = sorted(folder.glob("frame_*.png"))
+    assert len(pngs) == 4
+    im = np.asarray(Image.open(pngs[0]))
+    assert im.shape[2] == 4 and im[..., 3].min() == 0 and im[..., 3].max() == 255
+    gif = tmp_path / "r.gif"
+    assert cli(["render", "--params", str(truth), "--art", art, "--out", str(gif), "--max-frames", "3"]) == 0
+    with Image.open(gif) as g:
+        assert g.n_frames == 3
+
+
+def test_errors_are_one_line(clip, art, tmp_path, capsys):
+    video, _ = clip
+    cases = [
+        ["--video", str(tmp_path / "missing.mp4"), "--art", art],
+        ["--video", str(video), "--art", "no-such-character"],
+        ["--video", str(video), "--art", art, "--init", str(tmp_path / "nope.json")],
+        ["--video", str(video), "--art", art, "--training", str(tmp_path / "nosession")],
+    ]
+    for extra in cases:
+        rc = cli(["render", *extra, "--out", str(tmp_path / "x.mp4")])
+        err = capsys.readouterr().err.strip()
+        assert rc == 2
+        assert err.startswith("inkface: ") and "\n" not in err, err
+        assert "Traceback" not in err
+    assert not (tmp_path / "x.mp4").exists()
+
+
+@pytest.mark.slow
+def test_module_entry_point(clip, art, tmp_path):
+    _, truth = clip
+    out = tmp_path / "r.mp4"
+    r = subprocess.run([sys.executable, "-m", "app", "render", "--params", str(truth), "--art", art,
+                        "--out", str(out), "--max-frames", "3"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert len(_frames(out)) == 3
