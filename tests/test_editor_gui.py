@@ -13,7 +13,7 @@ from PIL import Image, ImageDraw
 pytest.importorskip("PySide6")
 pytest.importorskip("pytestqt")
 
-from PySide6.QtCore import Qt  # noqa: E402
+from PySide6.QtCore import QPoint, Qt  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 
 from art_sets import editing as ed  # noqa: E402
@@ -551,3 +551,28 @@ def test_opening_a_set_with_wrong_sizes_offers_to_fit(make_window, images, tmp_p
     win2.doc.undo_stack.undo()  # the fit is an undoable edit
     assert ed.size_mismatches(win2.doc.artset.mouth) == [1]
     assert any("resize or crop" in i.message for i in win2.doc.issues)
+
+
+def test_zoom_about_the_cursor_then_draw(make_window, images, qtbot):
+    from PySide6.QtCore import QPointF
+    from PySide6.QtGui import QWheelEvent
+
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Zoom", heads, eyes, mouths)
+    win.tabs.setCurrentIndex(0)
+    c = win.line_canvas
+    qtbot.waitUntil(lambda: c.width() > 300)
+    anchor = c.to_widget(30, 20)
+    ev = QWheelEvent(anchor, c.mapToGlobal(anchor), QPoint(0, 0), QPoint(0, 240), Qt.NoButton, Qt.NoModifier,
+                     Qt.NoScrollPhase, False)
+    fit = c.scale()
+    c.wheelEvent(ev)
+    assert c.scale() == pytest.approx(fit * 1.5625)
+    x, y = c.to_image(anchor)
+    assert abs(x - 30) < 0.01 and abs(y - 20) < 0.01
+    _drag(qtbot, c, [(28, 18), (34, 22)])
+    np.testing.assert_allclose(win.doc.artset.mouth.drawings[0].lines[0], [28, 18, 34, 22], atol=0.2)
+    c.setFocus()
+    QTest.keyClick(c, Qt.Key_0)
+    assert c.scale() == pytest.approx(fit)

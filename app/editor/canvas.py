@@ -36,19 +36,65 @@ class _ImageView(QWidget):
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(240, 180)
         self._checker = checker_brush()
+        self.zoom = 1.0  # on top of the fit; the wheel zooms about the cursor, "0" resets
+        self.pan = QPointF(0, 0)  # widget pixels; middle-button drag pans
+        self._pan_from = None
 
     def image_size(self) -> tuple[int, int]:
         return (1, 1)
 
-    def scale(self) -> float:
+    def fit_scale(self) -> float:
         w, h = self.image_size()
         s = min((self.width() - 2 * self.MARGIN) / max(w, 1), (self.height() - 2 * self.MARGIN) / max(h, 1))
         return max(min(s, 12.0), 0.05)
 
+    def scale(self) -> float:
+        return self.fit_scale() * self.zoom
+
     def offset(self) -> QPointF:
         w, h = self.image_size()
         s = self.scale()
-        return QPointF((self.width() - w * s) / 2, (self.height() - h * s) / 2)
+        return QPointF((self.width() - w * s) / 2, (self.height() - h * s) / 2) + self.pan
+
+    def reset_view(self) -> None:
+        self.zoom, self.pan = 1.0, QPointF(0, 0)
+        self.update()
+
+    def wheelEvent(self, ev):
+        steps = ev.angleDelta().y() / 120.0
+        if not steps:
+            return
+        pos = ev.position()
+        before = self.to_image(pos)
+        self.zoom = float(min(max(self.zoom * (1.25 ** steps), 1.0), 16.0))
+        if self.zoom == 1.0:
+            self.pan = QPointF(0, 0)
+        else:  # keep the image point under the cursor where it was
+            after = self.to_widget(*before)
+            self.pan += pos - after
+        self.update()
+
+    def _start_pan(self, ev) -> bool:
+        if ev.button() == Qt.MiddleButton:
+            self._pan_from = (ev.position(), QPointF(self.pan))
+            self.setCursor(Qt.ClosedHandCursor)
+            return True
+        return False
+
+    def _do_pan(self, ev) -> bool:
+        if self._pan_from is None:
+            return False
+        start, pan0 = self._pan_from
+        self.pan = pan0 + (ev.position() - start)
+        self.update()
+        return True
+
+    def _end_pan(self, ev) -> bool:
+        if self._pan_from is None or ev.button() != Qt.MiddleButton:
+            return False
+        self._pan_from = None
+        self.setCursor(Qt.ArrowCursor)
+        return True
 
     def to_widget(self, x: float, y: float) -> QPointF:
         o, s = self.offset(), self.scale()
@@ -183,6 +229,8 @@ class LineCanvas(_ImageView):
         return (sx, sy)
 
     def mousePressEvent(self, ev):
+        if self._start_pan(ev):
+            return
         d = self._drawing()
         if d is None or ev.button() not in (Qt.LeftButton, Qt.RightButton):
             return
@@ -205,6 +253,8 @@ class LineCanvas(_ImageView):
         self.update()
 
     def mouseMoveEvent(self, ev):
+        if self._do_pan(ev):
+            return
         pt = self.to_image(ev.position())
         snap = not (ev.modifiers() & Qt.AltModifier)
         if self._drag is None:
@@ -232,6 +282,8 @@ class LineCanvas(_ImageView):
         self.update()
 
     def mouseReleaseEvent(self, ev):
+        if self._end_pan(ev):
+            return
         drag, self._drag = self._drag, None
         live, self._live = self._live, None
         if drag is None or ev.button() != Qt.LeftButton:
@@ -258,6 +310,8 @@ class LineCanvas(_ImageView):
         elif k == Qt.Key_Escape:
             self._drag, self._live = None, None
             self.doc.select(line=-1)
+        elif k == Qt.Key_0:
+            self.reset_view()
         elif k == Qt.Key_Tab or k == Qt.Key_Backtab:
             n = ed.line_count(self._part()) if self._part() else 0
             if n:
@@ -428,7 +482,7 @@ class HeadCanvas(_ImageView):
 
     def mousePressEvent(self, ev):
         art = self.doc.artset
-        if art is None:
+        if art is None or self._start_pan(ev):
             return
         pt = self.to_image(ev.position())
         if self.mode == "paint":
@@ -453,7 +507,7 @@ class HeadCanvas(_ImageView):
     def mouseMoveEvent(self, ev):
         self._mouse = ev.position()
         art = self.doc.artset
-        if art is None:
+        if art is None or self._do_pan(ev):
             return
         pt = self.to_image(ev.position())
         if self._drag is None:
@@ -501,6 +555,8 @@ class HeadCanvas(_ImageView):
         self.update()
 
     def mouseReleaseEvent(self, ev):
+        if self._end_pan(ev):
+            return
         drag, self._drag = self._drag, None
         live_boxes, self._live_boxes = self._live_boxes, {}
         live_pivot, self._live_pivot = self._live_pivot, None
@@ -526,3 +582,9 @@ class HeadCanvas(_ImageView):
     def leaveEvent(self, ev):
         self._mouse = None
         self.update()
+
+    def keyPressEvent(self, ev):
+        if ev.key() == Qt.Key_0:
+            self.reset_view()
+        else:
+            super().keyPressEvent(ev)

@@ -210,7 +210,7 @@ class EditorWindow(QMainWindow):
         self.accept_button.clicked.connect(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
         bar.addWidget(self.accept_button)
         bar.addStretch(1)
-        help_ = QLabel("drag: new line · drag an end or the middle: move · Alt: no snapping · Del: delete · Tab: next line · [ ]: drawings")
+        help_ = QLabel("drag: new line · drag an end or the middle: move · Alt: no snap · Del: delete · Tab: next line · [ ]: drawings · wheel: zoom · 0: fit")
         help_.setStyleSheet("color: #777;")
         bar.addWidget(help_)
         lv.addLayout(bar)
