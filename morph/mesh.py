@@ -48,6 +48,8 @@ class MeshGrid:
         ys = np.arange(n, dtype=np.float64) * (self.h - 1) / self.cells
         gx, gy = np.meshgrid(xs, ys)
         self.vertices = np.stack([gx, gy], axis=-1)  # (n, n, 2) float64, [row j, col i] = (x, y)
+        self._rows: np.ndarray | None = None  # scratch for upsample_many(reuse=True)
+        self._dense: np.ndarray | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -76,7 +78,7 @@ class MeshGrid:
         k, n = meshes.shape[0], self.cells + 1
         comps = np.ascontiguousarray(np.moveaxis(meshes, -1, 1)).reshape(k * 2, n, n)  # (2k, n, n)
         if reuse:
-            if getattr(self, "_rows", None) is None or self._rows.shape[0] < 2 * k:
+            if self._rows is None or self._rows.shape[0] < 2 * k:
                 self._rows = np.empty((2 * k, self.h, n), np.float32)
                 self._dense = np.empty((2 * k * self.h, self.w), np.float32)
             rows = np.matmul(self.ry, comps, out=self._rows[: 2 * k])

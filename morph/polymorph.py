@@ -163,6 +163,9 @@ class PartMorpher:
     ) -> np.ndarray:
         """The morphed part, premultiplied RGBA uint8 ``(h, w, 4)`` (a new array).
 
+        Scratch buffers are reused between calls, so one instance renders one frame at a time
+        (use one ``PartMorpher`` per thread).
+
         ``weights`` are barycentric (clipped at 0, normalised). ``detail`` keeps the line detail
         of the heaviest drawing (``morph.detail``). ``jitter`` is an optional ``(m, m, 2)`` mesh
         displacement in pixels added to every drawing's warp (``morph.style``).
