@@ -116,6 +116,8 @@ class Compositor:
     def matrix(self, pose: Sequence[float]) -> np.ndarray:
         """The 2×3 affine map canvas → output for ``pose`` (after ``gain``)."""
         dx, dy, roll = (float(v) * self.gain for v in pose)
+        if not all(math.isfinite(v) for v in (dx, dy, roll)):
+            raise ValueError(f"pose must be three finite numbers (dx, dy, roll_deg), got {tuple(pose)}")
         m = cv2.getRotationMatrix2D(self.pivot, roll, 1.0)
         m[0, 2] += dx
         m[1, 2] += dy
@@ -183,6 +185,8 @@ class Compositor:
 
         Only the bounding box of the moved content is computed (``cv2.warpAffine``, bilinear).
         """
+        if len(pose) != 3:
+            raise ValueError(f"pose must be (dx, dy, roll_deg), got {tuple(pose)}")
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if dx == 0.0 and dy == 0.0 and roll == 0.0:
             return flat.copy()

@@ -165,3 +165,11 @@ def test_content_bounding_box_warp_matches_a_full_warp():
         want = cv2.warpAffine(head, c.matrix(pose), CANVAS, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         d = np.abs(got.astype(int) - want.astype(int))
         assert np.mean(d) < 0.05 and d.max() <= 16
+
+
+def test_bad_pose_is_a_clear_error():
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], {})
+    with pytest.raises(ValueError, match="finite"):
+        c.compose({}, pose=(0, float("nan"), 3))
+    with pytest.raises(ValueError, match="roll_deg"):
+        c.compose({}, pose=(1, 2))

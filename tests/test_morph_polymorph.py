@@ -183,3 +183,11 @@ def test_exact_three_way_option_matches_the_exact_field(mouths):
         assert np.hypot(mx - ex, my - ey).mean() < 0.1
     exact = bn.polymorph_exact(imgs[:3], lines[:3], w).astype(np.float32)
     assert np.abs(m.render((0, 1, 2), w).astype(np.float32) - exact).mean() < 0.5
+
+
+def test_parts_without_control_lines_cross_dissolve(mouths):
+    imgs, _ = mouths
+    m = PartMorpher(imgs[:2], [np.zeros((0, 4)), np.zeros((0, 4))], alpha_steps=3)
+    got = m.render((0, 1), (0.5, 0.5)).astype(int)
+    want = bn.blend_pm([bn.premultiply(imgs[0]), bn.premultiply(imgs[1])], [0.5, 0.5]).astype(int)
+    assert np.abs(got - want).max() <= 1
