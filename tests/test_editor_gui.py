@@ -346,6 +346,9 @@ def test_preview_slider_triangle_and_fallback(make_window, images, qtbot, monkey
     _lines_everywhere(doc, "mouth")
     pv = win.preview
     pv.tabs.setCurrentIndex(0)
+    pv.refresh()  # tables are built on a worker thread; the panel polls until they are ready
+    qtbot.waitUntil(lambda: pv.morph_view.caption == "morph" and pv.morph_view._img is not None, timeout=20000)
+    pv.wait_for_morph = True
     pv.combo_a.setCurrentIndex(0)
     pv.combo_b.setCurrentIndex(2)
     pv.slider.setValue(0)

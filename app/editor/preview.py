@@ -12,6 +12,8 @@ either, a cross-dissolve with a visible note.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
@@ -27,12 +29,21 @@ from .imaging import checker_brush, rgba_to_qimage
 
 
 class MorphEngine:
-    """Renders blends of one part's drawings; picks the best morph code that is installed."""
+    """Renders blends of one part's drawings; picks the best morph code that is installed.
+
+    ``PartMorpher`` tables are built for the drawings shown and kept while their image and
+    line arrays stay the same objects (edits always replace arrays, never change them). With
+    ``wait=False`` a needed rebuild runs on a worker thread and :meth:`render` returns None
+    until it is ready, so the window never stalls after an edit.
+    """
 
     def __init__(self):
         self.note = ""
-        self._cache_key = None
+        self._src: tuple[list, list] | None = None  # the arrays the current morpher was built from
         self._morpher = None
+        self._lock = threading.Lock()
+        self._building: threading.Thread | None = None
+        self._built: tuple | None = None  # (src, morpher or exception) from the worker
         try:
             from morph.polymorph import PartMorpher
 
@@ -48,12 +59,38 @@ class MorphEngine:
         if self._PartMorpher is None and self._exact is None:
             self.note = "morph engine not available: showing a cross-dissolve"
 
-    def render(self, part, indices, weights) -> tuple[np.ndarray, bool]:
-        """Blend of ``part.drawings[indices]`` with ``weights``: (RGBA, premultiplied?)."""
+    @property
+    def busy(self) -> bool:
+        return self._building is not None and self._building.is_alive()
+
+    def _same(self, src) -> bool:
+        return self._src is not None and self._src_matches(self._src, src)
+
+    def _build_in_background(self, src, images, lines) -> None:
+        if self.busy:
+            return  # the caller polls; the newest request is started when this one ends
+
+        def work():
+            try:
+                result = self._PartMorpher(images, lines, alpha_steps=11)
+            except Exception as e:  # reported by render()
+                result = e
+            with self._lock:
+                self._built = (src, result)
+
+        self._building = threading.Thread(target=work, name="editor-morph", daemon=True)
+        self._building.start()
+
+    def render(self, part, indices, weights, wait: bool = True) -> tuple[np.ndarray, bool] | None:
+        """Blend of ``part.drawings[indices]`` with ``weights``: (RGBA, premultiplied?).
+
+        Returns None only with ``wait=False`` while the morph tables are being built.
+        """
         idx = [int(i) for i in indices]
         uniq = sorted(set(idx))
         images = [part.drawings[i].image for i in uniq]
-        lines = [np.asarray(part.drawings[i].lines, np.float64).reshape(-1, 4) for i in uniq]
+        raw_lines = [part.drawings[i].lines for i in uniq]
+        lines = [np.asarray(l, np.float64).reshape(-1, 4) for l in raw_lines]
         wmap = {i: 0.0 for i in uniq}
         for i, w in zip(idx, weights):
             wmap[i] += float(w)
@@ -67,16 +104,24 @@ class MorphEngine:
             self.note = "line counts differ: showing a cross-dissolve"
             return ed.cross_dissolve(images, w), False
         if self._PartMorpher is not None:
-            key = tuple((id(im), id(l)) for im, l in zip(images, (part.drawings[i].lines for i in uniq)))
+            src = (list(images), list(raw_lines))
+            with self._lock:
+                built, self._built = self._built, None
+            if built is not None and not isinstance(built[1], Exception):
+                self._src, self._morpher = built
             try:
-                if key != self._cache_key:
-                    self._morpher = self._PartMorpher(images, lines, alpha_steps=11)
-                    self._cache_key = key
+                if built is not None and isinstance(built[1], Exception) and self._src_matches(built[0], src):
+                    raise built[1]
+                if not self._same(src):
+                    if not wait:
+                        self._build_in_background(src, images, lines)
+                        return None
+                    self._morpher, self._src = self._PartMorpher(images, lines, alpha_steps=11), src
                 self.note = ""
                 return self._morpher.render(list(range(len(uniq))), w), True
             except Exception as e:  # a bug in morph must not close the editor
                 self.note = f"morph failed ({_one_line(e)}): showing a cross-dissolve"
-                self._cache_key = None
+                self._src = None
         elif self._exact is not None:
             try:
                 self.note = "fast morph not available: exact Beier–Neely (slower)"
@@ -84,6 +129,10 @@ class MorphEngine:
             except Exception as e:
                 self.note = f"morph failed ({_one_line(e)}): showing a cross-dissolve"
         return ed.cross_dissolve(images, w), False
+
+    @staticmethod
+    def _src_matches(a, b) -> bool:
+        return len(a[0]) == len(b[0]) and all(x is y for x, y in zip(a[0] + a[1], b[0] + b[1]))
 
 
 def _one_line(e: BaseException) -> str:
@@ -201,6 +250,7 @@ class PreviewPanel(QWidget):
         super().__init__(parent)
         self.doc = doc
         self.engine = MorphEngine()
+        self.wait_for_morph = False  # tests set True to render synchronously
         self.live = None
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
@@ -328,10 +378,16 @@ class PreviewPanel(QWidget):
             return
         part = self.doc.artset.parts[self.doc.part]
         idx, w = blend
-        img, pm = self.engine.render(part, idx, w)
+        self.dissolve_view.set_image(ed.cross_dissolve([part.drawings[i].image for i in idx], w))
+        out = self.engine.render(part, idx, w, wait=self.wait_for_morph)
+        if out is None:  # tables are being built on a worker thread: keep the last morph, poll
+            self.morph_view.caption = "morph (updating…)"
+            self.morph_view.update()
+            self._timer.start(60)
+            return
+        img, pm = out
         self.morph_view.caption = "morph"
         self.morph_view.set_image(img, pm)
-        self.dissolve_view.set_image(ed.cross_dissolve([part.drawings[i].image for i in idx], w))
         self.note.setText(self.engine.note)
         self.note.setVisible(bool(self.engine.note))
 
