@@ -1,8 +1,8 @@
 """Assemble a frame: parts in their boxes, the head over them, shimmer, head tilt (Buck et al. §3.2).
 
-Everything is premultiplied RGBA uint8 (see ``morph``). Per frame the head (a precomputed
-premultiplied copy) is copied, and only inside the part boxes is ``head + parts·(1 − α_head)``
-computed, so the soft alpha of the head's holes feathers the parts in. The whole character is
+Everything is premultiplied RGBA uint8 (see ``morph``). Each head has a precomputed premultiplied
+canvas; per frame only the part boxes are rewritten with ``head + parts·(1 − α_head)``, so the
+soft alpha of the head's holes feathers the parts in. The whole character is
 then rotated about the art set's pivot and translated with one ``cv2.warpAffine`` restricted to
 the bounding box of the moved convex hull of everything that can be non-transparent.
 """

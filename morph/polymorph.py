@@ -10,8 +10,8 @@ At run time, with barycentric weights ``(w_A, w_B, w_C)``, drawing A is warped w
 add up exactly to the three-way target ``Σ w_i L_i``, the fields only approximately), α being
 linearly interpolated between the stored tables. Each of the three meshes is upsampled to a dense
 map, the premultiplied drawings are resampled with ``cv2.remap``, and the results are summed
-with the weights (``w_A·A' + w_B·B' + w_C·C'``, one rounding). A drawing with weight 1 is
-returned exactly as drawn.
+with the weights (``w_A·A' + w_B·B' + w_C·C'``, not drawn one over another). A drawing with
+weight 1 is returned exactly as drawn.
 """
 
 from __future__ import annotations
