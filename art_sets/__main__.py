@@ -30,10 +30,11 @@ def _resolve(target: str) -> Path:
 
 def cmd_check(args) -> int:
     from art_sets.io import scan
-    from art_sets.validate import recommendations
+    from art_sets.validate import recommendations, validate
 
     folder = _resolve(args.dir)
-    art, problems = scan(folder)
+    problems = validate(folder)
+    art = scan(folder)[0] if not problems else None
     for p in problems:
         print(p)
     if problems:

@@ -153,4 +153,5 @@ def _band(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
 
 def character() -> Straight:
     return Straight(slug="ivy", name="Ivy", style="straight",
-                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN)
+                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN,
+                    mouth_box=(176, 312, 160, 120), mouth_center=(256.0, 356.0), mouth_scale=38.0)
