@@ -17,7 +17,8 @@ must agree to a fraction of a pixel, in the definitions of ``shared/DESIGN.md``:
 
 The face is built in a face-local frame (origin at the midpoint of the eye centres, x towards
 the image-right eye, y towards the chin, pixels) and rotated by the roll and translated into the
-frame. Shapes are polygons rasterised at 4x (2x for large, unmeasured shapes) and area-averaged,
+frame. Shapes are polygons rasterised at 8x for the measured features (4x / 2x for the rest)
+and area-averaged,
 with a half-sub-pixel inward offset that cancels OpenCV's fill bias, so edges are anti-aliased
 and sub-pixel accurate.
 """
@@ -141,7 +142,7 @@ class Style:
     ``noise`` is the sigma of gaussian sensor noise (grey levels), ``blur`` a gaussian blur sigma
     (pixels), ``lighting_drift`` the amplitude of the slow global gain / colour change (0.2 = ±20 %),
     ``jpeg_quality`` 1..100 passes each frame through JPEG (0 = off). ``catchlight`` draws a small
-    specular highlight on each pupil.
+    specular highlight on each pupil; ``limbus`` darkens the iris rim (1 = flat iris). ``lash`` (the upper lash line, half-width ``lash_width`` × ipd, 0 = none) defaults to the brow colour.
     """
 
     name: str = "default"
@@ -153,6 +154,8 @@ class Style:
     mouth: BGR = (40, 28, 78)
     teeth: BGR = (222, 232, 236)
     sclera: BGR = (228, 234, 240)
+    pupil: BGR = (12, 12, 14)
+    lash: BGR | None = None
     shirt: BGR = (140, 92, 58)
     background: BGR = (186, 190, 182)
     ipd: float = 80.0
@@ -162,6 +165,8 @@ class Style:
     lighting_drift: float = 0.0
     jpeg_quality: int = 0
     catchlight: bool = True
+    limbus: float = 0.65
+    lash_width: float = 0.02
     shading: float = 1.0
 
     def replace(self, **changes) -> "Style":
@@ -192,12 +197,12 @@ EYE_HW = 0.24  # half-width of the eye opening
 EYE_H = 0.20  # lid-to-lid gap at eye_open = 1
 EYE_UPPER_SHARE = 0.6  # share of the gap above the eye's centre line
 IRIS_R, PUPIL_R = 0.095, 0.042
-LASH = 0.02
 BROW_B0, BROW_UP, BROW_DOWN = 0.40, 0.14, 0.10
 BROW_HALF, BROW_ARCH, BROW_T = 0.30, 0.06, 0.07
 MOUTH_Y, MOUTH_W0 = 1.02, 0.78
 LIP_TU, LIP_TL = 0.085, 0.11
 GAP_MIN, GAP_MAX = 0.012, 0.45
+FEATURE_SS = 8  # supersampling of the measured features (eyes, brows, lips): edges within 1/16 px
 SMILE_UP, FROWN_DOWN = 0.10, 0.08
 
 _T_LIP = np.linspace(-1.0, 1.0, 41)
@@ -271,7 +276,7 @@ def _mouth(st: FaceState) -> _Mouth:
         t_u=LIP_TU * u * (1.0 + 0.35 * p) * (1.0 - 0.25 * max(s, 0.0)),
         t_l=LIP_TL * u * (1.0 + 0.3 * p) * (1.0 - 0.15 * max(s, 0.0)),
         p_in=0.9 - 0.4 * p,
-        p_out=0.6 - 0.2 * p,
+        p_out=0.45 - 0.15 * p,
     )
 
 
@@ -398,12 +403,14 @@ def clicks_for(state: FaceState, frame: int = 0) -> dict:
 
 def _inset(pts: np.ndarray, d: float) -> np.ndarray:
     """Move each vertex of a closed polygon ``d`` pixels towards the inside."""
-    prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
-    tan = nxt - prev
-    nrm = np.stack([tan[:, 1], -tan[:, 0]], axis=1)
-    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True) + 1e-12
+    tan = np.empty_like(pts)
+    tan[1:-1] = pts[2:] - pts[:-2]
+    tan[0] = pts[1] - pts[-1]
+    tan[-1] = pts[0] - pts[-2]
+    nrm = tan[:, ::-1] * np.array([1.0, -1.0])
+    nrm /= np.sqrt((nrm * nrm).sum(axis=1, keepdims=True)) + 1e-12
     x, y = pts[:, 0], pts[:, 1]
-    area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    area2 = float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
     return pts - (d if area2 > 0 else -d) * nrm
 
 
@@ -459,8 +466,9 @@ def _blend(buf: np.ndarray, bx: _Box, box: _Box, alpha: np.ndarray, colour) -> N
     ``buf`` holds the pixels of ``bx``; ``box`` (inside ``bx``) is where ``alpha`` lives.
     """
     sub = buf[box.y0 - bx.y0 : box.y1 - bx.y0, box.x0 - bx.x0 : box.x1 - bx.x0]
-    a = alpha[..., None]
-    sub += a * (np.asarray(colour, np.float32) - sub)
+    tmp = np.subtract(np.asarray(colour, np.float32), sub)
+    tmp *= alpha[..., None]
+    sub += tmp
 
 
 def _clip_box(inner: _Box | None, outer: _Box) -> _Box | None:
@@ -563,15 +571,24 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     buf = frame[bx.y0:bx.y1, bx.x0:bx.x1].astype(np.float32)
     skin = np.asarray(style.skin, np.float32)
 
-    def paint(polys, colour, ss=4, clip=None, box=None):
+    def paint(polys, colour, ss=4, box=None):
         box = box or _clip_box(_Box.around(polys, w, h), bx)
-        if box is None:
-            return None
-        a = _coverage(polys, box, ss)
-        if clip is not None:
-            a *= clip
-        _blend(buf, bx, box, a, colour)
-        return a
+        if box is not None:
+            _blend(buf, bx, box, _coverage(polys, box, ss), colour)
+
+    def compose(box, base, layers):
+        """``layers`` (polygons, colour) painted over a ``base`` colour, as a (h, w, 3) array."""
+        g = np.empty(box.shape + (3,), np.float32)
+        g[:] = np.asarray(base, np.float32)
+        for polys, colour in layers:
+            a = _coverage(polys, box, FEATURE_SS)
+            g += a[..., None] * (np.asarray(colour, np.float32) - g)
+        return g
+
+    def group(box, base, layers, outline):
+        """Compose a feature in its own buffer, then paint it inside ``outline``: edge pixels then
+        mix the feature with the skin under it exactly once (layers reach past the outline)."""
+        _blend(buf, bx, box, _coverage(outline, box, FEATURE_SS), compose(box, base, layers))
 
     paint([hair_back], style.hair, ss=2)
     paint([neck], _mul(skin, 0.8), ss=2)
@@ -605,32 +622,31 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
         yb = _brow_centre(tb, float(np.clip(b, -1, 1)), inner, u)
         thk = 0.5 * _brow_thickness(tb, inner, u)
         brow = np.concatenate([np.stack([xb, yb - thk], 1), np.stack([xb, yb + thk], 1)[::-1]])
-        paint([L(brow)], style.brow)
+        paint([L(brow)], style.brow, ss=FEATURE_SS)
 
         # eye: lash line, white opening, iris, pupil, catch-light — all inside the lids
         up, lo = _eye_gaps(e, u)
         xe = ex + _T_EYE * hw
         prof = _lid_profile(_T_EYE)
         yu, yl = -up * prof, lo * prof
-        lash_t = LASH * u * (0.35 + 0.65 * prof ** 0.3)
+        lash_t = style.lash_width * u * (0.35 + 0.65 * prof ** 0.3)
         lash = np.concatenate([np.stack([xe, yu - lash_t], 1), np.stack([xe, yu + lash_t], 1)[::-1]])
         white = np.concatenate([np.stack([xe, yu], 1), np.stack([xe, yl], 1)[-2:0:-1]])
         iris_pts = L(_ellipse(ex + gx, gy, IRIS_R * u, IRIS_R * u))
         eye_box = _clip_box(_Box.around([L(lash), iris_pts], w, h), bx)
         if eye_box is None:
             continue
-        paint([L(lash)], style.brow, box=eye_box)
+        if style.lash_width > 0:
+            paint([L(lash)], style.lash if style.lash is not None else style.brow, box=eye_box)
         if up + lo < 0.02:
             continue
-        inside = paint([L(white)], style.sclera, box=eye_box)
-        if inside is None:
-            continue
-        paint([iris_pts], _mul(style.iris, 0.65), clip=inside, box=eye_box)
-        paint([L(_ellipse(ex + gx, gy, 0.8 * IRIS_R * u, 0.8 * IRIS_R * u))], style.iris, clip=inside, box=eye_box)
-        paint([L(_ellipse(ex + gx, gy, PUPIL_R * u, PUPIL_R * u))], (12, 12, 14), clip=inside, box=eye_box)
+        c = ex + gx
+        layers = [([iris_pts], _mul(style.iris, style.limbus)),
+                  ([L(_ellipse(c, gy, 0.8 * IRIS_R * u, 0.8 * IRIS_R * u))], style.iris),
+                  ([L(_ellipse(c, gy, PUPIL_R * u, PUPIL_R * u))], style.pupil)]
         if style.catchlight:
-            paint([L(_ellipse(ex + gx + 0.032 * u, gy - 0.032 * u, 0.016 * u, 0.016 * u))], (245, 248, 250),
-                  clip=inside, box=eye_box)
+            layers.append(([L(_ellipse(c + 0.032 * u, gy - 0.032 * u, 0.016 * u, 0.016 * u))], (245, 248, 250)))
+        group(eye_box, style.sclera, layers, [L(white)])
 
     # mouth: dark interior (teeth, tongue) under the two lips
     m = _mouth(st)
@@ -638,22 +654,27 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     xm = t * m.half_w
     iu, il = m.inner_upper(t), m.inner_lower(t)
     ou, ol = m.outer_upper(t), m.outer_lower(t)
-    upper = np.concatenate([np.stack([xm, ou], 1), np.stack([xm, iu], 1)[-2:0:-1]])
-    lower = np.concatenate([np.stack([xm, il], 1), np.stack([xm, ol], 1)[-2:0:-1]])
     hole = np.concatenate([np.stack([xm, iu], 1), np.stack([xm, il], 1)[-2:0:-1]])
-    mbox = _clip_box(_Box.around([L(upper), L(lower)], w, h), bx)
+    outline = np.concatenate([np.stack([xm, ou], 1), np.stack([xm, ol], 1)[-2:0:-1]])
+    mbox = _clip_box(_Box.around([L(outline)], w, h), bx)
     if mbox is not None:
-        inside = paint([L(hole)], style.mouth, box=mbox)
-        if inside is not None and m.y_il0 - m.y_iu0 > 0.04 * u:
+        # lower-lip colour everywhere, the upper lip above the lips' meeting line, the
+        # interior (with tongue and teeth) inside the inner edges; all cut to the outline
+        mg = max(2.0, 0.05 * u)
+        meet = 0.5 * (iu + il)
+        upper_ext = np.concatenate([[[-m.half_w - mg, m.yc]], np.stack([xm, ou - mg], 1), [[m.half_w + mg, m.yc]],
+                                    np.stack([xm, meet], 1)[::-1]])
+        inner = []
+        if m.y_il0 - m.y_iu0 > 0.04 * u:
             tongue = _ellipse(0.0, m.y_il0, 0.55 * m.half_w, 0.16 * u)
-            paint([L(tongue)], _mul(np.add(style.mouth, style.lip) / 2.0, 0.8), clip=inside, box=mbox)
+            inner.append(([L(tongue)], _mul(np.add(style.mouth, style.lip) / 2.0, 0.8)))
             if st.teeth:
                 tt = t[np.abs(t) <= 0.75]
-                band = np.concatenate([np.stack([tt * m.half_w, m.inner_upper(tt) - 0.01 * u], 1),
+                band = np.concatenate([np.stack([tt * m.half_w, m.inner_upper(tt) - 0.05 * u], 1),
                                        np.stack([tt * m.half_w, m.inner_upper(tt) + 0.075 * u], 1)[::-1]])
-                paint([L(band)], style.teeth, clip=inside, box=mbox)
-        paint([L(upper)], _mul(style.lip, 0.86), box=mbox)
-        paint([L(lower)], style.lip, box=mbox)
+                inner.append(([L(band)], style.teeth))
+        interior = compose(mbox, style.mouth, inner)
+        group(mbox, style.lip, [([L(upper_ext)], _mul(style.lip, 0.86)), ([L(hole)], interior)], [L(outline)])
 
     frame[bx.y0:bx.y1, bx.x0:bx.x1] = _to_u8(buf)
 
@@ -823,12 +844,15 @@ class Performance:
                         teeth |= b * amp > 0.12
                     tc += dur
                 tc = end + rng.uniform(0.4, 1.5)
-        smile = 0.12 * _smooth_noise(rng, t, 0.05, 0.2) * env
+        smile = arr()
         if smiles:
+            smile += 0.12 * _smooth_noise(rng, t, 0.05, 0.2) * env
             tc = 0.8 + rng.uniform(0.0, 2.0)
+            first = True
             while tc < T:
                 dur = rng.uniform(1.0, 3.0)
-                amp = rng.uniform(0.6, 1.0) if rng.random() > 0.25 else -rng.uniform(0.4, 0.8)
+                amp = rng.uniform(0.6, 1.0) if first or rng.random() > 0.25 else -rng.uniform(0.4, 0.8)
+                first = False
                 smile = smile + amp * _bump(t, tc, dur, 0.3)
                 tc += dur + rng.uniform(1.5, 5.0)
         smile = np.clip(smile + smile_t, -1, 1)
@@ -836,9 +860,11 @@ class Performance:
         brow_l, brow_r = arr(), arr()
         if brows:
             tc = 0.8 + rng.uniform(0.0, 2.0)
+            first = True
             while tc < T:
                 dur = rng.uniform(0.6, 1.6)
-                amp = rng.uniform(0.5, 1.0) if rng.random() > 0.3 else -rng.uniform(0.5, 0.9)
+                amp = rng.uniform(0.5, 1.0) if first or rng.random() > 0.3 else -rng.uniform(0.5, 0.9)
+                first = False
                 b = amp * _bump(t, tc, dur, 0.3)
                 brow_l += b * rng.uniform(0.85, 1.0)
                 brow_r += b * rng.uniform(0.85, 1.0)
@@ -847,7 +873,7 @@ class Performance:
             brow_r += 0.08 * env * _smooth_noise(rng, t, 0.1, 0.5)
         brow_l, brow_r = np.clip(brow_l, -1, 1), np.clip(brow_r, -1, 1)
 
-        base = 1.0 + 0.06 * env * _smooth_noise(rng, t, 0.1, 0.4)
+        base = 1.0 + (0.06 * env * _smooth_noise(rng, t, 0.1, 0.4) if blink else 0.0)
         base += 0.2 * np.clip((brow_l + brow_r) / 2, 0, None) - 0.25 * np.clip(smile, 0, None)
         eye_l, eye_r = base.copy(), base.copy()
         if blink:
