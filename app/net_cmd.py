@@ -65,6 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         parser.add_argument("--training", metavar="SESSION", help="a saved training session for the character")
         parser.add_argument("--out", metavar="OUT.mp4", help="draw the character into a video / GIF / PNGs")
         parser.add_argument("--frames", type=int, metavar="N", help="stop after N received frames")
+        parser.add_argument("--fps", type=int, choices=(10, 15, 30), default=30, help="drawing rate (default 30)")
         parser.add_argument("--timeout", type=float, default=5.0, metavar="S",
                             help="stop after S seconds without packets once the stream started (default 5; 0 = never)")
         parser.add_argument("--wait", type=float, default=0.0, metavar="S",
@@ -323,28 +324,11 @@ def _send(args) -> int:
 # receive
 
 
-@dataclass
-class _NetCalibration:
-    """What the puppet needs of a calibration, learnt from the sender's hello."""
-
-    ipd: float
-    neutral: FaceParams
-    frame_size: tuple[int, int]
-
-
 class _Drawing:
-    """The character and the output file, built when the first hello tells the performer's face."""
+    """The character and the output file. The puppet is built before the stream starts (loading a
+    character takes a moment); the sender's hello tells it the performer's ipd and neutral face."""
 
     def __init__(self, args) -> None:
-        self.args = args
-        self.puppet = None
-        self.writer = None
-        self.frames = 0
-        self.last_draw = 0.0
-        self.resting = False
-
-    def _build(self, rx: UdpReceiver) -> None:
-        args = self.args
         try:
             from training.puppet import Puppet
         except ImportError as e:
@@ -365,45 +349,52 @@ class _Drawing:
             from training.session import TrainingSession
 
             session = TrainingSession.load(args.training, artset=artset, autosave=False)
-        else:
-            try:
-                from training.defaults import default_session
-
-                session = default_session(artset)
-            except ImportError:
-                session = None
-        hello = rx.hello
-        neutral = rx.neutral if rx.neutral is not None else None
-        cal = _NetCalibration(hello.ipd, neutral, hello.frame_size) if neutral is not None else None
-        self.puppet = Puppet(artset, calibration=cal, session=session, fps=max(1, int(round(hello.fps))))
-        if args.out:
-            from app.record import FrameWriter
-
-            self.writer = FrameWriter(args.out, fps=hello.fps)
+        self._puppet_cls = Puppet
+        self.puppet = Puppet(artset, session=session, fps=args.fps)
+        self.out = args.out
+        self.fps = args.fps
+        self.writer = None
+        self.frames = 0
+        self.resting = False
+        self._gap_frames = 0
+        self._hello = None
 
     def _draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
-        if self.puppet is None:
-            self._build(rx)
+        if rx.hello is not self._hello:  # a new stream: its performer's scale and neutral face
+            from training.features import FeatureSpace
+
+            self._hello = rx.hello
+            features = FeatureSpace.from_values(rx.hello.ipd, rx.neutral) if rx.neutral is not None else None
+            p = self.puppet
+            if abs(rx.hello.fps - p.input_fps) > 0.5:  # filters and hold times count frames: rebuild
+                self.puppet = p = self._puppet_cls(p.artset, session=p.session, fps=self.fps, renderer=p.renderer,
+                                                   input_fps=rx.hello.fps, features=features)  # fmt: skip
+            elif features is not None:
+                p.features = features
         pf = self.puppet.step_params(frame)
-        if self.writer is not None and pf is not None and getattr(pf, "rgba_pm", None) is not None:
+        if self.out and pf.rgba_pm is not None and pf.fresh:
+            if self.writer is None:
+                from app.record import FrameWriter
+
+                self.writer = FrameWriter(self.out, fps=self.fps)
             self.writer.write(pf.rgba_pm)
             self.frames += 1
 
-    def on_frame(self, rx: UdpReceiver, frame: FaceParams, now: float) -> None:
+    def on_frame(self, rx: UdpReceiver, frame: FaceParams) -> None:
         """Draw a received frame (every one, in order)."""
         self._draw(rx, frame)
-        self.last_draw = now
+        self._gap_frames = 0
         self.resting = False
 
     def idle(self, rx: UdpReceiver, now: float) -> None:
-        """While packets are late or have stopped, keep the timeline at the sender's rate: draw the
-        held pose, then the ease to neutral, then stop once at rest."""
+        """Call when no datagram is waiting. While packets are late or have stopped, keep the
+        timeline at the sender's rate: draw the held pose, then the ease to neutral, then rest."""
         if rx.last_frame is None or self.resting or rx.hello is None:
             return
         period = 1.0 / max(rx.hello.fps, 1.0)
-        while self.last_draw + 1.5 * period <= now:
-            self.last_draw += period
-            pose = rx.pose(self.last_draw)
+        while rx.last_arrival + (self._gap_frames + 1.5) * period <= now:
+            self._gap_frames += 1
+            pose = rx.pose(rx.last_arrival + self._gap_frames * period)
             self._draw(rx, pose)
             if pose.status == LOST and pose.confidence == 0.0:
                 self.resting = True
@@ -411,7 +402,7 @@ class _Drawing:
 
     def close(self) -> str:
         if self.writer is None:
-            return ""
+            return "no frames drawn" if self.out else ""
         path = self.writer.close()
         return f"wrote {path} ({self.frames} frames)"
 
@@ -432,14 +423,15 @@ def _receive(args) -> int:
         last_note = start
         try:
             while True:
-                for f in rx.poll(0.02 if drawing is not None else 0.1):
+                new = rx.poll(0.02 if drawing is not None else 0.1)
+                for f in new:
                     got.append(f)
                     if drawing is not None:
-                        drawing.on_frame(rx, f, time.monotonic())
+                        drawing.on_frame(rx, f)
                     if args.frames and len(got) >= args.frames:
                         break
                 now = time.monotonic()
-                if drawing is not None:
+                if drawing is not None and not new:
                     drawing.idle(rx, now)
                 if args.frames and len(got) >= args.frames:
                     break

@@ -362,3 +362,43 @@ def test_unmeasured_values_travel_as_the_last_value_sent():
     assert by[1].status == "mouth_lost"
     assert by[1].mouth_width == by[0].mouth_width and by[1].lip_lower == by[0].lip_lower
     assert codec.encode(by[1].replace(mouth_width=0, lip_lower=0)) != codec.encode(by[0].replace(mouth_width=0, lip_lower=0))
+
+
+@pytest.mark.slow
+def test_cli_receive_draws_the_character(tmp_path):
+    pytest.importorskip("training.puppet")
+    import cv2
+
+    from art_sets.library import list_bundled
+
+    bundled = list_bundled()
+    if not bundled:
+        pytest.skip("no bundled character")
+    out = tmp_path / "rx.mp4"
+    with UdpReceiver(0) as probe:
+        port = probe.address[1]
+    rx = subprocess.Popen(
+        [sys.executable, "-m", "app", "receive", "--port", str(port), "--art", str(bundled[0][1]), "--out", str(out),
+         "--frames", "20", "--timeout", "20", "--wait", "60", "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        # the receiver loads the character before it listens; keep sending until it has 20 frames
+        with Sender(("127.0.0.1", port), FRAME, IPD, neutral=NEUTRAL, compress=True) as tx:
+            rows = track(600, seed=8)
+            for r in rows:
+                tx.send(r)
+                time.sleep(1 / 30)
+                if rx.poll() is not None:
+                    break
+        out_text, err = rx.communicate(timeout=60)
+    finally:
+        rx.kill()
+    assert rx.returncode == 0, err
+    assert "(20 frames)" in out_text and "0 malformed" in out_text
+    cap = cv2.VideoCapture(str(out))
+    n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    ok, img = cap.read()
+    cap.release()
+    assert ok and n >= 20
+    assert img.std() > 10  # a drawing, not a blank page
