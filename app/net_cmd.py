@@ -2,18 +2,24 @@
 
 send
     ``send --to HOST:PORT [--camera N | --video FILE | --params TRACK] [--init CLICKS.json | --auto]
-    [--compress]`` tracks a camera or a video (calibrated from the clicks, or found automatically)
-    and sends each frame's ten bytes over UDP, paced in real time. ``--params`` replays a
-    recorded track instead: a CSV track, a packet-stream file (``.ifs``) or an MPEG-4 FAP file
-    (``.fap``). ``--record OUT.ifs`` also keeps what was sent.
+    [--compress]`` tracks a camera or a video (calibrated from the clicks — for a video,
+    ``<video>.clicks.json`` beside it is used when no ``--init`` is given — or found
+    automatically) and sends each frame's ten bytes over UDP, paced in real time. ``--params``
+    replays a recorded track instead: a CSV track (give ``--ipd``, ``--init`` or let the mouth
+    width estimate it), a packet-stream file (``.ifs``) or an MPEG-4 FAP file (``.fap``).
+    ``--record OUT.ifs`` also keeps what was sent.
 
 receive
     ``receive --port PORT [--art NAME] [--training SESSION] [--bind ADDR] [--out OUT.mp4 | --frames N]``
-    listens on 127.0.0.1 (``--bind`` to change), draws every received frame with the character
-    into ``--out`` (MP4 / GIF / PNGs), and can keep the received track (``--csv``, ``--record
-    OUT.ifs``, ``--fap``). It stops after ``--frames`` frames, after ``--timeout`` seconds
-    without packets once the stream started, or on Ctrl-C, and prints the link statistics.
+    listens on 127.0.0.1 (``--bind`` to change). With ``--art``/``--out``/``--training`` it draws
+    every received frame with the character (``training.puppet``) into ``--out`` (MP4 / GIF /
+    PNGs); while packets are late or have stopped it keeps the sender's frame rate, drawing the
+    held pose and then the ease to neutral. Without them it only counts. The received track can
+    be kept (``--csv``, ``--record OUT.ifs``, ``--fap``). It stops after ``--frames`` frames,
+    after ``--timeout`` seconds without packets once the stream started, or on Ctrl-C, and
+    prints the link statistics (loss, reordering, drops, bits per frame, bit rate).
 
+Received frames are numbered by the packets' sequence numbers, timed by their timestamps.
 Expected errors print one line, ``inkface: <message>``, and exit with code 2.
 """
 
@@ -48,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         init = parser.add_mutually_exclusive_group()
         init.add_argument("--init", metavar="CLICKS.json", help="calibration clicks (see DESIGN.md)")
         init.add_argument("--auto", action="store_true", help="find the face automatically")
-        parser.add_argument("--compress", action="store_true", help="temporal compression (lossless, ~3x fewer bits)")
+        parser.add_argument("--compress", action="store_true", help="lossless temporal compression (about 30-40 instead of 80 bits a frame)")
         parser.add_argument("--key-interval", type=int, default=30, metavar="N",
                             help="with --compress: a key frame every N frames (default 30)")
         parser.add_argument("--fps", type=float, metavar="F", help="send rate (default: the source's)")
