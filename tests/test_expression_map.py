@@ -162,3 +162,19 @@ def test_query_dimension_is_checked():
         m.weights([1, 2])
     with pytest.raises(ValueError):
         ExpressionMap(np.zeros((0, 3)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    pts=arrays(np.float64, st.tuples(st.integers(1, 8), st.just(3)), elements=st.integers(0, 2).map(float)),
+    q=arrays(np.float64, 3, elements=st.floats(-3, 5)),
+)
+def test_grid_points_with_duplicates_and_collinear_sets(pts, q):
+    m = ExpressionMap(pts)
+    idx, w = m.weights(q)
+    assert np.all(w >= 0) and abs(w.sum() - 1) < 1e-9
+    # each training point is reproduced exactly by its group's representative
+    for i, p in enumerate(pts):
+        dense = m.weights_full(p, len(pts))
+        rep = m.duplicate_of[i]
+        assert dense[rep] == pytest.approx(1.0, abs=1e-9)
