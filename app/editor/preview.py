@@ -13,6 +13,7 @@ either, a cross-dissolve with a visible note.
 from __future__ import annotations
 
 import threading
+import time
 
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QTimer, Signal
@@ -398,22 +399,30 @@ class PreviewPanel(QWidget):
                 self.live.stop()
                 self.live = None
             self.live_button.setText("Start live preview")
+            self.dissolve_view.show()
             return
-        try:
-            src = "camera" if self.live_source.currentIndex() == 1 else "performance"
-            self.live = LivePreview(self.doc, self._show_live, src)
-        except Exception as e:
-            self.live = None
-            self.live_status.setText(f"Live preview is not available: {_one_line(e)}")
+        if self.doc.artset is None:
             self.live_button.setChecked(False)
             return
+        src = "camera" if self.live_source.currentIndex() == 1 else "performance"
+        self.live = LivePreview(self.doc, self._show_live, src, on_stop=self._live_stopped)
         self.live_button.setText("Stop live preview")
         self.live_status.setText(self.live.describe())
+        self.dissolve_view.hide()
 
-    def _show_live(self, rgba_pm: np.ndarray, note: str):
-        self.morph_view.caption = "live"
-        self.morph_view.set_image(rgba_pm, True)
+    def _show_live(self, rgba_pm: np.ndarray | None, note: str):
+        if rgba_pm is not None:
+            self.morph_view.caption = "live"
+            self.morph_view.set_image(rgba_pm, True)
         self.live_status.setText(note)
+
+    def _live_stopped(self):
+        self.live = None
+        self.live_button.blockSignals(True)
+        self.live_button.setChecked(False)
+        self.live_button.blockSignals(False)
+        self.live_button.setText("Start live preview")
+        self.dissolve_view.show()
 
     def stop(self):
         if self.live is not None:
@@ -421,83 +430,117 @@ class PreviewPanel(QWidget):
             self.live = None
 
 
+_CALIBRATION: list = []  # the bundled performer's calibration, made once per process
+
+
+def _performance_calibration(workers):
+    if not _CALIBRATION:
+        try:
+            _CALIBRATION.append(workers.performance_calibration(workers.bundled_performance()))
+        except Exception:  # the puppet can still run uncalibrated
+            return None
+    return _CALIBRATION[0]
+
+
 class LivePreview:
-    """Feeds frames through a ``training.puppet.Puppet`` built on the art set being edited, at
-    about 15 fps on the GUI thread. The source is the bundled performance (the synthetic
-    performer, calibrated from its own clicks) or camera 0. After an edit the puppet is rebuilt
-    once the edits have paused for a moment (building α tables takes a while)."""
+    """Feeds frames through a ``training.puppet.Puppet`` built on the art set being edited.
+
+    Everything slow — opening the source, calibrating on the bundled performance, building the
+    puppet's α tables, tracking and rendering — runs on a worker thread at about 15 fps; the GUI
+    only shows the newest frame. The source is the bundled performance (the synthetic performer,
+    calibrated from its own clicks) or camera 0. After an edit the puppet is rebuilt from a
+    snapshot once the edits have paused for a moment.
+    """
 
     REBUILD_PAUSE_S = 0.8
+    FRAME_S = 1 / 15
 
-    def __init__(self, doc: EditorDocument, show, source: str = "performance"):
-        from app import workers  # the window's helpers: sources with fallbacks, puppet building
-
-        self.doc, self.show, self.workers = doc, show, workers
-        self.calibration = None
-        if source == "camera":
-            self.source = workers.open_source(workers.SourceSpec(kind="camera", camera=0))
-            self.what = "camera 0"
-        else:
-            self.source = workers.open_source(workers.SourceSpec(kind="performance"))
-            self.what = "the bundled performance"
-            try:
-                self.calibration = workers.performance_calibration(workers.bundled_performance())
-            except Exception:
-                self.calibration = None
-        self.frames = iter(self.source)
-        self.puppet = None
-        self._art = None
+    def __init__(self, doc: EditorDocument, show, source: str = "performance", on_stop=None):
+        self.doc, self.show, self.kind, self.on_stop = doc, show, source, on_stop
+        self.what = "camera 0" if source == "camera" else "the bundled performance"
+        self._lock = threading.Lock()
+        self._latest = None  # (rgba_pm, note) from the worker
+        self._error: str | None = None
+        self._stop = threading.Event()
+        self._art = ed.clone(doc.artset)  # snapshot the worker renders (arrays are shared, never changed)
+        self._art_version = 0
         self._changed_at = 0.0
         doc.changed.connect(self._on_changed)
-        self._build()  # raises (CoreMissing …) when the puppet is not available
         self.timer = QTimer()
-        self.timer.setInterval(66)
-        self.timer.timeout.connect(self.tick)
+        self.timer.setInterval(40)
+        self.timer.timeout.connect(self._poll)
         self.timer.start()
+        self.thread = threading.Thread(target=self._run, name="editor-live", daemon=True)
+        self.thread.start()
 
     def describe(self) -> str:
-        return f"live from {self.what}"
+        return f"starting live preview from {self.what} (building the puppet)…"
 
     def _on_changed(self):
-        import time
+        with self._lock:
+            self._art = ed.clone(self.doc.artset)
+            self._art_version += 1
+            self._changed_at = time.monotonic()
 
-        self._changed_at = time.monotonic()
-
-    def _build(self):
-        art = self.doc.artset
-        spec = self.workers.PuppetSpec(calibration=self.calibration, fps=15)
-        self.puppet = self.workers.make_puppet(art, spec)
-        self._art = art
-
-    def tick(self):
-        import time
-
+    def _run(self):
         try:
-            if self.doc.artset is not self._art and time.monotonic() - self._changed_at > self.REBUILD_PAUSE_S:
-                self._build()
-            try:
-                fr = next(self.frames)
-            except StopIteration:
-                self.frames = iter(self.source)
-                return
-            out = self.puppet.step(fr.image, fr.index, fr.time)
-        except Exception as e:  # anything from the core: stop and say why, in one line
-            self.stop()
-            self.show(np.zeros((2, 2, 4), np.uint8), f"live preview stopped: {_one_line(e)}")
-            return
-        ms = sum(getattr(out, "timings_ms", {}).values())
-        status = getattr(getattr(out, "params", None), "status", "")
-        stale = "  (showing the set before your last edit)" if self.doc.artset is not self._art else ""
-        self.show(out.rgba_pm, f"live from {self.what} — {status} — {ms:.1f} ms a frame{stale}")
+            from app import workers  # the window's helpers: sources with fallbacks, puppet building
 
-    def stop(self):
-        if getattr(self, "timer", None) is not None:
-            self.timer.stop()
+            calibration = None
+            if self.kind == "camera":
+                src = workers.open_source(workers.SourceSpec(kind="camera", camera=0))
+            else:
+                src = workers.open_source(workers.SourceSpec(kind="performance"))
+                calibration = _performance_calibration(workers)
+            self.source = src
+            frames = iter(src)
+            version, puppet = -1, None
+            while not self._stop.is_set():
+                t0 = time.monotonic()
+                with self._lock:
+                    art, v, changed = self._art, self._art_version, self._changed_at
+                if puppet is None or (v != version and t0 - changed > self.REBUILD_PAUSE_S):
+                    puppet = workers.make_puppet(art, workers.PuppetSpec(calibration=calibration, fps=15))
+                    version = v
+                try:
+                    fr = next(frames)
+                except StopIteration:
+                    frames = iter(src)
+                    continue
+                out = puppet.step(fr.image, fr.index, fr.time)
+                ms = sum(getattr(out, "timings_ms", {}).values())
+                status = getattr(getattr(out, "params", None), "status", "")
+                stale = "  (showing the set before your last edits)" if v != version else ""
+                with self._lock:
+                    self._latest = (out.rgba_pm, f"live from {self.what} — {status} — {ms:.1f} ms a frame{stale}")
+                self._stop.wait(max(self.FRAME_S - (time.monotonic() - t0), 0.0))
+        except Exception as e:  # anything from the core: stop and say why, in one line
+            self._error = _one_line(e)
+        finally:
+            try:
+                self.source.close()
+            except Exception:
+                pass
+
+    def _poll(self):
+        if self._error is not None:
+            msg = self._error
+            self.stop()
+            self.show(None, f"live preview stopped: {msg}")
+            if self.on_stop is not None:
+                self.on_stop()
+            return
+        with self._lock:
+            latest, self._latest = self._latest, None
+        if latest is not None:
+            self.show(*latest)
+
+    def stop(self, wait: float = 2.0):
+        self.timer.stop()
+        self._stop.set()
         try:
             self.doc.changed.disconnect(self._on_changed)
         except (RuntimeError, TypeError):
             pass
-        try:
-            self.source.close()
-        except Exception:
-            pass
+        if self.thread.is_alive() and threading.current_thread() is not self.thread:
+            self.thread.join(wait)
