@@ -388,3 +388,76 @@ def test_expressions_are_complete_and_named():
     assert t["brows_up"].brow_l > t["neutral"].brow_l + 8 > t["brows_angry"].brow_l + 8
     with pytest.raises(KeyError, match="nope"):
         base.with_expression("nope")
+
+
+# ---------------------------------------------------------------------------------------------
+# python -m tracker synth
+
+
+def test_synth_cli_writes_clip_truth_and_clicks(tmp_path, capsys):
+    from tracker.__main__ import main
+
+    out = tmp_path / "clip.avi"
+    rc = main(["synth", "--out", str(out), "--truth", str(tmp_path / "t.csv"), "--seconds", "0.5", "--seed", "3",
+               "--style", "dark_skin", "--size", "320x240", "--quiet"])
+    assert rc == 0
+    assert "clip.avi" in capsys.readouterr().out
+    rows = read_csv(tmp_path / "t.csv")
+    perf = Performance(seconds=0.5, seed=3, style=STYLES["dark_skin"], frame_size=(320, 240))
+    assert len(rows) == 15
+    assert np.allclose([r.values() for r in rows], [perf.truth(i).values() for i in range(15)], atol=1e-3)
+    assert json.loads((tmp_path / "clip.clicks.json").read_text()) == perf.clicks()
+    cap = cv2.VideoCapture(str(out))
+    ok, first = cap.read()
+    cap.release()
+    assert ok and first.shape == (240, 320, 3)
+    assert np.abs(first.astype(int) - perf.frame(0)).mean() < 4
+
+
+def test_synth_cli_default_truth_path_and_still_head(tmp_path):
+    from tracker.__main__ import main
+
+    assert main(["synth", "--out", str(tmp_path / "c.mp4"), "--seconds", "0.4", "--still", "--quiet"]) == 0
+    rows = read_csv(tmp_path / "c.truth.csv")
+    assert len(rows) == 12
+    assert all(r.roll_deg == 0.0 and r.mid_x == rows[0].mid_x for r in rows)
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--out", "{tmp}/missing/c.mp4"], "missing"),
+    (["--out", "{tmp}/c.webm"], "c.webm"),
+    (["--out", "{tmp}/c.mp4", "--seconds", "99999"], "--seconds"),
+])
+def test_synth_cli_errors_are_one_line(tmp_path, capsys, argv, message):
+    from tracker.__main__ import main
+
+    rc = main(["synth", "--quiet"] + [a.replace("{tmp}", str(tmp_path)) for a in argv])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("inkface: ") and message in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [["--size", "640"], ["--style", "nope"], ["--seconds", "-1"]])
+def test_synth_cli_rejects_bad_options(tmp_path, capsys, argv):
+    from tracker.__main__ import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["synth", "--out", str(tmp_path / "c.mp4")] + argv)
+    assert e.value.code == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_python_m_tracker_synth_runs(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "tracker", "synth", "--out", str(tmp_path / "c.mp4"), "--truth",
+                        str(tmp_path / "t.csv"), "--seconds", "0.3", "--size", "160x120"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "c.mp4").stat().st_size > 0 and (tmp_path / "c.clicks.json").exists()
+    bad = subprocess.run([sys.executable, "-m", "tracker", "track", str(tmp_path / "nope.mp4"), "--init",
+                          str(tmp_path / "c.clicks.json"), "--csv", str(tmp_path / "o.csv")],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and bad.stderr.startswith("inkface: ") and "nope.mp4" in bad.stderr

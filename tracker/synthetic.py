@@ -994,6 +994,7 @@ class Performance:
                         progress(i + 1, self.n)
             finally:
                 writer.release()
+            os.chmod(tmp, 0o644)
             os.replace(tmp, video_path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
@@ -1011,6 +1012,7 @@ def _write_json(path: Path, data: Mapping) -> None:
         with os.fdopen(fd, "w") as f:
             json.dump(data, f, indent=1)
             f.write("\n")
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
