@@ -8,13 +8,15 @@ How a frame is coded
     Every ``key_interval``-th frame is a *key frame*: its ten codes are sent raw (10 bytes) and
     both sides reset their state, so a receiver that lost a packet resynchronises there.
     Every other frame is a *delta frame*: each code is predicted from the frames before it
-    (the previous value, or a linear extrapolation from the last two; each channel picks the
-    one that has recently been better, the same rule on both sides, so nothing is sent for
-    the choice), and the residual (mod 256) is binarised — zero? sign, unary magnitude up
-    to 8, then an Elias-gamma escape — and coded with an adaptive binary arithmetic coder.
-    Contexts: the channel's group (position, roll, eyes, brows, mouth), how busy the channel
-    was last frame and what its partner (the other eye, the other brow, ...) did this frame,
-    since both eyes blink together and both brows rise together. The arithmetic code of one
+    (the previous value, a linear extrapolation from the last two, or the mean of the last
+    four; each channel picks the one that has recently been best, by the same rule on both
+    sides, so nothing is sent for the choice). A channel with a partner coded before it (the
+    other eye, the other brow, the next lip value) may add the partner's residual to its
+    prediction, chosen the same way (both eyes blink together). The residual (mod 256) is
+    binarised — zero? sign, unary magnitude up to 8, then an Elias-gamma escape — and coded
+    with an adaptive binary arithmetic coder. Contexts: the channel's group (position, roll,
+    eyes, brows, mouth), how busy the channel was last frame and what its partner did this
+    frame. The arithmetic code of one
     frame ends on the fewest whole bytes that identify it (a still frame often takes 0 bytes);
     a frame whose code would not be shorter than 10 bytes is sent raw instead (both sides still
     adapt on it), so no frame ever costs more than the uncompressed 80 bits.
@@ -240,7 +242,7 @@ _NPRED = 3
 class _Model:
     """Predictors, residual history and adaptive contexts; reset at every key frame."""
 
-    __slots__ = ("hist", "res", "cost", "zero", "sign", "mag")
+    __slots__ = ("hist", "res", "cost", "zero", "sign", "mag", "follow", "alone")
 
     def __init__(self, codes: Sequence[int]) -> None:
         self.hist = [[int(c)] * 4 for c in codes]
@@ -248,14 +250,20 @@ class _Model:
         # running |residual| of each predictor per channel (x8, decays by 1/8 a frame);
         # hold starts ahead so a fresh model prefers it
         self.cost = [[0] + [8] * (_NPRED - 1) for _ in range(N)]
+        self.follow = [8] * N
+        self.alone = [0] * N
         self.zero = [[[1, 1] for _ in range(_ACT * _ACT)] for _ in range(_NGROUPS)]
         self.sign = [[[1, 1] for _ in range(3)] for _ in range(_NGROUPS)]
         self.mag = [[[[1, 1] for _ in range(_UNARY - 1)] for _ in range(2)] for _ in range(_NGROUPS)]
 
-    def predict(self, c: int) -> int:
+    def predict(self, c: int, cur_res: list[int] | None = None) -> int:
         cost = self.cost[c]
         best = min(range(_NPRED), key=cost.__getitem__)
-        return _predictions(self.hist[c])[best]
+        p = _predictions(self.hist[c])[best]
+        q = _PARTNER[c]
+        if q >= 0 and cur_res is not None and self.follow[c] < self.alone[c]:
+            p = _clip8(p + cur_res[q])
+        return p
 
     def contexts(self, c: int, cur_res: list[int]) -> tuple[list[int], list[int], list[list[int]]]:
         g = _GROUP[c]
@@ -272,7 +280,14 @@ class _Model:
             x = codes[c]
             h = self.hist[c]
             cost = self.cost[c]
-            for k, p in enumerate(_predictions(h)):
+            preds = _predictions(h)
+            best = min(range(_NPRED), key=cost.__getitem__)
+            q = _PARTNER[c]
+            if q >= 0:
+                base = preds[best]
+                self.alone[c] += 8 * abs(x - base) - (self.alone[c] >> 3)
+                self.follow[c] += 8 * abs(x - _clip8(base + res[q])) - (self.follow[c] >> 3)
+            for k, p in enumerate(preds):
                 cost[k] += 8 * abs(x - p) - (cost[k] >> 3)
             h.pop()
             h.insert(0, x)
@@ -324,7 +339,7 @@ def _code_frame(enc: _Encoder, m: _Model, codes: Sequence[int]) -> None:
     """Code one delta frame into ``enc`` and advance the model (contexts adapt as they code)."""
     res = [0] * N
     for c in range(N):
-        r = _wrap(codes[c] - m.predict(c))
+        r = _wrap(codes[c] - m.predict(c, res))
         res[c] = r
         _code_residual(enc, m.contexts(c, res), r)
     m.advance(codes, res)
@@ -379,7 +394,7 @@ class StreamDecoder:
             for c in range(N):
                 r = _decode_residual(dec, m.contexts(c, res))
                 res[c] = r
-                codes[c] = (m.predict(c) + r) & 0xFF
+                codes[c] = (m.predict(c, res) + r) & 0xFF
         except StreamError:
             self.reset()
             raise
