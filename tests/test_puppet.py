@@ -143,3 +143,23 @@ def test_tracking_real_frames_with_the_real_renderer(art, session):
         pf = p.step(frame, i, i / 30)
         idx, w = pf.weights["mouth"]
         assert names[idx[0]] == expr, (expr, [(names[j], round(a, 2)) for j, a in zip(idx, w)])
+
+
+def test_leaning_in_is_not_an_expression(art, session):
+    from tracker.calibration import calibrate
+    from tracker.clicks import Clicks
+    from tracker.synthetic import clicks_for
+
+    base = FaceState()
+    frame0, _ = render_face(base)
+    cal = calibrate(frame0, Clicks.from_dict(clicks_for(base)))
+    feats = {}
+    for follow in (True, False):
+        p = Puppet(art, calibration=cal, session=session, filter="none", renderer=FakeRenderer(), follow_scale=follow)
+        p.step(frame0, 0, 0.0)
+        near, _ = render_face(base.replace(ipd=base.ipd * 1.25))  # the performer leans in
+        for i in range(1, 16):  # and stays there (the scale estimate is smoothed)
+            feats[follow] = p.step(near, i, i / 30).features
+    # lengths grow 25 % with the lean; compensated, the face stays (nearly) neutral
+    assert np.abs(feats[True][3:]).max() < 0.03
+    assert np.abs(feats[False][3:]).max() > 0.05

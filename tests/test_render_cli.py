@@ -106,3 +106,15 @@ def test_module_entry_point(clip, art, tmp_path):
                         "--out", str(out), "--max-frames", "3"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
     assert len(_frames(out)) == 3
+
+
+def test_no_face_and_no_clicks_is_a_one_line_error(art, tmp_path, capsys):
+    blank = tmp_path / "blank.mp4"
+    w = cv2.VideoWriter(str(blank), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (160, 120))
+    for _ in range(5):
+        w.write(np.full((120, 160, 3), 90, np.uint8))
+    w.release()
+    rc = cli(["render", "--video", str(blank), "--art", art, "--out", str(tmp_path / "o.mp4")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and err.startswith("inkface: ") and "\n" not in err
+    assert "--init" in err

@@ -252,7 +252,7 @@ class Puppet:
         if cur <= 0.25 * self.features.ipd or cur >= 4.0 * self.features.ipd:
             return  # a mis-tracked pupil, not a lean
         target = self.features.ipd / cur
-        self._scale = target if self._scale_n == 0 else self._scale + 0.2 * (target - self._scale)
+        self._scale = target if self._scale_n == 0 else self._scale + 0.3 * (target - self._scale)
         self._scale_n += 1
 
     def step_params(self, params: FaceParams) -> PuppetFrame:
