@@ -68,6 +68,7 @@ def make_window(qtbot, tmp_path, monkeypatch):
     monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
     monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
     monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user_art"))
+    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
     from app.editor.window import EditorWindow
 
     def make():
