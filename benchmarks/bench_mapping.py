@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks.harness import TIMING_COLUMNS, Table, benchmark, time_each
+from benchmarks.harness import TIMING_COLUMNS, Table, Timing, benchmark, time_each
 from morph.mappers import MAPPERS, make_mapper
 from training.diagnostics import leave_one_out
 from training.features import PART_SLICES, FeatureSpace
@@ -179,4 +179,40 @@ def _filter_table(ctx) -> Table:
 
 @benchmark("mapping")
 def run(ctx):
-    return [_mapper_table(ctx), _filter_table(ctx)]
+    return [_mapper_table(ctx), _filter_table(ctx), _puppet_table(ctx)]
+
+
+class _NullRenderer:
+    gain = 1.0
+
+    def render(self, **kw):
+        return None
+
+
+def _puppet_table(ctx) -> Table:
+    from art_sets.io import load_artset
+    from art_sets.library import list_bundled
+    from tracker.synthetic import Performance
+    from training.defaults import default_session
+    from training.puppet import Puppet
+
+    bundled = list_bundled()
+    t = Table("Puppet per frame without tracking and drawing (step_params, null renderer)",
+              ["filter", "stage"] + TIMING_COLUMNS)
+    if not bundled:
+        t.note = "no bundled art set"
+        return t
+    art = load_artset(bundled[0][1])
+    session = default_session(art)
+    perf = Performance(seconds=4.0 if ctx.quick else 10.0, seed=8)
+    rows = [perf.truth(i) for i in range(len(perf))]
+    for name in ("none", "one_euro", "chai"):
+        p = Puppet(art, session=session, filter=name, renderer=_NullRenderer())
+        samples = {"filter": [], "map": []}
+        total = time_each(lambda r: samples["filter"].append(p.step_params(r).timings_ms), rows)
+        for key in ("filter", "map"):
+            vals = [d[key] for d in samples["filter"] if key in d]
+            t.add(name, key, *Timing(vals).cells())
+        t.add(name, "whole step", *total.cells())
+    t.note = f"art set {art.name}; {len(rows)} frames of a scripted performance; map = both parts' .weights() and the pose"
+    return t
