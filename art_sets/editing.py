@@ -740,6 +740,84 @@ def paint_alpha(
     return out
 
 
+# ----------------------------------------------------------------------------- starter lines
+
+
+def ink_mask(image: np.ndarray) -> np.ndarray:
+    """Pixels that are drawn on, as a bool ``(h, w)`` mask.
+
+    The paper is estimated from the image border (its median colour, or transparency when the
+    border is mostly transparent); ink is whatever is opaque and clearly differs from it, the
+    threshold scaling with how noisy the paper is (texture, scanner grain).
+    """
+    img = as_rgba(image)
+    h, w = img.shape[:2]
+    b = max(1, min(h, w) // 20)
+    ring = np.concatenate([img[:b].reshape(-1, 4), img[-b:].reshape(-1, 4),
+                           img[:, :b].reshape(-1, 4), img[:, -b:].reshape(-1, 4)]).astype(np.float32)
+    opaque = img[:, :, 3] > 32
+    if np.mean(ring[:, 3] > 32) < 0.5:  # drawn on transparency: every opaque pixel is ink
+        return opaque
+    paper = np.median(ring[ring[:, 3] > 32, :3], axis=0)
+    spread = np.percentile(np.linalg.norm(ring[ring[:, 3] > 32, :3] - paper, axis=1), 95)
+    dist = np.linalg.norm(img[:, :, :3].astype(np.float32) - paper, axis=2)
+    return opaque & (dist > max(40.0, 2.0 * float(spread)))
+
+
+def ink_box(mask: np.ndarray, trim: float = 0.5) -> tuple[float, float, float, float] | None:
+    """``(x0, y0, x1, y1)`` of the ink in ``mask``, ignoring ``trim`` percent of stray pixels on
+    each side; None when there is (almost) no ink."""
+    ys, xs = np.nonzero(mask)
+    if len(xs) < 8:
+        return None
+    x0, x1 = np.percentile(xs, [trim, 100 - trim])
+    y0, y1 = np.percentile(ys, [trim, 100 - trim])
+    return float(x0), float(y0), float(x1) + 1.0, float(y1) + 1.0
+
+
+def suggest_lines(image: np.ndarray, part: str) -> np.ndarray:
+    """Starter control lines for a drawing: the edges of its ink's bounding box.
+
+    For each feature (the mouth; each eye with its brow, left and right half of an eyes
+    drawing) four lines: top and bottom (left to right), left and right (top to bottom). Every
+    drawing of a part gets the same lines in the same order, so a morph already moves the
+    features' extents instead of cross-fading them; the artist then refines them.
+    """
+    mask = ink_mask(image)
+    h, w = mask.shape
+    regions = [(0, w // 2), (w // 2, w)] if part == "eyes" else [(0, w)]
+    out = []
+    for a, b in regions:
+        box = ink_box(mask[:, a:b])
+        if box is None:  # blank half: lines around its middle so counts still match
+            cx, cy = (a + b) / 2.0, h / 2.0
+            x0, y0, x1, y1 = cx - (b - a) / 4.0, cy - h / 8.0, cx + (b - a) / 4.0, cy + h / 8.0
+        else:
+            x0, y0, x1, y1 = box[0] + a, box[1], box[2] + a, box[3]
+        y1 = max(y1, y0 + 1.0)
+        x1 = max(x1, x0 + 1.0)
+        out += [[x0, y0, x1, y0], [x0, y1, x1, y1], [x0, y0, x0, y1], [x1, y0, x1, y1]]
+    lines = np.array(out, np.float64)
+    lines[:, 0::2] = np.clip(lines[:, 0::2], 0, w - 1)
+    lines[:, 1::2] = np.clip(lines[:, 1::2], 0, h - 1)
+    return lines
+
+
+def add_starter_lines(artset: ArtSet, part: str) -> int:
+    """Append :func:`suggest_lines` to every drawing of ``part`` (placed: each is its own);
+    returns the number of lines added per drawing."""
+    p = artset.parts[part]
+    if not p.drawings:
+        raise EditError(f"{part}: add drawings first")
+    make_consistent(artset, part)
+    n = 0
+    for d in p.drawings:
+        new = suggest_lines(d.image, part)
+        n = len(new)
+        d.lines = np.vstack([np.asarray(d.lines, np.float64).reshape(-1, 4), new])
+    return n
+
+
 # ----------------------------------------------------------------------------- previews
 
 

@@ -306,3 +306,36 @@ def test_any_sequence_of_line_edits_keeps_the_part_consistent(ops):
             assert all(0 <= i < n for i in ed.unplaced(art, "mouth", di))
         assert set(ed.missing_lines(art, "mouth")) == set(range(n))
     assert ed.same_artset(snap, small_set())  # the starting snapshot was never touched
+
+
+@pytest.mark.parametrize("paper", [(255, 255, 255, 255), (240, 200, 160, 255), (0, 0, 0, 0)])
+def test_suggest_lines_frame_the_ink(paper):
+    im = Image.new("RGBA", (120, 60), paper)
+    dr = ImageDraw.Draw(im)
+    dr.ellipse([20, 20, 50, 40], fill=(30, 20, 20, 255))  # left eye
+    dr.ellipse([75, 15, 100, 45], fill=(30, 20, 20, 255))  # right eye
+    rng = np.random.default_rng(0)
+    arr = np.asarray(im).astype(np.int16)
+    if paper[3]:
+        arr[:, :, :3] += rng.integers(-12, 13, arr[:, :, :3].shape)  # paper grain
+    arr = np.clip(arr, 0, 255).astype(np.uint8)
+    eyes = ed.suggest_lines(arr, "eyes")
+    assert eyes.shape == (8, 4)
+    np.testing.assert_allclose(eyes[0], [20, 20, 51, 20], atol=1.5)  # top of the left eye
+    np.testing.assert_allclose(eyes[5], [75, 46, 101, 46], atol=1.5)  # bottom of the right eye
+    mouth = ed.suggest_lines(arr, "mouth")
+    assert mouth.shape == (4, 4)
+    np.testing.assert_allclose(mouth[2], [20, 15, 20, 46], atol=1.5)  # left side, top to bottom
+
+
+def test_add_starter_lines_to_a_part():
+    art = small_set()
+    n = ed.add_starter_lines(art, "eyes")
+    assert n == 8 and {len(d.lines) for d in art.eyes.drawings} == {8}
+    assert all(not v for v in ed.missing_lines(art, "eyes").values())
+    # the open eyes are taller than the closed ones
+    h_open = art.eyes.drawings[2].lines[1, 1] - art.eyes.drawings[2].lines[0, 1]
+    h_closed = art.eyes.drawings[0].lines[1, 1] - art.eyes.drawings[0].lines[0, 1]
+    assert h_open > h_closed
+    blank = np.full((40, 100, 4), 255, np.uint8)
+    assert ed.suggest_lines(blank, "eyes").shape == (8, 4)

@@ -581,3 +581,15 @@ def test_zoom_about_the_cursor_then_draw(make_window, images, qtbot):
     c.setFocus()
     QTest.keyClick(c, Qt.Key_0)
     assert c.scale() == pytest.approx(fit)
+
+
+def test_starter_lines_button(make_window, images):
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Start", heads, eyes, mouths)
+    win.doc.select(part="mouth")
+    win.starter_button.click()
+    assert {len(d.lines) for d in win.doc.artset.mouth.drawings} == {4}
+    assert not any(win.doc.artset.eyes.drawings[0].lines.shape[0] for _ in [0])
+    win.doc.undo_stack.undo()
+    assert {len(d.lines) for d in win.doc.artset.mouth.drawings} == {0}

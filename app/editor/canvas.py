@@ -210,6 +210,10 @@ class LineCanvas(_ImageView):
             p.setPen(QColor(255, 255, 255))
             p.drawText(r.adjusted(0, 0, 0, -8), Qt.AlignHCenter | Qt.AlignBottom,
                        "Drag across a feature (a lip edge, a lid, a brow) to draw control line 0")
+        p.setPen(QColor(170, 172, 178))
+        p.drawText(QRectF(8, self.height() - 18, self.width() - 16, 16), Qt.AlignLeft | Qt.AlignVCenter,
+                   "drag: new line · drag an end or the middle: move · Alt: no snap · right-click: more · "
+                   "Del: delete · Tab: next line · [ ]: drawings · wheel: zoom · middle-drag: pan · 0: fit")
         p.setPen(QColor(230, 230, 230))
         nmiss = len(un)
         txt = f"{self.doc.part} ▸ {d.name}   {d.size[0]}×{d.size[1]} px   {len(lines)} line(s)"

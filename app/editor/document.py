@@ -378,6 +378,11 @@ class EditorDocument(QObject):
         self.edit("copy lines", lambda art: ed.copy_lines(art, part, src, dst),
                   select={"part": part, "drawing": dst})
 
+    def add_starter_lines(self, part: str) -> int:
+        """Frame each drawing's ink with starter lines (four per feature) to refine by hand."""
+        return self.edit("starter lines", lambda art: ed.add_starter_lines(art, part),
+                         select={"part": part, "line": -1})
+
     def accept_lines(self, part: str, drawing: int, indices=None) -> None:
         self.edit("accept lines", lambda art: ed.mark_placed(art, part, drawing, indices))
 

@@ -205,14 +205,16 @@ class EditorWindow(QMainWindow):
         self.copy_button = QPushButton("Copy lines from…")
         self.copy_button.clicked.connect(self._copy_lines_menu)
         bar.addWidget(self.copy_button)
+        self.starter_button = QPushButton("Starter lines")
+        self.starter_button.setToolTip("frame the ink of every drawing of this part with lines "
+                                       "(top, bottom, left, right of each feature): a quick start to refine")
+        self.starter_button.clicked.connect(self._starter_lines)
+        bar.addWidget(self.starter_button)
         self.accept_button = QPushButton("Accept dashed lines")
         self.accept_button.setToolTip("the copied (dashed) lines already sit on their features here")
         self.accept_button.clicked.connect(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
         bar.addWidget(self.accept_button)
         bar.addStretch(1)
-        help_ = QLabel("drag: new line · drag an end or the middle: move · Alt: no snap · Del: delete · Tab: next line · [ ]: drawings · wheel: zoom · 0: fit")
-        help_.setStyleSheet("color: #777;")
-        bar.addWidget(help_)
         lv.addLayout(bar)
         split = QSplitter(Qt.Vertical)
         split.addWidget(self.line_canvas)
@@ -372,6 +374,7 @@ class EditorWindow(QMainWindow):
         e.addSeparator()
         e.addAction("Delete selected line", lambda: self.doc.line >= 0 and self.doc.delete_line(self.doc.part, self.doc.line))
         e.addAction("Accept dashed lines in this drawing", lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
+        e.addAction("Add starter lines to this part", self._starter_lines)
         e.addAction("Resize drawings to the box", lambda: self.doc.fit_part(self.doc.part, "resize"))
         e.addAction("Crop drawings to the box", lambda: self.doc.fit_part(self.doc.part, "crop"))
         e.addAction("Resize heads to the canvas", lambda: self.doc.fit_heads("resize"))
@@ -728,6 +731,17 @@ class EditorWindow(QMainWindow):
             if j != self.doc.drawing:
                 m.addAction(d.name, lambda j=j: self.doc.copy_lines(self.doc.part, j, self.doc.drawing))
         m.exec(self.copy_button.mapToGlobal(self.copy_button.rect().bottomLeft()))
+
+    def _starter_lines(self):
+        art = self.doc.artset
+        if art is None:
+            return
+        try:
+            n = self.doc.add_starter_lines(self.doc.part)
+        except ed.EditError as e:
+            self.statusBar().showMessage(str(e), 6000)
+            return
+        self.statusBar().showMessage(f"added {n} starter lines to every {self.doc.part} drawing: drag them onto the features", 8000)
 
     def cut_holes(self):
         if self.doc.artset is not None:
