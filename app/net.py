@@ -19,6 +19,16 @@ input), detects loss, duplicates and reordering from sequence numbers (a late fr
 and dropped: a newer pose is already shown), holds the last pose for ``hold_s`` when packets
 stop and then eases to the neutral face over ``ease_s``, and measures bandwidth.
 Bandwidth figures count UDP payload bytes; IPv4 + UDP headers add 28 bytes per datagram.
+
+Use from a window or a loop (no threads needed; ``poll`` never blocks longer than asked)::
+
+    rx = UdpReceiver(9000)                  # 127.0.0.1:9000
+    rx.poll(0.01)                           # handle what arrived -> list of new FaceParams
+    pose = rx.pose()                        # newest, held, or easing to neutral (None before any)
+    rx.stats.summary()                      # loss, reordering, drops, bits/frame, bit/s
+
+    tx = Sender("127.0.0.1:9000", frame_size=(640, 480), ipd=cal.ipd, neutral=cal.neutral, compress=True)
+    tx.send(face_params)                    # per tracked frame
 """
 
 from __future__ import annotations
@@ -29,7 +39,7 @@ import socket
 import struct
 import time
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
