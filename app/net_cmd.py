@@ -138,32 +138,22 @@ def _rate(rows: list[FaceParams]) -> float:
 
 
 def _load_track(args) -> _Track:
+    from tracker.stream_codec import read_track
+
     path = Path(args.params)
-    suffix = path.suffix.lower()
-    if suffix == ".ifs":
-        from tracker.stream_codec import read_track_stream
-
-        header, rows = read_track_stream(path)
-        neutral = None
-        if header.neutral is not None:
-            from tracker.params import ParamCodec
-
-            neutral = ParamCodec(header.frame_size, header.ipd).decode(bytes(header.neutral))
-        return _Track(rows, header.frame_size, header.ipd, header.fps, neutral)
-    if suffix == ".fap":
-        from tracker.fap import read_fap
-
-        fap = read_fap(path)
-        size = _frame_size(args.frame_size) or (640, 480)
-        return _Track(fap.rows, size, fap.fapu.es0, fap.fps, fap.neutral)
-    rows = read_csv(path)
+    tf = read_track(path)
+    rows = tf.rows
     if not rows:
         raise _Fail(f"{path}: the track has no frames")
-    vals = params_array(r for r in rows if r.status != LOST)
-    if len(vals) == 0:
-        vals = params_array(rows)
-    neutral = FaceParams.from_values(np.nanmedian(vals, axis=0), status=OK)
-    ipd = args.ipd
+    size = tf.frame_size or _frame_size(args.frame_size) or (640, 480)
+    fps = tf.fps or _rate(rows)
+    neutral = tf.neutral
+    if neutral is None:  # a CSV: the median of the tracked frames stands in for the neutral face
+        vals = params_array(r for r in rows if r.status != LOST)
+        if len(vals) == 0:
+            vals = params_array(rows)
+        neutral = FaceParams.from_values(np.nanmedian(vals, axis=0), status=OK)
+    ipd = args.ipd or tf.ipd
     if ipd is None and args.init:
         from tracker.clicks import Clicks
 
@@ -175,8 +165,7 @@ def _load_track(args) -> _Track:
             print(f"inkface: {path.name} has no ipd; assuming {ipd:.1f} px from the mouth width (use --ipd)", file=sys.stderr)
     if not (math.isfinite(ipd) and ipd > 0):
         raise _Fail(f"{path}: cannot tell the inter-pupil distance; pass --ipd PX")
-    size = _frame_size(args.frame_size) or (640, 480)
-    return _Track(rows, size, float(ipd), _rate(rows), neutral)
+    return _Track(rows, size, float(ipd), fps, neutral)
 
 
 @dataclass

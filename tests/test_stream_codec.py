@@ -176,3 +176,21 @@ def test_stream_file_errors_name_the_file(tmp_path):
     hdr.write_bytes(b'{"format": 1, "kind": "inkface-packet-stream", "frame_size": [0, 4], "ipd": 3}\n')
     with pytest.raises(StreamError, match="header"):
         read_stream(hdr)
+
+
+def test_read_track_reads_all_three_formats(tmp_path):
+    from tracker.fap import write_fap
+    from tracker.params import write_csv
+    from tracker.stream_codec import read_track
+
+    codec = ParamCodec((640, 480), 80.0)
+    rows = [codec.decode(c, frame=i, time=i / 25) for i, c in enumerate(smooth_frames(30, seed=9, noise=0.5))]
+    write_csv(tmp_path / "t.csv", rows)
+    write_track_stream(tmp_path / "t.ifs", rows, (640, 480), 80.0, fps=25, neutral=rows[0])
+    write_fap(tmp_path / "t.fap", rows, rows[0], 80.0, fps=25)
+    csv_t, ifs_t, fap_t = (read_track(tmp_path / f"t.{ext}") for ext in ("csv", "ifs", "fap"))
+    assert len(csv_t.rows) == len(ifs_t.rows) == len(fap_t.rows) == 30
+    assert csv_t.ipd is None and ifs_t.ipd == 80.0 and fap_t.ipd == 80.0
+    assert ifs_t.frame_size == (640, 480) and ifs_t.fps == 25 and fap_t.fps == 25
+    assert np.allclose(ifs_t.rows[7].values(), rows[7].values())
+    assert abs(fap_t.rows[7].mouth_width - rows[7].mouth_width) < 0.1

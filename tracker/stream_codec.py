@@ -699,3 +699,39 @@ def read_track_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[FaceP
     """Read a packet-stream file back to ``(header, track)``; frames that cannot be decoded are skipped."""
     header, packets = read_stream(path)
     return header, packets_to_track(header, packets)
+
+
+@dataclass
+class TrackFile:
+    """A parameter track read from any of the three files, with what the file knows about it
+    (``None`` where it does not say)."""
+
+    rows: list[FaceParams]
+    frame_size: tuple[int, int] | None
+    ipd: float | None
+    fps: float | None
+    neutral: FaceParams | None
+
+
+def read_track(path: str | os.PathLike) -> TrackFile:
+    """Read a track CSV, a packet-stream file (``.ifs``) or an MPEG-4 FAP file (``.fap``).
+
+    Raises the reader's one-line error (:class:`tracker.params.TrackFormatError`,
+    :class:`StreamError` or :class:`tracker.fap.FapError`), each naming the file.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".ifs":
+        header, rows = read_track_stream(path)
+        neutral = None
+        if header.neutral is not None:
+            neutral = ParamCodec(header.frame_size, header.ipd).decode(bytes(header.neutral))
+        return TrackFile(rows, header.frame_size, header.ipd, header.fps, neutral)
+    if suffix == ".fap":
+        from tracker.fap import read_fap
+
+        fap = read_fap(path)
+        return TrackFile(fap.rows, None, fap.fapu.es0, fap.fps, fap.neutral)
+    from tracker.params import read_csv
+
+    return TrackFile(read_csv(path), None, None, None, None)
