@@ -163,6 +163,7 @@ class Calibration:
     eye: ColourClassifier
     lip_axis: np.ndarray
     neutral: FaceParams = field(default_factory=FaceParams)
+    white_threshold: float | None = None
     eye_ref: tuple[float, float, float] | None = None
     mouth_ref: tuple[float, float, float] | None = None
 
@@ -191,6 +192,7 @@ class Calibration:
             "classifiers": {"pupil": self.pupil.to_dict(), "lip": self.lip.to_dict(), "eye": self.eye.to_dict()},
             "lip_axis": [float(v) for v in self.lip_axis],
             "neutral": {k: v for k, v in self.neutral.as_dict().items()},
+            "white_threshold": self.white_threshold,
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
         }
@@ -252,6 +254,7 @@ class Calibration:
                 eye=ColourClassifier.from_dict(d["classifiers"]["eye"]),
                 lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
                 neutral=FaceParams(**neutral_d),
+                white_threshold=float(d["white_threshold"]) if d.get("white_threshold") is not None else None,
                 eye_ref=tuple(float(v) for v in d["eye_ref"]) if d.get("eye_ref") is not None else None,
                 mouth_ref=tuple(float(v) for v in d["mouth_ref"]) if d.get("mouth_ref") is not None else None,
             )
@@ -310,6 +313,23 @@ def _refine_pupil(grey: np.ndarray, click: tuple[float, float], ipd: float) -> t
     x = float((wgt * xx).sum() / wgt.sum())
     y = float((wgt * yy).sum() / wgt.sum())
     return (x, y), math.sqrt(comp.sum() / math.pi)
+
+
+def _two_means(v: np.ndarray) -> tuple[float, float] | None:
+    """Means of the dark and the bright group of 1-D values (2-means), or None if too few."""
+    v = np.sort(np.asarray(v, dtype=np.float64))
+    if len(v) < 8:
+        return None
+    t = 0.5 * (v[0] + v[-1])
+    for _ in range(20):
+        lo, hi = v[v < t], v[v >= t]
+        if not len(lo) or not len(hi):
+            return None
+        nt = 0.5 * (lo.mean() + hi.mean())
+        if abs(nt - t) < 1e-3:
+            break
+        t = nt
+    return float(lo.mean()), float(hi.mean())
 
 
 def _patch(img: np.ndarray, cx: float, cy: float, hw: float, hh: float) -> np.ndarray:
@@ -413,10 +433,21 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     except ValueError as e:
         raise CalibrationError(f"calibration: {e}") from None
 
+    # luminance threshold between the eye's white and the rest (iris, lashes), if there is a white
+    ilum = features(eye_interior, 1.0)[:, 0] * 255.0
+    lab = _two_means(ilum)
+    white_threshold = None
+    if lab is not None:
+        lo_m, hi_m = lab
+        if hi_m - lo_m > 40:
+            white_threshold = 0.5 * (lo_m + hi_m)
+
     # lips: pixels near the mouth click that the skin model does not explain
-    skin_g = Gaussians(features(np.concatenate([skin_px, ring]), 1.0), 3, np.array([0.035, 0.012, 0.012]))
+    # (mostly by chroma: shading and nostrils make the skin's brightness vary more than its hue)
+    yw = 0.3
+    skin_g = Gaussians(features(np.concatenate([skin_px, ring]), yw), 3, np.array([0.035 * yw, 0.012, 0.012]))
     cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
-    fc = features(cand, 1.0)
+    fc = features(cand, yw)
     not_skin = skin_g.mahalanobis2(fc) > 12.0
     lum = fc[:, 0]
     med = np.median(lum[not_skin]) if not_skin.any() else 0.0
@@ -430,7 +461,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     diff = lips.astype(np.float64).mean(0) - ring.astype(np.float64).mean(0)
     lip_axis = diff / max(float(diff @ diff), 1e-6)
     lip_cls = ColourClassifier(
-        lips, np.concatenate([skin_px, ring, pupil_px, brow_px, eye_interior]), y_weight=1.0, name="lip"
+        lips, np.concatenate([skin_px, ring, pupil_px, brow_px, eye_interior]), y_weight=0.5, name="lip"
     )
 
     # --- mouth geometry on the calibration frame
@@ -489,6 +520,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         lip=lip_cls,
         eye=eye_cls,
         lip_axis=lip_axis,
+        white_threshold=white_threshold,
     )
     # lids and the neutral values: measure the calibration frame the way the tracker will
     from tracker.face_tracker import FaceTracker

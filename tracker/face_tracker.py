@@ -143,7 +143,7 @@ class FaceTracker:
         self.brow_finders = [
             BrowFinder(p, c, BROW_LO * h, BROW_HI * h) for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights)
         ]
-        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius)
+        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius, white=cal.white_threshold)
         self.mouth_finder = MouthFinder()
         # eye crops (face coordinates): both pupil search windows with template margins, the
         # brows' search range above, the lid walks below; a wider one for re-acquisition
@@ -351,7 +351,7 @@ class FaceTracker:
         value = cv2.transform(crop.astype(np.float32), self.lip_axis)
         seed = (cx - rect[0], cy - rect[1])
         min_area = max(int(0.12 * self.cal.mouth_area), 6)
-        res = self.mouth_finder.find(score, value=value, seed=seed, min_area=min_area)
+        res = self.mouth_finder.find(score, value=value, seed=seed, min_area=min_area, lip_level=1.0)
         if res is not None:
             if res.width < 0.2 * self.cal.mouth_width or res.width > 2.2 * self.cal.mouth_width:
                 res = None

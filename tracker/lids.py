@@ -32,10 +32,10 @@ def _edge(lum: np.ndarray, prob: np.ndarray, k: int, min_contrast: float = 24.0)
         return 0.0
     n = len(lum)
     inner = float(lum[max(k - 2, 0) : k].mean())
-    outer = float(lum[k : min(k + 2, n)].mean())
+    outer = float(lum[k])
     if abs(inner - outer) >= min_contrast:
         half = 0.5 * (inner + outer)
-        for j in (k, k + 1, k - 1):  # the crossing may sit one sample either side of k
+        for j in (k, k - 1, k + 1):  # blur may put the crossing one sample either side of k
             if 1 <= j < n:
                 a, b = float(lum[j - 1]), float(lum[j])
                 if (a - half) * (b - half) <= 0 and a != b:
@@ -52,14 +52,16 @@ class LidFinder:
     ``interior`` scores the eye's inside (iris and white), ``pupil`` the pupil; a walk first
     leaves the pupil (``pupil_radius`` crop px, give or take), then stops at the first run of
     pixels that are not inside. If nothing next to the pupil is inside, the lid cuts the
-    pupil and the walk ends where the pupil's colour does.
+    pupil and the walk ends where the pupil's colour does. ``white`` is the luminance
+    threshold between the eye's white and everything darker (learned at calibration).
     Walks go ``up_max`` crop px up and ``down_max`` down.
     """
 
     def __init__(
         self, interior: ColourClassifier, pupil: ColourClassifier, up_max: float, down_max: float,
-        pupil_radius: float = 3.0, run: int = 1,
+        pupil_radius: float = 3.0, run: int = 1, white: float | None = None,
     ):
+        self.white = white
         self.interior = interior
         self.skip = int(np.ceil(1.7 * pupil_radius)) + 1
         self.pupil = pupil
@@ -91,16 +93,30 @@ class LidFinder:
         n = len(p)
         inside = p >= 128
         lim = min(self.skip, n)
-        if inside[:lim].any():
-            s = int(inside[:lim].argmax())  # the walk leaves the pupil into iris or white
-            inside[:s] = True
-            k = _first_run(~inside, self.run)
-            if k < 0:
-                return float(max(n - 1, 0))
-            pp = np.where(inside, np.maximum(p, 128.0), p)
-            return _edge(lum, pp, k)
-        # no iris or white next to the pupil: the lid crosses the pupil (or the eye is shut)
-        s = 0
-        while s < lim and q[s] >= 64:
-            s += 1
-        return max(s - 0.5, 0.0)
+        if not inside[:lim].any():
+            # no iris or white next to the pupil: the lid crosses the pupil (or the eye is shut)
+            s = 0
+            while s < lim and q[s] >= 64:
+                s += 1
+            return max(s - 0.5, 0.0)
+        s = int(inside[:lim].argmax())  # the walk leaves the pupil into iris or white
+        inside[:s] = True
+        k = _first_run(~inside, self.run)
+        if k < 0:
+            k = n
+        if self.white is not None:
+            # outwards from the pupil the white can only be followed by the lid: the first
+            # sample darker than the white after some white ends the eye (dark lashes and
+            # a dark iris may share colours, never this order)
+            white = lum[s:k] >= self.white
+            if white.any():
+                w0 = s + int(white.argmax())
+                after = lum[w0:k] < self.white
+                if after.any():
+                    k2 = w0 + int(after.argmax())
+                    a, b = float(lum[k2 - 1]), float(lum[k2])
+                    return (k2 - 1) + (a - self.white) / (a - b) if a != b else k2 - 0.5
+        if k >= n:
+            return float(max(n - 1, 0))
+        pp = np.where(inside, np.maximum(p, 128.0), p)
+        return _edge(lum, pp, k)

@@ -80,7 +80,8 @@ class MouthFinder:
         """The cleaned lip blob: ``(mask bool, stats row, area)`` or None.
 
         Tags (score ≥ 128) are opened and closed with a 3×3 cross; of the 4-connected
-        components the largest wins, discounted by its distance from ``seed`` if given.
+        components the largest wins, discounted by its distance from ``seed`` if given;
+        pieces directly above or below it (a lip cut off by the teeth) join it.
         Holes are not filled: the radial spanning takes each ray's farthest blob pixel, so
         an open mouth's ring of lip gives its outer outline all the same.
         """
@@ -99,7 +100,27 @@ class MouthFinder:
         best = int(np.argmax(score))
         if areas[best] < min_area:
             return None
-        return lab == best + 1, stats[best + 1], int(areas[best])
+        # teeth or a tongue can cut an open mouth's lips apart: pieces of lip right above
+        # or below the main blob, overlapping it sideways, belong to the same mouth
+        x, y, w, h = (int(v) for v in stats[best + 1, :4])
+        keep = [best + 1]
+        for j in range(1, n):
+            if j == best + 1 or stats[j, cv2.CC_STAT_AREA] < max(min_area, 0.04 * areas[best]):
+                continue
+            jx, jy, jw, jh = (int(v) for v in stats[j, :4])
+            overlap = min(x + w, jx + jw) - max(x, jx)
+            gap = max(jy - (y + h), y - (jy + jh), 0)
+            if overlap >= 0.5 * min(w, jw) and gap <= 0.25 * w:
+                keep.append(j)
+        if len(keep) == 1:
+            return lab == best + 1, stats[best + 1], int(areas[best])
+        mask = np.isin(lab, keep)
+        x0 = min(int(stats[j, 0]) for j in keep)
+        y0 = min(int(stats[j, 1]) for j in keep)
+        x1 = max(int(stats[j, 0] + stats[j, 2]) for j in keep)
+        y1 = max(int(stats[j, 1] + stats[j, 3]) for j in keep)
+        st = np.array([x0, y0, x1 - x0, y1 - y0, int(sum(stats[j, 4] for j in keep))])
+        return mask, st, int(st[4])
 
     # ------------------------------------------------------------------ polygon
     def _rays(self, max_r: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -170,15 +191,14 @@ class MouthFinder:
         return float(ys.min()), float(ys.max())
 
     @staticmethod
-    def _corner(norm: np.ndarray, poly: np.ndarray, side: int) -> tuple[float, float]:
+    def _corner(norm: np.ndarray, start: tuple[float, float], side: int) -> tuple[float, float]:
         """Sub-pixel mouth corner on ``side`` (−1 left, +1 right).
 
-        Starts at the polygon's extreme vertex and scans the rows within two pixels of it
-        for the farthest point where the normalised lip value falls through 0.5 going
-        outwards.
+        Starts at the blob's extreme point ``start`` and scans the rows within two pixels
+        of it for the farthest point where the normalised lip value falls through 0.5
+        going outwards.
         """
-        k = int(np.argmax(poly[:, 0] * side))
-        vx, vy = float(poly[k, 0]), float(poly[k, 1])
+        vx, vy = float(start[0]), float(start[1])
         h, w = norm.shape
         a = min(max(int(round(vx - side * 6)), 0), w - 1)
         b = min(max(int(round(vx + side * 5)), 0), w - 1)
@@ -205,8 +225,17 @@ class MouthFinder:
         t = np.where(va != vb, (va - 0.5) / np.where(va != vb, va - vb, 1.0), 0.0)
         pos = i + t
         best = int(np.argmax(pos))
-        xx = lo + pos[best] if side > 0 else hi - pos[best]
-        return float(xx), float(ya + rows[best])
+        yb, xb = float(rows[best]), float(pos[best])
+        # the tip lies between rows: fit a parabola through the best row and its neighbours
+        if 0 < best < len(rows) - 1 and rows[best - 1] == rows[best] - 1 and rows[best + 1] == rows[best] + 1:
+            a_, b_, c_ = float(pos[best - 1]), float(pos[best]), float(pos[best + 1])
+            den = a_ - 2 * b_ + c_
+            if den < -1e-6:
+                d = float(np.clip(0.5 * (a_ - c_) / den, -0.5, 0.5))
+                yb += d
+                xb = b_ - 0.25 * (a_ - c_) * d
+        xx = lo + xb if side > 0 else hi - xb
+        return float(xx), float(ya + yb)
 
     @staticmethod
     def _refine_vertical(norm: np.ndarray, x: float, y_est: float, direction: int, reach: float = 3.0) -> float:
@@ -219,13 +248,16 @@ class MouthFinder:
         ys = np.clip(y_est + _VSTEPS * direction, 0, h - 1).astype(np.float32)
         xs = np.full_like(ys, min(max(x, 0.0), w - 1.0))
         vals = cv2.remap(norm, xs.reshape(1, -1), ys.reshape(1, -1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
-        inside = vals >= 0.5
+        # half-way between the lip just inside and the skin just outside this very edge
+        inner, outer = float(np.median(vals[:8])), float(np.median(vals[-4:]))
+        half = 0.5 * (inner + outer) if inner - outer > 0.3 else 0.5
+        inside = vals >= half
         idx = np.nonzero(inside[:-1] & ~inside[1:])[0]
         if len(idx) == 0:
             return y_est
         i = int(idx[-1])
         a, b = float(vals[i]), float(vals[i + 1])
-        t = (a - 0.5) / (a - b) if a != b else 0.5
+        t = (a - half) / (a - b) if a != b else 0.5
         return float(ys[i] + t * (ys[i + 1] - ys[i]))
 
     def find(
@@ -234,14 +266,16 @@ class MouthFinder:
         value: np.ndarray | None = None,
         seed: tuple[float, float] | None = None,
         min_area: int = 6,
+        lip_level: float | None = None,
     ) -> MouthResult | None:
         """Run all steps on a crop of lip scores; None when no lip blob is found.
 
         ``value`` (float32, crop size) is an optional lip value that is linear in colour
         mixtures (high on lip, low on skin, e.g. a projection of BGR); edges are then placed
         where it crosses half-way between the lip's level and the level along the crop's
-        border (skin), which is exact for anti-aliased or blurred edges. Without it the
-        smoothed score is used.
+        border (skin), which is exact for anti-aliased or blurred edges; ``lip_level`` is
+        the lip's nominal value if known: the lip level is then the median over blob pixels
+        within ±50 % of it (the dark inside of an open mouth would bias a plain median). Without ``value`` the smoothed score is used.
         """
         found = self.blob(score_u8, seed, min_area)
         if found is None:
@@ -258,6 +292,10 @@ class MouthFinder:
             border = np.concatenate([value[0], value[-1], value[1:-1, 0], value[1:-1, -1]])
             lo_level = float(np.median(border))
             lip_vals = value[y0 : y0 + bh, x0 : x0 + bw][sub & (score_u8[y0 : y0 + bh, x0 : x0 + bw] >= 128)]
+            if lip_level is not None and len(lip_vals):
+                # only values near the lip's own (not the dark inside of an open mouth)
+                near = lip_vals[(lip_vals > 0.5 * lip_level) & (lip_vals < 1.5 * lip_level)]
+                lip_vals = near if len(near) >= 8 else lip_vals
             hi_level = float(np.median(lip_vals)) if len(lip_vals) else lo_level + 1.0
             span = hi_level - lo_level
             if abs(span) < 1e-6:
@@ -268,8 +306,12 @@ class MouthFinder:
             norm = cv2.GaussianBlur(score_u8.astype(np.float32) * np.float32(1.0 / 255.0), (5, 5), 0.8)
         r = self.snake(norm, centre, r0)
         poly = self.polygon(centre, r)
-        left = self._corner(norm, poly, -1)
-        right = self._corner(norm, poly, +1)
+        ends = []
+        for x_end in (int(xs.min()), int(xs.max())):
+            rows = ys[xs == x_end]
+            ends.append((x_end + x0, float(rows.mean()) + y0))
+        left = self._corner(norm, ends[0], -1)
+        right = self._corner(norm, ends[1], +1)
         cx = 0.5 * (left[0] + right[0])
         cy = 0.5 * (left[1] + right[1])
         top, bottom = self._crossing_y(poly, cx, cy)

@@ -1,0 +1,134 @@
+"""Each finder on synthetic frames with known truth."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker.calibration import calibrate
+from tracker.clicks import Clicks
+from tracker.face_tracker import FaceTracker
+from tracker.mouth import MouthFinder
+from tracker.params import EYES_CLOSED
+from tracker.synthetic import STYLES, FaceState, clicks_for, face_landmarks, render_face
+
+BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+
+
+@pytest.fixture(scope="module")
+def cal():
+    frame, _ = render_face(BASE)
+    return calibrate(frame, Clicks.from_dict(clicks_for(BASE)))
+
+
+def _track(cal, state, style=None, warm=None):
+    tr = FaceTracker(cal)
+    if warm is not None:
+        tr.track(render_face(warm, style)[0])
+    img, truth = render_face(state, style)
+    return tr, tr.track(img), truth
+
+
+@pytest.mark.parametrize("expr", ["neutral", "smile", "ah", "oo", "brows_up", "brows_angry", "wide"])
+def test_expressions_match_truth(cal, expr):
+    st = BASE.with_expression(expr)
+    _, r, t = _track(cal, st)
+    e = np.abs(r.params.values() - t.values())
+    tol = np.array([1, 1, 1, 1.5, 1.5, 1.5, 1.5, 2, 1.5, 1.5])
+    assert np.all(e <= tol), dict(zip(["x", "y", "roll", "el", "er", "bl", "br", "w", "lu", "ll"], e.round(2)))
+
+
+def test_roll_and_shift_are_followed(cal):
+    """The regions of interest rotate with the pupil line and move with the face."""
+    tr = FaceTracker(cal)
+    for i, roll in enumerate(np.linspace(0, 24, 9)):
+        st = BASE.replace(roll_deg=float(roll), cx=320 + 3 * i, cy=210 - 2 * i)
+        img, t = render_face(st)
+        r = tr.track(img, i)
+    assert abs(r.params.roll_deg - 24) < 0.5
+    assert abs(r.params.mid_x - t.mid_x) < 1 and abs(r.params.mid_y - t.mid_y) < 1
+    assert abs(r.params.mouth_width - t.mouth_width) < 2
+    assert abs(r.params.brow_l - t.brow_l) < 1.5
+
+
+def test_closed_eyes_keep_the_pupils(cal):
+    tr = FaceTracker(cal)
+    r0 = tr.track(render_face(BASE)[0])
+    r1 = tr.track(render_face(BASE.with_expression("eyes_closed"))[0], 1)
+    assert r1.params.status == EYES_CLOSED
+    assert all(r1.debug["closed"])
+    assert np.allclose(r1.overlay.pupils, r0.overlay.pupils, atol=0.5)
+    assert r1.params.eye_open_l < 3 and r1.params.eye_open_r < 3
+    # and they are found again when the eyes open
+    r2 = tr.track(render_face(BASE)[0], 2)
+    assert r2.params.status == "ok" and abs(r2.params.eye_open_l - 16) < 1.5
+
+
+def test_a_red_object_outside_the_mouth_region_is_ignored(cal):
+    img, t = render_face(BASE.with_expression("smile"))
+    lip = tuple(int(c) for c in STYLES["default"].lip)
+    cv2.circle(img, (520, 300), 30, lip, -1)  # a lip-coloured ball beside the face
+    cv2.rectangle(img, (300, 420), (360, 470), lip, -1)  # and one on the shirt
+    tr = FaceTracker(cal)
+    r = tr.track(img)
+    assert abs(r.params.mouth_width - t.mouth_width) < 2
+    lm = face_landmarks(BASE.with_expression("smile"))
+    assert np.allclose(r.overlay.mouth_corners, [lm["mouth_left"], lm["mouth_right"]], atol=2)
+
+
+def test_mouth_polygon_and_snake_hug_a_known_lip_shape():
+    """A lens-shaped lip (two parabolas) drawn at 8× and area-averaged: known outline."""
+    ss = 8
+    h, w, cx, cy, hw, up, lo = 90, 140, 70.0, 45.0, 45.0, 12.0, 16.0
+    yy, xx = (np.mgrid[0 : h * ss, 0 : w * ss] + 0.5) / ss - 0.5  # pixel-centre coordinates
+    u = (xx - cx) / hw
+    inside = (np.abs(u) < 1) & (yy >= cy - up * (1 - u**2)) & (yy <= cy + lo * (1 - u**2))
+    cover = cv2.resize(inside.astype(np.float32), (w, h), interpolation=cv2.INTER_AREA)
+    score = np.round(cover * 255).astype(np.uint8)
+    res = MouthFinder().find(score, value=cover, seed=(cx, cy))
+    assert res is not None
+    assert abs(res.width - 2 * hw) < 1.5
+    assert abs(res.lip_upper - up) < 0.6 and abs(res.lip_lower - lo) < 0.6
+    # every snake vertex lies on the true outline (within a pixel), the raw polygon near it
+    for poly, tol in ((res.polygon, 1.0), (res.raw_polygon, 1.6)):
+        px, py = poly[:, 0], poly[:, 1]
+        uu = np.clip((px - cx) / hw, -1, 1)
+        top, bot = cy - up * (1 - uu**2), cy + lo * (1 - uu**2)
+        d = np.minimum(np.abs(py - top), np.abs(py - bot))
+        assert np.median(d) < 0.5 and np.percentile(d, 90) < tol
+
+
+def test_mouth_ring_blob_gives_outer_outline():
+    """An open mouth is a ring of lip around a dark hole: the polygon is the outer edge."""
+    img = np.zeros((80, 120), np.float32)
+    cv2.ellipse(img, (60, 40), (40, 25), 0, 0, 360, 1.0, -1)
+    cv2.ellipse(img, (60, 40), (30, 14), 0, 0, 360, 0.0, -1)
+    res = MouthFinder().find((img * 255).astype(np.uint8), value=img)
+    assert res is not None
+    assert abs(res.width - 81) < 2
+    assert abs(res.lip_upper - 25.5) < 1.0 and abs(res.lip_lower - 25.5) < 1.0
+
+
+@pytest.mark.parametrize("style", ["dark_skin", "pale_lips"])
+def test_other_performers_calibrate_and_track(style):
+    s = STYLES[style]
+    frame, _ = render_face(BASE, s)
+    c = calibrate(frame, Clicks.from_dict(clicks_for(BASE)))
+    for expr in ("neutral", "ah", "smile"):
+        img, t = render_face(BASE.with_expression(expr), s)
+        r = FaceTracker(c).track(img)
+        e = np.abs(r.params.values() - t.values())
+        assert e[:3].max() < 1 and e[3:7].max() < 1.5 and e[7] < 2 and e[8:].max() < 1.5, (expr, e.round(2))
+
+
+def test_clicks_a_few_pixels_off_still_calibrate():
+    c = clicks_for(BASE)
+    rng = np.random.default_rng(4)
+    for k in ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth"):
+        c[k] = [v + float(rng.uniform(-2.5, 2.5)) for v in c[k]]
+    frame, t = render_face(BASE)
+    cal = calibrate(frame, Clicks.from_dict(c))
+    e = np.abs(cal.neutral.values() - t.values())
+    assert e[:3].max() < 1 and e[3:7].max() < 1.5 and e[7] < 2
+    assert math.isclose(cal.ipd, 80, abs_tol=1)
