@@ -42,7 +42,7 @@ class PartMorpher:
     ``images`` are straight RGBA uint8 (as in PNG) unless ``premultiplied=True``. ``a, b, p``
     are the Beier–Neely constants, ``border`` what is sampled outside a drawing
     (``beier_neely.border_mode``). ``exact_three_way`` samples the exact three-way field on
-    the mesh every frame instead of summing two-way tables (about 1 ms more per part; for
+    the mesh every frame instead of summing two-way tables (1–2 ms more per part; for
     offline rendering).
     """
 

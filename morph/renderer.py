@@ -25,7 +25,7 @@ class CharacterRenderer:
 
     ``gain`` scales the pose (head translation and roll); ``detail`` switches on the
     detail-keeping blend; ``style`` sets the expression-driven style used when ``render`` gets a
-    positive ``style_level``; ``exact_three_way`` trades about 1 ms a part for the exact
+    positive ``style_level``; ``exact_three_way`` trades 1–2 ms a part for the exact
     three-way field instead of the paper's sum of two-way warps (``PartMorpher``).
     """
 
