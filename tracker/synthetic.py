@@ -577,12 +577,18 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
             _blend(buf, bx, box, _coverage(polys, box, ss), colour)
 
     def compose(box, base, layers):
-        """``layers`` (polygons, colour) painted over a ``base`` colour, as a (h, w, 3) array."""
+        """``layers`` (polygons, colour[, supersampling]) painted over a ``base`` colour, as a
+        (h, w, 3) array over ``box``; a colour may be a (h, w, 3) array over ``box`` too."""
         g = np.empty(box.shape + (3,), np.float32)
         g[:] = np.asarray(base, np.float32)
-        for polys, colour in layers:
-            a = _coverage(polys, box, FEATURE_SS)
-            g += a[..., None] * (np.asarray(colour, np.float32) - g)
+        for polys, colour, *ss in layers:
+            lb = _clip_box(_Box.around(polys, w, h), box)
+            if lb is None:
+                continue
+            col = np.asarray(colour, np.float32)
+            if col.ndim == 3:
+                col = col[lb.y0 - box.y0:lb.y1 - box.y0, lb.x0 - box.x0:lb.x1 - box.x0]
+            _blend(g, box, lb, _coverage(polys, lb, ss[0] if ss else FEATURE_SS), col)
         return g
 
     def group(box, base, layers, outline):
@@ -641,11 +647,11 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
         if up + lo < 0.02:
             continue
         c = ex + gx
-        layers = [([iris_pts], _mul(style.iris, style.limbus)),
-                  ([L(_ellipse(c, gy, 0.8 * IRIS_R * u, 0.8 * IRIS_R * u))], style.iris),
+        layers = [([iris_pts], _mul(style.iris, style.limbus), 4),
+                  ([L(_ellipse(c, gy, 0.8 * IRIS_R * u, 0.8 * IRIS_R * u))], style.iris, 4),
                   ([L(_ellipse(c, gy, PUPIL_R * u, PUPIL_R * u))], style.pupil)]
         if style.catchlight:
-            layers.append(([L(_ellipse(c + 0.032 * u, gy - 0.032 * u, 0.016 * u, 0.016 * u))], (245, 248, 250)))
+            layers.append(([L(_ellipse(c + 0.032 * u, gy - 0.032 * u, 0.016 * u, 0.016 * u))], (245, 248, 250), 4))
         group(eye_box, style.sclera, layers, [L(white)])
 
     # mouth: dark interior (teeth, tongue) under the two lips
@@ -667,12 +673,12 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
         inner = []
         if m.y_il0 - m.y_iu0 > 0.04 * u:
             tongue = _ellipse(0.0, m.y_il0, 0.55 * m.half_w, 0.16 * u)
-            inner.append(([L(tongue)], _mul(np.add(style.mouth, style.lip) / 2.0, 0.8)))
+            inner.append(([L(tongue)], _mul(np.add(style.mouth, style.lip) / 2.0, 0.8), 4))
             if st.teeth:
                 tt = t[np.abs(t) <= 0.75]
                 band = np.concatenate([np.stack([tt * m.half_w, m.inner_upper(tt) - 0.05 * u], 1),
                                        np.stack([tt * m.half_w, m.inner_upper(tt) + 0.075 * u], 1)[::-1]])
-                inner.append(([L(band)], style.teeth))
+                inner.append(([L(band)], style.teeth, 4))
         interior = compose(mbox, style.mouth, inner)
         group(mbox, style.lip, [([L(upper_ext)], _mul(style.lip, 0.86)), ([L(hole)], interior)], [L(outline)])
 
@@ -736,14 +742,15 @@ def render_face(
 # Scripted performances
 
 
-def _smooth_noise(rng: np.random.Generator, t: np.ndarray, f_lo: float, f_hi: float, k: int = 4) -> np.ndarray:
-    """A smooth random curve of unit-ish spread, softly bounded to (−1, 1)."""
+def _smooth_noise(rng: np.random.Generator, t: np.ndarray, f_lo: float, f_hi: float, k: int = 4,
+                  gain: float = 0.9) -> np.ndarray:
+    """A smooth random curve: ``tanh(gain · v)`` of a unit-variance sum of ``k`` sinusoids."""
     f = rng.uniform(f_lo, f_hi, k)
     ph = rng.uniform(0, 2 * np.pi, k)
     wts = rng.uniform(0.5, 1.0, k)
     v = (wts[:, None] * np.sin(2 * np.pi * f[:, None] * t[None, :] + ph[:, None])).sum(0)
     v /= math.sqrt(float((wts ** 2).sum()) / 2.0)
-    return np.tanh(0.9 * v)
+    return np.tanh(gain * v)
 
 
 def _bump(t: np.ndarray, t0: float, dur: float, attack: float = 0.3) -> np.ndarray:
@@ -817,7 +824,9 @@ class Performance:
         n = self.n
         arr = lambda v=0.0: np.full(n, v, np.float64)
 
-        self._roll = roll_amp * env * _smooth_noise(rng, t, 0.05, 0.25)
+        # mostly within ±half the amplitude, reaching the full amplitude now and then
+        self._roll = np.clip(roll_amp * env * _smooth_noise(rng, t, 0.05, 0.25, gain=0.45) / math.tanh(0.45 * 2.4),
+                             -roll_amp, roll_amp)
         self._cx = cx0 + drift * w * env * _smooth_noise(rng, t, 0.03, 0.15)
         self._cy = cy0 + 0.6 * drift * h * env * _smooth_noise(rng, t, 0.03, 0.15)
         self._ipd = self.ipd * (1.0 + scale_amplitude * env * _smooth_noise(rng, t, 0.03, 0.12))
