@@ -59,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
                             help="with --compress: a key frame every N frames (default 30)")
         parser.add_argument("--fps", type=float, metavar="F", help="send rate (default: the source's)")
         parser.add_argument("--ipd", type=float, metavar="PX", help="inter-pupil distance of a CSV track (pixels)")
-        parser.add_argument("--frame-size", metavar="WxH", help="frame size of a CSV track (default 640x480)")
+        parser.add_argument("--frame-size", metavar="WxH", help="frame size of a CSV track (default: the smallest common size holding its positions)")
         parser.add_argument("--frames", type=int, metavar="N", help="stop after N frames")
         parser.add_argument("--record", metavar="OUT.ifs", help="also write what was sent as a packet-stream file")
         parser.add_argument("--quiet", action="store_true", help="no progress line")
@@ -130,6 +130,20 @@ def _frame_size(text: str | None) -> tuple[int, int] | None:
     return w, h
 
 
+_COMMON_SIZES = ((640, 480), (1280, 720), (1920, 1080), (2560, 1440), (3840, 2160))
+
+
+def _covering_size(rows: list[FaceParams]) -> tuple[int, int]:
+    """The smallest common frame size that holds every face position of a track without a size."""
+    xy = params_array(rows)[:, :2]
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    mx, my = (xy.max(axis=0) if len(xy) else (0.0, 0.0))
+    for w, h in _COMMON_SIZES:
+        if mx < w and my < h:
+            return w, h
+    return int(mx) + 1, int(my) + 1
+
+
 def _rate(rows: list[FaceParams]) -> float:
     t = np.array([r.time for r in rows], dtype=np.float64)
     dt = np.diff(t[np.isfinite(t)])
@@ -145,7 +159,7 @@ def _load_track(args) -> _Track:
     rows = tf.rows
     if not rows:
         raise _Fail(f"{path}: the track has no frames")
-    size = tf.frame_size or _frame_size(args.frame_size) or (640, 480)
+    size = tf.frame_size or _frame_size(args.frame_size) or _covering_size(rows)
     fps = tf.fps or _rate(rows)
     neutral = tf.neutral
     if neutral is None:  # a CSV: the median of the tracked frames stands in for the neutral face
