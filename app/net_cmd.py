@@ -141,7 +141,7 @@ def _covering_size(rows: list[FaceParams]) -> tuple[int, int]:
     for w, h in _COMMON_SIZES:
         if mx < w and my < h:
             return w, h
-    return int(mx) + 1, int(my) + 1
+    return max(int(mx) + 1, 640), max(int(my) + 1, 480)
 
 
 def _rate(rows: list[FaceParams]) -> float:
