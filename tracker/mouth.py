@@ -226,8 +226,11 @@ class MouthFinder:
         pos = i + t
         best = int(np.argmax(pos))
         yb, xb = float(rows[best]), float(pos[best])
-        # the tip lies between rows: fit a parabola through the best row and its neighbours
-        if 0 < best < len(rows) - 1 and rows[best - 1] == rows[best] - 1 and rows[best + 1] == rows[best] + 1:
+        flat = pos >= pos[best] - 0.15
+        if flat.sum() > 1:  # a blunt corner: the middle of the rows that reach furthest
+            yb = float(rows[flat].mean())
+        # a sharp tip lies between rows: fit a parabola through the best row and its neighbours
+        elif 0 < best < len(rows) - 1 and rows[best - 1] == rows[best] - 1 and rows[best + 1] == rows[best] + 1:
             a_, b_, c_ = float(pos[best - 1]), float(pos[best]), float(pos[best + 1])
             den = a_ - 2 * b_ + c_
             if den < -1e-6:

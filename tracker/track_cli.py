@@ -123,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     video = Path(args.video)
+    _Video(video).close()  # a bad video is reported before anything else
     if args.auto:
         clicks, cal_frame = _auto(video)
     else:

@@ -1,0 +1,217 @@
+"""Calibration files, tracking a performance (loss and recovery) and the track CLI."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker.auto_init import AutoInitError, auto_clicks
+from tracker.calibration import Calibration, CalibrationError, calibrate
+from tracker.clicks import Clicks
+from tracker.face_tracker import FaceTracker
+from tracker.params import CSV_COLUMNS, LOST, read_csv
+from tracker.synthetic import STYLES, FaceState, Performance, clicks_for, render_face
+from tracker.track_cli import add_arguments, run
+
+BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+
+
+@pytest.fixture(scope="module")
+def cal():
+    frame, _ = render_face(BASE)
+    return calibrate(frame, Clicks.from_dict(clicks_for(BASE)))
+
+
+def test_calibration_save_load_round_trip(cal, tmp_path):
+    p = tmp_path / "perf" / "me.json"
+    cal.save(p)
+    assert (p.parent / "me.eye_l.png").exists() and (p.parent / "me.eye_r.png").exists()
+    assert json.loads(p.read_text())["format"] == 1
+    back = Calibration.load(p)
+    assert np.array_equal(back.lip.table, cal.lip.table)
+    assert np.array_equal(back.pupil.table, cal.pupil.table)
+    assert np.allclose(back.eye_templates[0], cal.eye_templates[0])
+    assert back.neutral.values() == pytest.approx(cal.neutral.values())
+    img, _ = render_face(BASE.with_expression("ah").replace(roll_deg=10.0))
+    a = FaceTracker(cal).track(img).params.values()
+    b = FaceTracker(back).track(img).params.values()
+    assert np.allclose(a, b, atol=1e-6)
+    assert not list(p.parent.glob(".*.tmp"))  # atomic writes leave no temporaries
+
+
+def test_calibration_load_errors(tmp_path):
+    with pytest.raises(CalibrationError, match="cannot read"):
+        Calibration.load(tmp_path / "none.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"format": 99}))
+    with pytest.raises(CalibrationError, match="format"):
+        Calibration.load(bad)
+
+
+def test_calibrate_rejects_clicks_off_the_face():
+    frame, _ = render_face(BASE)
+    c = clicks_for(BASE)
+    c["mouth"] = [320.0, 150.0]  # above the eyes
+    with pytest.raises(CalibrationError, match="mouth"):
+        calibrate(frame, Clicks.from_dict(c))
+    c = clicks_for(BASE)
+    c["mouth"] = [320.0, 700.0]
+    with pytest.raises(CalibrationError, match="outside"):
+        calibrate(frame, Clicks.from_dict(c))
+
+
+@pytest.mark.slow
+def test_performance_with_roll_blinks_and_an_absence():
+    """A 3 s performance; the face is gone for 0.4 s and must be back within 5 frames."""
+    perf = Performance(seconds=3.0, seed=11, style=STYLES["strong_roll"], away=[(1.6, 2.0)])
+    cal = calibrate(perf.frame(0), Clicks.from_dict(perf.clicks()))
+    tr = FaceTracker(cal)
+    errs, status, vis = [], [], []
+    for i in range(len(perf)):
+        img, t = perf.render(i)
+        r = tr.track(img, i, i / 30)
+        status.append(r.params.status)
+        vis.append(t.status != LOST)
+        if t.status != LOST and r.params.status != LOST:
+            errs.append(np.abs(r.params.values() - t.values()))
+    e = np.median(np.array(errs), axis=0)
+    assert e[:2].max() < 1 and e[2] < 1 and e[3:7].max() < 1.5 and e[7] < 2 and e[8:].max() < 1.5, e.round(2)
+    away = [i for i, v in enumerate(vis) if not v]
+    assert all(status[i] == LOST for i in away[1:])  # lost (values held) while gone
+    back = away[-1] + 1
+    lost_after = 0
+    while status[back + lost_after] == LOST:
+        lost_after += 1
+    assert lost_after <= 5
+    assert sum(s == LOST and v for s, v in zip(status, vis)) == lost_after
+
+
+def test_lost_holds_the_last_values(cal):
+    tr = FaceTracker(cal)
+    r0 = tr.track(render_face(BASE)[0])
+    empty = render_face(BASE.replace(visible=False))[0]
+    r1 = tr.track(empty, 1)
+    r2 = tr.track(empty, 2)
+    assert r1.params.status == LOST and r2.params.status == LOST
+    assert np.allclose(r2.params.values(), r0.params.values())
+    moved = BASE.replace(cx=200.0, cy=260.0, roll_deg=8.0)
+    img, t = render_face(moved)
+    r3 = tr.track(img, 3)
+    r4 = tr.track(img, 4)
+    assert r4.params.status != LOST
+    assert abs(r4.params.mid_x - t.mid_x) < 1 and abs(r4.params.mid_y - t.mid_y) < 1
+
+
+def test_overlay_draws(cal, tmp_path):
+    img, _ = render_face(BASE.with_expression("grin").replace(roll_deg=-12))
+    tr = FaceTracker(cal)
+    tr.track(img)
+    r = tr.track(img, 1)
+    out = r.overlay.draw(img)
+    assert out.shape == img.shape and not np.array_equal(out, img)
+    assert r.overlay.lip_polygon.shape[1] == 2 and len(r.overlay.rois) == 2
+    assert len(r.overlay.blob_contour()) > 10
+
+
+def test_auto_init_finds_the_clicks():
+    img, _ = render_face(BASE)
+    got = auto_clicks(img)
+    want = Clicks.from_dict(clicks_for(BASE))
+    for k, v in got.points().items():
+        assert np.hypot(*np.subtract(v, want.points()[k])) < 0.08 * 80, k
+    c = calibrate(img, got)
+    assert abs(c.ipd - 80) < 1.5
+
+
+def test_auto_init_says_when_nothing_is_found():
+    blank = np.full((240, 320, 3), 128, np.uint8)
+    with pytest.raises(AutoInitError, match="no face"):
+        auto_clicks(blank)
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    d = tmp_path_factory.mktemp("clip")
+    perf = Performance(seconds=1.0, seed=4)
+    video = d / "clip.avi"
+    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 30, perf.frame_size)
+    assert w.isOpened()
+    for i in range(len(perf)):
+        w.write(perf.frame(i))
+    w.release()
+    clicks = d / "clip.clicks.json"
+    clicks.write_text(json.dumps(perf.clicks()))
+    return video, clicks, perf
+
+
+def _cli(*argv):
+    import argparse
+
+    ap = argparse.ArgumentParser()
+    add_arguments(ap)
+    return run(ap.parse_args([str(a) for a in argv]))
+
+
+def test_cli_tracks_a_clip(clip, tmp_path, capsys):
+    video, clicks, perf = clip
+    out = tmp_path / "out.csv"
+    assert _cli(video, "--init", clicks, "--csv", out, "--quiet") == 0
+    with open(out) as f:
+        header = next(csv.reader(f))
+    assert tuple(header[:11]) == CSV_COLUMNS
+    rows = read_csv(out)
+    assert len(rows) == len(perf)
+    err = np.array([np.abs(r.values() - perf.truth(i).values()) for i, r in enumerate(rows)])
+    med = np.median(err, axis=0)
+    assert med[:3].max() < 1 and med[3:7].max() < 1.5 and med[7] < 2 and med[8:].max() < 1.5, med.round(2)
+    assert all(r.status != LOST for r in rows)
+
+
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        ("missing_video", "no such video"),
+        ("not_video", "cannot open"),
+        ("missing_key", "missing key"),
+        ("outside", "outside"),
+        ("past_end", "past the end"),
+        ("bad_json", "not valid JSON"),
+    ],
+)
+def test_cli_bad_inputs_give_one_line(clip, tmp_path, capsys, case, message):
+    video, clicks, perf = clip
+    d = json.loads(clicks.read_text())
+    cl = tmp_path / "c.json"
+    v = video
+    if case == "missing_video":
+        v = tmp_path / "none.avi"
+    elif case == "not_video":
+        v = tmp_path / "text.avi"
+        v.write_text("hello")
+    elif case == "missing_key":
+        d.pop("left_brow")
+    elif case == "outside":
+        d["mouth"] = [700, 20]
+    elif case == "past_end":
+        d["frame"] = 500
+    cl.write_text("{oops" if case == "bad_json" else json.dumps(d))
+    rc = _cli(v, "--init", cl, "--csv", tmp_path / "o.csv", "--quiet")
+    err = capsys.readouterr().err.strip()
+    assert rc == 2
+    assert err.startswith("inkface: ") and message in err and "\n" not in err and "Traceback" not in err
+
+
+def test_cli_module_entry_point_exit_code(tmp_path):
+    r = subprocess.run(
+        [sys.executable, "-m", "tracker.track_cli", str(tmp_path / "x.mp4"), "--init", "c.json", "--csv", "o.csv"],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert r.returncode == 2
+    assert r.stderr.strip().count("\n") == 0 and "no such video" in r.stderr
