@@ -308,6 +308,27 @@ def test_face_can_leave_the_frame():
     assert np.array_equal(far, empty)
 
 
+def test_face_can_slide_out_of_the_frame_and_back():
+    perf = Performance(seconds=4, seed=0, away=[(1.0, 3.0)], away_mode="slide")
+    st = [perf.truth(i) for i in range(len(perf))]
+    assert st[25].status == "ok" and st[60].status == "lost" and st[110].status == "ok"
+    assert abs(st[60].mid_x - 320) > 320 + perf.ipd
+    assert np.array_equal(perf.frame(60), render_face(FaceState(visible=False))[0])
+    steps = np.abs(np.diff([t.mid_x for t in st]))
+    assert steps.max() < 50  # it slides, it does not jump
+    with pytest.raises(ValueError, match="away_mode"):
+        Performance(seconds=1, away_mode="teleport")
+
+
+def test_status_follows_what_is_in_the_frame():
+    size = (640, 480)
+    assert face_truth(FaceState(), frame_size=size).status == "ok"
+    low = FaceState(cy=430.0)  # pupils in, mouth below the bottom edge
+    assert face_truth(low, frame_size=size).status == "mouth_lost"
+    assert face_truth(FaceState(cx=-10.0), frame_size=size).status == "lost"
+    assert render_face(low)[1].status == "mouth_lost"
+
+
 def test_eyes_closed_status_and_closed_lids_show_no_white():
     st = FaceState().with_expression("eyes_closed")
     assert face_truth(st).status == "eyes_closed"

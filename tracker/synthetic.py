@@ -38,7 +38,7 @@ from typing import Callable, Iterator, Mapping, Sequence
 import cv2
 import numpy as np
 
-from tracker.params import EYES_CLOSED, LOST, OK, FaceParams, write_csv
+from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams, write_csv
 
 BGR = tuple[int, int, int]
 
@@ -321,11 +321,13 @@ def _eye_gaps(e: float, u: float) -> tuple[float, float]:
 # Ground truth
 
 
-def face_truth(state: FaceState, frame: int = 0, time: float = 0.0) -> FaceParams:
+def face_truth(state: FaceState, frame: int = 0, time: float = 0.0,
+               frame_size: tuple[int, int] | None = None) -> FaceParams:
     """The exact ten parameters of what :func:`render_face` draws for ``state``.
 
-    Status is ``lost`` when the face is not visible (values still say where it would be) and
-    ``eyes_closed`` when both lid gaps are under 10 % of normal.
+    Status: ``lost`` when the face is not visible or (given ``frame_size``) a pupil is outside the
+    frame; ``mouth_lost`` when the mouth centre is outside the frame; ``eyes_closed`` when both
+    lid gaps are under 10 % of normal; else ``ok``. Values always say where the face is (or would be).
     """
     u = state.ipd
     gx, gy = state.gaze_x * u, state.gaze_y * u
@@ -342,8 +344,13 @@ def face_truth(state: FaceState, frame: int = 0, time: float = 0.0) -> FaceParam
     m = _mouth(state)
     lip_u = m.yc - float(m.outer_upper(0.0))
     lip_l = float(m.outer_lower(0.0)) - m.yc
-    if not state.visible:
+    inside = lambda p: frame_size is None or (0 <= p[0] < frame_size[0] and 0 <= p[1] < frame_size[1])
+    pose = _Pose.of(state)
+    pupils = [(state.cx + sx * 0.5 * u * pose.c, state.cy - sx * 0.5 * u * pose.s) for sx in (-1, 1)]
+    if not state.visible or not all(inside(p) for p in pupils):
         status, conf = LOST, 0.0
+    elif not inside(pose.point(0.0, m.yc)):
+        status, conf = MOUTH_LOST, 0.5
     elif max(state.eye_open_l, state.eye_open_r) < 0.1:
         status, conf = EYES_CLOSED, 1.0
     else:
@@ -735,7 +742,7 @@ def render_face(
     if state.visible and state.ipd > 0:
         _draw_face(img, state, style)
     img = _degrade(img, style, state.light, rng if rng is not None else np.random.default_rng(0))
-    return img, face_truth(state, frame=frame, time=time)
+    return img, face_truth(state, frame=frame, time=time, frame_size=(w, h))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -774,7 +781,8 @@ class Performance:
     and double blinks), ``brows`` (raises and frowns), ``smiles``, ``gaze`` (small eye
     movements), ``roll_amplitude`` (degrees, default ``style.roll_max``), ``drift`` (fraction of
     the frame the face wanders over), ``scale_amplitude`` (leaning in / out, ±fraction of the
-    ipd), ``away`` (intervals in seconds when the face is gone), ``script`` (a function
+    ipd), ``away`` (intervals in seconds when the face is gone: ``away_mode`` "vanish" hides it,
+    "slide" moves it out of the frame sideways and back), ``script`` (a function
     ``(index, FaceState) -> FaceState`` applied last, for custom tests).
     """
 
@@ -797,9 +805,12 @@ class Performance:
         smiles: bool = True,
         gaze: bool = True,
         away: Sequence[tuple[float, float]] = (),
+        away_mode: str = "vanish",
         ramp: float = 0.7,
         script: Callable[[int, FaceState], FaceState] | None = None,
     ):
+        if away_mode not in ("vanish", "slide"):
+            raise ValueError(f"away_mode must be 'vanish' or 'slide', got {away_mode!r}")
         if fps <= 0:
             raise ValueError(f"fps must be positive, got {fps}")
         if seconds < 0:
@@ -911,7 +922,14 @@ class Performance:
             self._gx, self._gy = arr(), arr()
         self._visible = np.ones(n, bool)
         for a, b in away:
-            self._visible &= ~((t >= a) & (t < b))
+            if away_mode == "vanish":
+                self._visible &= ~((t >= a) & (t < b))
+                continue
+            # slide out sideways in 0.8 s, stay out, slide back in
+            side = -1.0 if self._cx[min(int(a * self.fps), n - 1)] < 0.5 * w else 1.0
+            out = np.clip(np.minimum((t - a) / 0.8, (b - t) / 0.8), 0.0, 1.0)
+            out = out * out * (3 - 2 * out)
+            self._cx = self._cx + side * out * (0.5 * w + 4.0 * self._ipd)
         amp = self.style.lighting_drift
         if amp > 0:
             g = 1.0 + amp * env * _smooth_noise(rng, t, 0.05, 0.2)
@@ -958,7 +976,7 @@ class Performance:
     def truth(self, i: int) -> FaceParams:
         """The exact parameters of frame ``i``."""
         i = self._check(i)
-        return face_truth(self.state(i), frame=i, time=i / self.fps)
+        return face_truth(self.state(i), frame=i, time=i / self.fps, frame_size=self.frame_size)
 
     def truths(self) -> list[FaceParams]:
         return [self.truth(i) for i in range(self.n)]
