@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from tracker.params import LOST, MOUTH_LOST, OK, FaceParams
+from tracker.params import LOST, MOUTH_LOST, FaceParams
 from training.features import EYES, MOUTH, FeatureSpace
 from training.filters import Chain, RateFilter, make_filter
 
