@@ -37,7 +37,7 @@ def smooth_frames(n: int, seed: int, noise: float = 0.0, amp: float = 30.0) -> l
 frames_st = st.lists(st.binary(min_size=10, max_size=10), min_size=1, max_size=60)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(frames=frames_st, key_interval=st.integers(1, 40))
 def test_arbitrary_frames_round_trip_exactly(frames, key_interval):
     coded = compress_frames(frames, key_interval)
@@ -46,7 +46,7 @@ def test_arbitrary_frames_round_trip_exactly(frames, key_interval):
     assert [k for k, _ in coded][:: key_interval] == [True] * len(coded[::key_interval])
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(
     seed=st.integers(0, 10_000),
     noise=st.sampled_from([0.0, 0.5, 2.0]),
@@ -63,7 +63,7 @@ def test_smooth_frames_with_jumps_round_trip(seed, noise, steps):
     assert decompress_frames(compress_frames(frames, 30)) == frames
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 10_000), key_interval=st.integers(2, 20), lost=st.sets(st.integers(0, 79), max_size=12))
 def test_lost_packets_recover_at_the_next_key_frame(seed, key_interval, lost):
     frames = smooth_frames(80, seed, noise=0.7)
