@@ -608,7 +608,8 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     paint(ears, _mul(skin, 0.9), ss=2)
     hbox = _clip_box(_Box.around([head], w, h), bx)
     if hbox is not None:
-        ys, xs = np.mgrid[hbox.y0:hbox.y1, hbox.x0:hbox.x1].astype(np.float32)
+        xs = np.arange(hbox.x0, hbox.x1, dtype=np.float32)[None, :]
+        ys = np.arange(hbox.y0, hbox.y1, dtype=np.float32)[:, None]
         lx, ly = pose.local(xs, ys)
         rx, ry = lx / (HEAD_A * u), (ly - HEAD_CY * u) / (HEAD_B * u)
         shade = 1.04 - style.shading * (0.2 * (rx * rx + ry * ry) ** 2 + 0.05 * rx)
@@ -776,7 +777,7 @@ class Performance:
     """A scripted, seeded performance of the synthetic performer.
 
     Frame 0 is always neutral, frontal, eyes open and centred (the calibration frame); the
-    motion fades in over the first ``ramp`` seconds. Options switch parts of the script:
+    expression fades in over the first ``ramp`` seconds, the head's motion over twice that. Options:
     ``talk`` (syllables of ah / ee / oo / eh with pauses), ``blink`` (every 2–5 s, some winks
     and double blinks), ``brows`` (raises and frowns), ``smiles``, ``gaze`` (small eye
     movements), ``roll_amplitude`` (degrees, default ``style.roll_max``), ``drift`` (fraction of
@@ -832,15 +833,17 @@ class Performance:
         T = t[-1] + 1.0 / self.fps
         env = np.clip(t / max(ramp, 1e-6), 0, 1)
         env = env * env * (3 - 2 * env)
+        penv = np.clip(t / max(2.0 * ramp, 1e-6), 0, 1)  # the head's pose fades in more slowly
+        penv = penv * penv * (3 - 2 * penv)
         n = self.n
         arr = lambda v=0.0: np.full(n, v, np.float64)
 
         # mostly within ±half the amplitude, reaching the full amplitude now and then
-        self._roll = np.clip(roll_amp * env * _smooth_noise(rng, t, 0.05, 0.25, gain=0.45) / math.tanh(0.45 * 2.4),
+        self._roll = np.clip(roll_amp * penv * _smooth_noise(rng, t, 0.05, 0.25, gain=0.45) / math.tanh(0.45 * 2.4),
                              -roll_amp, roll_amp)
-        self._cx = cx0 + drift * w * env * _smooth_noise(rng, t, 0.03, 0.15)
-        self._cy = cy0 + 0.6 * drift * h * env * _smooth_noise(rng, t, 0.03, 0.15)
-        self._ipd = self.ipd * (1.0 + scale_amplitude * env * _smooth_noise(rng, t, 0.03, 0.12))
+        self._cx = cx0 + drift * w * penv * _smooth_noise(rng, t, 0.03, 0.15)
+        self._cy = cy0 + 0.6 * drift * h * penv * _smooth_noise(rng, t, 0.03, 0.15)
+        self._ipd = self.ipd * (1.0 + scale_amplitude * penv * _smooth_noise(rng, t, 0.03, 0.12))
 
         mouth, pucker, smile_t, teeth = arr(), arr(), arr(), np.zeros(n, bool)
         if talk:
