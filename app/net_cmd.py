@@ -99,10 +99,9 @@ def run(args) -> int:
 
 
 def _expected(e: Exception) -> bool:
-    """Errors that carry a user-facing one-line message: ValueError subclasses of ours and OS errors."""
-    return isinstance(e, (NetError, TrackFormatError, OSError)) or (
-        isinstance(e, (ValueError, RuntimeError)) and type(e).__module__.split(".")[0] in ("tracker", "art_sets", "training", "morph", "app")
-    )
+    """Errors that carry a user-facing one-line message: the project's own error classes
+    (TrackFormatError, StreamError, FapError, ClicksError, SourceError, ArtSetError, ...) and OS errors."""
+    return isinstance(e, OSError) or type(e).__module__.split(".")[0] in ("tracker", "art_sets", "training", "morph", "app")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -285,6 +284,9 @@ def _send(args) -> int:
         raise _Fail(f"--key-interval must be at least 1, got {args.key_interval}")
     if args.fps is not None and not args.fps > 0:
         raise _Fail(f"--fps must be positive, got {args.fps}")
+    if args.ipd is not None and not (math.isfinite(args.ipd) and args.ipd > 0):
+        raise _Fail(f"--ipd must be a positive number of pixels, got {args.ipd}")
+    _frame_size(args.frame_size)  # check it before reading anything
     if args.params:
         tr = _load_track(args)
         frames = iter(tr.rows)

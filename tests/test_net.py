@@ -237,6 +237,8 @@ def _cli(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
         (["send", "--to", "127.0.0.1:99999", "--params", "x.csv"], "out of range"),
         (["receive", "--port", "-5", "--frames", "1"], "out of range"),
         (["receive", "--port", "abc", "--frames", "1"], "not a number"),
+        (["receive", "--port", "0", "--art", "no-such-character", "--frames", "1"], "no-such-character"),
+        (["send", "--to", "127.0.0.1:9", "--params", "x.csv", "--frame-size", "big"], "WxH"),
     ],
 )
 def test_cli_bad_address_or_port_is_one_line(args, message, capsys):
