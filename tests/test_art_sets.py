@@ -384,3 +384,20 @@ def test_visible_box_edge(bundled_copy):
     Image.fromarray(im).save(bundled_copy / "head-1.png")
     msg = messages(bundled_copy)
     assert "mouth box edge shows" in msg and "head-1.png" in msg
+
+
+def test_saved_files_are_readable_by_others(tmp_path):
+    import os
+    import stat
+
+    folder = save_artset(tiny_artset(), tmp_path / "perm")
+    mode = stat.S_IMODE(os.stat(folder / "artset.json").st_mode)
+    assert mode & stat.S_IRUSR and mode & stat.S_IWUSR and mode & stat.S_IRGRP == (0o666 & ~_current_umask() & stat.S_IRGRP)
+
+
+def _current_umask() -> int:
+    import os
+
+    m = os.umask(0)
+    os.umask(m)
+    return m

@@ -30,7 +30,7 @@ class Blue(Character):
                         grain=0.8, opacity=0.8 if i else 0.55)
             opts.update(kw)
             c = LIGHT if (i == 0 and passes > 1) else color
-            s.stroke(pts, w * (1.15 if i == 0 else 1.0), c, rng=rng, **opts)
+            s.stroke(pts, w * (1.35 if i == 0 else 1.2), c, rng=rng, **opts)
 
     def scribble_fill(self, s: Surface, poly, rng, color=BLUE, angle=60.0, spacing=2.6, opacity=0.55, clip_blur=0.0):
         s.hatch(poly, angle, spacing, 1.2, color, rng, opacity=opacity, grain=0.8, clip_blur=clip_blur)
@@ -52,10 +52,10 @@ class Blue(Character):
             s.fill(ellipse(g.iris_c + (-0.35 * g.iris_r, -0.35 * g.iris_r), g.iris_r * 0.18, g.iris_r * 0.18), PAPER, clip=clip)
             self.pen(s, g.upper, 4.0, rng, taper=(0.1, 0.15))
             self.pen(s, sub_curve(g.lower, 0.1, 0.95), 1.5, rng, passes=1, opacity=0.7)
-            self.pen(s, sub_curve(offset(g.upper, 0.3 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)
+            self.pen(s, sub_curve(g.upper - (0, 0.3 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)
         else:
             self.pen(s, g.upper, 3.0, rng)
-            self.pen(s, sub_curve(offset(g.upper, 0.35 * hw), 0.25, 0.8), 1.2, rng, passes=1, opacity=0.45)
+            self.pen(s, sub_curve(g.upper - (0, 0.35 * hw), 0.25, 0.8), 1.2, rng, passes=1, opacity=0.45)
         for u in (0.72, 0.84, 0.95):  # lashes at the outer corner
             p = point_at(g.upper, u)
             d = np.array([-g.sgn * 0.16 * hw, -0.2 * hw if not g.closed else 0.18 * hw])
@@ -175,6 +175,6 @@ def messy_hair(rng) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, floa
 def character() -> Blue:
     return Blue(slug="bleu", name="Bleu", style="blue",
                 description="A blue-pencil sketch on cream paper: grainy strokes, hatching, construction lines (the paper's 'Blue').",
-                seed=37, skin=PAPER, paper_amount=0.03, grain=1.0, eye_hw=35.0,
-                eye_centers=((198.0, 226.0), (314.0, 226.0)), eyes_box=(110, 146, 292, 132),
-                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 356.0), mouth_scale=42.0)
+                seed=37, skin=PAPER, paper_amount=0.018, grain=1.0, eye_hw=38.0,
+                eye_centers=((194.0, 228.0), (318.0, 228.0)), eyes_box=(104, 150, 304, 132), eye_kw={"brow_gap": 0.85},
+                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 354.0), mouth_scale=44.0)

@@ -29,7 +29,7 @@ TOOTH_SHADE = hex_rgb("#d8ccb0")
 MONSTER_MOUTHS = {
     "neutral": MouthPose(hw=1.0, smile=0.04, tu=0.12, tl=0.16),
     "smile": MouthPose(hw=1.12, smile=0.34, tu=0.12, tl=0.16),
-    "ah": MouthPose(hw=0.86, smile=0.0, open=1.0, up_ratio=0.3, tongue=True, teeth_up=1, teeth_dn=1),
+    "ah": MouthPose(hw=0.86, smile=0.0, open=0.9, up_ratio=0.3, tongue=True, teeth_up=1, teeth_dn=1),
     "oo": MouthPose(hw=0.46, open=0.5, round=1.0, tu=0.2, tl=0.22, up_ratio=0.42, teeth_up=1, teeth_dn=1),
     "grin": MouthPose(hw=1.2, smile=0.32, open=0.62, up_ratio=0.4, teeth_up=1, teeth_dn=1, tongue=True),
     "frown": MouthPose(hw=0.98, smile=-0.26, tu=0.12, tl=0.16),
@@ -75,12 +75,12 @@ class Monster(Character):
         else:
             s.fill(np.concatenate([lid_top, (g.upper + (0, 1))[::-1]]), SHADE)
             self.pen(s, g.upper, 5.5, rng, taper=(0.15, 0.15))
-            self.pen(s, sub_curve(offset(g.upper, 0.25 * hw), 0.3, 0.7), 2.0, rng, taper=(0.5, 0.5))
+            self.pen(s, sub_curve(g.upper - (0, 0.25 * hw), 0.3, 0.7), 2.0, rng, taper=(0.5, 0.5))
         # bony brow ridge
-        top = offset(g.brow, -0.16 * hw)
-        bot = offset(g.brow, 0.14 * hw)
+        top = g.brow - (0, 0.2 * hw)
+        bot = g.brow + (0, 0.16 * hw)
         u = np.linspace(0, 1, len(g.brow))
-        k = (0.5 + 0.5 * np.sin(np.pi * np.clip(u * 0.85 + 0.08, 0, 1)))[:, None]
+        k = (0.2 + 0.8 * np.sin(np.pi * np.clip(u * 0.9 + 0.05, 0, 1)) ** 0.7)[:, None]
         ridge = np.concatenate([g.brow + (top - g.brow) * k, (g.brow + (bot - g.brow) * k)[::-1]])
         s.fill(ridge, DEEP)
         self.pen(s, closed(ridge), 3.0, rng, taper=(0, 0))
@@ -181,4 +181,4 @@ def character() -> Monster:
                    description="A green horned creature with fangs: thick brush ink, flat cel shading (the paper's 'Monster').",
                    seed=44, skin=SKIN, mouth_skin=MUZZLE, eye_hw=38.0, eye_centers=((194.0, 216.0), (318.0, 216.0)),
                    eyes_box=(100, 146, 312, 132), mouth_box=(136, 304, 240, 126), mouth_center=(256.0, 350.0),
-                   mouth_scale=60.0, eye_kw={"brow_gap": 0.8, "brow_len": 1.05})
+                   mouth_scale=66.0, paper_amount=0.012, eye_kw={"brow_gap": 0.8, "brow_len": 1.05})

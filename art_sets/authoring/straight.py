@@ -19,6 +19,9 @@ MOUTH = hex_rgb("#6e2b35")
 TONGUE = hex_rgb("#d9707a")
 LIP = hex_rgb("#dd8d8a")
 BLUSH = hex_rgb("#f0a39a")
+SHIRT = hex_rgb("#4f9db8")
+CLIP = hex_rgb("#f6c343")
+CLIP_MID = hex_rgb("#e8734f")
 WHITE = (1.0, 1.0, 0.99)
 
 
@@ -47,7 +50,7 @@ class Straight(Character):
             self.pen(s, bez(flick[0], flick[0] + (-g.sgn * 0.15 * hw, -0.02 * hw), flick[1]), 3.2, rng, taper=(0.0, 0.8), tip=0.1)
             self.pen(s, sub_curve(g.lower, 0.18, 0.92), 1.7, rng, taper=(0.4, 0.4))
             if pose.up > 0.6:
-                self.pen(s, sub_curve(offset(g.upper, 0.32 * hw), 0.25, 0.85), 1.4, rng, taper=(0.5, 0.5))
+                self.pen(s, sub_curve(g.upper - (0, 0.32 * hw), 0.25, 0.85), 1.4, rng, taper=(0.5, 0.5))
         else:
             self.pen(s, g.upper, 4.0, rng, taper=(0.15, 0.1), tip=0.3)
             for u in (0.55, 0.75, 0.92):
@@ -101,9 +104,9 @@ class Straight(Character):
 
     # --- head -----------------------------------------------------------------------------------
     def draw_head(self, s: Surface, rng, k: int) -> None:
-        j = lambda: rng.normal(0, 0.7, 2)
+        j = lambda sd=0.7: rng.normal(0, sd, 2)
         cx = 256.0
-        face = head_outline(cx, 256, 180, 216, chin=0.2) + j()
+        face = head_outline(cx, 256, 180, 216, chin=0.14) + j()
         # hair behind the head (bob)
         back = np.concatenate([
             bez((52, 350), (20, 130), (140, 22), (256, 24), n=50),
@@ -119,6 +122,16 @@ class Straight(Character):
         s.fill(np.array([(206, 430), (306, 430), (300, 470), (212, 470)]), SKIN_SHADE, blur=8)
         self.pen(s, [(206, 420), (203, 512)], 3.0, rng, taper=(0, 0.3))
         self.pen(s, [(306, 420), (309, 512)], 3.0, rng, taper=(0, 0.3))
+        # shirt with a rounded collar, in front of the neck, behind the chin
+        shirt = np.array([(40, 512), (70, 486), (150, 466), (212, 458), (256, 480), (300, 458), (362, 466), (442, 486), (472, 512)]) + j()
+        s.fill(shirt, SHIRT)
+        self.pen(s, shirt, 3.0, rng, taper=(0, 0))
+        for sgn in (-1, 1):
+            collar = np.concatenate([bez((256, 482), (256 + sgn * 20, 470), (256 + sgn * 46, 456), (256 + sgn * 60, 456), n=20),
+                                     bez((256 + sgn * 60, 456), (256 + sgn * 80, 476), (256 + sgn * 70, 500), (256 + sgn * 30, 504), n=20),
+                                     bez((256 + sgn * 30, 504), (256 + sgn * 8, 500), (256, 482), n=10)]) + j(0.4)
+            s.fill(collar, WHITE)
+            self.pen(s, closed(collar), 2.6, rng, taper=(0, 0))
         for sgn in (-1, 1):
             ear = ellipse((cx + sgn * 178, 262), 22, 34) + j()
             s.fill(ear, SKIN)
@@ -143,6 +156,14 @@ class Straight(Character):
         for a, b, c in (((150, 78), (200, 70), (240, 80)), ((300, 76), (350, 82), (392, 110))):
             self.pen(s, bez(a, b, c), 5.0, rng, color=HAIR_HI, taper=(0.5, 0.5))
         self.pen(s, closed(fringe), 3.4, rng, taper=(0, 0))
+        # a flower hair clip on the fringe
+        c = np.array([372.0, 104.0]) + j(0.4)
+        for a in np.linspace(0, 2 * np.pi, 5, endpoint=False):
+            petal = ellipse(c + 11 * np.array([np.cos(a), np.sin(a)]), 9, 6, rot=a)
+            s.fill(petal, CLIP)
+            self.pen(s, closed(petal), 1.8, rng, taper=(0, 0))
+        s.fill(ellipse(c, 5, 5), CLIP_MID)
+        self.pen(s, closed(ellipse(c, 5, 5)), 1.6, rng, taper=(0, 0))
         for a, b, c in (((262, 110), (270, 90), (262, 62)), ((200, 140), (215, 115), (218, 90)), ((340, 140), (322, 118), (318, 92))):
             self.pen(s, bez(np.add(a, j()), b, c), 2.0, rng, taper=(0.1, 0.6))
 
@@ -153,5 +174,6 @@ def _band(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
 
 def character() -> Straight:
     return Straight(slug="ivy", name="Ivy", style="straight",
-                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN,
-                    mouth_box=(176, 312, 160, 120), mouth_center=(256.0, 356.0), mouth_scale=38.0)
+                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN, paper_amount=0.006, eye_hw=40.0, eye_centers=((192.0, 232.0), (320.0, 232.0)),
+                    eyes_box=(100, 150, 312, 132), eye_kw={"brow_gap": 0.85, "iris": 0.56},
+                    mouth_box=(172, 310, 168, 124), mouth_center=(256.0, 354.0), mouth_scale=44.0)

@@ -59,7 +59,7 @@ class Wavy(Character):
     def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
         # baggy lower lids
-        self.pen(s, sub_curve(offset(g.lower, -0.3 * hw - 2), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)
+        self.pen(s, sub_curve(g.lower + (0, 0.3 * hw + 2), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)
         if not g.closed:
             opening = g.opening()
             clip = s.mask(opening)
@@ -70,7 +70,7 @@ class Wavy(Character):
             self.pen(s, g.lower, 2.0, rng)
         else:
             self.pen(s, g.upper, 3.4, rng)
-            self.pen(s, sub_curve(offset(g.upper, 0.22 * hw), 0.25, 0.8), 1.6, rng, passes=1, opacity=0.7)
+            self.pen(s, sub_curve(g.upper - (0, 0.22 * hw), 0.25, 0.8), 1.6, rng, passes=1, opacity=0.7)
         # a brow made of a few short scratchy strokes
         for k in range(4):
             u0 = 0.02 + 0.22 * k + rng.uniform(-0.03, 0.03)
@@ -166,6 +166,6 @@ def _overshoot(p: np.ndarray, frac: float, rng) -> np.ndarray:
 def character() -> Wavy:
     return Wavy(slug="noodle", name="Noodle", style="wavy",
                 description="A loose, wobbly sepia line over off-register watercolour washes (the paper's 'Wavy').",
-                seed=23, skin=SKIN, paper_amount=0.035, eye_hw=38.0, eye_centers=((200.0, 216.0), (312.0, 216.0)),
+                seed=23, skin=SKIN, paper_amount=0.02, eye_hw=38.0, eye_centers=((200.0, 216.0), (312.0, 216.0)),
                 eyes_box=(116, 144, 280, 126), mouth_box=(156, 330, 200, 122), mouth_center=(256.0, 374.0),
-                mouth_scale=50.0, eye_kw={"iris": 0.3, "brow_gap": 1.05})
+                mouth_scale=54.0, eye_kw={"iris": 0.3, "brow_gap": 1.05})
