@@ -38,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--fps", type=int, choices=(10, 15, 30), default=30, help="output rate; 10 / 15 average 3 / 2 frames (default 30)")
     parser.add_argument("--side-by-side", action="store_true", help="the performer's frame on the left, the character on the right")
     parser.add_argument("--params", metavar="TRACK.csv", help="take the ten values from this track instead of tracking the video")
-    parser.add_argument("--filter", default="one_euro", help="temporal filter: none, one_euro, gate, gate+one_euro, chai (default one_euro)")
+    parser.add_argument("--filter", default="gate+one_euro", help="temporal filter: none, one_euro, gate, gate+one_euro, chai (default gate+one_euro)")
     parser.add_argument("--strength", type=float, default=0.5, help="filter strength 0..1 (default 0.5)")
     parser.add_argument("--mapper", default="delaunay", help="expression mapper: delaunay (the paper's), cardinal, ridge, convex")
     parser.add_argument("--gain", type=float, default=1.0, help="head motion gain (0 = still head)")

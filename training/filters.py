@@ -141,7 +141,7 @@ class OutlierGate:
 
     name = "gate"
 
-    def __init__(self, window: int = 3, k: float = 4.0, floor: float = 0.04, max_hold: int = 2, rate: float = 0.05):
+    def __init__(self, window: int = 3, k: float = 4.0, floor: float = 0.04, max_hold: int = 1, rate: float = 0.05):
         self.window = int(window)
         self.k = float(k)
         self.floor = float(floor)

@@ -85,7 +85,7 @@ class Puppet:
         calibration=None,
         session=None,
         fps: int = 30,
-        filter="one_euro",
+        filter="gate+one_euro",
         strength: float = 0.5,
         mapper: str = "delaunay",
         gain: float = 1.0,
