@@ -251,6 +251,8 @@ class Recorder:
         self._last_t = t
         if self._next_t is None:
             self._next_t = t
+        if t - self._next_t > 1.0:  # a jump in the source's clock: resynchronise, do not fill the gap
+            self._next_t = t
         copies = 0
         while self._next_t <= t + 1e-6:
             copies += 1

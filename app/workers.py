@@ -448,7 +448,8 @@ class CaptureThread(QThread):
             fps = float(getattr(src, "fps", 30.0) or 30.0)
             w, h = getattr(src, "size", (0, 0))
             self.sourceOpened.emit(self.spec.describe(), fps, int(w), int(h))
-            pace = self.realtime and self.spec.kind != "camera"
+            # a real camera paces itself; files, the synthetic performer and fakes are paced here
+            pace = self.realtime and (self._given_source is not None or self.spec.kind != "camera")
             t0 = time.perf_counter()
             shown = 0
             offset = 0  # index offset across loops
