@@ -234,7 +234,7 @@ def _puppet_table(ctx) -> Table:
     session = default_session(art)
     perf = Performance(seconds=4.0 if ctx.quick else 10.0, seed=8)
     rows = [perf.truth(i) for i in range(len(perf))]
-    for name in ("none", "one_euro", "chai"):
+    for name in ("none", "one_euro", "gate+one_euro", "chai"):
         p = Puppet(art, session=session, filter=name, renderer=_NullRenderer())
         samples = {"filter": [], "map": []}
         total = time_each(lambda r: samples["filter"].append(p.step_params(r).timings_ms), rows)
