@@ -124,6 +124,7 @@ LID_UP, LID_DOWN = 0.26, 0.22  # how far the lid walks go
 BROW_LO, BROW_HI = 0.55, 1.6  # brow search range, × calibrated brow height
 MOUTH_HALF_W = 0.75  # × calibrated mouth width, each side of the predicted centre
 MOUTH_UP, MOUTH_DOWN = 0.32, 0.62  # above / below the predicted centre
+BALANCE_EVERY = 4  # frames between colour-balance updates (lighting drifts slowly)
 
 
 class FaceTracker:
@@ -177,7 +178,8 @@ class FaceTracker:
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
-        self._refs = (None, None)
+        self._gains: dict = {}
+        self._balance_age: dict = {}
 
     # -------------------------------------------------------------- colour constancy
     @staticmethod
@@ -194,15 +196,22 @@ class FaceTracker:
         """
         if ref is None:
             return crop
-        g = np.asarray(ref) / np.maximum(self._level(crop), 1.0)
-        g = np.clip(g, 0.5, 2.0)
-        if np.all(np.abs(g - 1.0) < 0.03):
-            return crop
-        return cv2.transform(crop, np.diag(g).astype(np.float32))
+        key = id(ref)
+        n = self._balance_age.get(key, 0)
+        if n == 0 or key not in self._gains:
+            g = np.asarray(ref) / np.maximum(self._level(crop), 1.0)
+            g = np.minimum(np.maximum(g, 0.5), 2.0)
+            self._gains[key] = None if np.all(np.abs(g - 1.0) < 0.03) else np.diag(g).astype(np.float32)
+        self._balance_age[key] = (n + 1) % BALANCE_EVERY
+        m = self._gains[key]
+        return crop if m is None else cv2.transform(crop, m)
 
     def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
         """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
-        return self._refs
+        e, m = getattr(self, "_last_eye_level", None), getattr(self, "_last_mouth_crop", None)
+        if e is None or m is None:
+            return None, None
+        return tuple(float(v) for v in self._level(e)), tuple(float(v) for v in self._level(m))
 
     # -------------------------------------------------------------- helpers
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
@@ -272,71 +281,73 @@ class FaceTracker:
             ov = Overlay(status=LOST, rois=[self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
             return TrackResult(p, ov, {"scores": scores})
 
-        pupils_img = ff.to_image(pup_f)
         # lids and brows in the eye crop, along its up axis through each pupil
         k = ff.scale
-        lid_up, lid_down, brow_h, brow_pts, lid_pts = [], [], [], [], []
+        lid_up, lid_down, brow_h = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
         for i in range(2):
             pc = (pup_f[i, 0] - ox, pup_f[i, 1] - oy)
+            up, down = self.lid_finder.find(crop, grey, pc)
             if closed[i]:
-                up, down = self.lid_finder.find(crop, grey, pc)
                 up, down = min(up, 0.04 * wi), min(down, 0.04 * wi)
-            else:
-                up, down = self.lid_finder.find(crop, grey, pc)
             hb, _ = self.brow_finders[i].find(grey, pc)
-            if not math.isfinite(hb):
-                hb = self.cal.brow_heights[i]
-            lid_up.append(up)
-            lid_down.append(down)
-            brow_h.append(hb)
-            brow_pts.append([pup_f[i, 0], pup_f[i, 1] - hb])
-            lid_pts += [[pup_f[i, 0], pup_f[i, 1] - up], [pup_f[i, 0], pup_f[i, 1] + down]]
-
+            lid_up[i], lid_down[i] = up, down
+            brow_h[i] = hb if math.isfinite(hb) else self.cal.brow_heights[i]
+        (plx, ply), (prx, pry) = pup_f
+        pts = [
+            pup_f,
+            [[plx, ply - brow_h[0]], [prx, pry - brow_h[1]]],
+            [[plx, ply - lid_up[0]], [plx, ply + lid_down[0]], [prx, pry - lid_up[1]], [prx, pry + lid_down[1]]],
+        ]
+        if mouth_res is not None:
+            mo = np.array(mouth_origin, dtype=np.float64)
+            mcx, mcy = mouth_res.centre[0] + mo[0], mouth_res.centre[1] + mo[1]
+            pts += [
+                np.array([mouth_res.left, mouth_res.right, mouth_res.centre]) + mo,
+                [[mcx, mcy - mouth_res.lip_upper], [mcx, mcy + mouth_res.lip_lower]],
+                mouth_res.polygon + mo,
+                mouth_res.raw_polygon + mo,
+            ]
+        img_pts = ff.to_image(np.concatenate([np.asarray(q, dtype=np.float64).reshape(-1, 2) for q in pts]))
+        pupils_img = img_pts[0:2]
         left, right = pupils_img
         mid = 0.5 * (left + right)
         roll = math.degrees(math.atan2(-(right[1] - left[1]), right[0] - left[0]))
         vals = [mid[0], mid[1], roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
         ov = Overlay(
             pupils=pupils_img,
-            brows=ff.to_image(np.array(brow_pts)),
-            lids=ff.to_image(np.array(lid_pts)),
+            brows=img_pts[2:4],
+            lids=img_pts[4:8],
             rois=[self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)],
         )
         status = OK
         if mouth_res is not None:
-            mo = np.array(mouth_origin)
-            corners = ff.to_image(np.array([mouth_res.left, mouth_res.right]) + mo)
-            centre_f = np.array(mouth_res.centre) + mo
-            vals += [float(np.hypot(*(corners[1] - corners[0]))), mouth_res.lip_upper / k, mouth_res.lip_lower / k]
+            n = len(mouth_res.polygon)
+            corners = img_pts[8:10]
+            vals += [math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1]), mouth_res.lip_upper / k, mouth_res.lip_lower / k]
             ov.mouth_corners = corners
-            ov.mouth_centre = ff.to_image(centre_f[None])[0]
-            ov.lip_points = ff.to_image(np.array([[centre_f[0], centre_f[1] - mouth_res.lip_upper], [centre_f[0], centre_f[1] + mouth_res.lip_lower]]))
-            ov.lip_polygon = ff.to_image(mouth_res.polygon + mo)
-            ov.lip_raw_polygon = ff.to_image(mouth_res.raw_polygon + mo)
+            ov.mouth_centre = img_pts[10]
+            ov.lip_points = img_pts[11:13]
+            ov.lip_polygon = img_pts[13 : 13 + n]
+            ov.lip_raw_polygon = img_pts[13 + n : 13 + 2 * n]
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
-            # the mouth centre relative to the measured pupils, for the next frame's crop
-            ff_meas = FaceFrame.from_pupils(tuple(pupils_img[0]), tuple(pupils_img[1]), wi)
+            # the mouth centre in the face frame of the measured pupils, for the next crop
+            ff_meas = FaceFrame.from_pupils(tuple(left), tuple(right), wi)
             self.mouth_face = ff_meas.to_face(ov.mouth_centre[None])[0]
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
         if closed[0] and closed[1]:
             status = EYES_CLOSED
-        conf = float(np.clip(np.mean([max(s, 0.0) for s in scores]), 0.0, 1.0))
+        conf = min(max(0.5 * (max(scores[0], 0.0) + max(scores[1], 0.0)), 0.0), 1.0)
         if mouth_res is None:
             conf *= 0.5
         params = FaceParams.from_values(vals, frame=index, time=time, status=status, confidence=conf)
         ov.status = status
         # motion update
-        new = pupils_img
-        self.velocity = new - self.pupils
-        self.pupils = new
+        self.velocity = pupils_img - self.pupils
+        self.pupils = pupils_img
         self.last = params
-        self._refs = (
-            tuple(float(v) for v in self._level(self._last_eye_level)),
-            tuple(float(v) for v in self._level(self._last_mouth_crop)),
-        )
         debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down]}
         return TrackResult(params, ov, debug)
 

@@ -31,7 +31,7 @@ def _edge(lum: np.ndarray, prob: np.ndarray, k: int, min_contrast: float = 24.0)
     if k == 0:
         return 0.0
     n = len(lum)
-    inner = float(lum[max(k - 2, 0) : k].mean())
+    inner = 0.5 * (float(lum[max(k - 2, 0)]) + float(lum[k - 1]))
     outer = float(lum[k])
     if abs(inner - outer) >= min_contrast:
         half = 0.5 * (inner + outer)
@@ -80,9 +80,9 @@ class LidFinder:
         yi = min(max(int(round(pupil[1])), 0), h - 1)
         y0, y1 = max(yi - self.up_max, 0), min(yi + self.down_max + 1, h)
         strip = bgr[y0:y1, xi - 1 : xi + 2]
-        p = self.interior.prob_u8(strip).mean(axis=1)
+        p = np.add.reduce(self.interior.prob_u8(strip), axis=1, dtype=np.float32) * np.float32(1 / 3)
         q = self.pupil.prob_u8(strip[:, 1])
-        lum = grey[y0:y1, xi - 1 : xi + 2].mean(axis=1)
+        lum = np.add.reduce(grey[y0:y1, xi - 1 : xi + 2], axis=1) * np.float32(1 / 3)
         c = yi - y0
         dy = yi - pupil[1]  # sample j of a walk sits j ∓ dy from the pupil
         up = self._walk(p[c::-1], q[c::-1], lum[c::-1]) - dy

@@ -234,7 +234,7 @@ class MouthFinder:
             a_, b_, c_ = float(pos[best - 1]), float(pos[best]), float(pos[best + 1])
             den = a_ - 2 * b_ + c_
             if den < -1e-6:
-                d = float(np.clip(0.5 * (a_ - c_) / den, -0.5, 0.5))
+                d = min(max(0.5 * (a_ - c_) / den, -0.5), 0.5)
                 yb += d
                 xb = b_ - 0.25 * (a_ - c_) * d
         xx = lo + xb if side > 0 else hi - xb
@@ -252,7 +252,7 @@ class MouthFinder:
         xs = np.full_like(ys, min(max(x, 0.0), w - 1.0))
         vals = cv2.remap(norm, xs.reshape(1, -1), ys.reshape(1, -1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
         # half-way between the lip just inside and the skin just outside this very edge
-        inner, outer = float(np.median(vals[:8])), float(np.median(vals[-4:]))
+        inner, outer = float(vals[:8].mean()), float(vals[-4:].mean())
         half = 0.5 * (inner + outer) if inner - outer > 0.3 else 0.5
         inside = vals >= half
         idx = np.nonzero(inside[:-1] & ~inside[1:])[0]
@@ -286,8 +286,8 @@ class MouthFinder:
         blob, st, area = found
         x0, y0, bw, bh = (int(v) for v in st[:4])
         sub = blob[y0 : y0 + bh, x0 : x0 + bw]
-        ys, xs = np.nonzero(sub)
-        centre = (float(xs.mean()) + x0, float(ys.mean()) + y0)
+        m = cv2.moments(sub.view(np.uint8), binaryImage=True)
+        centre = (m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0)
         max_r = 0.5 * math.hypot(bw, bh) + 3.0
         r0 = self.radial(blob, centre, max_r)
         raw = self.polygon(centre, r0)
@@ -310,9 +310,9 @@ class MouthFinder:
         r = self.snake(norm, centre, r0)
         poly = self.polygon(centre, r)
         ends = []
-        for x_end in (int(xs.min()), int(xs.max())):
-            rows = ys[xs == x_end]
-            ends.append((x_end + x0, float(rows.mean()) + y0))
+        for c in (0, bw - 1):  # the blob's leftmost and rightmost columns
+            rows = np.flatnonzero(sub[:, c])
+            ends.append((c + x0, 0.5 * float(rows[0] + rows[-1]) + y0))
         left = self._corner(norm, ends[0], -1)
         right = self._corner(norm, ends[1], +1)
         cx = 0.5 * (left[0] + right[0])

@@ -18,10 +18,11 @@ from tracker.colour_model import ColourClassifier
 
 def parabola_offset(a: float, b: float, c: float) -> float:
     """Sub-sample offset (−0.5..0.5) of the extremum of a parabola through (−1,a), (0,b), (1,c)."""
+    a, b, c = float(a), float(b), float(c)
     den = a - 2.0 * b + c
     if abs(den) < 1e-12:
         return 0.0
-    return float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+    return min(max(0.5 * (a - c) / den, -0.5), 0.5)
 
 
 def subpixel_peak(score: np.ndarray, x: int, y: int) -> tuple[float, float]:
