@@ -60,6 +60,12 @@ class MorphEngine:
         if self._PartMorpher is None and self._exact is None:
             self.note = "morph engine not available: showing a cross-dissolve"
 
+    def wait(self, timeout: float = 10.0) -> None:
+        """Let a table build in progress finish (before the window closes)."""
+        t = self._building
+        if t is not None:
+            t.join(timeout)
+
     @property
     def busy(self) -> bool:
         return self._building is not None and self._building.is_alive()
@@ -253,6 +259,7 @@ class PreviewPanel(QWidget):
         self.engine = MorphEngine()
         self.wait_for_morph = False  # tests set True to render synchronously
         self.live = None
+        self._stopped: list = []  # live previews told to stop, joined when the window closes
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
         self.morph_view = ImageLabel("morph")
@@ -396,7 +403,8 @@ class PreviewPanel(QWidget):
     def _toggle_live(self, on: bool):
         if not on:
             if self.live is not None:
-                self.live.stop()
+                self.live.stop(wait=0.0)  # it ends by itself after the current frame
+                self._stopped.append(self.live)
                 self.live = None
             self.live_button.setText("Start live preview")
             self.dissolve_view.show()
@@ -417,6 +425,8 @@ class PreviewPanel(QWidget):
         self.live_status.setText(note)
 
     def _live_stopped(self):
+        if self.live is not None:
+            self._stopped.append(self.live)
         self.live = None
         self.live_button.blockSignals(True)
         self.live_button.setChecked(False)
@@ -425,9 +435,15 @@ class PreviewPanel(QWidget):
         self.dissolve_view.show()
 
     def stop(self):
+        """Stop live mode and wait for background work (the window is closing)."""
+        self._timer.stop()
         if self.live is not None:
-            self.live.stop()
+            self._stopped.append(self.live)
             self.live = None
+        for live in self._stopped:
+            live.stop(wait=15.0)
+        self._stopped.clear()
+        self.engine.wait()
 
 
 _CALIBRATION: list = []  # the bundled performer's calibration, made once per process
@@ -466,6 +482,7 @@ class LivePreview:
         self._art_version = 0
         self._changed_at = 0.0
         doc.changed.connect(self._on_changed)
+        self._connected = True
         self.timer = QTimer()
         self.timer.setInterval(40)
         self.timer.timeout.connect(self._poll)
@@ -538,9 +555,11 @@ class LivePreview:
     def stop(self, wait: float = 2.0):
         self.timer.stop()
         self._stop.set()
-        try:
-            self.doc.changed.disconnect(self._on_changed)
-        except (RuntimeError, TypeError):
-            pass
+        if self._connected:
+            self._connected = False
+            try:
+                self.doc.changed.disconnect(self._on_changed)
+            except (RuntimeError, TypeError):
+                pass
         if self.thread.is_alive() and threading.current_thread() is not self.thread:
             self.thread.join(wait)
