@@ -41,33 +41,9 @@ def performer():
     return {"perf": perf, "frames": frames, "clicks": perf.clicks(), "calibration": performance_calibration(perf)}
 
 
-class _ListCamera:
-    """Stand-in for ``tracker.sources.FakeCamera`` in builds that do not have it yet."""
-
-    def __init__(self, frames, fps=30, loop=False):
-        self.frames, self.fps, self.loop = list(frames), float(fps), loop
-        self.size = (self.frames[0].shape[1], self.frames[0].shape[0])
-
-    def __iter__(self):
-        from types import SimpleNamespace
-
-        i = 0
-        while True:
-            for img in self.frames:
-                yield SimpleNamespace(index=i, time=i / self.fps, image=img)
-                i += 1
-            if not self.loop:
-                return
-
-    def close(self):
-        pass
-
-
 def _fake_camera(frames, loop=True):
-    try:
-        from tracker.sources import FakeCamera
-    except ImportError:
-        FakeCamera = _ListCamera
+    from tracker.sources import FakeCamera
+
     return FakeCamera(frames, fps=30, loop=loop)
 
 
