@@ -113,6 +113,8 @@ def _resolve(host: str, port: int) -> tuple[int, tuple]:
         raise NetError(f"cannot resolve host {host!r} ({getattr(e, 'strerror', None) or e})") from None
     if not infos:
         raise NetError(f"cannot resolve host {host!r}")
+    # prefer IPv4: "localhost" may resolve to ::1 first while the receiver listens on 127.0.0.1
+    infos.sort(key=lambda i: i[0] != socket.AF_INET)
     family, _, _, _, addr = infos[0]
     return family, addr
 
