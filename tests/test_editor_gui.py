@@ -593,3 +593,29 @@ def test_starter_lines_button(make_window, images):
     assert not any(win.doc.artset.eyes.drawings[0].lines.shape[0] for _ in [0])
     win.doc.undo_stack.undo()
     assert {len(d.lines) for d in win.doc.artset.mouth.drawings} == {0}
+
+
+def test_every_menu_action_is_safe_with_or_without_a_character(make_window, monkeypatch, images):
+    from PySide6.QtWidgets import QDialog, QFileDialog, QMenu
+
+    win = make_window()
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: "")
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([], ""))
+    monkeypatch.setattr(QDialog, "exec", lambda self: 0)
+    from PySide6.QtWidgets import QMessageBox
+
+    monkeypatch.setattr(QMessageBox, "information", lambda *a, **k: 0)
+    skip = {"&Close"}
+
+    def trigger_all():
+        for menu in win.menuBar().findChildren(QMenu):
+            for act in menu.actions():
+                if act.menu() is None and not act.isSeparator() and act.text() not in skip and act.isEnabled():
+                    act.trigger()
+
+    trigger_all()
+    assert win.doc.artset is None
+    heads, eyes, mouths = images
+    win.new_character("Menus", heads, eyes, mouths)
+    trigger_all()
+    assert win.doc.artset is not None

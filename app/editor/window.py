@@ -212,7 +212,7 @@ class EditorWindow(QMainWindow):
         bar.addWidget(self.starter_button)
         self.accept_button = QPushButton("Accept dashed lines")
         self.accept_button.setToolTip("the copied (dashed) lines already sit on their features here")
-        self.accept_button.clicked.connect(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
+        self.accept_button.clicked.connect(self._safe(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing)))
         bar.addWidget(self.accept_button)
         bar.addStretch(1)
         lv.addLayout(bar)
@@ -372,12 +372,13 @@ class EditorWindow(QMainWindow):
         e.addAction(undo)
         e.addAction(redo)
         e.addSeparator()
-        e.addAction("Delete selected line", lambda: self.doc.line >= 0 and self.doc.delete_line(self.doc.part, self.doc.line))
-        e.addAction("Accept dashed lines in this drawing", lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
+        e.addAction("Delete selected line", self._safe(lambda: self.doc.line >= 0 and self.doc.delete_line(self.doc.part, self.doc.line)))
+        e.addAction("Accept dashed lines in this drawing", self._safe(lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing)))
         e.addAction("Add starter lines to this part", self._starter_lines)
-        e.addAction("Resize drawings to the box", lambda: self.doc.fit_part(self.doc.part, "resize"))
-        e.addAction("Crop drawings to the box", lambda: self.doc.fit_part(self.doc.part, "crop"))
-        e.addAction("Resize heads to the canvas", lambda: self.doc.fit_heads("resize"))
+        e.addAction("Resize drawings to the box", self._safe(lambda: self.doc.fit_part(self.doc.part, "resize")))
+        e.addAction("Crop drawings to the box", self._safe(lambda: self.doc.fit_part(self.doc.part, "crop")))
+        e.addAction("Resize heads to the canvas", self._safe(lambda: self.doc.fit_heads("resize")))
+        e.addAction("Crop heads to the canvas", self._safe(lambda: self.doc.fit_heads("crop")))
         a = mb.addMenu("&Add")
         a.addAction("Head images…", lambda: self._browse_add("heads"))
         a.addAction("Eye drawings…", lambda: self._browse_add("eyes"))
@@ -391,6 +392,15 @@ class EditorWindow(QMainWindow):
         tb.addAction(undo)
         tb.addAction(redo)
         self.addToolBar(tb)
+
+    def _safe(self, fn):
+        """A menu slot that reports an impossible edit in the status bar instead of raising."""
+        def run(*_):
+            try:
+                fn()
+            except (ed.EditError, IndexError, KeyError) as e:
+                self.statusBar().showMessage(str(e) if isinstance(e, ed.EditError) else "nothing to do here", 6000)
+        return run
 
     # ------------------------------------------------------------------ refresh
     def _show_message(self, text: str):
