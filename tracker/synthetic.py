@@ -529,6 +529,62 @@ def _noise_bank(w: int, h: int) -> np.ndarray:
     return bank
 
 
+SPRITE_BOX = (-1.3, -1.35, 1.3, 1.95)
+"""Face-local box (units of ipd: x0, y0, x1, y1) of the head sprite: hair, ears, skin, nose."""
+FEATURE_BOX = (-0.95, -0.8, 0.95, 1.75)
+"""Face-local box (units of ipd) holding every eye, brow and mouth shape at any expression."""
+
+
+@functools.lru_cache(maxsize=16)
+def _head_sprite(k: int, skin: BGR, hair: BGR, shading: float) -> tuple[np.ndarray, np.ndarray]:
+    """The rigid parts of the head drawn once at ``k`` pixels per ipd: straight BGR and alpha, uint8.
+
+    Sprite pixel (0, 0) is the face-local point ``(SPRITE_BOX[0], SPRITE_BOX[1]) · k``. Frames warp
+    it into place (rotation, scale, shift), which costs far less than drawing these shapes.
+    """
+    x0, y0, x1, y1 = SPRITE_BOX
+    sw, sh = int(math.ceil((x1 - x0) * k)), int(math.ceil((y1 - y0) * k))
+    pose = _Pose(-x0 * k, -y0 * k, 1.0, 0.0)
+    L = pose.apply
+    box = _Box(0, 0, sw, sh)
+    col = np.zeros((sh, sw, 3), np.float32)
+    alpha = np.zeros((sh, sw, 1), np.float32)
+    sk = np.asarray(skin, np.float32)
+
+    def over(polys, colour):
+        a = _coverage([L(p) for p in polys], box, 4)[..., None]
+        col[:] = col * (1.0 - a) + a * np.asarray(colour, np.float32)
+        alpha[:] = alpha * (1.0 - a) + a
+
+    u = float(k)
+    over([_ellipse(0.0, 0.12 * u, 1.1 * u, 1.38 * u)[_SIN < 0.25]], hair)
+    over([_ellipse(sx * 0.98 * u, 0.22 * u, 0.14 * u, 0.24 * u) for sx in (-1, 1)], sk * 0.9)
+    lx = (np.arange(sw, dtype=np.float32) + x0 * k)[None, :]
+    ly = (np.arange(sh, dtype=np.float32) + y0 * k)[:, None]
+    rx, ry = lx / (HEAD_A * u), (ly - HEAD_CY * u) / (HEAD_B * u)
+    shade = 1.04 - shading * (0.2 * (rx * rx + ry * ry) ** 2 + 0.05 * rx)
+    over([_head_outline(u)], shade[..., None] * sk)
+    # hair over the forehead: the top of a slightly larger oval down to a hairline
+    top = _ellipse(0.0, 0.12 * u, 1.07 * u, 1.34 * u)
+    arc = top[top[:, 1] < 0.05 * u]  # angles π..2π: left side → over the top → right side
+    hx = np.linspace(1.0, -1.0, 31) * u
+    hairline = np.stack([hx, (-0.74 + 0.32 * (hx / u) ** 4) * u], axis=1)
+    over([np.concatenate([arc, hairline])], hair)
+    # nose: a soft shadow, a lighter tip, two nostrils
+    over([_ellipse(0.0, 0.70 * u, 0.16 * u, 0.05 * u)], sk * 0.93)
+    over([_ellipse(0.0, 0.58 * u, 0.12 * u, 0.1 * u)], sk * 1.04)
+    over([_ellipse(sx * 0.085 * u, 0.65 * u, 0.04 * u, 0.022 * u) for sx in (-1, 1)], sk * 0.62)
+    # straight (un-premultiplied) colour, pushed out past the edges so warping leaves no fringe
+    wide_c = cv2.GaussianBlur(col, (0, 0), 0.05 * k)
+    wide_a = cv2.GaussianBlur(alpha[..., 0], (0, 0), 0.05 * k)[..., None]
+    straight = np.where(alpha > 1e-3, col / np.maximum(alpha, 1e-3), wide_c / np.maximum(wide_a, 1e-3))
+    c8 = np.clip(straight + 0.5, 0, 255).astype(np.uint8)
+    a8 = np.clip(alpha[..., 0] * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    c8.setflags(write=False)
+    a8.setflags(write=False)
+    return c8, a8
+
+
 def _mul(c, k: float) -> tuple[float, float, float]:
     return (c[0] * k, c[1] * k, c[2] * k)
 
@@ -566,17 +622,37 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     _draw_body(frame, st, style, pose)
     L = pose.apply  # local polygon → image polygon
 
-    head = L(_head_outline(u))
-    hair_back = L(_ellipse(0.0, 0.12 * u, 1.1 * u, 1.38 * u)[_SIN < 0.25])
     body = _body_pose(st, pose)
     neck = np.concatenate([L(np.array([[-0.40 * u, 1.2 * u], [0.40 * u, 1.2 * u]])),
                            body.apply(np.array([[0.46 * u, 0.3 * u], [-0.46 * u, 0.3 * u]]))])
-    ears = [L(_ellipse(sx * 0.98 * u, 0.22 * u, 0.14 * u, 0.24 * u)) for sx in (-1, 1)]
-    bx = _Box.around([head, hair_back, neck] + ears, w, h, pad=3)
+    skin = np.asarray(style.skin, np.float32)
+    if _Box.around([neck], w, h) is not None:
+        cv2.fillPoly(frame, [np.round(np.clip(neck, -1e5, 1e5) * 16).astype(np.int32)],
+                     tuple(float(v) * 0.8 for v in style.skin),
+                     cv2.LINE_AA, 4)
+    # the rigid head (hair, ears, shaded skin, nose): a cached sprite warped into place
+    x0, y0, x1, y1 = SPRITE_BOX
+    hb = _Box.around([L(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) * u)], w, h)
+    if hb is not None:
+        k = int(min(max(2 ** math.ceil(math.log2(max(u, 1.0))), 32), 512))
+        s_col, s_alpha = _head_sprite(k, tuple(style.skin), tuple(style.hair), float(style.shading))
+        sc = u / k
+        m = np.array([[pose.c * sc, pose.s * sc, 0.0], [-pose.s * sc, pose.c * sc, 0.0]])
+        m[:, 2] = np.array(pose.point(x0 * u, y0 * u)) - [hb.x0, hb.y0]
+        size = (hb.x1 - hb.x0, hb.y1 - hb.y0)
+        col = cv2.warpAffine(s_col, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        alpha = cv2.warpAffine(s_alpha, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                               borderValue=0)
+        a = alpha.astype(np.float32) * np.float32(1.0 / 255.0)
+        sub = frame[hb.y0:hb.y1, hb.x0:hb.x1]
+        sub[:] = cv2.blendLinear(sub, col, 1.0 - a, a)
+
+    # eyes, brows and mouth: drawn exactly, in a float buffer around them
+    fx0, fy0, fx1, fy1 = FEATURE_BOX
+    bx = _Box.around([L(np.array([[fx0, fy0], [fx1, fy0], [fx1, fy1], [fx0, fy1]]) * u)], w, h, pad=3)
     if bx is None:
         return
     buf = frame[bx.y0:bx.y1, bx.x0:bx.x1].astype(np.float32)
-    skin = np.asarray(style.skin, np.float32)
 
     def paint(polys, colour, ss=4, box=None):
         box = box or _clip_box(_Box.around(polys, w, h), bx)
@@ -602,30 +678,6 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
         """Compose a feature in its own buffer, then paint it inside ``outline``: edge pixels then
         mix the feature with the skin under it exactly once (layers reach past the outline)."""
         _blend(buf, bx, box, _coverage(outline, box, FEATURE_SS), compose(box, base, layers))
-
-    paint([hair_back], style.hair, ss=2)
-    paint([neck], _mul(skin, 0.8), ss=2)
-    paint(ears, _mul(skin, 0.9), ss=2)
-    hbox = _clip_box(_Box.around([head], w, h), bx)
-    if hbox is not None:
-        xs = np.arange(hbox.x0, hbox.x1, dtype=np.float32)[None, :]
-        ys = np.arange(hbox.y0, hbox.y1, dtype=np.float32)[:, None]
-        lx, ly = pose.local(xs, ys)
-        rx, ry = lx / (HEAD_A * u), (ly - HEAD_CY * u) / (HEAD_B * u)
-        shade = 1.04 - style.shading * (0.2 * (rx * rx + ry * ry) ** 2 + 0.05 * rx)
-        paint([head], shade[..., None] * skin, ss=2, box=hbox)
-
-    # hair over the forehead: the top of a slightly larger oval down to a hairline
-    top = _ellipse(0.0, 0.12 * u, 1.07 * u, 1.34 * u)
-    arc = top[top[:, 1] < 0.05 * u]  # angles π..2π: left side → over the top → right side
-    hx = np.linspace(1.0, -1.0, 31) * u
-    hairline = np.stack([hx, (-0.74 + 0.32 * (hx / u) ** 4) * u], axis=1)
-    paint([L(np.concatenate([arc, hairline]))], style.hair, ss=2)
-
-    # nose: a lighter tip and two nostrils
-    paint([L(_ellipse(0.0, 0.70 * u, 0.16 * u, 0.05 * u))], _mul(skin, 0.93))
-    paint([L(_ellipse(0.0, 0.58 * u, 0.12 * u, 0.1 * u))], _mul(skin, 1.04))
-    paint([L(_ellipse(sx * 0.085 * u, 0.65 * u, 0.04 * u, 0.022 * u)) for sx in (-1, 1)], _mul(skin, 0.62))
 
     gx, gy = st.gaze_x * u, st.gaze_y * u
     hw = EYE_HW * u
