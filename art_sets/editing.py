@@ -137,9 +137,33 @@ def slug(text: str) -> str:
     return s or "drawing"
 
 
-def name_from_path(path: str | Path) -> str:
-    """Expression name from an image file name: ``"Mouth_AH.png"`` -> ``"mouth_ah"``."""
-    return slug(Path(path).stem)
+_ROLE_WORDS = {
+    "heads": ("heads", "head", "face", "faces"),
+    "eyes": ("eyes", "eye", "brows", "brow"),
+    "mouth": ("mouths", "mouth", "lips", "lip"),
+}
+
+
+def name_from_path(path: str | Path, part: str | None = None) -> str:
+    """Expression name from an image file name, without a leading word naming the part:
+    ``"Mouth_AH.png"`` -> ``"ah"`` (part "mouth"), ``"eyes-open.png"`` -> ``"open"``."""
+    name = slug(Path(path).stem)
+    for word in _ROLE_WORDS.get(part or "", ()):
+        for sep in ("-", "_"):
+            if name.startswith(word + sep) and len(name) > len(word) + 1:
+                return name[len(word) + 1:].strip("-_") or name
+    return name
+
+
+def sort_images(paths: Iterable[str | Path]) -> dict[str, list[Path]]:
+    """Sort image files into ``heads``, ``eyes`` and ``mouth`` by a word in the file's name or its
+    folder's name (head/face, eye/brow, mouth/lip); the rest go to ``"unsorted"``. Sorted by name."""
+    out: dict[str, list[Path]] = {"heads": [], "eyes": [], "mouth": [], "unsorted": []}
+    for p in sorted(Path(x) for x in paths):
+        words = re.split(r"[^a-z]+", f"{p.parent.name} {p.stem}".lower())
+        role = next((r for r, ws in _ROLE_WORDS.items() if any(w in ws for w in words)), "unsorted")
+        out[role].append(p)
+    return out
 
 
 def unique_name(name: str, taken: Iterable[str]) -> str:

@@ -339,3 +339,16 @@ def test_add_starter_lines_to_a_part():
     assert h_open > h_closed
     blank = np.full((40, 100, 4), 255, np.uint8)
     assert ed.suggest_lines(blank, "eyes").shape == (8, 4)
+
+
+def test_names_and_sorting_from_file_names(tmp_path):
+    assert ed.name_from_path("scans/Mouth_AH.png", "mouth") == "ah"
+    assert ed.name_from_path("eyes-open.png", "eyes") == "open"
+    assert ed.name_from_path("mouth.png", "mouth") == "mouth"
+    assert ed.name_from_path("Grin 2.PNG") == "grin-2"
+    s = ed.sort_images([tmp_path / "head-1.png", tmp_path / "mouths" / "ah.png", tmp_path / "Eye_wide.png",
+                        tmp_path / "brows_angry.png", tmp_path / "lip_oo.png", tmp_path / "cat.png"])
+    assert [p.name for p in s["heads"]] == ["head-1.png"]
+    assert [p.name for p in s["eyes"]] == ["Eye_wide.png", "brows_angry.png"]
+    assert sorted(p.name for p in s["mouth"]) == ["ah.png", "lip_oo.png"]
+    assert [p.name for p in s["unsorted"]] == ["cat.png"]

@@ -619,3 +619,24 @@ def test_every_menu_action_is_safe_with_or_without_a_character(make_window, monk
     win.new_character("Menus", heads, eyes, mouths)
     trigger_all()
     assert win.doc.artset is not None
+
+
+def test_new_character_dialog_fills_from_a_folder(make_window, tmp_path, qtbot):
+    from app.editor.window import NewCharacterDialog
+
+    folder = tmp_path / "my_monster"
+    (folder / "mouths").mkdir(parents=True)
+    _head(folder / "head.png")
+    for k, n in enumerate(["open", "closed", "wide"]):
+        _eyes(folder / f"eyes_{n}.png", k)
+    for k, n in enumerate(["neutral", "smile", "ah"]):
+        _mouth(folder / "mouths" / f"mouth-{n}.png", k)
+    dlg = NewCharacterDialog()
+    qtbot.addWidget(dlg)
+    dlg.fill_from_folder(folder)
+    assert dlg.name.text() == "My Monster"
+    assert [len(dlg.paths[k]) for k in ("heads", "eyes", "mouth")] == [1, 3, 3]
+    win = make_window()
+    win.new_character(dlg.name.text(), dlg.paths["heads"], dlg.paths["eyes"], dlg.paths["mouth"])
+    assert win.doc.artset.eyes.names() == ["closed", "open", "wide"]
+    assert win.doc.artset.mouth.names() == ["ah", "neutral", "smile"]

@@ -201,8 +201,8 @@ class EditorDocument(QObject):
         art = ed.new_artset(
             name,
             [ed.load_image(p) for p in heads],
-            [(ed.name_from_path(p), ed.load_image(p)) for p in eyes],
-            [(ed.name_from_path(p), ed.load_image(p)) for p in mouths],
+            [(ed.name_from_path(p, "eyes"), ed.load_image(p)) for p in eyes],
+            [(ed.name_from_path(p, "mouth"), ed.load_image(p)) for p in mouths],
             author=author,
             fit=fit,
         )
@@ -324,7 +324,7 @@ class EditorDocument(QObject):
     # convenience wrappers: the actions the window's menus, canvases and tests use
     def add_drawings(self, part: str, paths: Iterable[str | Path], fit: str = "resize") -> list[int]:
         paths = list(paths)
-        images = [(ed.name_from_path(p), ed.load_image(p)) for p in paths]
+        images = [(ed.name_from_path(p, part), ed.load_image(p)) for p in paths]
 
         def fn(art):
             return [ed.add_drawing(art, part, n, img, fit) for n, img in images]

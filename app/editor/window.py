@@ -93,6 +93,11 @@ class NewCharacterDialog(QDialog):
             h.addLayout(col)
             self.lists[key] = lst
             form.addRow(label, box)
+        from_folder = QPushButton("Fill from a folder…")
+        from_folder.setToolTip("sorts the images of a folder (and its sub-folders) by the words head/face, "
+                               "eye/brow and mouth/lip in their file or folder names")
+        from_folder.clicked.connect(self._from_folder)
+        form.addRow(from_folder)
         self.fit = QComboBox()
         self.fit.addItems(["resize", "crop"])
         form.addRow("Drawings of another size", self.fit)
@@ -105,6 +110,23 @@ class NewCharacterDialog(QDialog):
         bb.rejected.connect(self.reject)
         form.addRow(bb)
         self.paths: dict[str, list[Path]] = {k: [] for k in self.lists}
+
+    def _from_folder(self):
+        d = QFileDialog.getExistingDirectory(self, "Folder with head, eye and mouth images")
+        if d:
+            self.fill_from_folder(Path(d))
+
+    def fill_from_folder(self, folder: Path) -> dict:
+        """Sort a folder's images (one level of sub-folders too) into the three lists."""
+        files = [p for p in Path(folder).rglob("*") if p.suffix.lower() in ed.IMAGE_SUFFIXES
+                 and len(p.relative_to(folder).parts) <= 2]
+        sorted_ = ed.sort_images(files)
+        for key in ("heads", "eyes", "mouth"):
+            self._clear(key)
+            self._add(key, sorted_[key])
+        if not self.name.text().strip() or self.name.text() == "My character":
+            self.name.setText(Path(folder).name.replace("_", " ").replace("-", " ").title())
+        return sorted_
 
     def _clear(self, key):
         self.lists[key].clear()
