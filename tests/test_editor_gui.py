@@ -147,6 +147,13 @@ def test_build_character_draw_save_reload_validate(make_window, images, tmp_path
     assert validate(folder) == []
     back = load_artset(folder)
     assert ed.same_artset(back, doc.artset)
+    try:  # the renderer takes what the editor made
+        from morph.renderer import CharacterRenderer
+    except ImportError:
+        CharacterRenderer = None
+    if CharacterRenderer is not None:
+        frame = CharacterRenderer(back).render(eyes=([0, 1, 2], [0.2, 0.3, 0.5]), mouth=([0, 1, 2], [0.5, 0.5, 0.0]))
+        assert frame.shape == (280, 240, 4) and frame[:, :, 3].max() == 255
     assert not doc.dirty and not (folder / ".artset.autosave").exists()
     win.problems.refill()
     assert "no problems" in win.problems.item(0).text()
