@@ -288,8 +288,8 @@ def _refine_pupil(grey: np.ndarray, click: tuple[float, float], ipd: float) -> t
     xi, yi = int(round(click[0])), int(round(click[1]))
     x0, x1 = max(xi - r, 0), min(xi + r + 1, w)
     y0, y1 = max(yi - r, 0), min(yi + r + 1, h)
-    win = grey[y0:y1, x0:x1]
     rp = max(0.04 * ipd, 1.0)
+    win = grey[y0:y1, x0:x1]
     kd = _odd(2 * rp, 3)
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kd, kd)).astype(np.float32)
     disc /= disc.sum()
@@ -309,10 +309,17 @@ def _refine_pupil(grey: np.ndarray, click: tuple[float, float], ipd: float) -> t
     comp = lab == lab[ky, kx]
     if not mask[ky, kx] or comp.sum() < 2:
         return (cx, cy), rp
-    wgt = np.clip(thr - win, 0, None) * comp
-    x = float((wgt * xx).sum() / wgt.sum())
-    y = float((wgt * yy).sum() / wgt.sum())
-    return (x, y), math.sqrt(comp.sum() / math.pi)
+    # the centre of the dark disc's convex hull: a highlight biting into its edge is a
+    # concavity the hull fills, so it does not pull the centre away
+    cnts, _ = cv2.findContours(comp.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    hull = cv2.convexHull(max(cnts, key=len))
+    m = cv2.moments(hull)
+    if m["m00"] <= 1.0:
+        wgt = np.clip(thr - win, 0, None) * comp
+        return (float((wgt * xx).sum() / wgt.sum()), float((wgt * yy).sum() / wgt.sum())), rp
+    x = x0 + m["m10"] / m["m00"]
+    y = y0 + m["m01"] / m["m00"]
+    return (float(x), float(y)), math.sqrt(comp.sum() / math.pi)
 
 
 def _two_means(v: np.ndarray) -> tuple[float, float] | None:
