@@ -410,15 +410,12 @@ def clicks_for(state: FaceState, frame: int = 0) -> dict:
 
 def _inset(pts: np.ndarray, d: float) -> np.ndarray:
     """Move each vertex of a closed polygon ``d`` pixels towards the inside."""
-    tan = np.empty_like(pts)
-    tan[1:-1] = pts[2:] - pts[:-2]
-    tan[0] = pts[1] - pts[-1]
-    tan[-1] = pts[0] - pts[-2]
-    nrm = tan[:, ::-1] * np.array([1.0, -1.0])
-    nrm /= np.sqrt((nrm * nrm).sum(axis=1, keepdims=True)) + 1e-12
     x, y = pts[:, 0], pts[:, 1]
-    area2 = float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
-    return pts - (d if area2 > 0 else -d) * nrm
+    tx = np.roll(x, -1) - np.roll(x, 1)
+    ty = np.roll(y, -1) - np.roll(y, 1)
+    area2 = float(x @ np.roll(y, -1) - np.roll(x, -1) @ y)
+    k = (d if area2 > 0 else -d) / (np.hypot(tx, ty) + 1e-12)
+    return np.stack([x - k * ty, y + k * tx], axis=1)
 
 
 class _Box:
@@ -451,14 +448,10 @@ def _coverage(polys: Sequence[np.ndarray], box: _Box, ss: int = 4) -> np.ndarray
     """Fraction of each pixel of ``box`` covered by the union of ``polys`` (image coords), float32."""
     h, w = box.shape
     big = np.zeros((h * ss, w * ss), np.uint8)
-    off = np.array([box.x0, box.y0], np.float64)
-    ints = []
-    for p in polys:
-        if len(p) < 3:
-            continue
-        q = (_inset(p, 0.5 / ss) - off) * ss + (ss - 1) / 2.0
-        q = np.clip(q, -1e6, 1e6)
-        ints.append(np.round(q * 16.0).astype(np.int32))
+    # sub-pixel j of pixel i has its centre at i - 0.5 + (j + 0.5) / ss; 4 fractional bits
+    off = 16.0 * (np.array([(ss - 1) / 2.0, (ss - 1) / 2.0]) - ss * np.array([box.x0, box.y0], np.float64))
+    ints = [np.rint(np.clip(_inset(p, 0.5 / ss) * (16.0 * ss) + off, -2e9, 2e9)).astype(np.int32)
+            for p in polys if len(p) >= 3]
     if ints:
         cv2.fillPoly(big, ints, 255, cv2.LINE_8, 4)
     if ss == 1:
