@@ -100,10 +100,15 @@ def test_morph_is_cleaner_than_dissolve(art):
     from benchmarks.bench_art_sets import ghosting
     from art_sets.sheet import cross_dissolve, to_straight
 
-    for part, (n0, n1) in ((art.mouth, ("neutral", "ah")), (art.eyes, ("open", "wide"))):
+    pairs = ((art.mouth, "neutral", "ah"), (art.mouth, "neutral", "oo"), (art.mouth, "smile", "ah"),
+             (art.eyes, "open", "wide"), (art.eyes, "open", "angry"), (art.eyes, "wide", "squint"))
+    morphed = dissolved = 0
+    for part, n0, n1 in pairs:
         a, b = part.drawings[part.index(n0)], part.drawings[part.index(n1)]
         m = to_straight(bn.polymorph_exact([a.image, b.image], [a.lines, b.lines], [0.5, 0.5]))
-        assert ghosting(a.image, b.image, m) < 0.8 * ghosting(a.image, b.image, cross_dissolve(a.image, b.image))
+        morphed += ghosting(a.image, b.image, m)
+        dissolved += ghosting(a.image, b.image, cross_dissolve(a.image, b.image))
+    assert morphed < 0.75 * dissolved, (morphed, dissolved)
 
 
 # --- the ink renderer -------------------------------------------------------------------------------

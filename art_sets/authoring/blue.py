@@ -60,6 +60,8 @@ class Blue(Character):
             p = point_at(g.upper, u)
             d = np.array([-g.sgn * 0.16 * hw, -0.2 * hw if not g.closed else 0.18 * hw])
             s.stroke([p, p + d], 1.6, BLUE, rng=rng, grain=0.6, taper=(0.0, 0.9), opacity=0.85)
+    def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        hw = g.hw
         # brow: a band of short diagonal strokes
         n = 16
         for i, u in enumerate(np.linspace(0.02, 0.98, n)):

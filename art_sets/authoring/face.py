@@ -230,6 +230,9 @@ class Character:
     def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng: np.random.Generator) -> None:  # pragma: no cover
         raise NotImplementedError
 
+    def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng: np.random.Generator) -> None:  # pragma: no cover
+        raise NotImplementedError
+
     def draw_mouth(self, s: Surface, g: MouthGeom, rng: np.random.Generator) -> None:  # pragma: no cover
         raise NotImplementedError
 
@@ -257,11 +260,15 @@ class Character:
         for pname, box, poses in (("eyes", self.eyes_box, self.eyes), ("mouth", self.mouth_box, self.mouths)):
             drawings = []
             for i, (dname, pose) in enumerate(poses.items()):
-                rng = np.random.default_rng([self.seed, 1 if pname == "eyes" else 2, i])
+                # the same seed for every drawing of a part: features drawn by the same calls get the
+                # same wobble and jitter, so they line up under the morph instead of shimmering
+                rng = np.random.default_rng([self.seed, 1 if pname == "eyes" else 2])
                 bg = self.mouth_skin if pname == "mouth" and self.mouth_skin else self.skin
                 s = Surface(box[:2], box[2:], tex, background=bg)
                 if pname == "eyes":
                     geoms = self.eye_geoms(pose)
+                    for g in geoms:  # brows first, while every drawing's random stream is still in step
+                        self.draw_brow(s, g, pose, rng)
                     for g in geoms:
                         self.draw_eye(s, g, pose, rng)
                     lines = np.concatenate([g.lines() for g in geoms])

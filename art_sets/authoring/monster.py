@@ -76,6 +76,8 @@ class Monster(Character):
             s.fill(np.concatenate([lid_top, (g.upper + (0, 1))[::-1]]), SHADE)
             self.pen(s, g.upper, 5.5, rng, taper=(0.15, 0.15))
             self.pen(s, sub_curve(g.upper - (0, 0.25 * hw), 0.3, 0.7), 2.0, rng, taper=(0.5, 0.5))
+    def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        hw = g.hw
         # bony brow ridge
         top = g.brow - (0, 0.2 * hw)
         bot = g.brow + (0, 0.16 * hw)

@@ -57,9 +57,8 @@ class Straight(Character):
                 p = sub_curve(g.upper, u, u, 2)[0]
                 d = np.array([-g.sgn * 0.12 * hw, 0.22 * hw]) * (0.6 + u)
                 self.pen(s, [p, p + d], 2.2, rng, taper=(0.0, 0.9))
-        self.draw_brow(s, g, rng)
 
-    def draw_brow(self, s: Surface, g: EyeGeom, rng) -> None:
+    def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         upper = offset(g.brow, -2.6)
         lower = offset(g.brow, 2.6)
         u = np.linspace(0, 1, len(g.brow))
