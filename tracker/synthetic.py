@@ -514,10 +514,11 @@ def _background(w: int, h: int, colour: BGR) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=4)
-def _noise_bank(w: int, h: int) -> np.ndarray:
-    """Unit gaussian noise, 2 frames plus a margin, float32; frames take random windows of it."""
+def _noise_bank(w: int, h: int, sigma: float) -> np.ndarray:
+    """Gaussian noise of ``sigma`` grey levels, rounded to int16: 2 frames plus a margin; each
+    frame adds a random window of it (cheap, and different from frame to frame)."""
     rng = np.random.default_rng(99)
-    bank = rng.standard_normal((2, h + 32, w + 32, 3), dtype=np.float32)
+    bank = np.rint(rng.standard_normal((2, h + 32, w + 32, 3), dtype=np.float32) * sigma).astype(np.int16)
     bank.setflags(write=False)
     return bank
 
@@ -754,12 +755,9 @@ def _degrade(frame: np.ndarray, style: Style, light, rng: np.random.Generator) -
         frame = cv2.GaussianBlur(frame, (0, 0), style.blur)
     if style.noise > 0:
         h, w = frame.shape[:2]
-        bank = _noise_bank(w, h)
+        bank = _noise_bank(w, h, round(float(style.noise), 2))
         k, oy, ox = int(rng.integers(2)), int(rng.integers(32)), int(rng.integers(32))
-        n = bank[k, oy:oy + h, ox:ox + w]
-        f = frame.astype(np.float32)
-        f += n * np.float32(style.noise)
-        frame = _to_u8(f)
+        frame = cv2.add(frame, bank[k, oy:oy + h, ox:ox + w], dtype=cv2.CV_8U)
     if style.jpeg_quality and 0 < style.jpeg_quality <= 100:
         ok, enc = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, int(style.jpeg_quality)])
         if ok:
