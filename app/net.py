@@ -25,6 +25,8 @@ Use from a window or a loop (no threads needed; ``poll`` never blocks longer tha
     rx = UdpReceiver(9000)                  # 127.0.0.1:9000
     rx.poll(0.01)                           # handle what arrived -> list of new FaceParams
     pose = rx.pose()                        # newest, held, or easing to neutral (None before any)
+    rx.frames(0.01)                         # or: every received frame, plus held / easing poses
+                                            #     at the sender's rate while none arrive
     rx.stats.summary()                      # loss, reordering, drops, bits/frame, bit/s
 
     tx = Sender("127.0.0.1:9000", frame_size=(640, 480), ipd=cal.ipd, neutral=cal.neutral, compress=True)
@@ -349,6 +351,9 @@ class Receiver:
         self._window: deque[tuple[float, int, int]] = deque()
         self.last_frame: FaceParams | None = None
         self.last_arrival = -math.inf
+        self._gap_anchor = -math.inf
+        self._gap_frames = 0
+        self._resting = False
 
     # --- input ---------------------------------------------------------------------------------
 
@@ -502,6 +507,29 @@ class Receiver:
     def stale(self) -> bool:
         return self.clock() - self.last_arrival > self.hold_s
 
+    def gap_poses(self, now: float | None = None) -> list[FaceParams]:
+        """Poses due while no frame arrives, at the sender's frame rate: the held pose, then the
+        ease to neutral, then nothing once at rest. Call it when no datagram is waiting; each
+        pose is returned once (the count restarts when a frame arrives)."""
+        last = self.last_frame
+        if last is None or self.hello is None:
+            return []
+        if self._gap_anchor != self.last_arrival:
+            self._gap_anchor, self._gap_frames, self._resting = self.last_arrival, 0, False
+        if self._resting:
+            return []
+        now = self.clock() if now is None else now
+        period = 1.0 / max(self.hello.fps, 1.0)
+        out = []
+        while self.last_arrival + (self._gap_frames + 1.5) * period <= now:
+            self._gap_frames += 1
+            pose = self.pose(self.last_arrival + self._gap_frames * period)
+            out.append(pose)
+            if pose.status == LOST and pose.confidence == 0.0:
+                self._resting = True
+                break
+        return out
+
 
 class UdpReceiver(Receiver):
     """A :class:`Receiver` on a UDP socket bound to ``bind:port`` (port 0 picks a free one)."""
@@ -544,6 +572,12 @@ class UdpReceiver(Receiver):
                 out.append(f)
         self.update_rates()
         return out
+
+    def frames(self, timeout: float = 0.0) -> list[FaceParams]:
+        """The frames to draw now, at the sender's rate: every newly received frame, or — when
+        nothing arrived within ``timeout`` — the held / easing poses that are due (see :meth:`gap_poses`)."""
+        new = self.poll(timeout)
+        return new if new else self.gap_poses()
 
     def close(self) -> None:
         self._sock.close()

@@ -366,11 +366,9 @@ class _Drawing:
         self.fps = args.fps
         self.writer = None
         self.frames = 0
-        self.resting = False
-        self._gap_frames = 0
         self._hello = None
 
-    def _draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
+    def draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
         if rx.hello is not self._hello:  # a new stream: its performer's scale and neutral face
             from training.features import FeatureSpace
 
@@ -390,26 +388,6 @@ class _Drawing:
                 self.writer = FrameWriter(self.out, fps=self.fps)
             self.writer.write(pf.rgba_pm)
             self.frames += 1
-
-    def on_frame(self, rx: UdpReceiver, frame: FaceParams) -> None:
-        """Draw a received frame (every one, in order)."""
-        self._draw(rx, frame)
-        self._gap_frames = 0
-        self.resting = False
-
-    def idle(self, rx: UdpReceiver, now: float) -> None:
-        """Call when no datagram is waiting. While packets are late or have stopped, keep the
-        timeline at the sender's rate: draw the held pose, then the ease to neutral, then rest."""
-        if rx.last_frame is None or self.resting or rx.hello is None:
-            return
-        period = 1.0 / max(rx.hello.fps, 1.0)
-        while rx.last_arrival + (self._gap_frames + 1.5) * period <= now:
-            self._gap_frames += 1
-            pose = rx.pose(rx.last_arrival + self._gap_frames * period)
-            self._draw(rx, pose)
-            if pose.status == LOST and pose.confidence == 0.0:
-                self.resting = True
-                return
 
     def close(self) -> str:
         if self.writer is None:
@@ -438,12 +416,13 @@ def _receive(args) -> int:
                 for f in new:
                     got.append(f)
                     if drawing is not None:
-                        drawing.on_frame(rx, f)
+                        drawing.draw(rx, f)
                     if args.frames and len(got) >= args.frames:
                         break
+                if drawing is not None and not new:  # late or stopped: hold, then ease to neutral
+                    for pose in rx.gap_poses():
+                        drawing.draw(rx, pose)
                 now = time.monotonic()
-                if drawing is not None and not new:
-                    drawing.idle(rx, now)
                 if args.frames and len(got) >= args.frames:
                     break
                 if got and args.timeout and now - rx.last_arrival > args.timeout:

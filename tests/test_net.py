@@ -155,6 +155,30 @@ def test_holds_then_eases_to_neutral():
     assert np.allclose(end.values(), codec.decode(codec.encode(NEUTRAL)).values()) and end.confidence == 0
 
 
+def test_gap_poses_keep_the_senders_rate_then_rest():
+    clock = Clock()
+    rx = Receiver(hold_s=0.5, ease_s=1.0, clock=clock)
+    codec = ParamCodec(FRAME, IPD)
+    rx.handle(Hello(1, FRAME, IPD, fps=10.0, neutral_codes=codec.encode(NEUTRAL)).encode(), "A")
+    assert rx.gap_poses() == []  # nothing received yet
+    rx.handle(encode_packet(codec.encode(NEUTRAL.replace(mid_x=500.0)), 0, 0), "A")
+    clock.t += 0.12
+    assert rx.gap_poses() == []  # the next frame is not late yet (1.5 periods)
+    clock.t += 0.04
+    assert len(rx.gap_poses()) == 1  # one frame period overdue: the held pose
+    clock.t += 5.0
+    poses = rx.gap_poses()
+    assert poses[-1].confidence == 0.0 and poses[-1].status == "lost"
+    assert 13 <= len(poses) <= 16  # 0.5 s hold + 1 s ease at 10 fps, then rest
+    xs = [p.mid_x for p in poses]
+    assert all(a >= b for a, b in zip(xs, xs[1:]))
+    clock.t += 1.0
+    assert rx.gap_poses() == []  # at rest
+    rx.handle(encode_packet(codec.encode(NEUTRAL), 1, 100), "A")
+    clock.t += 0.2
+    assert len(rx.gap_poses()) == 1  # a new gap starts counting again
+
+
 def _mutations(base: list[bytes]):
     return st.tuples(
         st.sampled_from(base),
