@@ -482,3 +482,10 @@ def test_python_m_tracker_synth_runs(tmp_path):
                           str(tmp_path / "c.clicks.json"), "--csv", str(tmp_path / "o.csv")],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and bad.stderr.startswith("inkface: ") and "nope.mp4" in bad.stderr
+
+
+def test_bad_state_and_size_are_refused():
+    with pytest.raises(ValueError, match="inter-pupil"):
+        render_face(FaceState(ipd=0.0))
+    with pytest.raises(ValueError, match="frame size"):
+        render_face(FaceState(), frame_size=(0, 480))

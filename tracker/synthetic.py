@@ -330,6 +330,8 @@ def face_truth(state: FaceState, frame: int = 0, time: float = 0.0,
     lid gaps are under 10 % of normal; else ``ok``. Values always say where the face is (or would be).
     """
     u = state.ipd
+    if not (u > 0 and math.isfinite(u)):
+        raise ValueError(f"inter-pupil distance must be positive, got {u}")
     gx, gy = state.gaze_x * u, state.gaze_y * u
     hw = EYE_HW * u
     vals = []
@@ -782,11 +784,12 @@ def render_face(
     w, h = int(frame_size[0]), int(frame_size[1])
     if w <= 0 or h <= 0:
         raise ValueError(f"frame size must be positive, got {frame_size}")
+    truth = face_truth(state, frame=frame, time=time, frame_size=(w, h))
     img = _background(w, h, tuple(int(c) for c in style.background)).copy()
-    if state.visible and state.ipd > 0:
+    if state.visible:
         _draw_face(img, state, style)
     img = _degrade(img, style, state.light, rng if rng is not None else np.random.default_rng(0))
-    return img, face_truth(state, frame=frame, time=time, frame_size=(w, h))
+    return img, truth
 
 
 # ---------------------------------------------------------------------------------------------
