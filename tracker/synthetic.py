@@ -17,10 +17,17 @@ must agree to a fraction of a pixel, in the definitions of ``shared/DESIGN.md``:
 
 The face is built in a face-local frame (origin at the midpoint of the eye centres, x towards
 the image-right eye, y towards the chin, pixels) and rotated by the roll and translated into the
-frame. Shapes are polygons rasterised at 8x for the measured features (4x / 2x for the rest)
-and area-averaged,
-with a half-sub-pixel inward offset that cancels OpenCV's fill bias, so edges are anti-aliased
-and sub-pixel accurate.
+frame. The measured features (eyes, brows, lips) are polygons rasterised at 8x and area-averaged,
+with a half-sub-pixel inward offset that cancels OpenCV's fill bias, so their edges are
+anti-aliased and within about 0.1 px of the truth (``tests/test_synthetic.py`` measures them).
+The rigid rest of the head (hair, ears, shaded skin, nose) is a cached sprite warped into place.
+
+Typical use::
+
+    img, truth = render_face(FaceState(roll_deg=10).with_expression("smile"), STYLES["noisy"])
+    perf = Performance(seconds=10, seed=3)          # scripted: talking, blinks, roll, drift, ...
+    frame, truth = perf.frame(42), perf.truth(42)
+    perf.write("clip.mp4", "truth.csv")             # + clip.clicks.json (frame 0 is neutral)
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ import json
 import math
 import os
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator, Mapping, Sequence
 
@@ -485,8 +492,8 @@ def _ellipse(cx: float, cy: float, a: float, b: float) -> np.ndarray:
     return np.stack([cx + a * _COS, cy + b * _SIN], axis=1)
 
 
-def _head_outline(u: float, grow: float = 0.0) -> np.ndarray:
-    a, b = (HEAD_A + grow) * u, (HEAD_B + grow) * u
+def _head_outline(u: float) -> np.ndarray:
+    a, b = HEAD_A * u, HEAD_B * u
     narrow = 1.0 - 0.13 * np.clip(_SIN, 0.0, None) ** 1.5  # narrower towards the chin
     return np.stack([a * _COS * narrow, HEAD_CY * u + b * _SIN], axis=1)
 
