@@ -9,7 +9,37 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import sys
+
 import app.qt_env  # noqa: F401  (choose a Qt platform before PySide6 loads)
+
+
+def keep_none_alive() -> bool:
+    """Work around PySide6 builds that return ``None`` from void methods without a new reference.
+
+    PySide6 6.12 assumes ``None`` is immortal (true from CPython 3.12 on). On 3.11 every call of a
+    void Qt method (``QPainter.drawLine``, ``QWidget.update`` …) then takes one reference from
+    ``None`` for good, and after a few thousand calls the interpreter aborts with "Fatal Python
+    error: none_dealloc". If a probe shows the leak, ``None`` gets a reserve of 2**40 references
+    (it is never freed anyway). Returns True when the reserve was added.
+    """
+    if sys.version_info >= (3, 12):
+        return False
+    import ctypes
+
+    from PySide6.QtGui import QColor
+
+    probe = QColor()
+    before = sys.getrefcount(None)
+    for _ in range(64):
+        probe.setRed(0)
+    if before - sys.getrefcount(None) < 32:
+        return False
+    ctypes.c_ssize_t.from_address(id(None)).value += 1 << 40
+    return True
+
+
+NONE_WORKAROUND = keep_none_alive()
 
 
 def open_editor(path: str | Path | None = None, parent=None):

@@ -21,7 +21,7 @@ from PySide6.QtWidgets import QMenu, QSizePolicy, QWidget
 from art_sets import editing as ed
 
 from .document import EditorDocument
-from .imaging import checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
+from .imaging import ImageCache, checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
 
 
 class _ImageView(QWidget):
@@ -373,7 +373,7 @@ class HeadCanvas(_ImageView):
         self._live_pivot = None
         self._live_head: np.ndarray | None = None
         self._mouse = None
-        self._cache: tuple | None = None
+        self._images = ImageCache(rgba_to_qimage, limit=48)
         doc.changed.connect(self._invalidate)
         doc.selectionChanged.connect(self._invalidate)
 
@@ -381,7 +381,6 @@ class HeadCanvas(_ImageView):
         return tuple(self.doc.artset.canvas) if self.doc.artset else (4, 3)
 
     def _invalidate(self):
-        self._cache = None
         self.update()
 
     def _boxes(self) -> dict[str, tuple]:
@@ -390,26 +389,23 @@ class HeadCanvas(_ImageView):
         out.update(self._live_boxes)
         return out
 
-    def _composite(self) -> QImage:
+    def _draw_composite(self, p: QPainter, r: QRectF) -> None:
+        """The parts (the selected drawing for the selected part, the first for the other) at
+        their boxes, then the head over them — or the head alone."""
         art = self.doc.artset
         head = self._live_head if self._live_head is not None else art.heads[self.doc.head % len(art.heads)]
-        key = (id(head), self.head_only, self.doc.part, self.doc.drawing,
-               tuple(tuple(p.box) for p in art.parts.values()),
-               tuple(id(d.image) for p in art.parts.values() for d in p.drawings[:1]))
-        if self._cache is not None and self._cache[0] == key and self._cache[2] is head:
-            return self._cache[1]
-        if self.head_only:
-            img = rgba_to_qimage(head)
-        else:
-            parts = {}
-            sel = art.parts[self.doc.part]
-            if sel.drawings:
-                parts[self.doc.part] = sel.drawings[min(self.doc.drawing, len(sel.drawings) - 1)].image
-            tmp = ed.clone(art)
-            tmp.heads = [head]
-            img = rgba_to_qimage(ed.compose_preview(tmp, parts, head=0, background=(250, 248, 242)))
-        self._cache = (key, img, head)
-        return img
+        s = self.scale()
+        if not self.head_only:
+            p.fillRect(r, QColor(250, 248, 242))
+            for name, part in art.parts.items():
+                if not part.drawings:
+                    continue
+                i = min(self.doc.drawing, len(part.drawings) - 1) if name == self.doc.part else 0
+                img = part.drawings[i].image
+                x, y = part.box[0], part.box[1]
+                p.drawImage(QRectF(r.left() + x * s, r.top() + y * s, img.shape[1] * s, img.shape[0] * s),
+                            self._images.get(img))
+        p.drawImage(r, self._images.get(head) if head is not self._live_head else rgba_to_qimage(head))
 
     def paintEvent(self, ev):
         p = QPainter(self)
@@ -423,7 +419,7 @@ class HeadCanvas(_ImageView):
             return
         r = self.image_rect()
         p.fillRect(r, self._checker)
-        p.drawImage(r, self._composite())
+        self._draw_composite(p, r)
         for name, box in self._boxes().items():
             x, y, w, h = box
             tl, br = self.to_widget(x, y), self.to_widget(x + w, y + h)

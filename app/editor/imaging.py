@@ -17,6 +17,26 @@ def rgba_to_qimage(rgba: np.ndarray, premultiplied: bool = False) -> QImage:
     return QImage(a.data, w, h, int(a.strides[0]), fmt).copy()
 
 
+class ImageCache:
+    """QImages (or icons) made from numpy arrays, found again by the array's identity.
+
+    The model never changes an array in place, so an array seen before gives the same picture.
+    The arrays are kept referenced, so an id is never reused while its entry lives.
+    """
+
+    def __init__(self, make, limit: int = 96):
+        self.make, self.limit = make, limit
+        self._items: dict[int, tuple[np.ndarray, object]] = {}
+
+    def get(self, arr: np.ndarray):
+        hit = self._items.get(id(arr))
+        if hit is None or hit[0] is not arr:
+            if len(self._items) >= self.limit:
+                self._items.pop(next(iter(self._items)))
+            hit = self._items[id(arr)] = (arr, self.make(arr))
+        return hit[1]
+
+
 def bgr_to_qimage(bgr: np.ndarray) -> QImage:
     a = np.ascontiguousarray(bgr, dtype=np.uint8)
     h, w = a.shape[:2]

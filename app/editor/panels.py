@@ -12,7 +12,7 @@ from PySide6.QtWidgets import QListWidget, QListWidgetItem, QSizePolicy, QWidget
 from art_sets import editing as ed
 
 from .document import EditorDocument
-from .imaging import checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
+from .imaging import ImageCache, checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
 
 
 def dropped_paths(mime) -> list[Path]:
@@ -29,6 +29,15 @@ def image_paths(paths) -> list[Path]:
         elif p.suffix.lower() in ed.IMAGE_SUFFIXES:
             out.append(p)
     return out
+
+
+_ICONS: dict[int, ImageCache] = {}
+
+
+def cached_icon(rgba: np.ndarray, size: int = 56) -> QIcon:
+    """:func:`thumb_icon`, made once per array."""
+    cache = _ICONS.setdefault(size, ImageCache(lambda a: thumb_icon(a, size), limit=128))
+    return cache.get(rgba)
 
 
 def thumb_icon(rgba: np.ndarray, size: int = 56) -> QIcon:

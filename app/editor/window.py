@@ -19,7 +19,9 @@ from art_sets.model import PART_NAMES
 
 from .canvas import HeadCanvas, LineCanvas
 from .document import EditorDocument, recoverable
-from .panels import DropList, LinesList, PartStrip, ProblemsList, dropped_paths, image_paths, thumb_icon
+from .panels import (
+    DropList, LinesList, PartStrip, ProblemsList, cached_icon, dropped_paths, image_paths, thumb_icon,
+)
 from .preview import PreviewPanel
 
 IMAGE_FILTER = "Images (*.png *.jpg *.jpeg *.bmp *.gif *.tif *.tiff *.webp)"
@@ -455,7 +457,7 @@ class EditorWindow(QMainWindow):
                 if key == "heads":
                     for i, h in enumerate(art.heads):
                         lst.addItem(f"head {i + 1}")
-                        lst.item(i).setIcon(thumb_icon(h))
+                        lst.item(i).setIcon(cached_icon(h))
                     continue
                 part = art.parts[key]
                 miss = ed.missing_lines(art, key)
@@ -467,7 +469,7 @@ class EditorWindow(QMainWindow):
                     if todo:
                         label += f"   ({todo} line{'s' if todo > 1 else ''} to place)"
                     lst.addItem(label)
-                    lst.item(i).setIcon(thumb_icon(d.image))
+                    lst.item(i).setIcon(cached_icon(d.image))
         finally:
             self._filling_lists = False
         self._on_selection()
