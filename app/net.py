@@ -174,6 +174,7 @@ class SendStats:
     hellos: int = 0
     bytes: int = 0  # every datagram, UDP payload
     payload_bytes: int = 0  # frame payloads only (the ten codes, or their compressed code)
+    dropped: int = 0  # frame packets deliberately not sent (simulated loss)
 
     @property
     def payload_bits_per_frame(self) -> float:
@@ -186,7 +187,8 @@ class Sender:
     ``frame_size`` and ``ipd`` fix the 8-bit quantisation (see :class:`tracker.params.ParamCodec`);
     ``neutral`` (the calibrated neutral face) lets the receiver ease to it when packets stop.
     Values the tracker could not measure (NaN) are sent as the last value sent (or neutral), and
-    the frame's status says what happened.
+    the frame's status says what happened. ``simulate_loss`` drops that fraction of frame packets
+    (not hellos) at random, to try a receiver on a lossy link.
     """
 
     def __init__(
@@ -199,6 +201,8 @@ class Sender:
         key_interval: int = 30,
         neutral: FaceParams | None = None,
         hello_every: int = 30,
+        simulate_loss: float = 0.0,
+        seed: int | None = None,
     ) -> None:
         host, port = parse_address(address) if isinstance(address, str) else address
         family, self.address = _resolve(host, check_port(port, allow_zero=False))
@@ -216,6 +220,10 @@ class Sender:
             neutral_codes=self.codec.encode(neutral) if neutral is not None else None,
         )  # fmt: skip
         self.hello_every = max(1, int(hello_every))
+        if not 0.0 <= simulate_loss < 1.0:
+            raise NetError(f"simulated loss must be in [0, 1), got {simulate_loss}")
+        self.simulate_loss = float(simulate_loss)
+        self._rng = np.random.default_rng(seed)
         self.stats = SendStats()
         self._seq = 0
         self._last_values: np.ndarray | None = None
@@ -251,7 +259,10 @@ class Sender:
         else:
             key, payload = self.encoder.encode(codes)
             data = encode_stream_packet(key, payload, self._seq, ts, params.status)
-        self._send(data)
+        if self.simulate_loss and self._rng.random() < self.simulate_loss:
+            self.stats.dropped += 1
+        else:
+            self._send(data)
         self._seq += 1
         self.stats.frames += 1
         self.stats.payload_bytes += len(payload)
@@ -502,6 +513,11 @@ class Receiver:
         return FaceParams.from_values(
             vals + (target - vals) * s, frame=last.frame, time=last.time, status=LOST, confidence=last.confidence * (1 - s)
         )
+
+    @property
+    def last_seq(self) -> int | None:
+        """The newest sequence number seen in this session (None before any frame packet)."""
+        return self._last_seq
 
     @property
     def stale(self) -> bool:

@@ -62,6 +62,8 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         parser.add_argument("--frame-size", metavar="WxH", help="frame size of a CSV track (default: the smallest common size holding its positions)")
         parser.add_argument("--frames", type=int, metavar="N", help="stop after N frames")
         parser.add_argument("--record", metavar="OUT.ifs", help="also write what was sent as a packet-stream file")
+        parser.add_argument("--simulate-loss", type=float, default=0.0, metavar="P",
+                            help="drop this fraction of frame packets at random (to try a lossy link)")
         parser.add_argument("--quiet", action="store_true", help="no progress line")
     else:
         parser.add_argument("--port", required=True, metavar="PORT", help="UDP port to listen on")
@@ -301,7 +303,7 @@ def _send(args) -> int:
     t0 = time.monotonic()
     last_note = t0
     with Sender((host, port), size, ipd, fps=fps, compress=args.compress, key_interval=args.key_interval,
-                neutral=neutral) as tx:  # fmt: skip
+                neutral=neutral, simulate_loss=args.simulate_loss) as tx:  # fmt: skip
         for i, p in enumerate(frames):
             if args.frames is not None and i >= args.frames:
                 break
@@ -327,6 +329,7 @@ def _send(args) -> int:
     print(
         f"sent {st.frames} frames to {host}:{port} in {dt:.1f} s: {st.payload_bits_per_frame:.1f} payload bits/frame "
         f"({'compressed' if args.compress else 'plain'}), {8 * st.bytes / dt:.0f} bit/s in UDP payloads"
+        + (f"; {st.dropped} dropped on purpose" if st.dropped else "")
     )
     return 0
 
