@@ -68,6 +68,18 @@ def test_written_video_reads_back(tmp_path, suffix, fourcc):
     assert src.closed
 
 
+def test_video_frame_by_index(tmp_path):
+    frames = frames_of(6)
+    path = tmp_path / "c.mkv"
+    write_video(path, frames, fourcc="FFV1")
+    with VideoFileSource(path) as src:
+        assert np.array_equal(src.frame(0), frames[0])
+        assert np.array_equal(src.frame(4), frames[4])
+        with pytest.raises(SourceError, match="no frame 9"):
+            src.frame(9)
+        assert len(list(src)) == 6  # reading a frame by index leaves iteration alone
+
+
 def test_missing_file_names_it(tmp_path):
     missing = tmp_path / "nowhere" / "clip.mp4"
     with pytest.raises(SourceError, match="clip.mp4") as e:
@@ -218,6 +230,8 @@ def test_synthetic_source_matches_the_performance():
     assert len(got) == 12
     assert np.array_equal(got[5].image, perf.frame(5))
     assert src.truth(got[5]) == perf.truth(5)
+    paced = SyntheticSource(perf, realtime=True)
+    assert [f.index for f in paced] == list(range(12))
     looped = SyntheticSource(perf, loop=True)
     for f in looped:
         if f.index == 14:

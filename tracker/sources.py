@@ -154,6 +154,22 @@ class VideoFileSource(_Source):
             yield Frame(i, i / self.fps, _as_bgr(img))
             i += 1
 
+    def frame(self, index: int) -> np.ndarray:
+        """The image of frame ``index``, decoded from the start (exact, unlike seeking)."""
+        if index < 0:
+            raise SourceError(f"{self.path}: frame {index} does not exist")
+        if index == 0:
+            return self._first
+        cap, _ = self._open()
+        try:
+            for i in range(1, index + 1):
+                ok, img = cap.read()
+                if not ok or img is None:
+                    raise SourceError(f"{self.path}: has no frame {index} (only {i} frames)")
+        finally:
+            cap.release()
+        return _as_bgr(img)
+
     def close(self) -> None:
         super().close()
         self._cap.release()
@@ -258,12 +274,14 @@ class CameraSource(_Source):
 
 class SyntheticSource(_Source):
     """The synthetic performer as a source; ``loop`` plays it again and again (indices keep
-    counting, times keep growing). ``truth(frame)`` gives the exact parameters of a frame."""
+    counting, times keep growing), ``realtime`` paces it at its fps like a camera.
+    ``truth(frame)`` gives the exact parameters of a frame."""
 
-    def __init__(self, performance: "Performance", loop: bool = False):
+    def __init__(self, performance: "Performance", loop: bool = False, realtime: bool = False):
         super().__init__()
         self.performance = performance
         self.loop = bool(loop)
+        self.realtime = bool(realtime)
         self.fps = float(performance.fps)
         self.size = tuple(performance.frame_size)
         self.name = f"synthetic performer (seed {performance.seed}, {len(performance)} frames)"
@@ -278,8 +296,13 @@ class SyntheticSource(_Source):
 
     def __iter__(self) -> Iterator[Frame]:
         n = len(self.performance)
+        t0 = _time.monotonic()
         i = 0
         while not self._closed:
+            if self.realtime:
+                wait = t0 + i / self.fps - _time.monotonic()
+                if wait > 0:
+                    _time.sleep(wait)
             yield Frame(i, i / self.fps, self.performance.frame(i % n))
             i += 1
             if i >= n and not self.loop:
