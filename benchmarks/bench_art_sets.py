@@ -67,7 +67,6 @@ def run(ctx):
         mb = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
         load.add(name, f"{mb:.2f}", "load_artset (JSON + PNG decode)", *time_call(lambda: load_artset(path), ctx.runs(7, 2), warmup=1).cells())
         if CharacterRenderer is not None:
-            art = load_artset(path)
             load.add(name, f"{mb:.2f}", "+ CharacterRenderer (all α tables)",
                      *time_call(lambda: CharacterRenderer(load_artset(path)), ctx.runs(3, 1), warmup=0).cells())
     load.note = f"{machine()}. Wall-clock; α tables = 11 steps per ordered pair of drawings, 30×30 mesh."

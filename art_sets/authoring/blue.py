@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from art_sets.authoring.face import DEFAULT_EYES, Character, EyeGeom, EyePose, MouthGeom, closed, head_outline
-from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, point_at, sub_curve
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, point_at, sub_curve
 
 PAPER = hex_rgb("#f6f0e1")
-BLUE = hex_rgb("#23449a")
+BLUE = hex_rgb("#1f3d8f")
 LIGHT = hex_rgb("#6f8fd4")
 DARK = hex_rgb("#142a6b")
 
@@ -118,6 +118,18 @@ class Blue(Character):
         self.pen(s, [(200, 420), (192, 512)], 2.2, rng)
         self.pen(s, [(312, 420), (320, 512)], 2.2, rng)
         s.hatch(np.array([(196, 430), (316, 430), (318, 470), (194, 470)]), 60, 3.2, 1.2, BLUE, rng, opacity=0.55, grain=0.8, clip_blur=6)
+        # a hatched jumper with a ribbed roll neck, behind the chin
+        jumper = np.array([(30, 512), (64, 484), (160, 462), (208, 452), (304, 452), (352, 462), (448, 484), (482, 512)]) + jit()
+        s.fill(jumper, PAPER)
+        s.hatch(jumper, 70, 4.2, 1.2, LIGHT, rng, opacity=0.55, grain=0.8)
+        s.hatch(jumper, 110, 7.0, 1.0, BLUE, rng, opacity=0.3, grain=0.8)
+        self.pen(s, jumper, 2.4, rng, taper=(0.05, 0.05))
+        roll = np.array([(186, 438), (326, 438), (334, 480), (178, 480)]) + jit(0.5)
+        s.fill(roll, PAPER)
+        for x in np.arange(190, 326, 7.0):
+            s.stroke([(x, 442 + rng.normal(0, 1)), (x - 1 + rng.normal(0, 1), 476)], 1.3, BLUE, rng=rng, grain=0.7, opacity=0.7,
+                     taper=(0.2, 0.2))
+        self.pen(s, closed(roll), 2.2, rng, taper=(0, 0))
         for sgn in (-1, 1):
             ear = ellipse((cx + sgn * 178, 262), 24, 36) + jit()
             self.pen(s, closed(ear)[::-1] if sgn > 0 else closed(ear), 2.2, rng)

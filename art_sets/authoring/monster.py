@@ -8,7 +8,7 @@ import numpy as np
 
 from art_sets.authoring.face import (DEFAULT_EYES, Character, EyeGeom, EyePose, MouthGeom, MouthPose, closed,
                                      head_outline)
-from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, point_at, sub_curve
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, point_at, sub_curve
 
 INK = hex_rgb("#1b1426")
 SKIN = hex_rgb("#74c06a")

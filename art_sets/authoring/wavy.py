@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from art_sets.authoring.face import DEFAULT_MOUTHS, Character, EyeGeom, EyePose, MouthGeom, MouthPose, closed
-from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, point_at, sub_curve
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, point_at, sub_curve
 
 INK = hex_rgb("#2e1d14")
 SKIN = hex_rgb("#f7cf9c")
