@@ -13,6 +13,7 @@ from PIL import Image, ImageDraw
 pytest.importorskip("PySide6")
 pytest.importorskip("pytestqt")
 
+import app.editor  # noqa: E402,F401  (applies the PySide6 None/True/False reference workaround for this process)
 from PySide6.QtCore import QPoint, Qt  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 
@@ -655,10 +656,17 @@ def test_none_survives_many_void_qt_calls():
     import sys
 
     import app.editor
+    from PySide6.QtCore import QObject, Signal
     from PySide6.QtGui import QColor
 
-    c = QColor()
+    class Emitter(QObject):
+        flag = Signal(bool)
+
+    c, e = QColor(), Emitter()
+    e.flag.connect(lambda v: None)
     for _ in range(50000):
         c.setRed(0)
-    assert sys.getrefcount(None) > 1000
+        e.flag.emit(True)
+        e.flag.emit(False)
+    assert min(sys.getrefcount(x) for x in (None, True, False)) > 1000
     assert isinstance(app.editor.NONE_WORKAROUND, bool)

@@ -15,13 +15,14 @@ import app.qt_env  # noqa: F401  (choose a Qt platform before PySide6 loads)
 
 
 def keep_none_alive() -> bool:
-    """Work around PySide6 builds that return ``None`` from void methods without a new reference.
+    """Work around PySide6 builds that return ``None``/``True``/``False`` without a new reference.
 
-    PySide6 6.12 assumes ``None`` is immortal (true from CPython 3.12 on). On 3.11 every call of a
-    void Qt method (``QPainter.drawLine``, ``QWidget.update`` …) then takes one reference from
-    ``None`` for good, and after a few thousand calls the interpreter aborts with "Fatal Python
-    error: none_dealloc". If a probe shows the leak, ``None`` gets a reserve of 2**40 references
-    (it is never freed anyway). Returns True when the reserve was added.
+    PySide6 6.12 assumes these singletons are immortal (true from CPython 3.12 on). On 3.11 every
+    call of a void Qt method (``QPainter.drawLine``, ``QWidget.update`` …) takes one reference from
+    ``None`` for good, and ``Signal.emit`` one from ``True``/``False``; after a few thousand calls
+    the interpreter aborts ("Fatal Python error: none_dealloc" / "bool_dealloc"), in any thread.
+    If a probe shows the leak, the three singletons get a reserve of 2**40 references each (they
+    are never freed anyway). Returns True when the reserve was added.
     """
     if sys.version_info >= (3, 12):
         return False
@@ -35,7 +36,8 @@ def keep_none_alive() -> bool:
         probe.setRed(0)
     if before - sys.getrefcount(None) < 32:
         return False
-    ctypes.c_ssize_t.from_address(id(None)).value += 1 << 40
+    for singleton in (None, True, False):
+        ctypes.c_ssize_t.from_address(id(singleton)).value += 1 << 40
     return True
 
 
