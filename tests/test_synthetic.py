@@ -489,3 +489,13 @@ def test_bad_state_and_size_are_refused():
         render_face(FaceState(ipd=0.0))
     with pytest.raises(ValueError, match="frame size"):
         render_face(FaceState(), frame_size=(0, 480))
+
+
+@settings(max_examples=40, deadline=None)
+@given(cx=hs.floats(-400, 1000), cy=hs.floats(-300, 800), roll=hs.floats(-40, 40), ipd=hs.floats(4, 300),
+       w=hs.integers(16, 400), h=hs.integers(16, 300), expr=hs.sampled_from(sorted(EXPRESSIONS)))
+def test_any_pose_and_frame_size_renders(cx, cy, roll, ipd, w, h, expr):
+    st = FaceState(cx=cx, cy=cy, roll_deg=roll, ipd=ipd).with_expression(expr)
+    img, truth = render_face(st, STYLES["webcam"], frame_size=(w, h))
+    assert img.shape == (h, w, 3) and img.dtype == np.uint8
+    assert truth.mid_x == cx and np.isfinite(truth.values()).all()
