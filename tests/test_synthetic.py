@@ -438,10 +438,12 @@ def test_synth_cli_writes_clip_truth_and_clicks(tmp_path, capsys):
 def test_synth_cli_default_truth_path_and_still_head(tmp_path):
     from tracker.__main__ import main
 
-    assert main(["synth", "--out", str(tmp_path / "c.mp4"), "--seconds", "0.4", "--still", "--quiet"]) == 0
+    assert main(["synth", "--out", str(tmp_path / "c.mp4"), "--seconds", "0.4", "--still", "--quiet",
+                 "--away", "0.2:0.3"]) == 0
     rows = read_csv(tmp_path / "c.truth.csv")
     assert len(rows) == 12
     assert all(r.roll_deg == 0.0 and r.mid_x == rows[0].mid_x for r in rows)
+    assert [r.status for r in rows].count("lost") == 3
 
 
 @pytest.mark.parametrize("argv,message", [
@@ -458,7 +460,8 @@ def test_synth_cli_errors_are_one_line(tmp_path, capsys, argv, message):
     assert err.startswith("inkface: ") and message in err and err.count("\n") == 1
 
 
-@pytest.mark.parametrize("argv", [["--size", "640"], ["--style", "nope"], ["--seconds", "-1"]])
+@pytest.mark.parametrize("argv", [["--size", "640"], ["--style", "nope"], ["--seconds", "-1"], ["--away", "3"],
+                                  ["--away", "4:2"]])
 def test_synth_cli_rejects_bad_options(tmp_path, capsys, argv):
     from tracker.__main__ import main
 

@@ -25,6 +25,16 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _interval(text: str) -> tuple[float, float]:
+    try:
+        a, b = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not START:END in seconds, e.g. 3:4.5") from None
+    if not 0 <= a < b:
+        raise argparse.ArgumentTypeError(f"{text}: need 0 <= START < END")
+    return a, b
+
+
 def _positive(kind):
     def parse(text: str):
         try:
@@ -54,6 +64,10 @@ def _add_synth(sub) -> None:
     p.add_argument("--ipd", type=_positive(float), help="inter-pupil distance in pixels (default from the style)")
     p.add_argument("--roll", type=float, metavar="DEG", help="roll amplitude in degrees (default from the style)")
     p.add_argument("--still", action="store_true", help="keep the head still (no roll, drift or leaning)")
+    p.add_argument("--away", type=_interval, action="append", default=[], metavar="START:END",
+                   help="the face is gone between these seconds (repeatable)")
+    p.add_argument("--away-mode", choices=("vanish", "slide"), default="vanish",
+                   help="how the face goes: vanish, or slide out of the frame and back (default vanish)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(run=_run_synth)
 
@@ -69,7 +83,7 @@ def _run_synth(args) -> int:
     if args.roll is not None and not args.still:
         still["roll_amplitude"] = args.roll
     perf = Performance(seconds=args.seconds, fps=args.fps, seed=args.seed, frame_size=args.size,
-                       style=STYLES[args.style], ipd=args.ipd, **still)
+                       style=STYLES[args.style], ipd=args.ipd, away=args.away, away_mode=args.away_mode, **still)
     progress = None if args.quiet else _Progress(f"synth {out.name}")
     clicks = perf.write(out, truth, progress=progress)
     if progress is not None:
