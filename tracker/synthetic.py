@@ -534,6 +534,7 @@ def _noise_bank(w: int, h: int, sigma: float) -> np.ndarray:
 
 SPRITE_BOX = (-1.3, -1.35, 1.3, 1.95)
 """Face-local box (units of ipd: x0, y0, x1, y1) of the head sprite: hair, ears, skin, nose."""
+_SPRITE_LEVELS = (32, 48, 64, 96, 128, 192, 256, 384, 512)  # sprite scales (px per ipd): warps shrink ≤ 1.5x
 FEATURE_BOX = (-0.95, -0.8, 0.95, 1.75)
 """Face-local box (units of ipd) holding every eye, brow and mouth shape at any expression."""
 
@@ -637,7 +638,7 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     x0, y0, x1, y1 = SPRITE_BOX
     hb = _Box.around([L(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) * u)], w, h)
     if hb is not None:
-        k = int(min(max(2 ** math.ceil(math.log2(max(u, 1.0))), 32), 512))
+        k = next((lv for lv in _SPRITE_LEVELS if lv >= u), _SPRITE_LEVELS[-1])
         s_col, s_alpha = _head_sprite(k, tuple(style.skin), tuple(style.hair), float(style.shading))
         sc = u / k
         m = np.array([[pose.c * sc, pose.s * sc, 0.0], [-pose.s * sc, pose.c * sc, 0.0]])
