@@ -497,21 +497,23 @@ class Receiver:
         self.stats.payload_bits_per_second = 8.0 * sum(p for _, _, p in w) / span
 
     def pose(self, now: float | None = None) -> FaceParams | None:
-        """The pose to draw now: the newest frame; after ``hold_s`` without packets, eased towards
-        the neutral face over ``ease_s`` (status ``lost``, confidence falling to 0)."""
+        """The pose to draw now: the newest frame (its time advanced to now while it is held); after
+        ``hold_s`` without packets, eased towards the neutral face over ``ease_s`` (status ``lost``,
+        confidence falling to 0)."""
         last = self.last_frame
         if last is None:
             return None
         now = self.clock() if now is None else now
         age = now - self.last_arrival
         if age <= self.hold_s:
-            return last
+            return last if age <= 0 else last.replace(time=last.time + age)
         s = _smoothstep((age - self.hold_s) / self.ease_s if self.ease_s > 0 else 1.0)
         target = self.neutral.values() if self.neutral is not None else last.values()
         vals = last.values()
         vals = np.where(np.isfinite(vals), vals, target)
         return FaceParams.from_values(
-            vals + (target - vals) * s, frame=last.frame, time=last.time, status=LOST, confidence=last.confidence * (1 - s)
+            vals + (target - vals) * s, frame=last.frame, time=last.time + age, status=LOST,
+            confidence=last.confidence * (1 - s),
         )
 
     @property

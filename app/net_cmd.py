@@ -405,12 +405,17 @@ def _receive(args) -> int:
         raise _Fail(f"--frames must be at least 1, got {args.frames}")
     if args.out and not args.frames and not args.timeout:
         raise _Fail("--out needs --frames N or a --timeout to know when the recording ends")
-    drawing = _Drawing(args) if (args.out or args.art or args.training) else None
+    if args.art:
+        from art_sets.library import find_artset
+
+        find_artset(args.art)  # a wrong name fails before anything listens
     got: list[FaceParams] = []
     with UdpReceiver(port, bind=args.bind) as rx:
         bound = rx.address
         if not args.quiet:
             print(f"listening on {bound[0]}:{bound[1]}", file=sys.stderr, flush=True)
+        # packets arriving while the character loads wait in the socket's buffer
+        drawing = _Drawing(args) if (args.out or args.art or args.training) else None
         start = time.monotonic()
         last_note = start
         try:

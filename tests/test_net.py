@@ -145,7 +145,9 @@ def test_holds_then_eases_to_neutral():
     last = rx.handle(encode_packet(codec.encode(far), 0, 0), "A")
     assert rx.pose() is last
     clock.t += 0.4
-    assert rx.pose() is last
+    held = rx.pose()
+    assert np.array_equal(held.values(), last.values()) and held.status == last.status
+    assert held.time == pytest.approx(last.time + 0.4)  # time moves on while the pose is held
     clock.t += 0.6  # halfway through the ease
     mid = rx.pose()
     assert mid.status == "lost" and 0 < mid.confidence < 1
