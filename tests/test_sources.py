@@ -258,3 +258,19 @@ def test_open_source_dispatches(tmp_path):
 def test_frame_is_a_small_record():
     f = Frame(3, 0.1, np.zeros((2, 2, 3), np.uint8))
     assert (f.index, f.time, f.image.shape) == (3, 0.1, (2, 2, 3))
+
+
+def test_video_closed_from_another_thread_while_playing(tmp_path):
+    path = tmp_path / "long.avi"
+    write_video(path, frames_of(200), fourcc="MJPG")
+    src = VideoFileSource(path)
+    seen = []
+    for f in src:
+        seen.append(f.index)
+        if f.index == 5:
+            th = threading.Thread(target=src.close)
+            th.start()
+            th.join()
+    assert seen[-1] < 10 and src.closed
+    with pytest.raises(SourceError, match="closed"):
+        iter(src).__next__()

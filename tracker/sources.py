@@ -63,6 +63,23 @@ class _Source:
 
     def __init__(self) -> None:
         self._closed = False
+        self._lock = threading.Lock()  # a capture is read and released under it (close may come from another thread)
+
+    def _read(self, cap) -> np.ndarray | None:
+        """The next image of ``cap``, or None at the end or once closed."""
+        with self._lock:
+            if self._closed:
+                return None
+            ok, img = cap.read()
+        return _as_bgr(img) if ok and img is not None else None
+
+    def _release(self, cap) -> None:
+        """Release ``cap`` once no read is in progress (give up waiting on a stuck device)."""
+        if self._lock.acquire(timeout=2.0):
+            try:
+                cap.release()
+            finally:
+                self._lock.release()
 
     @property
     def closed(self) -> bool:
@@ -141,17 +158,14 @@ class VideoFileSource(_Source):
         if self._closed:
             raise SourceError(f"{self.path}: source is closed")
         if self._used:  # start again from the top
-            self._cap.release()
+            self._release(self._cap)
             self._cap, self._first = self._open()
         self._used = True
         cap, first = self._cap, self._first
         yield Frame(0, 0.0, first)
         i = 1
-        while not self._closed:
-            ok, img = cap.read()
-            if not ok or img is None:
-                return
-            yield Frame(i, i / self.fps, _as_bgr(img))
+        while (img := self._read(cap)) is not None:
+            yield Frame(i, i / self.fps, img)
             i += 1
 
     def frame(self, index: int) -> np.ndarray:
@@ -172,7 +186,7 @@ class VideoFileSource(_Source):
 
     def close(self) -> None:
         super().close()
-        self._cap.release()
+        self._release(self._cap)
 
 
 def _as_bgr(img: np.ndarray) -> np.ndarray:
@@ -260,16 +274,13 @@ class CameraSource(_Source):
             yield Frame(0, 0.0, self._first)
             self._first = None
             i = 1
-        while not self._closed:
-            ok, img = self._cap.read()
-            if not ok or img is None:
-                return
-            yield Frame(i, _time.monotonic() - self._t0, _as_bgr(img))
+        while (img := self._read(self._cap)) is not None:
+            yield Frame(i, _time.monotonic() - self._t0, img)
             i += 1
 
     def close(self) -> None:
         super().close()
-        self._cap.release()
+        self._release(self._cap)
 
 
 class SyntheticSource(_Source):
