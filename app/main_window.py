@@ -2,7 +2,8 @@
 a strip of characters below, controls at the side, fps and ms per stage in the status bar.
 
 The window itself does no tracking or rendering: it owns a :class:`app.workers.Pipeline`
-(capture thread + puppet thread) and shows the :class:`DisplayFrame` s it publishes.
+(an engine process with the capture thread, the puppet and the recorder) and shows the
+:class:`DisplayFrame` s it publishes.
 """
 
 from __future__ import annotations
@@ -97,7 +98,8 @@ class MainWindow(QMainWindow):
         self.setAcceptDrops(True)
         self.last: DisplayFrame | None = None
         self.frames_shown = 0
-        self.recorder = None
+        self.recording: str | None = None  # output path while recording
+        self._record_result = None
         self._fake = fake_source
         self._calibration = calibration  # given or made in the calibration window: wins over saved ones
         self._calibration_note = ""
@@ -118,12 +120,15 @@ class MainWindow(QMainWindow):
         self.strip.select_path(art)
         self.source_spec = spec
         self.pipeline = Pipeline(spec, self._puppet_spec(art), realtime=realtime, fake_source=fake_source)
-        self.pipeline._on_capture = self._connect_capture
-        w = self.pipeline.worker
-        w.frameReady.connect(self._on_frame_ready)
-        w.puppetReady.connect(self._on_puppet_ready)
-        w.puppetFailed.connect(self._on_puppet_failed)
-        w.error.connect(lambda m: self.statusBar().showMessage(f"Problem: {m}", 6000))
+        pl = self.pipeline
+        pl.frameReady.connect(self._on_frame_ready)
+        pl.puppetReady.connect(self._on_puppet_ready)
+        pl.puppetFailed.connect(self._on_puppet_failed)
+        pl.error.connect(lambda m: self.statusBar().showMessage(f"Problem: {m}", 6000))
+        pl.sourceFailed.connect(self._on_source_failed)
+        pl.sourceOpened.connect(self._on_source_opened)
+        pl.recorded.connect(self._on_recorded)
+        pl.recordFailed.connect(self._on_record_failed)
         self._sync_source_controls(spec)
         self._status_timer = QTimer(self, interval=500, timeout=self._refresh_status)
         self._status_timer.start()
@@ -423,15 +428,15 @@ class MainWindow(QMainWindow):
 
     def set_art(self, path: str) -> None:
         """Switch the character (cross-fades once the new one is ready)."""
-        if not path or path == self.pipeline.worker.spec.art and self.pipeline.worker.puppet is not None:
+        if not path or path == self.pipeline.spec.art:
             return
         self.strip.select_path(path)
         self.settings.set("art/current", path)
         self._session = self._load_session(path)
-        self.pipeline.worker.request(art=path, session=self._session)
+        self.pipeline.request(art=path, session=self._session)
 
     def current_art(self) -> str:
-        return self.pipeline.worker.spec.art
+        return self.pipeline.spec.art
 
     def _cycle_art(self, step: int) -> None:
         paths = self.strip.paths()
@@ -469,7 +474,7 @@ class MainWindow(QMainWindow):
         if spec.kind == "video":
             self.settings.set("source/video", spec.video)
         self._sync_source_controls(spec)
-        self.pipeline.worker.request(calibration=self._calibration_for(spec))
+        self.pipeline.request(calibration=self._calibration_for(spec))
         self.pipeline.set_source(spec, fake_source)
         self.pause_btn.setChecked(False)
 
@@ -508,10 +513,6 @@ class MainWindow(QMainWindow):
         self.set_source(SourceSpec("video", video=path))
         return True
 
-    def _connect_capture(self, cap: workers.CaptureThread) -> None:
-        cap.sourceFailed.connect(self._on_source_failed)
-        cap.sourceOpened.connect(self._on_source_opened)
-
     def _on_source_opened(self, desc: str, fps: float, w: int, h: int) -> None:
         self.source_label.setText(f"{desc} · {w}×{h} @ {fps:.0f}")
 
@@ -533,8 +534,7 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(msg, 10000)
 
     def set_paused(self, paused: bool) -> None:
-        if self.pipeline.capture is not None:
-            self.pipeline.capture.set_paused(paused)
+        self.pipeline.set_paused(paused)
         self.pause_btn.setText("Resume" if paused else "Pause")
 
     # -------------------------------------------------------------------------- calibration
@@ -595,7 +595,7 @@ class MainWindow(QMainWindow):
         self._calibration = cal
         self._calibration_note = f"Calibrated just now ({self.performer()})"
         self._update_calibration_label()
-        self.pipeline.worker.request(calibration=cal)
+        self.pipeline.request(calibration=cal)
 
     # ----------------------------------------------------------------------------- training
     def _load_session(self, art_path: str):
@@ -619,7 +619,7 @@ class MainWindow(QMainWindow):
         if not art:
             self.statusBar().showMessage("Pick a character first", 4000)
             return None
-        cal = self.pipeline.worker.spec.calibration
+        cal = self.pipeline.spec.calibration
         win = TrainingWindow(art_path=art, performer=self.performer(), source=self.source_spec,
                              calibration=cal, parent=self)
         win.sessionSaved.connect(self._on_session_saved)
@@ -630,7 +630,7 @@ class MainWindow(QMainWindow):
 
     def _on_session_saved(self, session) -> None:
         self._session = session
-        self.pipeline.worker.request(session=session)
+        self.pipeline.request(session=session)
         self.statusBar().showMessage("Training saved and in use", 4000)
 
     # ------------------------------------------------------------------------------ editor
@@ -691,7 +691,7 @@ class MainWindow(QMainWindow):
             return
         self.rate_group.button(fps).setChecked(True)
         self.settings.set("output/fps", fps)
-        self.pipeline.worker.request(fps=fps)
+        self.pipeline.request(fps=fps)
 
     def _on_filter(self) -> None:
         name = self.filter_combo.currentData() or "one_euro"
@@ -699,18 +699,18 @@ class MainWindow(QMainWindow):
         self.settings.set("filter/name", name)
         self.settings.set("filter/strength", strength)
         if hasattr(self, "pipeline"):
-            self.pipeline.worker.request(filter=name, strength=strength)
+            self.pipeline.request(filter=name, strength=strength)
 
     def _on_gain(self, v: int) -> None:
         self.gain_label.setText(f"{v / 100:.2f}×")
         self.settings.set("render/gain", v / 100.0)
         if hasattr(self, "pipeline"):
-            self.pipeline.worker.request(gain=v / 100.0)
+            self.pipeline.request(gain=v / 100.0)
 
     def _on_detail(self, on: bool) -> None:
         self.settings.set("render/detail", bool(on))
         if hasattr(self, "pipeline"):
-            self.pipeline.worker.request(detail=bool(on))
+            self.pipeline.request(detail=bool(on))
 
     def _on_background(self) -> None:
         self._set_background_kind(self.bg_combo.currentData())
@@ -742,7 +742,7 @@ class MainWindow(QMainWindow):
     def _toggle_video_panel(self, on: bool) -> None:
         self.splitter.widget(0).setVisible(bool(on))
         if hasattr(self, "pipeline"):
-            self.pipeline.worker.render_video = bool(on)
+            self.pipeline.set_video(bool(on))
 
     def _toggle_full_screen(self, on: bool) -> None:
         self.showFullScreen() if on else self.showNormal()
@@ -752,8 +752,7 @@ class MainWindow(QMainWindow):
         self.pipeline.start()
 
     def _on_frame_ready(self) -> None:
-        fr = self.pipeline.outbox.take()
-        self.pipeline.worker.gui_consumed()
+        fr = self.pipeline.take()
         if fr is None:
             return
         self.last = fr
@@ -762,8 +761,6 @@ class MainWindow(QMainWindow):
         if fr.character is not None:
             self.char_view.set_image(fr.character, fr.art)
             self.char_view.placeholder = "Loading the character…"
-        if self.recorder is not None:
-            self.recorder.add(fr, self.char_view.background_colour())
         self.frames_shown += 1
         self.frameShown.emit(fr.index)
 
@@ -777,16 +774,16 @@ class MainWindow(QMainWindow):
             parts = [f"{k} {v:.1f}" for k, v in t.items() if isinstance(v, (int, float))]
             self.stage_label.setText("ms: " + " · ".join(parts))
         self.drop_label.setText(f"dropped {fr.dropped_capture + fr.dropped_display}")
-        if self.recorder is not None:
-            self.record_label.setText(self.recorder.describe())
+        if self.recording is not None:
+            self.record_label.setText(f"Recording to {Path(self.recording).name}…")
 
     # ---------------------------------------------------------------------------- record
     def _on_record_toggled(self, on: bool) -> None:
         self.record_action.setChecked(on)
-        if on and self.recorder is None:
+        if on and self.recording is None:
             if not self.start_recording_dialog():
                 self.record_btn.setChecked(False)
-        elif not on and self.recorder is not None:
+        elif not on and self.recording is not None:
             self.stop_recording()
 
     def start_recording_dialog(self) -> bool:
@@ -800,15 +797,19 @@ class MainWindow(QMainWindow):
         return self.start_recording(path)
 
     def start_recording(self, path: str) -> bool:
-        """Record the character (MP4 / GIF / PNG folder by extension) and the track beside it."""
-        from app.record import Recorder, RecordError
+        """Record the character (MP4 / GIF / PNG folder by extension) and the track beside it.
+
+        The engine process writes the files; the background is the one on screen."""
+        from app.record import RecordError, _rgb_tuple, format_of
 
         try:
-            self.recorder = Recorder(path, fps=self.rate(), background=self.char_view.background_colour(),
-                                     calibration=self.pipeline.worker.calibration)
+            format_of(path)
         except RecordError as e:
             QMessageBox.warning(self, "Record", str(e))
             return False
+        self._record_result = None
+        self.recording = str(path)
+        self.pipeline.start_recording(path, self.rate(), _rgb_tuple(self.char_view.background_colour()))
         self.settings.set("record/dir", str(Path(path).parent))
         self.record_btn.blockSignals(True)
         self.record_btn.setChecked(True)
@@ -817,19 +818,42 @@ class MainWindow(QMainWindow):
         self.record_action.setChecked(True)
         return True
 
-    def stop_recording(self):
-        rec, self.recorder = self.recorder, None
+    def stop_recording(self, timeout_s: float = 60.0):
+        """Stop and wait (pumping the engine's messages) until the files are closed."""
+        import time
+
+        if self.recording is None:
+            return None
+        self.recording = None
         self.record_btn.blockSignals(True)
         self.record_btn.setChecked(False)
         self.record_btn.setText("● Record")
         self.record_btn.blockSignals(False)
         self.record_action.setChecked(False)
-        if rec is None:
-            return None
-        result = rec.finish()
-        self.record_label.setText(result.describe())
-        self.statusBar().showMessage(result.describe(), 8000)
-        return result
+        self._record_result = _PENDING
+        self.pipeline.stop_recording()
+        end = time.monotonic() + timeout_s
+        while self._record_result is _PENDING and time.monotonic() < end and self.pipeline.running:
+            self.pipeline._poll()
+            time.sleep(0.01)
+        res = self._record_result
+        return None if res is _PENDING else res
+
+    def _on_recorded(self, result) -> None:
+        self._record_result = result
+        if result is not None:
+            self.record_label.setText(result.describe())
+            self.statusBar().showMessage(result.describe(), 8000)
+
+    def _on_record_failed(self, msg: str) -> None:
+        self._record_result = None
+        self.recording = None
+        self.record_btn.blockSignals(True)
+        self.record_btn.setChecked(False)
+        self.record_btn.setText("● Record")
+        self.record_btn.blockSignals(False)
+        self.record_label.setText(f"Recording failed: {msg}")
+        self.statusBar().showMessage(f"Recording failed: {msg}", 10000)
 
     def export_snapshot(self) -> None:
         if self.last is None or self.last.character is None:
@@ -892,7 +916,7 @@ class MainWindow(QMainWindow):
         )
 
     def closeEvent(self, ev) -> None:
-        if self.recorder is not None:
+        if self.recording is not None:
             self.stop_recording()
         self.settings.set_geometry("main", self.saveGeometry())
         self.settings.sync()
@@ -907,6 +931,9 @@ class MainWindow(QMainWindow):
 
     def sizeHint(self) -> QSize:
         return QSize(1360, 820)
+
+
+_PENDING = object()
 
 
 def _testing() -> bool:

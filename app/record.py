@@ -2,13 +2,13 @@
 
 * :class:`FrameWriter` writes premultiplied RGBA frames to one of the three formats (chosen
   by the file name: ``.mp4``/``.avi``, ``.gif``, ``.png`` or a folder → numbered PNGs).
-* :class:`Recorder` takes the window's frames on the GUI thread and hands them to a writer
-  thread through a bounded queue, so encoding never stalls the window. It also keeps every
+* :class:`Recorder` (used inside the engine process) takes the frames and hands them to a
+  writer thread through a bounded queue, so encoding never stalls the pipeline. It also keeps every
   frame's :class:`FaceParams` and writes them as a track CSV beside the video, with the
   calibration used (so the track can be re-rendered later).
 * :func:`render_track` re-renders a recorded track with any character (``Puppet.step_params``);
-  :class:`RenderThread` runs it off the GUI thread with progress, and
-  :class:`RerenderDialog` is the window for it.
+  :func:`render_task` runs it in its own process with progress, and :class:`RerenderDialog`
+  is the window for it.
 """
 
 from __future__ import annotations
@@ -239,7 +239,7 @@ class Recorder:
 
     def add(self, frame, background=None) -> None:
         """Queue one window frame (a :class:`app.workers.DisplayFrame`)."""
-        img = getattr(frame, "character", None)
+        img = getattr(frame, "rgba", None)  # premultiplied RGBA array (no Qt object crosses threads)
         if img is None:
             return
         params = getattr(frame, "params", None)
@@ -277,9 +277,8 @@ class Recorder:
                 return
             img, copies = item
             try:
-                arr = img if isinstance(img, np.ndarray) else _qimage_to_pm(img)
                 for _ in range(copies):
-                    self.writer.write(arr)
+                    self.writer.write(img)
             except Exception as e:
                 self.error = str(e).splitlines()[0] if str(e) else type(e).__name__
 
@@ -312,15 +311,6 @@ class Recorder:
                 except Exception:
                     pass
         return RecordResult(out, track, self.writer.frames, self.dropped, extra)
-
-
-def _qimage_to_pm(img) -> np.ndarray:
-    from PySide6.QtGui import QImage
-
-    img = img.convertToFormat(QImage.Format.Format_RGBA8888_Premultiplied)
-    w, h = img.width(), img.height()
-    arr = np.frombuffer(img.constBits(), np.uint8, count=img.bytesPerLine() * h)
-    return arr.reshape(h, img.bytesPerLine())[:, : w * 4].reshape(h, w, 4).copy()
 
 
 # ------------------------------------------------------------------------------------------
@@ -373,7 +363,6 @@ def render_track(
 
 # Qt parts are defined lazily so that FrameWriter / render_track import without a display.
 try:
-    from PySide6.QtCore import QThread, Signal
     from PySide6.QtWidgets import (
         QComboBox,
         QDialog,
@@ -389,33 +378,22 @@ try:
         QVBoxLayout,
     )
 except ImportError:  # pragma: no cover - PySide6 is a dependency of app/
-    QThread = object  # type: ignore
+    QDialog = object  # type: ignore
 
 
-class RenderThread(QThread):
-    """Runs :func:`render_track` off the GUI thread; reports progress and the result."""
+def render_track_task(report, cancelled, track_csv, art, out, fps=30.0, background=None) -> RecordResult:
+    """(Task process) :func:`render_track` reporting ``progress(i, n)``."""
+    return render_track(track_csv, art, out, fps, background, progress=lambda i, n: report("progress", i, n),
+                        cancelled=cancelled)
 
-    progress = Signal(int, int)
-    done = Signal(object)
-    failed = Signal(str)
 
-    def __init__(self, track_csv, art, out, fps=30.0, background=None, parent=None):
-        super().__init__(parent)
-        self.args = (track_csv, art, out, fps, background)
-        self._cancel = threading.Event()
+def render_task(track_csv, art, out, fps: float = 30.0, background=None):
+    """A started-on-demand :class:`app.workers.ProcessTask` re-rendering a track (see
+    :func:`render_track`): hooks ``progress(i, n)``, ``done(RecordResult)``, ``failed(msg)``."""
+    from app.workers import ProcessTask
 
-    def cancel(self) -> None:
-        self._cancel.set()
-
-    def run(self) -> None:
-        track, art, out, fps, bg = self.args
-        try:
-            res = render_track(track, art, out, fps, bg, progress=lambda i, n: self.progress.emit(i, n),
-                               cancelled=self._cancel.is_set)
-            self.done.emit(res)
-        except Exception as e:
-            msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-            self.failed.emit(msg)
+    return ProcessTask("app.record:render_track_task", str(track_csv), str(art), str(out), float(fps),
+                       _rgb_tuple(background))
 
 
 class RerenderDialog(QDialog):
@@ -427,7 +405,7 @@ class RerenderDialog(QDialog):
         self.setWindowTitle("Re-render a track with another character")
         self.setMinimumWidth(520)
         self.background = background
-        self.thread: RenderThread | None = None
+        self.thread = None  # app.workers.ProcessTask while rendering
         self.result_: RecordResult | None = None
         v = QVBoxLayout(self)
         v.setContentsMargins(18, 18, 18, 18)
@@ -493,8 +471,8 @@ class RerenderDialog(QDialog):
         self.start_btn.setEnabled(False)
         self.close_btn.setText("Cancel")
         self.msg.setText("Rendering…")
-        self.thread = RenderThread(track, self.art_combo.currentData(), out, self.fps_combo.currentData(),
-                                   self.background, parent=self)
+        self.thread = render_task(track, self.art_combo.currentData(), out, self.fps_combo.currentData(),
+                                  self.background)
         self.thread.progress.connect(self._on_progress)
         self.thread.done.connect(self._on_done)
         self.thread.failed.connect(self._on_failed)

@@ -40,7 +40,7 @@ from PySide6.QtWidgets import (
 
 from app.settings import performer_dir
 from app.views import VideoView, fit_rect, paint_placeholder
-from app.workers import SourceSpec, _one_line, bgr_to_qimage, bundled_performance, resolve_calibration
+from app.workers import ProcessTask, SourceSpec, _one_line, array_to_qimage, bgr_to_qimage, bundled_performance, resolve_calibration
 
 PARTS = ("eyes", "mouth")
 
@@ -131,41 +131,32 @@ def open_clip(source: SourceSpec | str | None):
     return PerformanceClip()
 
 
-class TrackThread(QThread):
-    """Tracks every frame of a clip (``FaceTracker``) off the GUI thread."""
+def clip_descriptor(clip) -> tuple:
+    """What a task process needs to reopen ``clip``: ("performance", perf) or ("video", path)."""
+    if isinstance(clip, PerformanceClip):
+        return ("performance", clip.perf)
+    return ("video", clip.path)
 
-    progress = Signal(int, int)
-    done = Signal(object)  # np.ndarray (m, 10), NaN rows where lost
-    failed = Signal(str)
 
-    def __init__(self, clip, calibration, parent=None):
-        super().__init__(parent)
-        self.clip = clip
-        self.calibration = calibration
-        self._stop = threading.Event()
+def track_clip_task(report, cancelled, desc: tuple, calibration) -> tuple:
+    """(Task process) track every frame of a clip: returns ``(track (m, 10) with NaN rows
+    where the face was lost, the Calibration used)``; reports ``progress(i, n)``."""
+    from tracker.face_tracker import FaceTracker
 
-    def cancel(self) -> None:
-        self._stop.set()
-
-    def run(self) -> None:
-        try:
-            from tracker.face_tracker import FaceTracker
-
-            tr = FaceTracker(self.calibration)
-            n = len(self.clip)
-            out = np.full((n, 10), np.nan)
-            for i in range(n):
-                if self._stop.is_set():
-                    return
-                res = tr.track(self.clip.frame(i), index=i, time=i / self.clip.fps)
-                p = res.params
-                if getattr(p, "status", "ok") != "lost":
-                    out[i] = p.values()
-                if i % 10 == 0 or i == n - 1:
-                    self.progress.emit(i + 1, n)
-            self.done.emit(out)
-        except Exception as e:
-            self.failed.emit(_one_line(e))
+    clip = PerformanceClip(desc[1]) if desc[0] == "performance" else VideoClip(desc[1])
+    cal = resolve_calibration(calibration)
+    tr = FaceTracker(cal)
+    n = len(clip)
+    out = np.full((n, 10), np.nan)
+    for i in range(n):
+        if cancelled():
+            break
+        p = tr.track(clip.frame(i), index=i, time=i / clip.fps).params
+        if getattr(p, "status", "ok") != "lost":
+            out[i] = p.values()
+        if i % 10 == 0 or i == n - 1:
+            report("progress", i + 1, n)
+    return out, cal
 
 
 # ------------------------------------------------------------------------------------------
@@ -176,15 +167,11 @@ def drawing_qimage(rgba: np.ndarray, paper=(250, 248, 243)) -> QImage:
     """A straight-alpha RGBA drawing on paper colour, as a QImage."""
     a = rgba[..., 3:4].astype(np.float32) / 255.0
     rgb = rgba[..., :3].astype(np.float32) * a + np.asarray(paper, np.float32) * (1 - a)
-    arr = np.ascontiguousarray(np.clip(rgb + 0.5, 0, 255).astype(np.uint8))
-    h, w = arr.shape[:2]
-    return QImage(arr.data, w, h, w * 3, QImage.Format.Format_RGB888).copy()
+    return array_to_qimage(np.clip(rgb + 0.5, 0, 255).astype(np.uint8), QImage.Format.Format_RGB888)
 
 
 def rgb_qimage(rgb: np.ndarray) -> QImage:
-    arr = np.ascontiguousarray(rgb[..., :3].astype(np.uint8))
-    h, w = arr.shape[:2]
-    return QImage(arr.data, w, h, w * 3, QImage.Format.Format_RGB888).copy()
+    return array_to_qimage(np.ascontiguousarray(rgb[..., :3].astype(np.uint8)), QImage.Format.Format_RGB888)
 
 
 class DrawingCard(QWidget):
@@ -461,10 +448,12 @@ class TrainingWindow(QMainWindow):
         self.art_path = str(art_path)
         self.artset = load_artset(self.art_path)
         self.performer = performer
-        self.calibration = resolve_calibration(calibration) if isinstance(calibration, (str, tuple)) else calibration
+        # "performance" / ("clicks", ...) are resolved by the tracking process, not here
+        self.calibration_spec = calibration
+        self.calibration = None if isinstance(calibration, (str, tuple)) else calibration
         self.clip = clip if clip is not None else open_clip(source)
         self.track: np.ndarray | None = None
-        self.tracker_thread: TrackThread | None = None
+        self.tracker_thread: ProcessTask | None = None
         self._recording: list[np.ndarray] | None = None
         self._record_until = 0.0
         self._diag_worst: dict[str, int] = {}
@@ -475,7 +464,7 @@ class TrainingWindow(QMainWindow):
         self.set_frame(0)
         self.refresh()
         self.resize(1320, 900)
-        if self.calibration is not None:
+        if self.calibration_spec is not None:
             self.track_clip()
         else:
             self.status.setText("No calibration for this performer: calibrate first (Tools → Calibrate) so frames can be tracked.")
@@ -648,7 +637,7 @@ class TrainingWindow(QMainWindow):
         self.slider.setRange(0, n)
         self.frame_spin.setRange(0, n)
         self.set_frame(0)
-        if self.calibration is not None:
+        if self.calibration_spec is not None:
             self.track_clip()
 
     def _open_clip_dialog(self) -> None:
@@ -663,13 +652,21 @@ class TrainingWindow(QMainWindow):
     def track_clip(self) -> None:
         """Track every frame of the clip in the background (for pairing and the frame cloud)."""
         self.status.setText(f"Tracking the clip ({len(self.clip)} frames)…")
-        self.tracker_thread = TrackThread(self.clip, self.calibration, self)
+        self.tracker_thread = ProcessTask("app.training_window:track_clip_task", clip_descriptor(self.clip),
+                                          self.calibration if self.calibration is not None else self.calibration_spec)
         self.tracker_thread.progress.connect(lambda i, n: self.status.setText(f"Tracking the clip… {i}/{n}"))
         self.tracker_thread.done.connect(self._on_tracked)
         self.tracker_thread.failed.connect(lambda m: self.status.setText(f"Tracking failed: {m}"))
         self.tracker_thread.start()
 
-    def _on_tracked(self, track: np.ndarray) -> None:
+    def _on_tracked(self, result) -> None:
+        track, cal = result
+        if self.calibration is None and cal is not None:
+            self.calibration = cal
+            try:
+                self.session.set_calibration(cal, ref=str(performer_dir(self.performer) / "calibration.json"))
+            except Exception:
+                pass
         self.track = track
         ok = np.all(np.isfinite(track), axis=1)
         ref = getattr(self.clip, "path", None) or self.clip.name

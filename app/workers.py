@@ -1,19 +1,18 @@
-"""Capture and tracking off the GUI thread.
+"""Capture, tracking and rendering off the GUI thread — in a separate engine process.
 
-Two threads feed the window:
+* The **engine process** (:func:`engine_main`) runs a :class:`Capture` thread that reads the
+  frame source (camera, video file, the synthetic performance) into a one-item
+  :class:`LatestSlot`, paced to the source's rate for files; when the engine has not taken the
+  previous frame it is overwritten and counted as dropped — frames are never queued. The
+  :class:`Engine` steps ``training.puppet.Puppet`` on the newest frame (track → filter → map →
+  render) and keeps only its newest result for the window; it is sent when the window has
+  acknowledged the previous one, so a slow window drops frames too. Characters are built on a
+  loader thread so video keeps flowing meanwhile. Recording happens there as well.
+* The **window side** (:class:`Pipeline`) polls the pipe from a timer and turns the newest
+  frame into QImages on the GUI thread. Requests (another source, character, rate, filter,
+  gain …) are messages; nothing heavy ever runs on the GUI thread.
 
-* :class:`CaptureThread` reads frames from a :class:`tracker.sources` source (camera, video
-  file, the synthetic performance), paced to the source's frame rate for files, and puts each
-  one into a one-item :class:`LatestSlot`. If the pipeline has not taken the previous frame,
-  that frame is overwritten and counted as dropped — frames are never queued.
-* :class:`PipelineThread` takes the newest frame, runs ``Puppet.step`` (track → filter → map
-  → render), converts the video frame and the character to ``QImage`` (allowed off the GUI
-  thread), and hands a :class:`DisplayFrame` to the GUI through a second slot. The GUI is
-  signalled only when it has consumed the previous one, so a slow GUI drops frames too.
-
-Everything the GUI asks for (another source, character, rate, filter, gain …) goes through
-thread-safe request methods; the pipeline thread applies them between frames, so the heavy
-work of loading a character and precomputing its α tables never blocks the window.
+Why a process and not QThreads: see the note above :class:`Hook`.
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from PySide6.QtCore import QThread, Signal
+from PySide6.QtCore import QTimer
 from PySide6.QtGui import QImage
 
 # ------------------------------------------------------------------------------------------
@@ -126,13 +125,14 @@ class PuppetSpec:
 
 @dataclass
 class DisplayFrame:
-    """One frame ready for the window, built entirely off the GUI thread."""
+    """One frame for the window. The worker fills the arrays; the GUI thread makes the
+    QImages (``video``, ``character``) with :meth:`to_images`, so no Qt object is touched
+    off the GUI thread."""
 
     index: int
     time: float
-    video: QImage | None
-    character: QImage | None
     frame_bgr: np.ndarray | None
+    rgba: np.ndarray | None = None  # premultiplied RGBA, a private copy (None: no character yet)
     params: Any = None
     overlay: Any = None
     weights: Any = None
@@ -142,26 +142,50 @@ class DisplayFrame:
     dropped_display: int = 0
     art: str = ""
     status: str = ""
+    fresh: bool = True  # False: the output rate held the previous picture
+    frames_read: int = 0  # by the capture so far
+    frames_done: int = 0  # by the engine so far
+    video: QImage | None = None
+    character: QImage | None = None
+
+    def to_images(self, previous: "DisplayFrame | None" = None, video: bool = True) -> None:
+        """Make the QImages (GUI thread only); a held picture reuses the previous QImage."""
+        if video and self.frame_bgr is not None and self.video is None:
+            self.video = bgr_to_qimage(self.frame_bgr)
+        if self.rgba is not None and self.character is None:
+            if previous is not None and previous.rgba is self.rgba and previous.character is not None:
+                self.character = previous.character
+            else:
+                self.character = rgba_pm_to_qimage(self.rgba)
 
 
 # ------------------------------------------------------------------------------------------
 # conversions (no copies beyond the one QImage needs to own its pixels)
 
 
+def array_to_qimage(arr: np.ndarray, fmt: QImage.Format) -> QImage:
+    """Copy a uint8 (h, w, c) array into a new QImage that owns its pixels.
+
+    The pixels are copied into Qt's own buffer (``QImage(w, h, fmt)`` then ``bits()``) rather
+    than wrapping the numpy buffer: a QImage wrapping Python memory releases it from whichever
+    thread drops the image, which corrupts reference counts when that is a worker thread.
+    """
+    h, w = arr.shape[:2]
+    c = 1 if arr.ndim == 2 else arr.shape[2]
+    img = QImage(w, h, fmt)
+    dst = np.frombuffer(img.bits(), np.uint8, count=img.bytesPerLine() * h).reshape(h, img.bytesPerLine())
+    dst[:, : w * c] = arr.reshape(h, w * c)
+    return img
+
+
 def bgr_to_qimage(frame: np.ndarray) -> QImage:
     """A BGR uint8 (H,W,3) frame as an owned QImage."""
-    h, w = frame.shape[:2]
-    buf = np.ascontiguousarray(frame)
-    img = QImage(buf.data, w, h, int(buf.strides[0]), QImage.Format.Format_BGR888)
-    return img.copy()
+    return array_to_qimage(frame, QImage.Format.Format_BGR888)
 
 
 def rgba_pm_to_qimage(rgba: np.ndarray) -> QImage:
     """A premultiplied RGBA uint8 (h,w,4) image as an owned QImage."""
-    h, w = rgba.shape[:2]
-    buf = np.ascontiguousarray(rgba)
-    img = QImage(buf.data, w, h, int(buf.strides[0]), QImage.Format.Format_RGBA8888_Premultiplied)
-    return img.copy()
+    return array_to_qimage(rgba, QImage.Format.Format_RGBA8888_Premultiplied)
 
 
 def qimage_to_rgba(img: QImage) -> np.ndarray:
@@ -406,30 +430,56 @@ def _call_flexibly(fn: Callable, *args, **kwargs):
 
 
 # ------------------------------------------------------------------------------------------
-# threads
+# the engine process
+#
+# PySide6 6.12 on CPython 3.11 corrupts the reference counts of None / True / False when a
+# Qt call that releases the GIL (QPainter.fillRect, processEvents, Signal.emit, ...) runs on
+# one thread while Python code runs on another: the process dies with "deallocating None".
+# (Python 3.12 makes those objects immortal, which hides the race.) So the window process
+# runs no Python threads at all: capture, tracking, rendering and recording live in a
+# separate *engine process* (which never touches Qt and may use threads), and the GUI polls
+# a pipe from a timer. On two cores this is also real parallelism instead of a shared GIL.
 
 
-class CaptureThread(QThread):
-    """Reads a frame source into a :class:`LatestSlot`.
+class Hook:
+    """A plain-Python signal: ``connect(fn)``, ``emit(*args)`` calls every fn in order."""
+
+    def __init__(self) -> None:
+        self._fns: list[Callable] = []
+
+    def connect(self, fn: Callable) -> None:
+        self._fns.append(fn)
+
+    def disconnect(self, fn: Callable) -> None:
+        if fn in self._fns:
+            self._fns.remove(fn)
+
+    def emit(self, *args) -> None:
+        for fn in list(self._fns):
+            fn(*args)
+
+
+class Capture(threading.Thread):
+    """(Engine process) reads a frame source into a :class:`LatestSlot`.
 
     ``realtime`` paces file and synthetic sources to their fps (cameras pace themselves);
-    with ``realtime=False`` it waits for the pipeline to take each frame (no drops: used to
-    measure the loop's top speed).
+    with ``realtime=False`` it waits for the engine to take each frame (no drops: used to
+    measure the loop's top speed). ``events`` receives ``(name, args)`` notifications.
     """
 
-    sourceFailed = Signal(str)
-    sourceOpened = Signal(str, float, int, int)  # description, fps, width, height
-    finishedSource = Signal()
-
-    def __init__(self, slot: LatestSlot, spec: SourceSpec, realtime: bool = True, source=None, parent=None):
-        super().__init__(parent)
+    def __init__(self, slot: LatestSlot, spec: SourceSpec, realtime: bool, source, events: Callable):
+        super().__init__(name="inkface-capture", daemon=True)
         self.slot = slot
         self.spec = spec
         self.realtime = realtime
         self._given_source = source
+        self._events = events
         self._stop = threading.Event()
         self._paused = threading.Event()
         self.frames_read = 0
+
+    def post(self, name: str, *args) -> None:
+        self._events(name, args)
 
     def stop(self) -> None:
         self._stop.set()
@@ -442,12 +492,12 @@ class CaptureThread(QThread):
         try:
             src = self._given_source if self._given_source is not None else open_source(self.spec)
         except Exception as e:  # SourceError, missing core, bad file: one line for the user
-            self.sourceFailed.emit(_one_line(e))
+            self.post("sourceFailed", _one_line(e))
             return
         try:
             fps = float(getattr(src, "fps", 30.0) or 30.0)
             w, h = getattr(src, "size", (0, 0))
-            self.sourceOpened.emit(self.spec.describe(), fps, int(w), int(h))
+            self.post("sourceOpened", self.spec.describe(), fps, int(w), int(h))
             # a real camera paces itself; files, the synthetic performer and fakes are paced here
             pace = self.realtime and (self._given_source is not None or self.spec.kind != "camera")
             t0 = time.perf_counter()
@@ -484,9 +534,9 @@ class CaptureThread(QThread):
                 src = _reopen(src, self.spec, self._given_source)
                 if src is None:
                     break
-            self.finishedSource.emit()
+            self.post("finishedSource")
         except Exception as e:
-            self.sourceFailed.emit(_one_line(e))
+            self.post("sourceFailed", _one_line(e))
         finally:
             try:
                 src.close()
@@ -494,76 +544,37 @@ class CaptureThread(QThread):
                 pass
 
 
-def _reopen(src, spec: SourceSpec, given):
-    """A fresh pass over the same source for looping playback."""
-    try:
-        src.close()
-    except Exception:
-        pass
-    if given is not None:
-        frames = getattr(given, "frames", None)
-        if frames is None:
-            return None
-        try:
-            return type(given)(frames, fps=given.fps)
-        except Exception:
-            return None
-    return open_source(spec)
+class Engine:
+    """(Engine process) steps the puppet on the newest captured frame and keeps the latest
+    result for the window; builds puppets on a loader thread so frames keep flowing."""
 
-
-def _one_line(e: BaseException) -> str:
-    msg = str(e).strip().splitlines()
-    return msg[0] if msg else type(e).__name__
-
-
-class PipelineThread(QThread):
-    """Takes the newest frame, steps the puppet and publishes a :class:`DisplayFrame`."""
-
-    frameReady = Signal()
-    puppetReady = Signal(str)  # art-set path now live
-    puppetFailed = Signal(str)
-    error = Signal(str)
-
-    def __init__(self, inbox: LatestSlot, outbox: LatestSlot, spec: PuppetSpec, parent=None):
-        super().__init__(parent)
+    def __init__(self, inbox: LatestSlot, spec: PuppetSpec, events: Callable):
         self.inbox = inbox
-        self.outbox = outbox
+        self._events = events
         self._lock = threading.Lock()
         self._pending: PuppetSpec | None = spec
         self.spec = PuppetSpec()
         self.puppet = None
         self._cache: dict[str, Any] = {}  # art path -> loaded ArtSet
         self._cal_cache: dict[Any, Any] = {}
-        self._stop = threading.Event()
-        self._gui_busy = threading.Event()
-        self._times: deque[float] = deque(maxlen=60)
-        self.frames_done = 0
-        self.last_error = ""
-        self.render_video = True
         self.calibration = None  # the resolved Calibration the puppet uses
         self.live_art = ""  # art set of the puppet in use ("" while none is ready)
         self.building = False
         self._gen = 0
         self._built = None
         self._build_lock = threading.Lock()
-        self._last_char: QImage | None = None
+        self._last_rgba: np.ndarray | None = None
+        self._times: deque[float] = deque(maxlen=60)
+        self.frames_done = 0
+        self.last_error = ""
 
-    # requests from the GUI thread ------------------------------------------------------
-    def request(self, **changes) -> None:
-        """Ask for a new puppet configuration; applied before the next frame."""
+    def post(self, name: str, *args) -> None:
+        self._events(name, args)
+
+    def request(self, spec: PuppetSpec) -> None:
         with self._lock:
-            base = self._pending or self.spec
-            self._pending = replace(base, **changes)
+            self._pending = spec
 
-    def stop(self) -> None:
-        self._stop.set()
-        self.inbox.notify_taken()
-
-    def gui_consumed(self) -> None:
-        """The GUI has taken the last frame; the next one may be signalled."""
-        self._gui_busy.clear()
-
-    # the loop --------------------------------------------------------------------------
     def _apply_pending(self) -> None:
         """Apply the GUI's latest request; swap in a puppet a loader thread has finished."""
         with self._lock:
@@ -575,15 +586,15 @@ class PipelineThread(QThread):
                 if err:
                     self.puppet, self.live_art = None, ""
                     self.last_error = err
-                    self.puppetFailed.emit(err)
+                    self.post("puppetFailed", err)
                 else:
                     self.puppet, self.live_art, self.calibration = puppet, bspec.art, cal
-                    self._last_char = None
+                    self._last_rgba = None
                     try:
                         _tune(puppet, self.spec)
                     except Exception:
                         pass
-                    self.puppetReady.emit(bspec.art)
+                    self.post("puppetReady", bspec.art)
         if spec is None:
             return
         old = self.spec
@@ -613,7 +624,7 @@ class PipelineThread(QThread):
             try:
                 self.puppet.set_session(spec.session)
             except Exception as e:
-                self.puppetFailed.emit(_one_line(e))
+                self.post("puppetFailed", _one_line(e))
         _tune(self.puppet, spec)
 
     def _build(self, gen: int, spec: PuppetSpec) -> None:
@@ -649,63 +660,430 @@ class PipelineThread(QThread):
             self._cal_cache[key] = resolve_calibration(cal)
         return self._cal_cache[key]
 
-    def run(self) -> None:
-        while not self._stop.is_set():
-            self._apply_pending()
-            item = self.inbox.take(timeout=0.1)
-            if item is None:
-                continue
-            index, t, image = item
-            try:
-                out = self._process(index, t, image)
-            except Exception as e:  # keep the window alive; say what went wrong once
-                msg = _one_line(e)
-                if msg != self.last_error:
-                    self.last_error = msg
-                    self.error.emit(msg)
-                out = DisplayFrame(index, t, bgr_to_qimage(image), None, image, status=f"error: {msg}")
-            now = time.perf_counter()
-            self._times.append(now)
-            if len(self._times) > 1:
-                out.fps = (len(self._times) - 1) / max(1e-9, self._times[-1] - self._times[0])
-            self.frames_done += 1
-            out.dropped_capture = self.inbox.dropped
-            out.dropped_display = self.outbox.dropped
-            self.outbox.put(out)
-            if not self._gui_busy.is_set():
-                self._gui_busy.set()
-                self.frameReady.emit()
+    def step(self, timeout: float) -> DisplayFrame | None:
+        """Apply requests, then process the newest frame (waiting up to ``timeout`` s)."""
+        self._apply_pending()
+        item = self.inbox.take(timeout=timeout)
+        if item is None:
+            return None
+        index, t, image = item
+        try:
+            out = self._process(index, t, image)
+        except Exception as e:  # keep going; say what went wrong once
+            msg = _one_line(e)
+            if msg != self.last_error:
+                self.last_error = msg
+                self.post("error", msg)
+            out = DisplayFrame(index, t, image, status=f"error: {msg}")
+        self._times.append(time.perf_counter())
+        if len(self._times) > 1:
+            out.fps = (len(self._times) - 1) / max(1e-9, self._times[-1] - self._times[0])
+        self.frames_done += 1
+        return out
 
     def _process(self, index: int, t: float, image: np.ndarray) -> DisplayFrame:
-        video = bgr_to_qimage(image) if self.render_video else None
         p = self.puppet
         if p is None:
-            return DisplayFrame(index, t, video, None, image, status="loading the character" if self.building else "no character")
+            return DisplayFrame(index, t, image, status="loading the character" if self.building else "no character")
         pf = p.step(image, index, t)
-        if pf is None:  # a puppet running at a lower output rate may skip frames
-            return DisplayFrame(index, t, video, None, image, art=self.live_art, status="")
+        if pf is None:
+            return DisplayFrame(index, t, image, art=self.live_art)
         rgba = getattr(pf, "rgba_pm", None)
-        if rgba is None:
-            char = None
-        elif not getattr(pf, "fresh", True) and self._last_char is not None:  # held picture (lower output rate)
-            char = self._last_char
-        else:
-            char = rgba_pm_to_qimage(rgba)
-            self._last_char = char
+        fresh = bool(getattr(pf, "fresh", True))
+        if rgba is not None:
+            if not fresh and self._last_rgba is not None:  # held picture (lower output rate)
+                rgba = self._last_rgba
+            else:  # a private copy: the renderer may reuse its buffer for the next frame
+                rgba = self._last_rgba = rgba.copy()
         params = getattr(pf, "params", None)
         return DisplayFrame(
-            index,
-            t,
-            video,
-            char,
-            image,
+            index, t, image, rgba,
             params=params,
             overlay=getattr(pf, "overlay", None),
             weights=getattr(pf, "weights", None),
             timings_ms=dict(getattr(pf, "timings_ms", {}) or {}),
             art=self.live_art,
             status=str(getattr(params, "status", "")) if params is not None else "",
+            fresh=fresh,
         )
+
+
+_META = ("index", "time", "params", "overlay", "weights", "timings_ms", "fps", "dropped_capture", "dropped_display",
+         "art", "status", "fresh", "frames_read", "frames_done")
+
+
+def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba) -> None:
+    """A frame over the pipe: the small fields pickled, the two pictures as raw bytes."""
+    img, rgba = fr.frame_bgr if send_video else None, fr.rgba
+    same = rgba is not None and rgba is last_sent_rgba
+    meta = {k: getattr(fr, k) for k in _META}
+    meta["video_shape"] = None if img is None else img.shape
+    meta["rgba_shape"] = None if rgba is None or same else rgba.shape
+    meta["rgba_same"] = same
+    conn.send(("frame", meta))
+    if img is not None:
+        conn.send_bytes(np.ascontiguousarray(img).reshape(-1).data)
+    if rgba is not None and not same:
+        conn.send_bytes(np.ascontiguousarray(rgba).reshape(-1).data)
+
+
+def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake_source=None) -> None:
+    """The engine process: capture thread + puppet + recorder; talks to the window over ``conn``."""
+    import os
+
+    for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ.setdefault(v, "1")
+    events: deque = deque()
+    post = lambda name, args: events.append((name, args))  # noqa: E731 - threads append, main loop sends
+    inbox = LatestSlot()
+    engine = Engine(inbox, spec, post)
+    objects: dict[str, Any] = {}  # "calibration" / "session" as last sent by the window
+
+    def start_capture(src_spec, fake):
+        c = Capture(inbox, src_spec, realtime, fake, post)
+        c.start()
+        return c
+
+    capture = start_capture(source, fake_source)
+    gui_free = True
+    send_video = True
+    latest: DisplayFrame | None = None
+    dropped_display = 0
+    last_sent_rgba = None
+    recorder = None
+    try:
+        while True:
+            while conn.poll():
+                msg = conn.recv()
+                cmd = msg.get("cmd")
+                if cmd == "quit":
+                    return
+                if cmd == "ack":
+                    gui_free = True
+                elif cmd == "video":
+                    send_video = bool(msg["on"])
+                elif cmd == "pause":
+                    capture.set_paused(bool(msg["on"]))
+                elif cmd == "source":
+                    capture.stop()
+                    capture.join(3.0)
+                    inbox.clear()
+                    capture = start_capture(msg["spec"], msg.get("fake"))
+                elif cmd == "puppet":
+                    for key in ("calibration", "session"):
+                        if key in msg:
+                            objects[key] = msg[key]
+                    engine.request(replace(msg["spec"], calibration=objects.get("calibration"),
+                                           session=objects.get("session")))
+                elif cmd == "record":
+                    from app.record import RecordError, Recorder
+
+                    try:
+                        recorder = Recorder(msg["path"], fps=msg["fps"], background=msg.get("background"),
+                                            calibration=engine.calibration)
+                        post("recordStarted", (msg["path"],))
+                    except RecordError as e:
+                        recorder = None
+                        post("recordFailed", (str(e),))
+                elif cmd == "stop_record":
+                    if recorder is not None:
+                        rec, recorder = recorder, None
+                        try:
+                            post("recorded", (rec.finish(),))
+                        except Exception as e:
+                            post("recordFailed", (_one_line(e),))
+                    else:
+                        post("recorded", (None,))
+            fr = engine.step(timeout=0.005)
+            if fr is not None:
+                if recorder is not None:
+                    recorder.add(fr)
+                if latest is not None:
+                    dropped_display += 1  # the window never saw it: dropped, not queued
+                latest = fr
+            while events:
+                name, args = events.popleft()
+                conn.send(("event", name, args))
+            if latest is not None and gui_free:
+                latest.dropped_capture = inbox.dropped
+                latest.dropped_display = dropped_display
+                latest.frames_read = capture.frames_read
+                latest.frames_done = engine.frames_done
+                _send_frame(conn, latest, send_video, last_sent_rgba)
+                last_sent_rgba = latest.rgba
+                latest = None
+                gui_free = False
+    except (EOFError, BrokenPipeError, ConnectionResetError, KeyboardInterrupt):
+        return
+    finally:
+        capture.stop()
+        if recorder is not None:
+            try:
+                recorder.finish()
+            except Exception:
+                pass
+
+
+class Pipeline:
+    """(Window side) the engine process and the timer that polls it.
+
+    ``request(**changes)`` changes the puppet (character, rate, filter, gain ...),
+    ``set_source`` plays from elsewhere, ``take()`` returns the newest :class:`DisplayFrame`
+    (with its QImages made here, on the GUI thread). Hooks: ``frameReady``, ``puppetReady``,
+    ``puppetFailed``, ``error``, ``sourceOpened``, ``sourceFailed``, ``recorded``,
+    ``recordFailed``.
+    """
+
+    def __init__(self, source: SourceSpec, puppet: PuppetSpec, realtime: bool = True, fake_source=None,
+                 poll_ms: int = 4):
+        self.source_spec = source
+        self.spec = puppet
+        self.realtime = realtime
+        self._fake = fake_source
+        self.live_art = ""
+        self.frames_done = self.frames_read = 0
+        self.dropped_capture = self.dropped_display = 0
+        self.frames_received = 0
+        self.send_video = True
+        self._sent_cal = self._sent_session = _UNSENT
+        for name in ("frameReady", "puppetReady", "puppetFailed", "error", "sourceOpened", "sourceFailed",
+                     "finishedSource", "recorded", "recordFailed", "recordStarted"):
+            setattr(self, name, Hook())
+        self._latest: DisplayFrame | None = None
+        self._prev: DisplayFrame | None = None
+        self._proc = None
+        self._conn = None
+        self._timer = QTimer()
+        self._timer.setInterval(poll_ms)
+        self._timer.timeout.connect(self._poll)
+
+    # lifecycle --------------------------------------------------------------------------
+    def start(self) -> None:
+        import multiprocessing as mp
+
+        ctx = mp.get_context("spawn")
+        self._conn, child = ctx.Pipe()
+        spec, extra = self._spec_message(self.spec)
+        spec = replace(spec, calibration=extra.get("calibration"), session=extra.get("session"))
+        self._proc = ctx.Process(target=engine_main, args=(child, self.source_spec, spec, self.realtime, self._fake),
+                                 name="inkface-engine", daemon=True)
+        self._proc.start()
+        child.close()
+        self._timer.start()
+
+    def stop(self, wait_s: float = 5.0) -> None:
+        self._timer.stop()
+        if self._conn is not None:
+            try:
+                self._conn.send({"cmd": "quit"})
+            except (OSError, BrokenPipeError):
+                pass
+        if self._proc is not None:
+            # keep draining: the engine may be blocked sending a frame into a full pipe
+            end = time.monotonic() + wait_s
+            while self._proc.is_alive() and time.monotonic() < end:
+                try:
+                    if self._conn is not None and self._conn.poll(0.01):
+                        self._conn.recv_bytes()
+                except (EOFError, OSError):
+                    self._proc.join(0.05)
+            if self._proc.is_alive():
+                self._proc.terminate()
+                self._proc.join(2.0)
+            self._proc = None
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+    @property
+    def running(self) -> bool:
+        return self._proc is not None and self._proc.is_alive()
+
+    def _send(self, msg: dict) -> None:
+        if self._conn is not None:
+            try:
+                self._conn.send(msg)
+            except (OSError, BrokenPipeError):
+                self.error.emit("the engine process has stopped")
+
+    # requests ---------------------------------------------------------------------------
+    def _spec_message(self, spec: PuppetSpec) -> tuple[PuppetSpec, dict]:
+        """The spec without its big objects, plus those objects that changed since last sent."""
+        extra = {}
+        if not _same(spec.calibration, self._sent_cal):
+            extra["calibration"] = spec.calibration
+            self._sent_cal = spec.calibration
+        if spec.session is not self._sent_session:
+            extra["session"] = spec.session
+            self._sent_session = spec.session
+        return replace(spec, calibration=None, session=None), extra
+
+    def request(self, **changes) -> None:
+        """Change the puppet; the engine applies it before its next frame."""
+        self.spec = replace(self.spec, **changes)
+        if self._conn is not None:
+            spec, extra = self._spec_message(self.spec)
+            self._send({"cmd": "puppet", "spec": spec, **extra})
+
+    def set_source(self, spec: SourceSpec, fake_source=None) -> None:
+        self.source_spec = spec
+        self._fake = fake_source
+        self._send({"cmd": "source", "spec": spec, "fake": fake_source})
+
+    def set_paused(self, paused: bool) -> None:
+        self._send({"cmd": "pause", "on": bool(paused)})
+
+    def set_video(self, on: bool) -> None:
+        self.send_video = bool(on)
+        self._send({"cmd": "video", "on": bool(on)})
+
+    def start_recording(self, path: str, fps: float, background) -> None:
+        self._send({"cmd": "record", "path": str(path), "fps": float(fps), "background": background})
+
+    def stop_recording(self) -> None:
+        self._send({"cmd": "stop_record"})
+
+    # polling ----------------------------------------------------------------------------
+    def _poll(self) -> None:
+        conn = self._conn
+        if conn is None:
+            return
+        got_frame = False
+        try:
+            while conn.poll():
+                msg = conn.recv()
+                if msg[0] == "event":
+                    _, name, args = msg
+                    if name == "puppetReady":
+                        self.live_art = args[0]
+                    getattr(self, name).emit(*args)
+                    if self._conn is None:
+                        return
+                elif msg[0] == "frame":
+                    self._latest = self._receive_frame(conn, msg[1])
+                    got_frame = True
+                    conn.send({"cmd": "ack"})
+        except (EOFError, OSError):
+            self._timer.stop()
+            self.error.emit("the engine process has stopped")
+            return
+        if got_frame:
+            self.frameReady.emit()
+
+    def _receive_frame(self, conn, meta: dict) -> DisplayFrame:
+        video = rgba = None
+        if meta["video_shape"] is not None:
+            video = np.frombuffer(conn.recv_bytes(), np.uint8).reshape(meta["video_shape"])
+        if meta["rgba_shape"] is not None:
+            rgba = np.frombuffer(conn.recv_bytes(), np.uint8).reshape(meta["rgba_shape"])
+        elif meta["rgba_same"] and self._prev is not None:
+            rgba = self._prev.rgba
+        fr = DisplayFrame(meta["index"], meta["time"], video, rgba)
+        for k in _META[2:]:
+            setattr(fr, k, meta[k])
+        self.frames_received += 1
+        self.dropped_capture, self.dropped_display = fr.dropped_capture, fr.dropped_display
+        self.frames_read, self.frames_done = fr.frames_read, fr.frames_done
+        return fr
+
+    def take(self) -> DisplayFrame | None:
+        """The newest frame (once), with its QImages made on this (the GUI) thread."""
+        fr, self._latest = self._latest, None
+        if fr is not None:
+            fr.to_images(self._prev, video=self.send_video)
+            self._prev = fr
+        return fr
+
+
+_UNSENT = object()
+
+
+def _task_main(conn, target: str, args: tuple) -> None:
+    """(Task process) run ``module:function(report, cancelled, *args)`` and report back."""
+    import importlib
+
+    mod, fn = target.split(":")
+    func = getattr(importlib.import_module(mod), fn)
+    state = {"cancel": False}
+
+    def cancelled() -> bool:
+        while conn.poll():
+            if conn.recv() == "cancel":
+                state["cancel"] = True
+        return state["cancel"]
+
+    def report(name: str, *a) -> None:
+        conn.send((name, a))
+
+    try:
+        res = func(report, cancelled, *args)
+        conn.send(("done", (res,)))
+    except Exception as e:
+        conn.send(("failed", (_one_line(e),)))
+
+
+class ProcessTask:
+    """A long job (re-render a track, track a clip) in its own process, polled by a timer.
+
+    Same face as a worker thread: ``start()``, ``isRunning()``, ``cancel()``, ``wait(ms)``
+    and hooks ``progress(i, n)``, ``done(result)``, ``failed(message)``.
+    """
+
+    def __init__(self, target: str, *args):
+        self.target, self.args = target, args
+        self.progress, self.done, self.failed = Hook(), Hook(), Hook()
+        self._proc = self._conn = None
+        self._finished = False
+        self._timer = QTimer()
+        self._timer.setInterval(20)
+        self._timer.timeout.connect(self._poll)
+
+    def start(self) -> None:
+        import multiprocessing as mp
+
+        ctx = mp.get_context("spawn")
+        self._conn, child = ctx.Pipe()
+        self._proc = ctx.Process(target=_task_main, args=(child, self.target, self.args), daemon=True)
+        self._proc.start()
+        child.close()
+        self._timer.start()
+
+    def isRunning(self) -> bool:  # noqa: N802 - same name as QThread's
+        return self._proc is not None and not self._finished
+
+    def cancel(self) -> None:
+        if self._conn is not None and not self._finished:
+            try:
+                self._conn.send("cancel")
+            except (OSError, BrokenPipeError):
+                pass
+
+    def wait(self, ms: int = 5000) -> bool:
+        if self._proc is None:
+            return True
+        self._proc.join(ms / 1000.0)
+        if self._proc.is_alive():
+            return False
+        self._poll()
+        return True
+
+    def _poll(self) -> None:
+        if self._conn is None:
+            return
+        try:
+            while self._conn.poll():
+                name, args = self._conn.recv()
+                if name in ("done", "failed"):
+                    self._finish()
+                getattr(self, name).emit(*args)
+        except (EOFError, OSError):
+            if not self._finished:
+                self._finish()
+                self.failed.emit("the task process stopped unexpectedly")
+
+    def _finish(self) -> None:
+        self._finished = True
+        self._timer.stop()
 
 
 def _same(a, b) -> bool:
@@ -723,44 +1101,25 @@ def _tune(puppet, spec: PuppetSpec) -> None:
     _call_flexibly(puppet.configure, fps=spec.fps, filter=spec.filter, strength=spec.strength, gain=spec.gain)
 
 
-class Pipeline:
-    """Owns the capture and pipeline threads and their two slots; restarts the source on demand."""
+def _reopen(src, spec: SourceSpec, given):
+    """A fresh pass over the same source for looping playback."""
+    try:
+        src.close()
+    except Exception:
+        pass
+    if given is not None:
+        frames = getattr(given, "frames", None)
+        if frames is None:
+            return None
+        try:
+            return type(given)(frames, fps=given.fps)
+        except Exception:
+            return None
+    return open_source(spec)
 
-    def __init__(self, source: SourceSpec, puppet: PuppetSpec, realtime: bool = True, fake_source=None):
-        self.inbox = LatestSlot()
-        self.outbox = LatestSlot()
-        self.source_spec = source
-        self.realtime = realtime
-        self._fake = fake_source
-        self.capture: CaptureThread | None = None
-        self.worker = PipelineThread(self.inbox, self.outbox, puppet)
 
-    def start(self) -> None:
-        self.worker.start()
-        self._start_capture()
+def _one_line(e: BaseException) -> str:
+    msg = str(e).strip().splitlines()
+    return msg[0] if msg else type(e).__name__
 
-    def _start_capture(self) -> None:
-        self.capture = CaptureThread(self.inbox, self.source_spec, self.realtime, source=self._fake)
-        self._on_capture(self.capture)
-        self.capture.start()
 
-    def _on_capture(self, cap: CaptureThread) -> None:
-        """Hook for the window to connect the new capture thread's signals."""
-
-    def set_source(self, spec: SourceSpec, fake_source=None) -> None:
-        self.stop_capture()
-        self.source_spec = spec
-        self._fake = fake_source
-        self.inbox.clear()
-        self._start_capture()
-
-    def stop_capture(self, wait_ms: int = 3000) -> None:
-        if self.capture is not None:
-            self.capture.stop()
-            self.capture.wait(wait_ms)
-            self.capture = None
-
-    def stop(self) -> None:
-        self.stop_capture()
-        self.worker.stop()
-        self.worker.wait(5000)

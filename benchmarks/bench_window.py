@@ -1,4 +1,5 @@
-"""The whole performance-window loop, offscreen: capture thread → puppet thread → GUI views.
+"""The whole performance-window loop, offscreen: engine process (capture thread → puppet) →
+pipe → GUI views.
 
 Two runs on frames of the bundled synthetic performance played by a fake camera:
 
@@ -38,10 +39,9 @@ def _run_window(frames, art, calibration, realtime: bool, seconds: float, max_fr
         app.processEvents()
         time.sleep(0.002)
     stages: dict[str, list[float]] = {}
+    pl = w.pipeline
     shown0 = w.frames_shown
-    cap0, done0 = w.pipeline.inbox.dropped, w.pipeline.worker.frames_done
-    disp0 = w.pipeline.outbox.dropped
-    read0 = w.pipeline.capture.frames_read if w.pipeline.capture else 0
+    cap0, done0, disp0, read0 = pl.dropped_capture, pl.frames_done, pl.dropped_display, pl.frames_read
     t0 = time.perf_counter()
     last_index = None
     while True:
@@ -58,10 +58,10 @@ def _run_window(frames, art, calibration, realtime: bool, seconds: float, max_fr
     el = time.perf_counter() - t0
     res = {
         "shown": w.frames_shown - shown0,
-        "processed": w.pipeline.worker.frames_done - done0,
-        "read": (w.pipeline.capture.frames_read if w.pipeline.capture else 0) - read0,
-        "dropped_capture": w.pipeline.inbox.dropped - cap0,
-        "dropped_display": w.pipeline.outbox.dropped - disp0,
+        "processed": pl.frames_done - done0,
+        "read": pl.frames_read - read0,
+        "dropped_capture": pl.dropped_capture - cap0,
+        "dropped_display": pl.dropped_display - disp0,
         "seconds": el,
         "stages": {k: statistics.median(v) for k, v in stages.items() if v},
     }
