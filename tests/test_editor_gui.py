@@ -670,3 +670,20 @@ def test_none_survives_many_void_qt_calls():
         e.flag.emit(False)
     assert min(sys.getrefcount(x) for x in (None, True, False)) > 1000
     assert isinstance(app.editor.NONE_WORKAROUND, bool)
+
+
+def test_edits_of_a_bundled_character_never_touch_its_folder(make_window, tmp_path, qtbot):
+    from art_sets.library import list_bundled
+
+    bundled = list_bundled()
+    if not bundled:
+        pytest.skip("no bundled characters yet")
+    folder = bundled[0][1]
+    before = sorted(p.relative_to(folder) for p in folder.rglob("*"))
+    win = make_window()
+    assert win.open_path(folder)
+    win.doc.move_line("mouth", 0, 0, [3, 3, 30, 8])
+    side = tmp_path / "userdata" / "editor-autosave" / f"bundled-{folder.name}" / "artset.json"
+    qtbot.waitUntil(side.exists, timeout=15000)
+    win.doc.wait_autosave()
+    assert sorted(p.relative_to(folder) for p in folder.rglob("*")) == before

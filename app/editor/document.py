@@ -29,17 +29,35 @@ from art_sets.model import ArtSet
 AUTOSAVE_NAME = ".artset.autosave"
 
 
-def autosave_dir_for(path: Path | None) -> Path:
-    """Where the side copy of the set at ``path`` (None: a new, unsaved set) is kept."""
-    if path is not None:
-        return Path(path) / AUTOSAVE_NAME
+def _user_autosave_root() -> Path:
     try:
         from app.settings import user_data_dir
 
         base = Path(user_data_dir())
     except Exception:  # settings module missing or unusable: fall back to the home folder
         base = Path.home() / ".inkface"
-    return base / "editor-autosave" / "untitled"
+    return base / "editor-autosave"
+
+
+def is_bundled(path: Path) -> bool:
+    """True for a folder inside the bundled characters (shipped files: never written to)."""
+    try:
+        from art_sets.library import bundled_dir
+
+        Path(path).resolve().relative_to(Path(bundled_dir()).resolve())
+        return True
+    except Exception:
+        return False
+
+
+def autosave_dir_for(path: Path | None) -> Path:
+    """Where the side copy of the set at ``path`` is kept: ``DIR/.artset.autosave``; for a new,
+    unsaved set (None) or a bundled one, a folder in the user data folder."""
+    if path is None:
+        return _user_autosave_root() / "untitled"
+    if is_bundled(path):
+        return _user_autosave_root() / f"bundled-{Path(path).name}"
+    return Path(path) / AUTOSAVE_NAME
 
 
 def recoverable(path: Path | None) -> Path | None:

@@ -18,7 +18,7 @@ from art_sets import editing as ed
 from art_sets.model import PART_NAMES
 
 from .canvas import HeadCanvas, LineCanvas
-from .document import EditorDocument, recoverable
+from .document import EditorDocument, is_bundled, recoverable
 from .panels import (
     DropList, LinesList, PartStrip, ProblemsList, cached_icon, dropped_paths, image_paths, thumb_icon,
 )
@@ -37,16 +37,6 @@ def _user_art_dir() -> Path | None:
         return d
     except Exception:  # library missing or the folder cannot be made: let the dialog start anywhere
         return None
-
-
-def _is_bundled(folder: Path) -> bool:
-    try:
-        from art_sets.library import bundled_dir
-
-        Path(folder).resolve().relative_to(Path(bundled_dir()).resolve())
-        return True
-    except Exception:
-        return False
 
 
 def _remember_user_folder(folder: Path) -> None:
@@ -611,7 +601,7 @@ class EditorWindow(QMainWindow):
     def save(self) -> bool:
         if self.doc.artset is None:
             return False
-        if self.doc.path is None or _is_bundled(self.doc.path):
+        if self.doc.path is None or is_bundled(self.doc.path):
             if self.doc.path is not None:
                 self.statusBar().showMessage("bundled characters are not changed in place: choose a folder for your copy", 8000)
             return self.save_as()
@@ -629,7 +619,7 @@ class EditorWindow(QMainWindow):
         if not has_set and folder.is_dir() and (any(folder.iterdir()) or (start is not None and folder.resolve() == start.resolve())):
             folder = folder / ed.slug(self.doc.artset.name)
             has_set = (folder / "artset.json").exists()
-        if _is_bundled(folder):
+        if is_bundled(folder):
             QMessageBox.information(self, "Inkface", "Bundled characters are not changed in place; choose another folder.")
             return False
         if has_set and folder != self.doc.path:
