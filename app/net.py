@@ -365,6 +365,7 @@ class Receiver:
         self._gap_anchor = -math.inf
         self._gap_frames = 0
         self._resting = False
+        self._alive = -math.inf
 
     # --- input ---------------------------------------------------------------------------------
 
@@ -415,6 +416,7 @@ class Receiver:
                 return None
             if codes is None:
                 st.waiting += 1
+                self._alive = now  # the sender is there: hold, do not ease, until the key frame
                 return None
         frame = self.codec.decode(codes, frame=p.seq, time=p.timestamp_ms / 1000.0, status=p.status)
         st.frames += 1
@@ -499,15 +501,17 @@ class Receiver:
     def pose(self, now: float | None = None) -> FaceParams | None:
         """The pose to draw now: the newest frame (its time advanced to now while it is held); after
         ``hold_s`` without packets, eased towards the neutral face over ``ease_s`` (status ``lost``,
-        confidence falling to 0)."""
+        confidence falling to 0). Packets that arrive but wait for a key frame count as signs of
+        life: the pose is held, not eased, until the stream decodes again."""
         last = self.last_frame
         if last is None:
             return None
         now = self.clock() if now is None else now
         age = now - self.last_arrival
-        if age <= self.hold_s:
+        silent = now - max(self.last_arrival, self._alive)
+        if silent <= self.hold_s:
             return last if age <= 0 else last.replace(time=last.time + age)
-        s = _smoothstep((age - self.hold_s) / self.ease_s if self.ease_s > 0 else 1.0)
+        s = _smoothstep((silent - self.hold_s) / self.ease_s if self.ease_s > 0 else 1.0)
         target = self.neutral.values() if self.neutral is not None else last.values()
         vals = last.values()
         vals = np.where(np.isfinite(vals), vals, target)

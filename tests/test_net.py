@@ -157,6 +157,25 @@ def test_holds_then_eases_to_neutral():
     assert np.allclose(end.values(), codec.decode(codec.encode(NEUTRAL)).values()) and end.confidence == 0
 
 
+def test_undecodable_packets_hold_the_pose_instead_of_easing():
+    clock = Clock()
+    rx = Receiver(hold_s=0.5, ease_s=1.0, clock=clock)
+    hello, pk = _packets(True, n=40)  # key frames every 10
+    rx.handle(hello, "A")
+    for i in range(3):
+        rx.handle(pk[i], "A")
+        clock.t += 0.1
+    last = rx.last_frame
+    for i in range(4, 10):  # 3 is lost: 4..9 wait for the key frame at 10
+        assert rx.handle(pk[i], "A") is None
+        clock.t += 0.2
+    held = rx.pose()
+    assert held.status == last.status and np.array_equal(held.values(), last.values())
+    assert rx.handle(pk[10], "A") is not None
+    clock.t += 2.0  # now the stream really stopped
+    assert rx.pose().status == "lost" and rx.pose().confidence == 0.0
+
+
 def test_gap_poses_keep_the_senders_rate_then_rest():
     clock = Clock()
     rx = Receiver(hold_s=0.5, ease_s=1.0, clock=clock)
