@@ -25,7 +25,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tracker.brows import brow_centre, column_profile
+from tracker.brows import brow_centre
 from tracker.clicks import Clicks
 
 

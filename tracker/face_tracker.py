@@ -29,9 +29,9 @@ import numpy as np
 from tracker.brows import BrowFinder
 from tracker.calibration import Calibration, FaceFrame
 from tracker.lids import LidFinder
-from tracker.mouth import MouthFinder, MouthResult
+from tracker.mouth import MouthFinder
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
-from tracker.pupils import PupilFinder, PupilResult
+from tracker.pupils import PupilFinder
 
 
 @dataclass
@@ -208,7 +208,7 @@ class FaceTracker:
 
     def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
         """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
-        e, m = getattr(self, "_last_eye_level", None), getattr(self, "_last_mouth_crop", None)
+        e, m = getattr(self, "_last_eye_crop", None), getattr(self, "_last_mouth_crop", None)
         if e is None or m is None:
             return None, None
         return tuple(float(v) for v in self._level(e)), tuple(float(v) for v in self._level(m))
@@ -224,7 +224,7 @@ class FaceTracker:
     def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int]):
         """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
         crop = self._balance(ff.crop(frame, rect), self.cal.eye_ref)
-        self._last_eye_level = crop
+        self._last_eye_crop = crop
         grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
         ox, oy = rect[0], rect[1]
         preds = [(-0.5 * self.wi - ox, -oy), (0.5 * self.wi - ox, -oy)]
@@ -369,6 +369,29 @@ class FaceTracker:
         return res, (rect[0], rect[1]), rect
 
     # -------------------------------------------------------------- re-acquisition
+    def _check_face(self, frame: np.ndarray, mouth: np.ndarray, mo: np.ndarray, ipd: float, ang: float) -> np.ndarray | None:
+        """Pupils (frame px) if the eye pictures match where a face with its mouth at
+        ``mouth``, inter-pupil distance ``ipd`` and roll ``ang`` (radians) has its eyes."""
+        H, W = frame.shape[:2]
+        u = np.array([math.cos(ang), -math.sin(ang)])
+        d = np.array([math.sin(ang), math.cos(ang)])
+        mid = mouth - ipd * (mo[0] * u + mo[1] * d)
+        pupils = np.array([mid - 0.5 * ipd * u, mid + 0.5 * ipd * u])
+        if not (np.all(pupils >= 0) and np.all(pupils[:, 0] < W) and np.all(pupils[:, 1] < H)):
+            return None
+        thr = self.cal.pupil_threshold
+        for search, rect, need in ((self.wide_search, self.eye_rect_wide, thr - 0.05), ((self.sx, self.sy), self.eye_rect, thr + 0.1)):
+            ff = self._frame(pupils)
+            _, _, res, (ox, oy) = self._eyes(frame, ff, search, rect)
+            if any(r is None or r.score < need for r in res):
+                return None
+            found = np.array([[r.x + ox, r.y + oy] for r in res])
+            dd = found[1] - found[0]
+            if not (0.75 < math.hypot(*dd) / self.wi < 1.3) or abs(dd[1]) > 0.4 * self.wi:
+                return None
+            pupils = ff.to_image(found)  # second pass: in the frame these pupils define
+        return pupils
+
     def _reacquire(self, frame: np.ndarray) -> np.ndarray | None:
         """Search the whole frame for the face; the two pupils (frame px) or None.
 
@@ -387,30 +410,21 @@ class FaceTracker:
         k0 = cal.work_ipd / cal.ipd
         mouth_w_frame = cal.mouth_width / k0
         area_px = cal.mouth_area / (k0 * k0) / (f * f)
-        order = np.argsort(-stats[1:, cv2.CC_STAT_AREA])[:4] + 1
+        order = np.argsort(-stats[1:, cv2.CC_STAT_AREA])[:3] + 1
         mo = np.array(cal.mouth_offset) / cal.work_ipd  # mouth centre in ipd units, face frame
         last_roll = math.radians(self.last.roll_deg) if math.isfinite(self.last.roll_deg) else 0.0
+        last_ipd = float(np.hypot(*(self.pupils[1] - self.pupils[0])))
         for j in order:
             a = stats[j, cv2.CC_STAT_AREA]
             if not (0.15 * area_px <= a <= 6.0 * area_px):
                 continue
             bw = stats[j, cv2.CC_STAT_WIDTH] * f
-            ipd = float(np.clip(cal.ipd * bw / max(mouth_w_frame, 1.0), 0.6 * cal.ipd, 1.7 * cal.ipd))
+            from_width = float(np.clip(cal.ipd * bw / max(mouth_w_frame, 1.0), 0.6 * cal.ipd, 1.7 * cal.ipd))
+            ipds = [from_width] + [v for v in (last_ipd, cal.ipd) if abs(v - from_width) > 0.08 * from_width]
             mc = np.array(cents[j]) * f
-            for ang in dict.fromkeys([last_roll, 0.0]):
-                u = np.array([math.cos(ang), -math.sin(ang)])
-                d = np.array([math.sin(ang), math.cos(ang)])
-                mid = mc - ipd * (mo[0] * u + mo[1] * d)
-                pupils = np.array([mid - 0.5 * ipd * u, mid + 0.5 * ipd * u])
-                if not (np.all(pupils >= 0) and np.all(pupils[:, 0] < W) and np.all(pupils[:, 1] < H)):
-                    continue
-                ff = self._frame(pupils)
-                crop, grey, res, (ox, oy) = self._eyes(frame, ff, self.wide_search, self.eye_rect_wide)
-                if any(r is None or r.closed or r.score < cal.pupil_threshold + 0.1 for r in res):
-                    continue
-                found = np.array([[r.x + ox, r.y + oy] for r in res])
-                dd = found[1] - found[0]
-                if not (0.75 < math.hypot(*dd) / self.wi < 1.3) or abs(dd[1]) > 0.4 * self.wi:
-                    continue
-                return ff.to_image(found)
+            for ipd in ipds:
+                for ang in dict.fromkeys([last_roll, 0.0]):
+                    found = self._check_face(frame, mc, mo, ipd, ang)
+                    if found is not None:
+                        return found
         return None
