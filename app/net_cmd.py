@@ -304,19 +304,27 @@ def _send(args) -> int:
     last_note = t0
     with Sender((host, port), size, ipd, fps=fps, compress=args.compress, key_interval=args.key_interval,
                 neutral=neutral, simulate_loss=args.simulate_loss) as tx:  # fmt: skip
-        for i, p in enumerate(frames):
-            if args.frames is not None and i >= args.frames:
-                break
-            if paced:
-                delay = t0 + i / fps - time.monotonic()
-                if delay > 0:
-                    time.sleep(delay)
-            tx.send(p)
-            sent.append(p)
-            now = time.monotonic()
-            if not args.quiet and sys.stderr.isatty() and now - last_note > 0.5:
-                last_note = now
-                print(f"\rsent {tx.stats.frames} frames, {tx.stats.payload_bits_per_frame:.1f} bits/frame", end="", file=sys.stderr)
+        try:
+            for i, p in enumerate(frames):
+                if args.frames is not None and i >= args.frames:
+                    break
+                if paced:
+                    delay = t0 + i / fps - time.monotonic()
+                    if delay > 0:
+                        time.sleep(delay)
+                tx.send(p)
+                if args.record:
+                    sent.append(p)
+                now = time.monotonic()
+                if not args.quiet and sys.stderr.isatty() and now - last_note > 0.5:
+                    last_note = now
+                    print(f"\rsent {tx.stats.frames} frames, {tx.stats.payload_bits_per_frame:.1f} bits/frame", end="",
+                          file=sys.stderr)  # fmt: skip
+        except KeyboardInterrupt:  # Ctrl-C ends a live send; what was sent is still recorded
+            pass
+        finally:
+            if hasattr(frames, "close"):
+                frames.close()
         if not args.quiet and sys.stderr.isatty():
             print(file=sys.stderr)
         st = tx.stats
