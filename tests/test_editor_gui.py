@@ -158,6 +158,9 @@ def test_build_character_draw_save_reload_validate(make_window, images, tmp_path
     assert not doc.dirty and not (folder / ".artset.autosave").exists()
     win.problems.refill()
     assert "no problems" in win.problems.item(0).text()
+    # advice (not errors) still shows: e.g. the drawing names default training pairs by
+    advice = [i for i in doc.issues if i.severity == "advice"]
+    assert any(i.message.startswith("mouth: no drawing named oo, grin, frown") and i.part == "mouth" for i in advice)
 
 
 def test_undo_redo_restore_exactly(make_window, images, qtbot):

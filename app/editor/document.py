@@ -138,10 +138,31 @@ def load_tolerant(path: Path) -> ArtSet:
 
 
 @dataclass
+class Advice:
+    """A recommendation that is not an error (``art_sets.validate.recommendations``)."""
+
+    message: str
+
+
+def check_folder(folder: Path) -> list:
+    """The validator's problems for ``folder``, then its advice (as :class:`Advice`)."""
+    from art_sets.validate import validate
+
+    found: list = list(validate(folder))
+    try:
+        from art_sets.validate import recommendations
+
+        found += [Advice(str(t)) for t in recommendations(folder)]
+    except Exception:  # advice is optional
+        pass
+    return found
+
+
+@dataclass
 class Issue:
     """A row of the problems panel: what is wrong and where to jump to fix it."""
 
-    severity: str  # "error" (validator) or "todo" (editor: lines still to place, sizes)
+    severity: str  # "error" (validator), "todo" (editor: lines to place, sizes) or "advice"
     file: str
     message: str
     part: str | None = None
@@ -458,11 +479,9 @@ class EditorDocument(QObject):
         snapshot = ed.clone(self.artset)
 
         def work():
-            from art_sets.validate import validate
-
             saved = ed.save_safely(snapshot, target)
             try:
-                problems = validate(target)
+                problems = check_folder(target)
             except Exception as e:  # the validator must never lose a save
                 problems = [f"validator failed: {' '.join(str(e).split())}"]
             return saved, problems
@@ -520,11 +539,9 @@ class EditorDocument(QObject):
         written = self._autosave_written
 
         def work():
-            from art_sets.validate import validate
-
             try:
                 write_side_copy(snapshot, target, written)
-                self._autosave_result = (str(target), validate(target))
+                self._autosave_result = (str(target), check_folder(target))
             except Exception as e:  # reported in the status bar; the next edit retries
                 self._autosave_result = ("", [f"autosave failed: {' '.join(str(e).split())}"])
 
@@ -561,10 +578,8 @@ class EditorDocument(QObject):
 
     # ------------------------------------------------------------------ problems
     def refresh_problems_from(self, folder: Path) -> None:
-        from art_sets.validate import validate
-
         try:
-            problems = validate(folder)
+            problems = check_folder(folder)
         except Exception as e:  # the validator must never take the editor down
             problems = []
             self.message.emit(f"validator failed: {e}")
@@ -603,6 +618,9 @@ class EditorDocument(QObject):
     def _issue_from_problem(self, prob, root: Path | None) -> Issue:
         if isinstance(prob, str):
             return Issue("error", "", prob)
+        if isinstance(prob, Advice):
+            m = re.match(r"(eyes|mouth)\b", prob.message)
+            return Issue("advice", "", prob.message, part=m.group(1) if m else None)
         file, msg = str(getattr(prob, "file", "")), str(getattr(prob, "message", prob))
         rel = file
         if root is not None:

@@ -217,16 +217,17 @@ class ProblemsList(QListWidget):
 
     def refill(self):
         self.clear()
-        if not self.doc.issues:
+        if not any(i.severity != "advice" for i in self.doc.issues):
             it = QListWidgetItem("✓ no problems: the validator accepts this character")
             it.setForeground(QColor(40, 140, 60))
             self.addItem(it)
-            return
+        marks = {"error": ("✗", QColor(200, 50, 40)), "todo": ("•", QColor(150, 100, 20)),
+                 "advice": ("ⓘ", QColor(70, 100, 150))}
         for k, issue in enumerate(self.doc.issues):
-            mark = "✗" if issue.severity == "error" else "•"
+            mark, col = marks.get(issue.severity, marks["todo"])
             it = QListWidgetItem(f"{mark} {issue.text()}")
             it.setData(Qt.UserRole, k)
-            it.setForeground(QColor(200, 50, 40) if issue.severity == "error" else QColor(150, 100, 20))
+            it.setForeground(col)
             self.addItem(it)
 
     def _clicked(self, item):

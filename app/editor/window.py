@@ -732,7 +732,16 @@ class EditorWindow(QMainWindow):
         if row < 0:
             return
         old = art.parts[key].drawings[row].name
-        new, ok = QInputDialog.getText(self, "Rename drawing", f"New name for {key} drawing {old!r}:", text=old)
+        try:
+            from art_sets.validate import RECOMMENDED
+
+            usual = [n for n in RECOMMENDED.get(key, ()) if n not in art.parts[key].names()]
+        except ImportError:
+            usual = []
+        new, ok = QInputDialog.getItem(
+            self, "Rename drawing",
+            f"New name for {key} drawing {old!r}\n(the usual names let the default training pair it with an expression):",
+            [old] + usual, 0, True)
         if ok and new.strip() and new != old:
             self.doc.rename_drawing(key, row, new)
 
