@@ -13,11 +13,11 @@ How a frame is coded
     sides, so nothing is sent for the choice). A channel with a partner coded before it (the
     other eye, the other brow, the next lip value) may add the partner's residual to its
     prediction, chosen the same way (both eyes blink together). The residual (mod 256) is
-    binarised — zero? sign, unary magnitude up to 8, then an Elias-gamma escape — and coded
+    binarised — zero? sign, magnitude in unary up to 7, from 8 on an Elias-gamma escape — coded
     with an adaptive binary arithmetic coder. Contexts: the channel's group (position, roll,
     eyes, brows, mouth), how busy the channel was last frame and what its partner did this
-    frame. The arithmetic code of one
-    frame ends on the fewest whole bytes that identify it (a still frame often takes 0 bytes);
+    frame. The arithmetic code of one frame ends on the fewest whole bytes that identify it
+    (a still frame often takes 0 bytes);
     a frame whose code would not be shorter than 10 bytes is sent raw instead (both sides still
     adapt on it), so no frame ever costs more than the uncompressed 80 bits.
 
