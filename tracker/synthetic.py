@@ -130,6 +130,9 @@ EXPRESSIONS: dict[str, dict] = {
     "squint": _expr(eye_open=0.45, brow=-0.3, smile=0.2),
     "wide": _expr(eye_open=1.3, brow=0.8),
     "surprise": _expr(eye_open=1.3, brow=1.0, mouth_open=0.6),
+    "sad": _expr(brow=0.45, smile=-0.55, eye_open=0.85),
+    "angry": _expr(brow=-1.0, smile=-0.5, eye_open=0.9),
+    "laugh": _expr(smile=1.0, mouth_open=0.7, teeth=True, eye_open=0.55, brow=0.3),
     "wink_l": _expr(eye_open_l=0.0, smile=0.4),
     "wink_r": _expr(eye_open_r=0.0, smile=0.4),
 }
