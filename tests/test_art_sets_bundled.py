@@ -135,3 +135,35 @@ def test_punch_makes_feathered_holes():
     s.punch(m)
     a = s.to_rgba()[..., 3]
     assert a[20, 40] < 10 and a[0, 0] == 255 and 10 < a[20, 18] < 245
+
+
+# --- feature geometry the drawings and their lines are generated from -------------------------------
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from art_sets.authoring.face import EyePose, MouthPose, eye_geom, lid_height_at, mouth_geom  # noqa: E402
+
+
+@settings(max_examples=60, deadline=None)
+@given(up=st.floats(0.1, 1.1), dn=st.floats(0.1, 0.9), closed=st.booleans(), brow=st.floats(-0.3, 0.5),
+       tilt=st.floats(-0.5, 0.6), drop=st.floats(0, 0.5), lift=st.floats(0, 0.3), sgn=st.sampled_from([-1.0, 1.0]))
+def test_eye_geometry_gives_usable_lines(up, dn, closed, brow, tilt, drop, lift, sgn):
+    g = eye_geom((100.0, 100.0), 36.0, sgn, EyePose(up=up, dn=dn, closed=closed, brow=brow, brow_tilt=tilt,
+                                                   lid_drop=drop, lower_lift=lift))
+    L = g.lines()
+    assert L.shape == (4, 4) and np.isfinite(L).all()
+    assert (np.hypot(L[:, 2] - L[:, 0], L[:, 3] - L[:, 1]) > 5).all()
+    assert (g.upper[:, 1] <= g.lower[:, 1] + 1e-9).all()  # lids never cross
+    assert (g.brow[:, 1] < lid_height_at(g.upper, g.brow[:, 0])).all()  # the brow stays above the lid
+
+
+@settings(max_examples=60, deadline=None)
+@given(hw=st.floats(0.4, 1.4), smile=st.floats(-0.4, 0.5), open_=st.floats(0, 1.1), rnd=st.floats(0, 1),
+       up=st.floats(0.2, 0.5))
+def test_mouth_geometry_gives_usable_lines(hw, smile, open_, rnd, up):
+    g = mouth_geom((100.0, 100.0), 40.0, MouthPose(hw=hw, smile=smile, open=open_, round=rnd, up_ratio=up))
+    L = g.lines()
+    assert L.shape == (6, 4) and np.isfinite(L).all()
+    assert (np.hypot(L[:, 2] - L[:, 0], L[:, 3] - L[:, 1]) > 1).all()
+    assert (g.outer_up[:, 1] <= g.inner_up[:, 1] + 1e-9).all() and (g.inner_up[:, 1] <= g.inner_dn[:, 1] + 1e-9).all()
+    assert (g.inner_dn[:, 1] <= g.outer_dn[:, 1] + 1e-9).all()

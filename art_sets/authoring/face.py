@@ -86,13 +86,23 @@ def eye_geom(center, hw: float, sgn: float, pose: EyePose, *, brow_gap: float = 
         dn = (pose.dn - pose.lower_lift) * hw * bump_d
         upper = base - np.stack([0 * t, up], 1)
         lower = base + np.stack([0 * t, np.maximum(dn, 0.06 * hw * bump_d)], 1)
+        upper[:, 1] = np.minimum(upper[:, 1], lower[:, 1])  # a lowered lid rests on the lower one
     by = c[1] - brow_gap * hw - pose.brow * hw
     b_in = np.array([c[0] + sgn * 0.85 * hw, by + pose.brow_tilt * hw])
     b_out = np.array([c[0] - sgn * (brow_len * hw + 0.1 * hw), by + 0.2 * hw - 0.35 * pose.brow_tilt * hw])
     mid = (b_in + b_out) / 2 - (0, (pose.brow_arch + 0.1 * pose.brow) * hw)
     brow = np.array([(1 - s) ** 2 * b_in + 2 * s * (1 - s) * mid + s ** 2 * b_out for s in t])
+    clearance = (lid_height_at(upper, brow[:, 0]) - brow[:, 1]).min()
+    if clearance < 0.12 * hw:  # keep the brow above the lid, e.g. a wide-open eye under a resting brow
+        brow = brow - (0, 0.12 * hw - clearance)
     iris_c = c + np.asarray(pose.gaze, np.float64) * hw + (0, 0.02 * hw)
     return EyeGeom(c, hw, inner, outer, upper, lower, brow, iris_c, iris * hw, pose.closed, sgn)
+
+
+def lid_height_at(lid: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """y of a lid curve at each x (the lid's end heights beyond its corners)."""
+    order = np.argsort(lid[:, 0])
+    return np.interp(xs, lid[order, 0], lid[order, 1])
 
 
 # --- mouth -----------------------------------------------------------------------------------
