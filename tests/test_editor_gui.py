@@ -390,7 +390,9 @@ def test_preview_slider_triangle_and_fallback(make_window, images, qtbot, monkey
     assert pvmod.MorphEngine().note == "" or "not available" in pvmod.MorphEngine().note
 
 
-def test_edit_command_line(tmp_path, capsys):
+def test_edit_command_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "userdata"))
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
     from app import editor_cmd
 
     ns = argparse.Namespace(dir=str(tmp_path / "nope"), screenshot=None, command="edit")
@@ -401,6 +403,12 @@ def test_edit_command_line(tmp_path, capsys):
     ns.dir = str(tmp_path / "empty")
     assert editor_cmd.run(ns) == 2
     assert "artset.json" in capsys.readouterr().err
+    ns.dir = None  # offscreen: no screen to show a window on, so say so instead of hanging
+    assert editor_cmd.run(ns) == 2
+    assert "screen" in capsys.readouterr().err
+    ns.screenshot = str(tmp_path / "shot.png")
+    assert editor_cmd.run(ns) == 0
+    assert Image.open(ns.screenshot).size[0] > 600
 
 
 def test_open_editor_on_bundled_character(qtbot, tmp_path, monkeypatch):
