@@ -101,21 +101,27 @@ class LidFinder:
             return max(s - 0.5, 0.0)
         s = int(inside[:lim].argmax())  # the walk leaves the pupil into iris or white
         inside[:s] = True
-        k = _first_run(~inside, self.run)
+        stop = ~inside
+        if self.white is not None and n > 1:
+            # a lone doubtful sample right before clear white (the blend of iris and white)
+            # is not a lid
+            nxt_white = np.zeros(n, dtype=bool)
+            nxt_white[:-1] = inside[1:] & (lum[1:] >= self.white)
+            stop &= ~nxt_white
+        k = _first_run(stop, self.run)
         if k < 0:
             k = n
-        if self.white is not None:
-            # outwards from the pupil the white can only be followed by the lid: the first
-            # sample darker than the white after some white ends the eye (dark lashes and
-            # a dark iris may share colours, never this order)
+        if self.white is not None and k < n:
+            # the white next to the lid: the edge is where the luminance drops out of it
+            # (dark lashes and a dark iris may share colours, so the colour test alone can
+            # run past the edge). Only a white run ending within three samples of the lid
+            # counts, so a highlight on the pupil does not.
             white = lum[s:k] >= self.white
             if white.any():
-                w0 = s + int(white.argmax())
-                after = lum[w0:k] < self.white
-                if after.any():
-                    k2 = w0 + int(after.argmax())
-                    a, b = float(lum[k2 - 1]), float(lum[k2])
-                    return (k2 - 1) + (a - self.white) / (a - b) if a != b else k2 - 0.5
+                w_last = s + len(white) - 1 - int(white[::-1].argmax())
+                if k - w_last <= 3 and float(lum[w_last + 1]) < self.white:
+                    a, b = float(lum[w_last]), float(lum[w_last + 1])
+                    return w_last + (a - self.white) / (a - b)
         if k >= n:
             return float(max(n - 1, 0))
         pp = np.where(inside, np.maximum(p, 128.0), p)
