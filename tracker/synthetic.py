@@ -152,7 +152,10 @@ class Style:
     ``noise`` is the sigma of gaussian sensor noise (grey levels), ``blur`` a gaussian blur sigma
     (pixels), ``lighting_drift`` the amplitude of the slow global gain / colour change (0.2 = ±20 %),
     ``jpeg_quality`` 1..100 passes each frame through JPEG (0 = off). ``catchlight`` draws a small
-    specular highlight on each pupil; ``limbus`` darkens the iris rim (1 = flat iris). ``lash`` (the upper lash line, half-width ``lash_width`` × ipd, 0 = none) defaults to the brow colour.
+    specular highlight on each pupil; ``limbus`` darkens the iris rim (1 = flat iris). ``lash`` (the
+    upper lash line, half-width ``lash_width`` × ipd, 0 = none) defaults to the brow colour.
+    ``shading`` scales the skin's shading, ``texture`` adds static skin mottling (relative brightness
+    sigma, e.g. 0.03), ``blush`` reddens the cheeks towards the lip colour (0..1).
     """
 
     name: str = "default"
@@ -178,6 +181,8 @@ class Style:
     limbus: float = 0.65
     lash_width: float = 0.02
     shading: float = 1.0
+    texture: float = 0.0
+    blush: float = 0.0
 
     def replace(self, **changes) -> "Style":
         return dataclasses.replace(self, **changes)
@@ -195,6 +200,8 @@ STYLES: dict[str, Style] = {
     "small_far": Style(name="small_far", ipd=48.0),
     "strong_roll": Style(name="strong_roll", roll_max=30.0),
     "webcam": Style(name="webcam", noise=4.0, blur=0.7, lighting_drift=0.12, jpeg_quality=80),
+    "realistic": Style(name="realistic", texture=0.015, blush=0.5, noise=3.0, blur=0.6, lighting_drift=0.1,
+                       jpeg_quality=85),
 }
 """Named styles for tests and benchmarks."""
 
@@ -543,7 +550,8 @@ FEATURE_BOX = (-0.95, -0.8, 0.95, 1.75)
 
 
 @functools.lru_cache(maxsize=16)
-def _head_sprite(k: int, skin: BGR, hair: BGR, shading: float) -> tuple[np.ndarray, np.ndarray]:
+def _head_sprite(k: int, skin: BGR, hair: BGR, shading: float, texture: float = 0.0, blush: float = 0.0,
+                 lip: BGR = (92, 78, 188)) -> tuple[np.ndarray, np.ndarray]:
     """The rigid parts of the head drawn once at ``k`` pixels per ipd: straight BGR and alpha, uint8.
 
     Sprite pixel (0, 0) is the face-local point ``(SPRITE_BOX[0], SPRITE_BOX[1]) · k``. Frames warp
@@ -570,7 +578,16 @@ def _head_sprite(k: int, skin: BGR, hair: BGR, shading: float) -> tuple[np.ndarr
     ly = (np.arange(sh, dtype=np.float32) + y0 * k)[:, None]
     rx, ry = lx / (HEAD_A * u), (ly - HEAD_CY * u) / (HEAD_B * u)
     shade = 1.04 - shading * (0.2 * (rx * rx + ry * ry) ** 2 + 0.05 * rx)
-    over([_head_outline(u)], shade[..., None] * sk)
+    face = shade[..., None] * sk
+    if blush > 0:  # redder cheeks: soft blobs pulled towards the lip colour
+        cheeks = sum(np.exp(-(((lx - sx * 0.55 * u) ** 2 + (ly - 0.55 * u) ** 2) / (0.2 * u) ** 2)) for sx in (-1, 1))
+        face += (0.35 * blush * cheeks)[..., None] * (np.asarray(lip, np.float32) * shade[..., None] - face)
+    if texture > 0:  # static mottling of the skin, a few hundredths of its brightness
+        rng = np.random.default_rng(4321)
+        grain = cv2.GaussianBlur(rng.standard_normal((sh, sw)).astype(np.float32), (0, 0), max(0.025 * k, 0.6))
+        grain /= max(float(grain.std()), 1e-6)
+        face *= (1.0 + texture * grain)[..., None]
+    over([_head_outline(u)], face)
     # hair over the forehead: the top of a slightly larger oval down to a hairline
     top = _ellipse(0.0, 0.12 * u, 1.07 * u, 1.34 * u)
     arc = top[top[:, 1] < 0.05 * u]  # angles π..2π: left side → over the top → right side
@@ -642,7 +659,8 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     hb = _Box.around([L(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) * u)], w, h)
     if hb is not None:
         k = next((lv for lv in _SPRITE_LEVELS if lv >= u), _SPRITE_LEVELS[-1])
-        s_col, s_alpha = _head_sprite(k, tuple(style.skin), tuple(style.hair), float(style.shading))
+        s_col, s_alpha = _head_sprite(k, tuple(style.skin), tuple(style.hair), float(style.shading),
+                                      float(style.texture), float(style.blush), tuple(style.lip))
         sc = u / k
         m = np.array([[pose.c * sc, pose.s * sc, 0.0], [-pose.s * sc, pose.c * sc, 0.0]])
         m[:, 2] = np.array(pose.point(x0 * u, y0 * u)) - [hb.x0, hb.y0]
