@@ -502,3 +502,16 @@ def test_any_pose_and_frame_size_renders(cx, cy, roll, ipd, w, h, expr):
     img, truth = render_face(st, STYLES["webcam"], frame_size=(w, h))
     assert img.shape == (h, w, 3) and img.dtype == np.uint8
     assert truth.mid_x == cx and np.isfinite(truth.values()).all()
+
+
+def test_textured_blushing_skin_keeps_the_features_exact():
+    style = STYLES["realistic"].replace(noise=0.0, blur=0.0, jpeg_quality=0, lighting_drift=0.0, catchlight=False)
+    st = FaceState(roll_deg=12.0).with_expression("smile")
+    img, truth = render_face(st, style)
+    el, er = measure_corners(img, st)
+    assert abs(el) < 0.6 and abs(er) < 0.6
+    plain, _ = render_face(st, style.replace(texture=0.0, blush=0.0))
+    lm = face_landmarks(st)
+    cheek = (lm["left_pupil"] * 0.3 + lm["mouth_left"] * 0.7).astype(int)
+    x, y = cheek
+    assert img[y, x, 2] - img[y, x, 1] > plain[y, x, 2] - plain[y, x, 1]  # redder cheek
