@@ -141,7 +141,7 @@ class _FakeCapture:
 
 @pytest.fixture
 def fake_cv_camera(monkeypatch):
-    monkeypatch.setattr(sources.sys, "platform", "testos")  # skip the /dev/video check
+    monkeypatch.setattr(sources, "_device_missing", lambda index: False)
     monkeypatch.setattr(sources.cv2, "VideoCapture", _FakeCapture)
     _FakeCapture.frames = frames_of(7, 80, 60)
     _FakeCapture.behaviour = "play"

@@ -197,6 +197,11 @@ def _as_bgr(img: np.ndarray) -> np.ndarray:
     return img
 
 
+def _device_missing(index: int) -> bool:
+    """True when a camera index surely does not exist (Linux: no V4L2 device node for it)."""
+    return sys.platform.startswith("linux") and not Path(f"/dev/video{index}").exists()
+
+
 def _run_with_timeout(fn, timeout: float, what: str):
     """Run ``fn()`` in a daemon thread; raise :class:`SourceError` if it takes over ``timeout`` s."""
     box: dict = {}
@@ -235,7 +240,7 @@ class CameraSource(_Source):
         self.name = f"camera {self.index}"
         if self.index < 0:
             raise SourceError(f"{self.name}: camera indices start at 0")
-        if sys.platform.startswith("linux") and not Path(f"/dev/video{self.index}").exists():
+        if _device_missing(self.index):
             raise SourceError(f"{self.name}: not found (no /dev/video{self.index})")
 
         def open_cam():
