@@ -515,3 +515,14 @@ def test_textured_blushing_skin_keeps_the_features_exact():
     cheek = (lm["left_pupil"] * 0.3 + lm["mouth_left"] * 0.7).astype(int)
     x, y = cheek
     assert img[y, x, 2] - img[y, x, 1] > plain[y, x, 2] - plain[y, x, 1]  # redder cheek
+
+
+def test_track_without_the_tracker_says_not_available(monkeypatch, capsys):
+    import sys
+
+    from tracker.__main__ import main
+
+    monkeypatch.setitem(sys.modules, "tracker.track_cli", None)  # import fails as if the module were absent
+    assert main(["track", "clip.mp4", "--init", "c.json", "--csv", "o.csv"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("inkface: track: not available") and err.count("\n") == 1
