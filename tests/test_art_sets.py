@@ -401,3 +401,28 @@ def _current_umask() -> int:
     m = os.umask(0)
     os.umask(m)
     return m
+
+
+_json = st.recursive(st.none() | st.booleans() | st.integers(-10**6, 10**6) | st.floats(allow_nan=True) | st.text(max_size=8),
+                     lambda ch: st.lists(ch, max_size=4) | st.dictionaries(st.text(max_size=6), ch, max_size=4), max_leaves=12)
+_paths = st.sampled_from([("format",), ("name",), ("canvas",), ("pivot",), ("heads",), ("heads", 0), ("parts",),
+                          ("parts", "eyes"), ("parts", "eyes", "box"), ("parts", "eyes", "drawings"),
+                          ("parts", "mouth", "drawings", 0), ("parts", "mouth", "drawings", 1, "lines"),
+                          ("parts", "mouth", "drawings", 2, "image"), ("parts", "eyes", "drawings", 0, "lines", 0)])
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(path=_paths, value=_json)
+def test_validator_never_crashes_on_odd_manifests(tmp_path_factory, path, value):
+    folder = save_artset(tiny_artset(), tmp_path_factory.mktemp("fz") / "t")
+    data = json.loads((folder / "artset.json").read_text())
+    node = data
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = value
+    (folder / "artset.json").write_text(json.dumps(data))
+    problems = validate(folder)  # must not raise
+    assert all(isinstance(p.file, str) and "\n" not in p.message for p in problems)
+    if problems:
+        with pytest.raises(ArtSetError):
+            load_artset(folder)

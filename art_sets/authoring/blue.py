@@ -88,7 +88,7 @@ class Blue(Character):
                 if amount > 0:
                     edge = edge0 + (0, sgn * amount * g.open)
                     s.fill(np.concatenate([edge0 - (0, sgn * 2), edge[::-1]]), PAPER, clip=clip)
-                    s.stroke(edge, 1.2, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.8)
+                    s.stroke(edge, 1.0, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.45)
                     for u in np.linspace(0.2, 0.8, 6):
                         a = point_at(edge0, u)
                         s.stroke([a, point_at(edge, u)], 0.9, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.5, taper=(0, 0.5))

@@ -197,7 +197,7 @@ DEFAULT_MOUTHS = {
     "neutral": MouthPose(),
     "smile": MouthPose(hw=1.18, smile=0.36, tl=0.2),
     "ah": MouthPose(hw=0.82, smile=0.02, open=0.95, teeth_up=0.14, tongue=True),
-    "oo": MouthPose(hw=0.46, open=0.42, round=1.0, tu=0.2, tl=0.24, up_ratio=0.4),
+    "oo": MouthPose(hw=0.52, open=0.52, round=1.0, tu=0.2, tl=0.24, up_ratio=0.4),
     "grin": MouthPose(hw=1.28, smile=0.34, open=0.52, up_ratio=0.38, teeth_up=0.5, teeth_dn=0.4),
     "frown": MouthPose(hw=0.95, smile=-0.28, tl=0.18),
     "ee": MouthPose(hw=1.2, smile=0.1, open=0.3, up_ratio=0.45, teeth_up=0.52, teeth_dn=0.48),

@@ -58,9 +58,8 @@ class Wavy(Character):
     # --- eyes ----------------------------------------------------------------------------------
     def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
-        # baggy lower lids
-        self.pen(s, sub_curve(g.lower + (0, 0.3 * hw + 2), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)
         if not g.closed:
+            self.pen(s, sub_curve(g.lower + (0, 0.3 * hw + 2), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)  # baggy lids
             opening = g.opening()
             clip = s.mask(opening)
             self.wash(s, opening, WHITE, rng, opacity=1.0)
