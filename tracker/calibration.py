@@ -164,6 +164,7 @@ class Calibration:
     lip_axis: np.ndarray
     neutral: FaceParams = field(default_factory=FaceParams)
     white_threshold: float | None = None
+    iris_level: float | None = None
     eye_ref: tuple[float, float, float] | None = None
     mouth_ref: tuple[float, float, float] | None = None
 
@@ -193,6 +194,7 @@ class Calibration:
             "lip_axis": [float(v) for v in self.lip_axis],
             "neutral": {k: v for k, v in self.neutral.as_dict().items()},
             "white_threshold": self.white_threshold,
+            "iris_level": self.iris_level,
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
         }
@@ -255,6 +257,7 @@ class Calibration:
                 lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
                 neutral=FaceParams(**neutral_d),
                 white_threshold=float(d["white_threshold"]) if d.get("white_threshold") is not None else None,
+                iris_level=float(d["iris_level"]) if d.get("iris_level") is not None else None,
                 eye_ref=tuple(float(v) for v in d["eye_ref"]) if d.get("eye_ref") is not None else None,
                 mouth_ref=tuple(float(v) for v in d["mouth_ref"]) if d.get("mouth_ref") is not None else None,
             )
@@ -443,9 +446,10 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     # luminance threshold between the eye's white and the rest (iris, lashes), if there is a white
     ilum = features(eye_interior, 1.0)[:, 0] * 255.0
     lab = _two_means(ilum)
-    white_threshold = None
+    white_threshold = iris_level = None
     if lab is not None:
         lo_m, hi_m = lab
+        iris_level = lo_m
         if hi_m - lo_m > 40:
             white_threshold = 0.5 * (lo_m + hi_m)
 
@@ -528,6 +532,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         eye=eye_cls,
         lip_axis=lip_axis,
         white_threshold=white_threshold,
+        iris_level=iris_level,
     )
     # lids and the neutral values: measure the calibration frame the way the tracker will
     from tracker.face_tracker import FaceTracker

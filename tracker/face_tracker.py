@@ -144,7 +144,7 @@ class FaceTracker:
         self.brow_finders = [
             BrowFinder(p, c, BROW_LO * h, BROW_HI * h) for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights)
         ]
-        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius, white=cal.white_threshold)
+        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius, white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level)
         self.mouth_finder = MouthFinder()
         # eye crops (face coordinates): both pupil search windows with template margins, the
         # brows' search range above, the lid walks below; a wider one for re-acquisition

@@ -59,8 +59,11 @@ class LidFinder:
 
     def __init__(
         self, interior: ColourClassifier, pupil: ColourClassifier, up_max: float, down_max: float,
-        pupil_radius: float = 3.0, run: int = 1, white: float | None = None,
+        pupil_radius: float = 3.0, run: int = 1, white: float | None = None, half_width: int = 1,
+        iris: float | None = None,
     ):
+        self.iris = iris
+        self.half_width = int(half_width)
         self.white = white
         self.interior = interior
         self.skip = int(np.ceil(1.7 * pupil_radius)) + 1
@@ -72,17 +75,19 @@ class LidFinder:
     def find(self, bgr: np.ndarray, grey: np.ndarray, pupil: tuple[float, float]) -> tuple[float, float]:
         """``(upper, lower)``: crop px from the pupil to the upper and to the lower lid.
 
-        One strip of three columns through the pupil is classified at once; each walk starts
+        One strip of ``2·half_width+1`` columns through the pupil is classified at once; each walk starts
         at the pupil's row. A walk that finds no lid returns its full length.
         """
         h, w = grey.shape
-        xi = min(max(int(round(pupil[0])), 1), w - 2)
+        hw = self.half_width
+        xi = min(max(int(round(pupil[0])), hw), w - 1 - hw)
         yi = min(max(int(round(pupil[1])), 0), h - 1)
         y0, y1 = max(yi - self.up_max, 0), min(yi + self.down_max + 1, h)
-        strip = bgr[y0:y1, xi - 1 : xi + 2]
-        p = np.add.reduce(self.interior.prob_u8(strip), axis=1, dtype=np.float32) * np.float32(1 / 3)
-        q = self.pupil.prob_u8(strip[:, 1])
-        lum = np.add.reduce(grey[y0:y1, xi - 1 : xi + 2], axis=1) * np.float32(1 / 3)
+        strip = bgr[y0:y1, xi - hw : xi + hw + 1]
+        inv = np.float32(1.0 / (2 * hw + 1))
+        p = np.add.reduce(self.interior.prob_u8(strip), axis=1, dtype=np.float32) * inv
+        q = self.pupil.prob_u8(strip[:, hw])
+        lum = np.add.reduce(grey[y0:y1, xi - hw : xi + hw + 1], axis=1) * inv
         c = yi - y0
         dy = yi - pupil[1]  # sample j of a walk sits j ∓ dy from the pupil
         up = self._walk(p[c::-1], q[c::-1], lum[c::-1]) - dy
@@ -124,5 +129,16 @@ class LidFinder:
                     return w_last + (a - self.white) / (a - b)
         if k >= n:
             return float(max(n - 1, 0))
+        if self.iris is not None:
+            # blur makes the classifier notice the lid late: walk back to where the
+            # luminance is half-way between the iris's (calibrated) and the lid's
+            outer = float(lum[k])
+            if abs(outer - self.iris) >= 24.0:
+                half = 0.5 * (outer + self.iris)
+                sgn = 1.0 if outer > self.iris else -1.0
+                for j in range(k, max(s, k - 4), -1):
+                    a, b = float(lum[j - 1]), float(lum[j])
+                    if sgn * (a - half) < 0 <= sgn * (b - half):
+                        return (j - 1) + (half - a) / (b - a)
         pp = np.where(inside, np.maximum(p, 128.0), p)
         return _edge(lum, pp, k)
