@@ -314,8 +314,12 @@ class _Pose:
         return cls(st.cx - (c * gx + s * gy), st.cy - (-s * gx + c * gy), c, s)
 
     def apply(self, pts: np.ndarray) -> np.ndarray:
+        pts = np.asarray(pts, np.float64)
+        out = np.empty(pts.shape, np.float64)
         x, y = pts[..., 0], pts[..., 1]
-        return np.stack([self.ox + self.c * x + self.s * y, self.oy - self.s * x + self.c * y], axis=-1)
+        out[..., 0] = self.ox + self.c * x + self.s * y
+        out[..., 1] = self.oy - self.s * x + self.c * y
+        return out
 
     def point(self, x: float, y: float) -> tuple[float, float]:
         return (self.ox + self.c * x + self.s * y, self.oy - self.s * x + self.c * y)
@@ -429,12 +433,17 @@ def clicks_for(state: FaceState, frame: int = 0) -> dict:
 
 def _inset(pts: np.ndarray, d: float) -> np.ndarray:
     """Move each vertex of a closed polygon ``d`` pixels towards the inside."""
+    nxt = np.empty_like(pts)
+    nxt[:-1] = pts[1:]
+    nxt[-1] = pts[0]
+    tan = nxt - np.concatenate([pts[-1:], pts[:-1]])
     x, y = pts[:, 0], pts[:, 1]
-    tx = np.roll(x, -1) - np.roll(x, 1)
-    ty = np.roll(y, -1) - np.roll(y, 1)
-    area2 = float(x @ np.roll(y, -1) - np.roll(x, -1) @ y)
-    k = (d if area2 > 0 else -d) / (np.hypot(tx, ty) + 1e-12)
-    return np.stack([x - k * ty, y + k * tx], axis=1)
+    area2 = float(x @ nxt[:, 1] - nxt[:, 0] @ y)
+    k = (d if area2 > 0 else -d) / (np.hypot(tan[:, 0], tan[:, 1]) + 1e-12)
+    out = np.empty_like(pts)
+    out[:, 0] = x - k * tan[:, 1]
+    out[:, 1] = y + k * tan[:, 0]
+    return out
 
 
 class _Box:
