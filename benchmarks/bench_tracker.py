@@ -45,16 +45,18 @@ def _track_clip(perf: Performance):
     frames = [perf.render(i) for i in range(len(perf))]
     cal = calibrate(frames[0][0], Clicks.from_dict(perf.clicks()))
     tr = FaceTracker(cal)
-    errs, statuses, times = [], [], []
+    errs, statuses, times, cpu = [], [], [], []
     visible = []
     for i, (img, truth) in enumerate(frames):
+        c0 = time.process_time()
         t0 = time.perf_counter()
         r = tr.track(img, index=i, time=i / perf.fps)
         times.append((time.perf_counter() - t0) * 1000.0)
+        cpu.append((time.process_time() - c0) * 1000.0)
         statuses.append(r.params.status)
         visible.append(truth.status != "lost")
         errs.append(np.abs(r.params.values() - truth.values()))
-    return np.array(errs), statuses, np.array(visible), times
+    return np.array(errs), statuses, np.array(visible), times, cpu
 
 
 @benchmark("tracker")
@@ -66,12 +68,14 @@ def run(ctx):
         ["clip"] + [SHORT[n] for n in PARAM_NAMES] + ["lost", "closed"],
     )
     all_times: list[float] = []
+    all_cpu: list[float] = []
     misses = []
     for name in names:
         style, opts = CLIPS[name]
         perf = Performance(seconds=seconds, seed=5, style=STYLES[style], **opts)
-        err, statuses, visible, times = _track_clip(perf)
+        err, statuses, visible, times, cpu = _track_clip(perf)
         all_times += times[2:]
+        all_cpu += cpu[2:]
         med, p95 = np.median(err, axis=0), np.percentile(err, 95, axis=0)
         lost = int(sum(s == "lost" and v for s, v in zip(statuses, visible)))
         closed = int(sum(s == "eyes_closed" for s in statuses))
@@ -88,7 +92,12 @@ def run(ctx):
     )
 
     speed = Table("Tracker speed, one 640×480 frame (one core)", ["stage"] + TIMING_COLUMNS + ["paper (450 MHz PIII)"])
-    speed.add("track one frame (all clips above)", *Timing(all_times).cells(), "29 ms")
+    speed.add("track one frame, wall clock (all clips above)", *Timing(all_times).cells(), "29 ms")
+    speed.add("track one frame, CPU time of this process", *Timing(all_cpu).cells(), "")
+    speed.note = (
+        "target: median ≤ 3 ms. Wall clock includes time stolen by other processes on a shared machine; "
+        "CPU time counts only this process (clock resolution about 1 µs)."
+    )
 
     rec = _recovery(ctx)
     return [acc, speed, rec]

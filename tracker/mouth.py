@@ -103,15 +103,12 @@ class MouthFinder:
         # teeth or a tongue can cut an open mouth's lips apart: pieces of lip right above
         # or below the main blob, overlapping it sideways, belong to the same mouth
         x, y, w, h = (int(v) for v in stats[best + 1, :4])
-        keep = [best + 1]
-        for j in range(1, n):
-            if j == best + 1 or stats[j, cv2.CC_STAT_AREA] < max(min_area, 0.04 * areas[best]):
-                continue
-            jx, jy, jw, jh = (int(v) for v in stats[j, :4])
-            overlap = min(x + w, jx + jw) - max(x, jx)
-            gap = max(jy - (y + h), y - (jy + jh), 0)
-            if overlap >= 0.5 * min(w, jw) and gap <= 0.25 * w:
-                keep.append(j)
+        sx, sy, sw, sh = (stats[1:, i] for i in range(4))
+        overlap = np.minimum(x + w, sx + sw) - np.maximum(x, sx)
+        gap = np.maximum(np.maximum(sy - (y + h), y - (sy + sh)), 0)
+        near = (areas >= max(min_area, 0.04 * areas[best])) & (overlap >= 0.5 * np.minimum(w, sw)) & (gap <= 0.25 * w)
+        near[best] = False
+        keep = [best + 1] + [int(j) + 1 for j in np.flatnonzero(near)]
         if len(keep) == 1:
             return lab == best + 1, stats[best + 1], int(areas[best])
         mask = np.isin(lab, keep)
@@ -228,7 +225,7 @@ class MouthFinder:
         yb, xb = float(rows[best]), float(pos[best])
         flat = pos >= pos[best] - 0.15
         if flat.sum() > 1:  # a blunt corner: the middle of the rows that reach furthest
-            yb = float(rows[flat].mean())
+            yb = 0.5 * float(rows[flat][0] + rows[flat][-1])
         # a sharp tip lies between rows: fit a parabola through the best row and its neighbours
         elif 0 < best < len(rows) - 1 and rows[best - 1] == rows[best] - 1 and rows[best + 1] == rows[best] + 1:
             a_, b_, c_ = float(pos[best - 1]), float(pos[best]), float(pos[best + 1])
@@ -252,7 +249,7 @@ class MouthFinder:
         xs = np.full_like(ys, min(max(x, 0.0), w - 1.0))
         vals = cv2.remap(norm, xs.reshape(1, -1), ys.reshape(1, -1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
         # half-way between the lip just inside and the skin just outside this very edge
-        inner, outer = float(vals[:8].mean()), float(vals[-4:].mean())
+        inner, outer = float(np.add.reduce(vals[:8])) * 0.125, float(np.add.reduce(vals[-4:])) * 0.25
         half = 0.5 * (inner + outer) if inner - outer > 0.3 else 0.5
         inside = vals >= half
         idx = np.nonzero(inside[:-1] & ~inside[1:])[0]
