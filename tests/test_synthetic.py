@@ -526,3 +526,15 @@ def test_track_without_the_tracker_says_not_available(monkeypatch, capsys):
     assert main(["track", "clip.mp4", "--init", "c.json", "--csv", "o.csv"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("inkface: track: not available") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("style", ["default", "strong_roll", "small_far"])
+def test_scripted_faces_stay_in_view(style):
+    for seed in range(4):
+        perf = Performance(seconds=30, seed=seed, style=STYLES[style])
+        w, h = perf.frame_size
+        for i in range(0, len(perf), 3):
+            lm = face_landmarks(perf.state(i))
+            pts = np.array([lm[k] for k in ("left_brow", "right_brow", "mouth_left", "mouth_right", "lip_lower")])
+            assert (pts > 10).all() and (pts[:, 0] < w - 10).all() and (pts[:, 1] < h - 10).all(), (seed, i)
+            assert perf.truth(i).status in ("ok", "eyes_closed")
