@@ -42,7 +42,7 @@ class Blue(Character):
             opening = g.opening()
             clip = s.mask(opening)
             iris = ellipse(g.iris_c, g.iris_r, g.iris_r)
-            s.fill(iris, LIGHT, opacity=0.35, clip=clip, grain=0.7)
+            s.fill(iris, LIGHT, opacity=0.6, clip=clip, grain=0.7)
             for a in np.linspace(0, 2 * np.pi, 22, endpoint=False):
                 d = np.array([np.cos(a), np.sin(a)])
                 s.stroke([g.iris_c + d * g.iris_r * 0.5, g.iris_c + d * g.iris_r * 0.95], 1.0, BLUE, rng=rng,
@@ -50,7 +50,7 @@ class Blue(Character):
             s.stroke(closed(iris), 1.6, BLUE, rng=rng, clip=clip, grain=0.6, taper=(0, 0), opacity=0.85)
             s.fill(ellipse(g.iris_c, g.iris_r * 0.45, g.iris_r * 0.45), DARK, clip=clip, grain=0.5)
             s.fill(ellipse(g.iris_c + (-0.35 * g.iris_r, -0.35 * g.iris_r), g.iris_r * 0.18, g.iris_r * 0.18), PAPER, clip=clip)
-            self.pen(s, g.upper, 4.0, rng, taper=(0.1, 0.15))
+            self.pen(s, g.upper, 4.6, rng, taper=(0.1, 0.15))
             self.pen(s, sub_curve(g.lower, 0.1, 0.95), 1.5, rng, passes=1, opacity=0.7)
             self.pen(s, sub_curve(g.upper - (0, 0.3 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)
         else:
@@ -92,10 +92,10 @@ class Blue(Character):
                     for u in np.linspace(0.2, 0.8, 6):
                         a = point_at(edge0, u)
                         s.stroke([a, point_at(edge, u)], 0.9, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.5, taper=(0, 0.5))
-            self.pen(s, g.inner_up, 3.0, rng, taper=(0.08, 0.08))
-            self.pen(s, g.inner_dn, 2.2, rng, taper=(0.08, 0.08))
+            self.pen(s, g.inner_up, 3.4, rng, taper=(0.08, 0.08))
+            self.pen(s, g.inner_dn, 2.8, rng, taper=(0.08, 0.08))
         else:
-            self.pen(s, g.seam, 3.2, rng, taper=(0.15, 0.15))
+            self.pen(s, g.seam, 3.6, rng, taper=(0.15, 0.15))
         self.pen(s, sub_curve(g.outer_dn, 0.32, 0.68), 1.5, rng, passes=1, opacity=0.7)
         lower = np.concatenate([sub_curve(g.outer_dn, 0.3, 0.7), sub_curve(g.outer_dn, 0.3, 0.7)[::-1] - (0, 0.12 * sc)])
         s.hatch(lower, 80, 2.4, 1.0, LIGHT, rng, opacity=0.5, grain=0.7)
@@ -191,4 +191,4 @@ def character() -> Blue:
                 description="A blue-pencil sketch on cream paper: grainy strokes, hatching, construction lines (the paper's 'Blue').",
                 seed=37, skin=PAPER, paper_amount=0.018, grain=1.0, eye_hw=38.0,
                 eye_centers=((194.0, 228.0), (318.0, 228.0)), eyes_box=(104, 150, 304, 132), eye_kw={"brow_gap": 0.85},
-                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 354.0), mouth_scale=44.0)
+                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 354.0), mouth_scale=47.0)
