@@ -59,9 +59,10 @@ class Monster(Character):
     def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
         # heavy upper lid: a shaded band above the lid line
-        lid_top = g.upper - np.stack([np.zeros(len(g.upper)), 0.22 * hw * np.sin(np.linspace(0, np.pi, len(g.upper))) ** 0.6 + 1.0], 1)
-        s.fill(np.concatenate([lid_top, g.upper[::-1]]), SHADE)
+        t = np.linspace(0, 1, len(g.upper))
         if not g.closed:
+            lid_top = g.upper - np.stack([0 * t, 0.22 * hw * np.sin(np.pi * t) ** 0.6 + 1.0], 1)
+            s.fill(np.concatenate([lid_top, g.upper[::-1]]), SHADE)
             opening = g.opening()
             clip = s.mask(opening)
             s.fill(opening, EYE)
@@ -72,10 +73,14 @@ class Monster(Character):
             s.fill(np.concatenate([g.upper, (g.upper + (0, 0.18 * hw))[::-1]]), DEEP, opacity=0.35, clip=clip, blur=1.5)
             self.pen(s, closed(opening), 3.2, rng, taper=(0, 0), pressure=0.1)
             self.pen(s, g.upper, 5.5, rng, taper=(0.1, 0.1))
-        else:
-            s.fill(np.concatenate([lid_top, (g.upper + (0, 1))[::-1]]), SHADE)
+        else:  # a heavy, bulging closed lid
+            base = g.inner + (g.outer - g.inner) * t[:, None]
+            dome = base - np.stack([0 * t, 0.45 * hw * np.sin(np.pi * t ** 0.8) ** 0.75], 1)
+            s.fill(np.concatenate([dome, g.upper[::-1]]), SHADE)
+            s.fill(np.concatenate([dome, (dome + (0, 0.14 * hw))[::-1]]), MUZZLE, opacity=0.35, blur=1.5)
+            self.pen(s, dome, 2.6, rng, color=DEEP, taper=(0.2, 0.2))
             self.pen(s, g.upper, 5.5, rng, taper=(0.15, 0.15))
-            self.pen(s, sub_curve(g.upper - (0, 0.25 * hw), 0.3, 0.7), 2.0, rng, taper=(0.5, 0.5))
+
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
         # bony brow ridge
