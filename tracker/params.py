@@ -132,12 +132,19 @@ def _fmt(v: float) -> str:
     return f"{v:.4f}" if math.isfinite(v) else "nan"
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_csv(path: str | os.PathLike, rows: Iterable[FaceParams], extra: Sequence[str] = EXTRA_COLUMNS) -> None:
     """Write a track CSV atomically: the contract's columns, then ``extra`` fields of the record."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(list(CSV_COLUMNS) + list(extra))
