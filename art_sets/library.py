@@ -40,6 +40,14 @@ def _manifest_name(folder: Path) -> str | None:
         return None
 
 
+def _style(folder: Path) -> str:
+    try:
+        style = json.loads((folder / MANIFEST).read_text(encoding="utf-8")).get("style", "")
+    except (OSError, ValueError, AttributeError):
+        return ""
+    return style.lower() if isinstance(style, str) else ""
+
+
 def _list(root: Path) -> list[tuple[str, Path]]:
     if not root.is_dir():
         return []
@@ -60,11 +68,7 @@ def list_bundled() -> list[tuple[str, Path]]:
     items = _list(bundled_dir())
 
     def key(item):
-        style = ""
-        try:
-            style = json.loads((item[1] / MANIFEST).read_text(encoding="utf-8")).get("style", "")
-        except (OSError, ValueError, AttributeError):
-            pass
+        style = _style(item[1])
         return (_ORDER.index(style) if style in _ORDER else len(_ORDER), item[0].lower())
 
     return sorted(items, key=key)
@@ -84,7 +88,7 @@ def find_artset(name_or_path: str | os.PathLike) -> Path:
     """The folder of an art set given its folder, its artset.json, its name or its folder's name.
 
     Names match case-insensitively against the manifest name and the folder name, bundled
-    sets first. Raises :class:`ArtSetError` listing the known names when nothing matches.
+    sets first, then against the manifest's ``style`` (so ``"monster"`` finds the monster). Raises :class:`ArtSetError` listing the known names when nothing matches.
     """
     p = Path(name_or_path).expanduser()
     if p.is_dir() and (p / MANIFEST).is_file():
@@ -95,6 +99,9 @@ def find_artset(name_or_path: str | os.PathLike) -> Path:
     known = list_all()
     for name, folder in known:
         if key in (name.lower(), folder.name.lower()):
+            return folder
+    for name, folder in known:  # a style name ("straight", "wavy", "blue", "monster") picks its character
+        if key == _style(folder):
             return folder
     if p.is_dir():
         raise ArtSetError(f"{p}: no {MANIFEST} in this folder")

@@ -22,9 +22,14 @@ def art(request):
 
 
 def test_four_characters_in_four_styles():
+    from art_sets.library import find_artset
+
     assert len(BUNDLED) >= 4
-    styles = {load_artset(p).extra.get("style") for _, p in BUNDLED}
-    assert {"straight", "wavy", "blue", "monster"} <= styles
+    styles = {load_artset(p).extra.get("style"): p for _, p in BUNDLED}
+    assert {"straight", "wavy", "blue", "monster"} <= set(styles)
+    for style, path in styles.items():
+        assert find_artset(style.upper()) == path
+    assert [load_artset(p).extra["style"] for _, p in BUNDLED][:4] == ["straight", "wavy", "blue", "monster"]
 
 
 @pytest.mark.parametrize("path", [p for _, p in BUNDLED], ids=IDS)
