@@ -97,10 +97,15 @@ def render_sheet(art: ArtSet, morph_fn: MorphFn | None = None, max_width: int = 
     faces = [(t, im.resize((256, 256), Image.LANCZOS)) for t, im in faces]
     blocks.append(("heads (grey shows the feathered holes)", faces))
     for part in (art.eyes, art.mouth):
-        blocks.append((f"{part.name}: {len(part.drawings)} drawings, {len(part.drawings[0].lines)} control lines each",
-                       [(d.name, annotate(d.image, d.lines)) for d in part.drawings]))
+        counts = sorted({len(d.lines) for d in part.drawings})
+        what = f"{counts[0]} control lines each" if len(counts) == 1 else f"UNEQUAL control-line counts {counts}"
+        blocks.append((f"{part.name}: {len(part.drawings)} drawings, {what}",
+                       [(f"{d.name} ({len(d.lines)})", annotate(d.image, d.lines)) for d in part.drawings]))
     if morph_fn is not None:
         for part in (art.eyes, art.mouth):
+            if len({len(d.lines) for d in part.drawings}) != 1 or len(part.drawings[0].lines) == 0:
+                blocks.append((f"{part.name}: no morphs (the drawings' control lines do not correspond)", []))
+                continue
             cells = []
             for i, j in combinations(range(len(part.drawings)), 2):
                 a, b = part.drawings[i], part.drawings[j]

@@ -426,3 +426,13 @@ def test_validator_never_crashes_on_odd_manifests(tmp_path_factory, path, value)
     if problems:
         with pytest.raises(ArtSetError):
             load_artset(folder)
+
+
+def test_sheet_of_a_set_whose_lines_do_not_correspond(tiny, tmp_path):
+    edit_manifest(tiny, lambda d: d["parts"]["mouth"]["drawings"][1]["lines"].pop())
+    out = tmp_path / "s.png"
+    r = run_cli("sheet", str(tiny), "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert out.exists()
+    r = run_cli("check", str(tiny))
+    assert r.returncode == 1 and "control lines" in r.stdout
