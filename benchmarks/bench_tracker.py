@@ -110,6 +110,8 @@ def _recovery(ctx) -> Table:
         ("clean", "default", [(2.0, 2.6), (5.0, 5.4)]),
         ("dark skin", "dark_skin", [(2.0, 2.6), (5.0, 5.4)]),
         ("small far", "small_far", [(2.0, 2.6), (5.0, 5.4)]),
+        ("lighting drift", "lighting", [(2.0, 2.6), (5.0, 5.4)]),
+        ("strong roll", "strong_roll", [(2.0, 2.6), (5.0, 5.4)]),
     ]
     for name, style, away in cases:
         seconds = 2.2 if ctx.quick else 7.0

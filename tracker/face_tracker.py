@@ -179,6 +179,7 @@ class FaceTracker:
         self.lost = False
         self.lost_frames = 0
         self._gains: dict = {}
+        self._good_gains: dict = {}
         self._balance_age: dict = {}
 
     # -------------------------------------------------------------- colour constancy
@@ -212,6 +213,20 @@ class FaceTracker:
         if e is None or m is None:
             return None, None
         return tuple(float(v) for v in self._level(e)), tuple(float(v) for v in self._level(m))
+
+    def _same_colour(self, crop: np.ndarray, ref) -> bool:
+        """Whether a (balanced) crop's median chromaticity is near the calibrated one."""
+        if ref is None:
+            return True
+        a = self._level(crop).astype(np.float64)
+        b = np.asarray(ref, dtype=np.float64)
+        ca, cb = a / max(a.sum(), 1.0), b / max(b.sum(), 1.0)
+        return float(np.abs(ca - cb).max()) < 0.04
+
+    def _plausible_mouth(self, m) -> bool:
+        """A lip blob of about the calibrated mouth's size with its corners level."""
+        w = self.cal.mouth_width
+        return 0.4 * w <= m.width <= 1.8 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width
 
     # -------------------------------------------------------------- helpers
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
@@ -273,10 +288,19 @@ class FaceTracker:
 
         mouth_res, mouth_origin, mouth_rect = self._mouth(frame, ff)
         scores = [r.score if r is not None else -1.0 for r in res]
-        face_seen = (not (closed[0] and closed[1])) or mouth_res is not None
-        if not face_seen or (closed[0] and closed[1] and max(scores) < 0.25 and mouth_res is None):
+        n_open = 2 - int(closed[0]) - int(closed[1])
+        if n_open == 2:
+            face_seen = True
+        elif mouth_res is None or not self._plausible_mouth(mouth_res):
+            face_seen = False  # one eye-like patch alone is too little (edges can look like one)
+        else:
+            # a wink or closed eyes: the mouth looks like this mouth; with no eye at all the
+            # eye region must also still have the calibrated face's colour
+            face_seen = n_open == 1 or self._same_colour(crop, self.cal.eye_ref)
+        if not face_seen:
             self.lost = True
             self.lost_frames = 1
+            self._gains = dict(self._good_gains)
             p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
             ov = Overlay(status=LOST, rois=[self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
             return TrackResult(p, ov, {"scores": scores})
@@ -348,6 +372,7 @@ class FaceTracker:
         self.velocity = pupils_img - self.pupils
         self.pupils = pupils_img
         self.last = params
+        self._good_gains = dict(self._gains)
         debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down]}
         return TrackResult(params, ov, debug)
 
@@ -403,6 +428,9 @@ class FaceTracker:
         H, W = frame.shape[:2]
         f = max(1, int(cal.ipd // 20))
         small = frame[::f, ::f]
+        gain = self._gains.get(id(cal.mouth_ref))  # the light as last seen on the mouth
+        if gain is not None:
+            small = cv2.transform(np.ascontiguousarray(small), gain)
         tags = (cal.lip.prob_u8(small) >= 128).astype(np.uint8)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
         if n <= 1:
