@@ -64,16 +64,29 @@ def _faces(grey: np.ndarray) -> list[tuple[int, int, int, int]]:
 
 
 def _dark_disc(grey: np.ndarray, box: tuple[int, int, int, int], radius: float) -> tuple[float, float, float]:
-    """Centre and mean grey of the darkest disc of ``radius`` px inside ``box`` (frame px)."""
+    """Centre of the pupil-like spot in ``box`` (frame px): a dark disc of ``radius`` px with a
+    lighter ring around it (so an eyebrow, dark but long, loses to a pupil in its white)."""
     x, y, w, h = box
     H, W = grey.shape
-    x0, y0, x1, y1 = max(x, 0), max(y, 0), min(x + w, W), min(y + h, H)
+    pad = int(math.ceil(2.5 * radius)) + 1
+    x0, y0, x1, y1 = max(x - pad, 0), max(y - pad, 0), min(x + w + pad, W), min(y + h + pad, H)
     win = grey[y0:y1, x0:x1].astype(np.float32)
     k = max(int(round(2 * radius)) | 1, 3)
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)).astype(np.float32)
-    mean = cv2.filter2D(win, -1, disc / disc.sum(), borderType=cv2.BORDER_REPLICATE)
-    j, i = np.unravel_index(int(np.argmin(mean)), mean.shape)
-    return float(x0 + i), float(y0 + j), float(mean[j, i])
+    kr = max(int(round(4.4 * radius)) | 1, k + 2)
+    ring = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kr, kr)).astype(np.float32)
+    o = (kr - k) // 2
+    ring[o : o + k, o : o + k] -= disc
+    ring = np.clip(ring, 0, None)
+    dmean = cv2.filter2D(win, -1, disc / disc.sum(), borderType=cv2.BORDER_REPLICATE)
+    rmean = cv2.filter2D(win, -1, ring / ring.sum(), borderType=cv2.BORDER_REPLICATE)
+    score = rmean - dmean
+    # only centres inside the box itself
+    inner = np.full_like(score, -np.inf)
+    bx0, by0 = max(x, 0) - x0, max(y, 0) - y0
+    inner[by0 : by0 + h, bx0 : bx0 + w] = score[by0 : by0 + h, bx0 : bx0 + w]
+    j, i = np.unravel_index(int(np.argmax(inner)), inner.shape)
+    return float(x0 + i), float(y0 + j), float(dmean[j, i])
 
 
 def _eyes(grey: np.ndarray, face: tuple[int, int, int, int]) -> tuple[list[tuple[float, float]], int]:
