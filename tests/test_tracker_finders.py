@@ -65,6 +65,18 @@ def test_closed_eyes_keep_the_pupils(cal):
     assert r2.params.status == "ok" and abs(r2.params.eye_open_l - 16) < 1.5
 
 
+def test_a_wink_keeps_the_closed_pupil_beside_the_open_one(cal):
+    tr = FaceTracker(cal)
+    tr.track(render_face(BASE)[0])
+    st = BASE.with_expression("wink_l").replace(cx=324.0, cy=212.0)
+    img, t = render_face(st)
+    r = tr.track(img, 1)
+    assert r.debug["closed"] == [True, False]
+    lm = face_landmarks(st)
+    assert np.allclose(r.overlay.pupils, [lm["left_pupil"], lm["right_pupil"]], atol=1.0)
+    assert r.params.eye_open_l < 3 and abs(r.params.eye_open_r - t.eye_open_r) < 1.5
+
+
 def test_a_red_object_outside_the_mouth_region_is_ignored(cal):
     img, t = render_face(BASE.with_expression("smile"))
     lip = tuple(int(c) for c in STYLES["default"].lip)

@@ -117,14 +117,16 @@ def test_overlay_draws(cal, tmp_path):
     assert len(r.overlay.blob_contour()) > 10
 
 
-def test_auto_init_finds_the_clicks():
-    img, _ = render_face(BASE)
+@pytest.mark.parametrize("style", ["default", "small_far"])
+def test_auto_init_finds_the_clicks(style):
+    st = BASE.replace(ipd=STYLES[style].ipd)
+    img, _ = render_face(st, STYLES[style])
     got = auto_clicks(img)
-    want = Clicks.from_dict(clicks_for(BASE))
+    want = Clicks.from_dict(clicks_for(st))
     for k, v in got.points().items():
-        assert np.hypot(*np.subtract(v, want.points()[k])) < 0.08 * 80, k
+        assert np.hypot(*np.subtract(v, want.points()[k])) < 0.08 * st.ipd, k
     c = calibrate(img, got)
-    assert abs(c.ipd - 80) < 1.5
+    assert abs(c.ipd - st.ipd) < 1.5
 
 
 def test_auto_init_says_when_nothing_is_found():
