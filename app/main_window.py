@@ -129,6 +129,8 @@ class MainWindow(QMainWindow):
         pl.sourceOpened.connect(self._on_source_opened)
         pl.recorded.connect(self._on_recorded)
         pl.recordFailed.connect(self._on_record_failed)
+        self.video_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(video=box))
+        self.char_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(char=box))
         self._sync_source_controls(spec)
         self._status_timer = QTimer(self, interval=500, timeout=self._refresh_status)
         self._status_timer.start()
@@ -580,12 +582,13 @@ class MainWindow(QMainWindow):
 
     def open_calibration(self):
         """Freeze the current frame and open the calibration window on it."""
-        if self.last is None or self.last.frame_bgr is None:
+        frame = self.pipeline.full_frame()
+        if frame is None:
             self.statusBar().showMessage("No frame to calibrate on yet", 4000)
             return None
         from app.calibration_window import CalibrationWindow
 
-        dlg = CalibrationWindow(self.last.frame_bgr.copy(), performer=self.performer(), parent=self)
+        dlg = CalibrationWindow(np.array(frame), performer=self.performer(), parent=self)
         dlg.calibrated.connect(self._on_calibrated)
         self._children.append(dlg)
         dlg.show()
@@ -623,6 +626,7 @@ class MainWindow(QMainWindow):
         win = TrainingWindow(art_path=art, performer=self.performer(), source=self.source_spec,
                              calibration=cal, parent=self)
         win.sessionSaved.connect(self._on_session_saved)
+        win.recordingChanged.connect(lambda on: self.pipeline.set_targets(full=on))
         self.frameShown.connect(lambda _i: win.live_frame(self.last))
         self._children.append(win)
         win.show()
@@ -757,7 +761,7 @@ class MainWindow(QMainWindow):
             return
         self.last = fr
         if fr.video is not None:
-            self.video_view.set_frame(fr.video, fr.overlay, fr.params)
+            self.video_view.set_frame(fr.video, fr.overlay, fr.params, fr.frame_size)
         if fr.character is not None:
             self.char_view.set_image(fr.character, fr.art)
             self.char_view.placeholder = "Loading the character…"

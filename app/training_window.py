@@ -40,7 +40,7 @@ from PySide6.QtWidgets import (
 
 from app.settings import performer_dir
 from app.views import VideoView, fit_rect, paint_placeholder
-from app.workers import ProcessTask, SourceSpec, _one_line, array_to_qimage, bgr_to_qimage, bundled_performance, resolve_calibration
+from app.workers import Hook, ProcessTask, SourceSpec, _one_line, array_to_qimage, bgr_to_qimage, bundled_performance, resolve_calibration
 
 PARTS = ("eyes", "mouth")
 
@@ -455,6 +455,7 @@ class TrainingWindow(QMainWindow):
         self.track: np.ndarray | None = None
         self.tracker_thread: ProcessTask | None = None
         self._recording: list[np.ndarray] | None = None
+        self.recordingChanged = Hook()  # True while recording: the live input must be camera-size
         self._record_until = 0.0
         self._diag_worst: dict[str, int] = {}
         self._live_feats: np.ndarray | None = None
@@ -864,6 +865,7 @@ class TrainingWindow(QMainWindow):
 
     def start_recording(self, seconds: float = 6.0) -> None:
         self._recording = []
+        self.recordingChanged.emit(True)
         self._record_until = time.monotonic() + seconds
         self.record_btn.setEnabled(False)
         self.record_btn.setText("Recording…")
@@ -871,6 +873,8 @@ class TrainingWindow(QMainWindow):
 
     def _finish_recording(self) -> Path | None:
         frames, self._recording = self._recording, None
+        self.recordingChanged.emit(False)
+        frames = [f for f in frames if f.shape == frames[-1].shape]  # the first may predate full size
         self.record_btn.setEnabled(True)
         self.record_btn.setText("● Record 6 s from camera")
         if not frames:

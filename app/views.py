@@ -11,9 +11,13 @@ from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
+
+import app.qt_env  # noqa: F401  (before Qt: platform plugin, PySide6 refcount guard)
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QVariantAnimation, Signal
 from PySide6.QtGui import QBrush, QColor, QFont, QIcon, QImage, QPainter, QPainterPath, QPalette, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QApplication, QListWidget, QListWidgetItem, QWidget
+
+from app.workers import Hook
 
 # ------------------------------------------------------------------------------------------
 # look
@@ -103,6 +107,29 @@ def fit_rect(img_w: int, img_h: int, area: QRectF) -> QRectF:
     s = min(area.width() / img_w, area.height() / img_h)
     w, h = img_w * s, img_h * s
     return QRectF(area.x() + (area.width() - w) / 2, area.y() + (area.height() - h) / 2, w, h)
+
+
+def view_box(w: QWidget, margin: int = 6) -> tuple[int, int]:
+    """The picture area of a view in device pixels (what the engine scales pictures to)."""
+    dpr = w.devicePixelRatioF()
+    return (max(1, int((w.width() - 2 * margin) * dpr)), max(1, int((w.height() - 2 * margin) * dpr)))
+
+
+def snap_rect(r: QRectF, img: QImage, dpr: float = 1.0) -> QRectF:
+    """``r`` made exactly the image's size when it nearly is, so it is drawn 1:1 (no rescale)."""
+    iw, ih = img.width() / dpr, img.height() / dpr
+    if abs(r.width() - iw) <= 2 and abs(r.height() - ih) <= 2:
+        c = r.center()
+        return QRectF(round(c.x() - iw / 2), round(c.y() - ih / 2), iw, ih)
+    return r
+
+
+def draw_image(p: QPainter, r: QRectF, img: QImage) -> None:
+    """Draw ``img`` into ``r``: a plain copy when sizes match, else a smooth scale."""
+    if p.device().devicePixelRatioF() == 1.0 and abs(r.width() - img.width()) < 0.5 and abs(r.height() - img.height()) < 0.5:
+        p.drawImage(r.topLeft(), img)
+    else:
+        p.drawImage(r, img)
 
 
 def checker_brush(cell: int = 12) -> QBrush:
@@ -291,18 +318,28 @@ class VideoView(QWidget):
         self.params: Any = None
         self.show_overlay = True
         self.placeholder = "No video yet"
+        self.frame_size: tuple[int, int] | None = None
+        self.sizeChanged = Hook()  # (w, h) in device pixels of the picture area
         self.setMinimumSize(320, 240)
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
 
-    def set_frame(self, image: QImage | None, overlay: Any = None, params: Any = None) -> None:
+    def set_frame(self, image: QImage | None, overlay: Any = None, params: Any = None,
+                  frame_size: tuple[int, int] | None = None) -> None:
+        """Show ``image``; overlay coordinates are pixels of a ``frame_size`` frame (default:
+        the image's own size; the engine may send the picture pre-scaled for display)."""
         self.image, self.overlay, self.params = image, overlay, params
+        self.frame_size = frame_size if frame_size and frame_size[0] > 0 else None
         self.update()
+
+    def resizeEvent(self, ev) -> None:
+        super().resizeEvent(ev)
+        self.sizeChanged.emit(view_box(self))
 
     def image_rect(self) -> QRectF:
         r = QRectF(self.rect()).adjusted(6, 6, -6, -6)
         if self.image is None:
             return r
-        return fit_rect(self.image.width(), self.image.height(), r)
+        return snap_rect(fit_rect(self.image.width(), self.image.height(), r), self.image, self.devicePixelRatioF())
 
     def paintEvent(self, _ev) -> None:
         p = QPainter(self)
@@ -316,10 +353,11 @@ class VideoView(QWidget):
         path = QPainterPath()
         path.addRoundedRect(r, 8, 8)
         p.setClipPath(path)
-        p.drawImage(r, self.image)
+        draw_image(p, r, self.image)
         p.setClipping(False)
-        sx = r.width() / self.image.width()
-        sy = r.height() / self.image.height()
+        fw, fh = self.frame_size or (self.image.width(), self.image.height())
+        sx = r.width() / fw
+        sy = r.height() / fh
         if self.show_overlay and self.overlay is not None:
             paint_overlay(p, self.overlay, lambda x, y: QPointF(r.x() + (x + 0.5) * sx, r.y() + (y + 0.5) * sy), sx)
         status = overlay_status(self.overlay, self.params)
@@ -347,6 +385,7 @@ class CharacterView(QWidget):
         self.placeholder = "Loading the character…"
         self.fade_ms = 450
         self.fades = 0  # cross-fades started (for tests and curiosity)
+        self.sizeChanged = Hook()  # (w, h) in device pixels of the picture area
         self._key = ""
         self._checker = checker_brush()
         self._anim = QVariantAnimation(self)
@@ -360,6 +399,10 @@ class CharacterView(QWidget):
         if colour is not None:
             self.colour = QColor(colour)
         self.update()
+
+    def resizeEvent(self, ev) -> None:
+        super().resizeEvent(ev)
+        self.sizeChanged.emit(view_box(self))
 
     def background_colour(self) -> QColor | None:
         """The flat colour behind the character, or None for transparent."""
@@ -396,8 +439,8 @@ class CharacterView(QWidget):
         p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform)
         p.fillRect(self.rect(), QColor("#141518"))
         area = QRectF(self.rect()).adjusted(6, 6, -6, -6)
-        img = self.image or self._old
-        r = fit_rect(img.width(), img.height(), area) if img is not None else area
+        img = self.image if self.image is not None else self._old
+        r = snap_rect(fit_rect(img.width(), img.height(), area), img, self.devicePixelRatioF()) if img is not None else area
         path = QPainterPath()
         path.addRoundedRect(r, 10, 10)
         p.setClipPath(path)
@@ -411,12 +454,12 @@ class CharacterView(QWidget):
             return
         if self._old is not None and self.image is not None and self._old is not self.image:
             p.setOpacity(1.0)
-            p.drawImage(r, self.image)
+            draw_image(p, r, self.image)
             p.setOpacity(self._fade)
-            p.drawImage(r, self._old)
+            draw_image(p, r, self._old)
             p.setOpacity(1.0)
         else:
-            p.drawImage(r, img)
+            draw_image(p, r, img)
 
 
 class ThumbnailStrip(QListWidget):
@@ -457,8 +500,9 @@ class ThumbnailStrip(QListWidget):
         pm = QPixmap(s, s)
         pm.fill(QColor("#e9e6df"))
         if rgba is not None:
-            a = np.ascontiguousarray(rgba[..., :4].astype(np.uint8))
-            img = QImage(a.data, a.shape[1], a.shape[0], a.shape[1] * 4, QImage.Format.Format_RGBA8888).copy()
+            from app.workers import array_to_qimage
+
+            img = array_to_qimage(np.ascontiguousarray(rgba[..., :4].astype(np.uint8)), QImage.Format.Format_RGBA8888)
             p = QPainter(pm)
             p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform)
             p.drawImage(fit_rect(img.width(), img.height(), QRectF(2, 2, s - 4, s - 4)), img)

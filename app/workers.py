@@ -25,6 +25,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+
+import app.qt_env  # noqa: F401  (before Qt: platform plugin, PySide6 refcount guard)
 from PySide6.QtCore import QTimer
 from PySide6.QtGui import QImage
 
@@ -145,6 +147,7 @@ class DisplayFrame:
     fresh: bool = True  # False: the output rate held the previous picture
     frames_read: int = 0  # by the capture so far
     frames_done: int = 0  # by the engine so far
+    frame_size: tuple = (0, 0)  # (w, h) of the camera frame; ``frame_bgr`` may be scaled for display
     video: QImage | None = None
     character: QImage | None = None
 
@@ -432,13 +435,11 @@ def _call_flexibly(fn: Callable, *args, **kwargs):
 # ------------------------------------------------------------------------------------------
 # the engine process
 #
-# PySide6 6.12 on CPython 3.11 corrupts the reference counts of None / True / False when a
-# Qt call that releases the GIL (QPainter.fillRect, processEvents, Signal.emit, ...) runs on
-# one thread while Python code runs on another: the process dies with "deallocating None".
-# (Python 3.12 makes those objects immortal, which hides the race.) So the window process
-# runs no Python threads at all: capture, tracking, rendering and recording live in a
-# separate *engine process* (which never touches Qt and may use threads), and the GUI polls
-# a pipe from a timer. On two cores this is also real parallelism instead of a shared GIL.
+# Why a process and not QThreads: on this 2-core machine the tracker, the renderer and the
+# window's painting are all Python + numpy, and in threads they take turns on one GIL; in two
+# processes they really run side by side. The window process then runs no Python threads at
+# all, which also keeps it clear of PySide6's thread-affinity pitfalls (see app/qt_env.py for
+# the reference-count bug of PySide6 6.12 on CPython 3.11, which first showed up here).
 
 
 class Hook:
@@ -709,13 +710,45 @@ class Engine:
 
 
 _META = ("index", "time", "params", "overlay", "weights", "timings_ms", "fps", "dropped_capture", "dropped_display",
-         "art", "status", "fresh", "frames_read", "frames_done")
+         "art", "status", "fresh", "frames_read", "frames_done", "frame_size")
 
 
-def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba) -> None:
-    """A frame over the pipe: the small fields pickled, the two pictures as raw bytes."""
-    img, rgba = fr.frame_bgr if send_video else None, fr.rgba
-    same = rgba is not None and rgba is last_sent_rgba
+def fit_size(w: int, h: int, box: tuple[int, int] | None) -> tuple[int, int]:
+    """(w, h) scaled to fit ``box`` keeping the aspect ratio (unchanged without a box)."""
+    if not box or box[0] <= 0 or box[1] <= 0:
+        return w, h
+    s = min(box[0] / w, box[1] / h)
+    return max(1, int(round(w * s))), max(1, int(round(h * s)))
+
+
+def scale_for_view(img: np.ndarray, box: tuple[int, int] | None) -> np.ndarray:
+    """Resize for display (area-averaged when shrinking, bilinear when enlarging).
+
+    Done in the engine so the window only copies pixels: Qt's smooth scaling of a 512² picture
+    to ~700² costs the GUI thread ~9 ms a frame, ``cv2.resize`` a fraction of that."""
+    import cv2
+
+    h, w = img.shape[:2]
+    tw, th = fit_size(w, h, box)
+    if abs(tw - w) <= 1 and abs(th - h) <= 1:
+        return img
+    interp = cv2.INTER_AREA if tw < w else cv2.INTER_LINEAR
+    return cv2.resize(img, (tw, th), interpolation=interp)
+
+
+def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba, targets: dict, cache: dict) -> None:
+    """A frame over the pipe: the small fields pickled, the two pictures as raw bytes, scaled
+    to the views' sizes (``targets``) unless the window asked for full frames."""
+    img = None
+    if send_video and fr.frame_bgr is not None:
+        img = fr.frame_bgr if targets.get("full") else scale_for_view(fr.frame_bgr, targets.get("video"))
+    rgba = fr.rgba
+    same = rgba is not None and rgba is last_sent_rgba and cache.get("box") == targets.get("char")
+    if rgba is not None and not same:
+        rgba = scale_for_view(rgba, targets.get("char"))
+        cache["box"] = targets.get("char")
+    if fr.frame_bgr is not None:
+        fr.frame_size = (int(fr.frame_bgr.shape[1]), int(fr.frame_bgr.shape[0]))
     meta = {k: getattr(fr, k) for k in _META}
     meta["video_shape"] = None if img is None else img.shape
     meta["rgba_shape"] = None if rgba is None or same else rgba.shape
@@ -740,13 +773,16 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
     objects: dict[str, Any] = {}  # "calibration" / "session" as last sent by the window
 
     def start_capture(src_spec, fake):
-        c = Capture(inbox, src_spec, realtime, fake, post)
+        c = Capture(inbox, src_spec, realtime, _rebuild(fake), post)
         c.start()
         return c
 
     capture = start_capture(source, fake_source)
     gui_free = True
     send_video = True
+    targets: dict = {}  # view sizes for display scaling; "full": send camera-size frames
+    scale_cache: dict = {}
+    last_frame: np.ndarray | None = None
     latest: DisplayFrame | None = None
     dropped_display = 0
     last_sent_rgba = None
@@ -762,6 +798,10 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
                     gui_free = True
                 elif cmd == "video":
                     send_video = bool(msg["on"])
+                elif cmd == "targets":
+                    targets.update(msg["targets"])
+                elif cmd == "snapshot":
+                    post("snapshot", (last_frame,))
                 elif cmd == "pause":
                     capture.set_paused(bool(msg["on"]))
                 elif cmd == "source":
@@ -796,6 +836,7 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
                         post("recorded", (None,))
             fr = engine.step(timeout=0.005)
             if fr is not None:
+                last_frame = fr.frame_bgr
                 if recorder is not None:
                     recorder.add(fr)
                 if latest is not None:
@@ -809,7 +850,7 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
                 latest.dropped_display = dropped_display
                 latest.frames_read = capture.frames_read
                 latest.frames_done = engine.frames_done
-                _send_frame(conn, latest, send_video, last_sent_rgba)
+                _send_frame(conn, latest, send_video, last_sent_rgba, targets, scale_cache)
                 last_sent_rgba = latest.rgba
                 latest = None
                 gui_free = False
@@ -822,6 +863,26 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
                 recorder.finish()
             except Exception:
                 pass
+
+
+def _portable(source):
+    """A fake camera as ``("fake", frames, fps, loop)`` so it can cross to the engine process
+    (sources hold locks, which do not pickle); anything else as is."""
+    if source is None or isinstance(source, tuple):
+        return source
+    frames = getattr(source, "frames", None)
+    if frames is not None:
+        return ("fake", list(frames), float(getattr(source, "fps", 30.0)), bool(getattr(source, "loop", False)))
+    return source
+
+
+def _rebuild(source):
+    """(Engine process) the source :func:`_portable` described."""
+    if isinstance(source, tuple) and source and source[0] == "fake":
+        from tracker.sources import FakeCamera
+
+        return FakeCamera(source[1], fps=source[2], loop=source[3])
+    return source
 
 
 class Pipeline:
@@ -847,7 +908,7 @@ class Pipeline:
         self.send_video = True
         self._sent_cal = self._sent_session = _UNSENT
         for name in ("frameReady", "puppetReady", "puppetFailed", "error", "sourceOpened", "sourceFailed",
-                     "finishedSource", "recorded", "recordFailed", "recordStarted"):
+                     "finishedSource", "recorded", "recordFailed", "recordStarted", "snapshot"):
             setattr(self, name, Hook())
         self._latest: DisplayFrame | None = None
         self._prev: DisplayFrame | None = None
@@ -865,7 +926,8 @@ class Pipeline:
         self._conn, child = ctx.Pipe()
         spec, extra = self._spec_message(self.spec)
         spec = replace(spec, calibration=extra.get("calibration"), session=extra.get("session"))
-        self._proc = ctx.Process(target=engine_main, args=(child, self.source_spec, spec, self.realtime, self._fake),
+        self._proc = ctx.Process(target=engine_main, args=(child, self.source_spec, spec, self.realtime,
+                                                           _portable(self._fake)),
                                  name="inkface-engine", daemon=True)
         self._proc.start()
         child.close()
@@ -928,7 +990,7 @@ class Pipeline:
     def set_source(self, spec: SourceSpec, fake_source=None) -> None:
         self.source_spec = spec
         self._fake = fake_source
-        self._send({"cmd": "source", "spec": spec, "fake": fake_source})
+        self._send({"cmd": "source", "spec": spec, "fake": _portable(fake_source)})
 
     def set_paused(self, paused: bool) -> None:
         self._send({"cmd": "pause", "on": bool(paused)})
@@ -936,6 +998,33 @@ class Pipeline:
     def set_video(self, on: bool) -> None:
         self.send_video = bool(on)
         self._send({"cmd": "video", "on": bool(on)})
+
+    def set_targets(self, video: tuple[int, int] | None = None, char: tuple[int, int] | None = None,
+                    full: bool | None = None) -> None:
+        """Sizes (device pixels) the pictures are shown at; ``full`` asks for camera-size frames."""
+        t = {}
+        if video is not None:
+            t["video"] = tuple(int(v) for v in video)
+        if char is not None:
+            t["char"] = tuple(int(v) for v in char)
+        if full is not None:
+            t["full"] = bool(full)
+        self._send({"cmd": "targets", "targets": t})
+
+    def full_frame(self, timeout_s: float = 5.0) -> np.ndarray | None:
+        """The newest camera frame at full size (waits for the engine, pumping its messages)."""
+        got: list = []
+        fn = got.append
+        self.snapshot.connect(fn)
+        try:
+            self._send({"cmd": "snapshot"})
+            end = time.monotonic() + timeout_s
+            while not got and time.monotonic() < end and self.running:
+                self._poll()
+                time.sleep(0.005)
+        finally:
+            self.snapshot.disconnect(fn)
+        return got[0] if got else None
 
     def start_recording(self, path: str, fps: float, background) -> None:
         self._send({"cmd": "record", "path": str(path), "fps": float(fps), "background": background})
