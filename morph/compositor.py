@@ -37,6 +37,12 @@ class Compositor:
     ``(dx, dy, roll_deg)`` is multiplied by ``gain``: dx, dy in canvas pixels (x right, y down),
     roll in degrees, positive turning the character counter-clockwise on screen (its right side
     up), as the performer's ``roll_deg`` does in the camera image.
+
+    ``keep_in_frame`` softly limits the translation so the head (the content above the pivot, the
+    neck) never leaves the canvas by more than ``margin`` pixels (default 3 % of the smaller
+    side): small moves pass almost unchanged, large ones approach the limit along a tanh curve.
+    Rotation about the pivot is never changed; when a strong roll alone pushes the head out, the
+    translation pulls it back. Off by default here (the maths stays plain); the renderer turns it on.
     """
 
     def __init__(
@@ -48,6 +54,8 @@ class Compositor:
         gain: float = 1.0,
         shimmer_every: int = 2,
         heads_premultiplied: bool = False,
+        keep_in_frame: bool = False,
+        margin: float | None = None,
     ):
         self.w, self.h = int(canvas[0]), int(canvas[1])
         self.pivot = (float(pivot[0]), float(pivot[1]))
@@ -79,22 +87,31 @@ class Compositor:
             for hd in self.heads
         ]
         self._hull = self._content_hull()
+        self.keep_in_frame = bool(keep_in_frame)
+        self.margin = 0.03 * min(self.w, self.h) if margin is None else float(margin)
+        self._head_hull = self._content_hull(above_pivot=True)
         # One flat canvas per head: outside the boxes it always equals the head, so a frame
         # only rewrites the boxes.
         self._flats = [hd.copy() for hd in self.heads]
         self._overlaps = self._any_overlap()
 
-    def _content_hull(self) -> np.ndarray:
+    def _content_hull(self, above_pivot: bool = False) -> np.ndarray:
         """Convex hull ``(k, 2)`` of every pixel that can be non-transparent (heads ∪ boxes).
 
         Pixel corners are used (a pixel at x covers x−0.5..x+0.5) so the hull encloses the
-        pixels' area; the affine warp need not touch output pixels outside it.
+        pixels' area; the affine warp need not touch output pixels outside it. ``above_pivot``:
+        only the rows down to the pivot (the head without neck and shoulders), or everything
+        when nothing lies above it.
         """
         alpha = np.zeros((self.h, self.w), np.uint8)
         for hd in self.heads:
             alpha |= (hd[:, :, 3] > 0).astype(np.uint8)
         for (x, y, bw, bh), _ in self._clip.values():
             alpha[y:y + bh, x:x + bw] = 1
+        if above_pivot:
+            cut = int(math.floor(self.pivot[1])) + 1
+            if 0 < cut < self.h and alpha[:cut].any():
+                alpha[cut:] = 0
         pts = cv2.findNonZero(alpha)
         if pts is None:
             return np.zeros((0, 2))
@@ -114,11 +131,18 @@ class Compositor:
         return (int(frame_no) // self.shimmer_every) % len(self.heads)
 
     def matrix(self, pose: Sequence[float]) -> np.ndarray:
-        """The 2×3 affine map canvas → output for ``pose`` (after ``gain``)."""
+        """The 2×3 affine map canvas → output for ``pose`` (after ``gain`` and, if on, the
+        keep-in-frame limit)."""
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if not all(math.isfinite(v) for v in (dx, dy, roll)):
             raise ValueError(f"pose must be three finite numbers (dx, dy, roll_deg), got {tuple(pose)}")
         m = cv2.getRotationMatrix2D(self.pivot, roll, 1.0)
+        if self.keep_in_frame and len(self._head_hull):
+            pts = self._head_hull @ m[:, :2].T + m[:, 2]
+            lo = -self.margin - pts.min(axis=0)
+            hi = np.array([self.w, self.h]) + self.margin - pts.max(axis=0)
+            dx = _soft_clamp(dx, lo[0], hi[0])
+            dy = _soft_clamp(dy, lo[1], hi[1])
         m[0, 2] += dx
         m[1, 2] += dy
         return m
@@ -187,10 +211,10 @@ class Compositor:
         """
         if len(pose) != 3:
             raise ValueError(f"pose must be (dx, dy, roll_deg), got {tuple(pose)}")
-        dx, dy, roll = (float(v) * self.gain for v in pose)
-        if dx == 0.0 and dy == 0.0 and roll == 0.0:
+        m = self.matrix(pose)
+        if np.array_equal(m, _IDENTITY):
             return flat.copy()
-        return self._warp_content(flat, self.matrix(pose))
+        return self._warp_content(flat, m)
 
     def _warp_content(self, flat: np.ndarray, m: np.ndarray) -> np.ndarray:
         """One ``warpAffine`` over the bounding box of the moved content hull."""
@@ -210,6 +234,23 @@ class Compositor:
         cv2.warpAffine(flat, local, (x1 - x0, y1 - y0), dst=out[y0:y1, x0:x1], flags=cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
         return out
+
+
+_IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+def _soft_clamp(x: float, lo: float, hi: float) -> float:
+    """``x`` softly limited to ``(lo, hi)``: slope 1 at the rest position ``p`` (0 pulled into the
+    range), tanh towards each bound; continuous in ``lo`` and ``hi`` so a limit that moves with
+    the roll never makes the head jump."""
+    if hi < lo:
+        return 0.5 * (lo + hi)
+    p = min(max(0.0, lo), hi)
+    if x >= p:
+        r = hi - p
+        return p + r * math.tanh((x - p) / r) if r > 0 else p
+    r = p - lo
+    return p - r * math.tanh((p - x) / r) if r > 0 else p
 
 
 def to_straight(pm: np.ndarray) -> np.ndarray:

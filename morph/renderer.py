@@ -26,7 +26,9 @@ class CharacterRenderer:
     ``gain`` scales the pose (head translation and roll); ``detail`` switches on the
     detail-keeping blend; ``style`` sets the expression-driven style used when ``render`` gets a
     positive ``style_level``; ``exact_three_way`` trades 1–2 ms a part for the exact
-    three-way field instead of the paper's sum of two-way warps (``PartMorpher``).
+    three-way field instead of the paper's sum of two-way warps (``PartMorpher``);
+    ``keep_in_frame`` softly limits head translation so the head stays on the canvas (see
+    ``Compositor``; rotation is never limited).
     """
 
     def __init__(
@@ -38,6 +40,7 @@ class CharacterRenderer:
         style: ExpressionStyle | None = None,
         shimmer_every: int = 2,
         exact_three_way: bool = False,
+        keep_in_frame: bool = True,
     ):
         self.artset = artset
         self.detail = bool(detail)
@@ -62,7 +65,7 @@ class CharacterRenderer:
             self.rest[name] = next((names.index(n) for n in _REST_NAMES.get(name, ()) if n in names), 0)
         self.compositor = Compositor(
             artset.canvas, artset.pivot, artset.heads, {n: p.box for n, p in artset.parts.items()},
-            gain=gain, shimmer_every=shimmer_every,
+            gain=gain, shimmer_every=shimmer_every, keep_in_frame=keep_in_frame,
         )
 
     @property

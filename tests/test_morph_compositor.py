@@ -173,3 +173,61 @@ def test_bad_pose_is_a_clear_error():
         c.compose({}, pose=(0, float("nan"), 3))
     with pytest.raises(ValueError, match="roll_deg"):
         c.compose({}, pose=(1, 2))
+
+
+def _head_bbox_after(c: Compositor, head: np.ndarray, pose):
+    """Bounding box (x0, y0, x1, y1) in canvas pixels of the head's pixels above the pivot after
+    ``pose`` (pixel centres mapped by the compositor's matrix, so content off the edge counts)."""
+    a = head[:, :, 3] > 0
+    a[int(c.pivot[1]) + 1:] = False
+    ys, xs = np.nonzero(a)
+    m = c.matrix(pose)
+    pts = np.stack([xs, ys], axis=1) @ m[:, :2].T + m[:, 2]
+    return (*pts.min(axis=0), *pts.max(axis=0))
+
+
+def _big_head():
+    """A round head nearly as wide as the canvas, a neck down to the bottom edge."""
+    import cv2
+
+    head = _clear_head()
+    cv2.ellipse(head, (60, 42), (50, 38), 0, 0, 360, (200, 150, 120, 255), -1)
+    cv2.rectangle(head, (50, 70), (70, 99), (200, 150, 120, 255), -1)
+    return head
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-5000, 5000), st.floats(-5000, 5000), st.floats(-60, 60), st.floats(0.0, 3.0))
+def test_keep_in_frame_holds_the_head_within_the_margin(dx, dy, roll, gain):
+    head = _big_head()
+    c = Compositor(CANVAS, (60, 80), [head], {}, gain=gain, keep_in_frame=True, margin=4)
+    x0, y0, x1, y1 = _head_bbox_after(c, head, (dx, dy, roll))
+    assert x0 >= -4 - 1 and y0 >= -4 - 1 and x1 <= CANVAS[0] - 1 + 4 + 1 and y1 <= CANVAS[1] - 1 + 4 + 1
+    # the unlimited compositor really would have left the canvas for the big moves
+    if max(abs(dx), abs(dy)) * gain > 200:
+        free = Compositor(CANVAS, (60, 80), [head], {}, gain=gain)
+        fx0, fy0, fx1, fy1 = _head_bbox_after(free, head, (dx, dy, roll))
+        assert fx0 < -5 or fy0 < -5 or fx1 > CANVAS[0] + 4 or fy1 > CANVAS[1] + 4
+
+
+def test_keep_in_frame_is_gentle_near_rest_and_monotonic():
+    head = _big_head()
+    c = Compositor(CANVAS, (60, 80), [head], {}, keep_in_frame=True, margin=4)
+    assert np.allclose(c.matrix((0, 0, 0)), [[1, 0, 0], [0, 1, 0]])
+    xs = [c.matrix((d, 0, 0))[0, 2] for d in np.linspace(-100, 100, 81)]
+    assert np.all(np.diff(xs) > 0)
+    assert c.matrix((0.5, 0, 0))[0, 2] == pytest.approx(0.5, abs=0.02)  # small moves pass
+    # rotation is never altered by the limit
+    assert np.allclose(c.matrix((500, 0, 20))[:, :2], Compositor(CANVAS, (60, 80), [head], {}).matrix((0, 0, 20))[:, :2])
+
+
+def test_bundled_head_stays_on_the_canvas_for_an_extreme_pose():
+    from art_sets.io import load_artset
+    from art_sets.library import find_artset
+
+    art = load_artset(find_artset("ivy"))
+    c = Compositor(art.canvas, art.pivot, art.heads, {}, keep_in_frame=True)
+    for pose in ((300, 300, 25), (-300, -300, -25), (150, 80, -30), (0, 0, 0)):
+        x0, y0, x1, y1 = _head_bbox_after(c, art.heads[0], pose)
+        m = c.margin + 1
+        assert x0 >= -m and y0 >= -m and x1 <= art.canvas[0] - 1 + m and y1 <= art.canvas[1] - 1 + m, pose

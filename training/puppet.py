@@ -127,10 +127,10 @@ class Puppet:
 
             renderer = CharacterRenderer(self.artset, gain=gain, detail=detail)
         self.renderer = renderer
-        eyes_box = self.artset.parts["eyes"].box
-        # canvas pixels per inter-pupil distance of head motion: a quarter of the eyes box (about
-        # half the drawn eye spacing), so a performer drifting around the frame stays on the canvas
-        self.pose_scale = 0.25 * float(eyes_box[2])
+        # canvas pixels of head motion per inter-pupil distance the performer moves away from the
+        # calibrated (neutral) position: a tenth of the canvas width, so ordinary drift moves the
+        # character a little; the renderer's keep-in-frame limit handles the extremes
+        self.pose_scale = 0.1 * float(self.artset.canvas[0])
         self.tracker = None
         self._fit()
         self._build_filter()
