@@ -98,13 +98,15 @@ class LidFinder:
         n = len(p)
         inside = p >= 128
         lim = min(self.skip, n)
-        if not inside[:lim].any():
-            # no iris or white next to the pupil: the lid crosses the pupil (or the eye is shut)
-            s = 0
-            while s < lim and q[s] >= 64:
-                s += 1
-            return max(s - 0.5, 0.0)
-        s = int(inside[:lim].argmax())  # the walk leaves the pupil into iris or white
+        pr = 0  # the pupil's own samples (its colour, within about its radius)
+        while pr < lim and q[pr] >= 64:
+            pr += 1
+        after = inside[pr:lim]
+        if not after.any():
+            # no iris or white between the pupil and its rim: the lid crosses the pupil
+            # (or the eye is shut) and the walk ends where the pupil's colour does
+            return max(pr - 0.5, 0.0)
+        s = pr + int(after.argmax())  # the walk leaves the pupil into iris or white
         inside[:s] = True
         stop = ~inside
         if self.white is not None and n > 1:
