@@ -138,13 +138,17 @@ class FaceTracker:
         self.cal = cal
         self.wi = wi = cal.work_ipd
         self.damping = float(damping)
-        self.pupil_finders = [PupilFinder(t, cal.pupil, cal.pupil_threshold, near=max(int(round(0.08 * wi)), 2)) for t in cal.eye_templates]
+        near = max(int(round(0.08 * wi)), 2)
+        self.pupil_finders = [PupilFinder(t, cal.pupil, cal.pupil_threshold, near=near) for t in cal.eye_templates]
         th, tw = cal.eye_templates[0].shape
         self.sx, self.sy = max(int(round(SEARCH_X * wi)), 3), max(int(round(SEARCH_Y * wi)), 2)
         self.brow_finders = [
             BrowFinder(p, c, BROW_LO * h, BROW_HI * h) for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights)
         ]
-        self.lid_finder = LidFinder(cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius, white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level)
+        self.lid_finder = LidFinder(
+            cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius,
+            white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level,
+        )
         self.mouth_finder = MouthFinder()
         # eye crops (face coordinates): both pupil search windows with template margins, the
         # brows' search range above, the lid walks below; a wider one for re-acquisition
@@ -188,16 +192,18 @@ class FaceTracker:
         """Median B, G, R of a crop (subsampled): mostly skin, whatever the expression."""
         return np.median(crop[::3, ::3].reshape(-1, 3), axis=0)
 
-    def _balance(self, crop: np.ndarray, ref) -> np.ndarray:
+    def _balance(self, crop: np.ndarray, which: str) -> np.ndarray:
         """Undo a global gain / colour cast relative to the calibration frame.
 
         The calibrated classifiers were learned under the calibration frame's light; a
         per-channel gain that brings the crop's median colour back to the calibrated one
-        keeps them valid under slow lighting drift or auto exposure.
+        keeps them valid under slow lighting drift or auto exposure. ``which`` is "eye" or
+        "mouth"; the gain is re-measured every :data:`BALANCE_EVERY` frames.
         """
+        ref = self.cal.eye_ref if which == "eye" else self.cal.mouth_ref
         if ref is None:
             return crop
-        key = id(ref)
+        key = which
         n = self._balance_age.get(key, 0)
         if n == 0 or key not in self._gains:
             g = np.asarray(ref) / np.maximum(self._level(crop), 1.0)
@@ -238,7 +244,7 @@ class FaceTracker:
 
     def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int]):
         """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
-        crop = self._balance(ff.crop(frame, rect), self.cal.eye_ref)
+        crop = self._balance(ff.crop(frame, rect), "eye")
         self._last_eye_crop = crop
         grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
         ox, oy = rect[0], rect[1]
@@ -381,7 +387,7 @@ class FaceTracker:
         mw, mh = self.mouth_size
         cx, cy = self.mouth_face
         rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
-        crop = self._balance(ff.crop(frame, rect), self.cal.mouth_ref)
+        crop = self._balance(ff.crop(frame, rect), "mouth")
         self._last_mouth_crop = crop
         score = self.cal.lip.prob_u8(crop)
         value = cv2.transform(crop.astype(np.float32), self.lip_axis)
@@ -428,7 +434,7 @@ class FaceTracker:
         H, W = frame.shape[:2]
         f = max(1, int(cal.ipd // 20))
         small = frame[::f, ::f]
-        gain = self._gains.get(id(cal.mouth_ref))  # the light as last seen on the mouth
+        gain = self._gains.get("mouth")  # the light as last seen on the mouth
         if gain is not None:
             small = cv2.transform(np.ascontiguousarray(small), gain)
         tags = (cal.lip.prob_u8(small) >= 128).astype(np.uint8)
