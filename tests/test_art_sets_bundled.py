@@ -172,3 +172,15 @@ def test_mouth_geometry_gives_usable_lines(hw, smile, open_, rnd, up):
     assert (np.hypot(L[:, 2] - L[:, 0], L[:, 3] - L[:, 1]) > 1).all()
     assert (g.outer_up[:, 1] <= g.inner_up[:, 1] + 1e-9).all() and (g.inner_up[:, 1] <= g.inner_dn[:, 1] + 1e-9).all()
     assert (g.inner_dn[:, 1] <= g.outer_dn[:, 1] + 1e-9).all()
+
+
+def test_no_drawn_feature_is_covered_by_the_head(art):
+    """Every inked/coloured pixel of every drawing falls where the heads are (nearly) see-through."""
+    for part in (art.eyes, art.mouth):
+        x, y, w, h = part.box
+        for d in part.drawings:
+            bg = np.median(d.image[..., :3].reshape(-1, 3), axis=0)
+            feature = np.linalg.norm(d.image[..., :3].astype(float) - bg, axis=2) > 40
+            for k, head in enumerate(art.heads):
+                covered = head[y:y + h, x:x + w, 3][feature]
+                assert covered.max() < 100, f"{part.name}/{d.name} under head {k + 1}: alpha {covered.max()}"

@@ -191,4 +191,4 @@ def character() -> Blue:
                 description="A blue-pencil sketch on cream paper: grainy strokes, hatching, construction lines (the paper's 'Blue').",
                 seed=37, skin=PAPER, paper_amount=0.018, grain=1.0, eye_hw=38.0,
                 eye_centers=((194.0, 228.0), (318.0, 228.0)), eyes_box=(104, 150, 304, 132), eye_kw={"brow_gap": 0.85},
-                mouth_box=(176, 312, 160, 118), mouth_center=(256.0, 354.0), mouth_scale=47.0)
+                mouth_box=(168, 312, 176, 118), mouth_center=(256.0, 354.0), mouth_scale=47.0)

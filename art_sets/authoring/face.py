@@ -228,7 +228,7 @@ class Character:
     heads: int = 3
     paper_amount: float = 0.015
     grain: float = 0.0
-    feather: float = 4.5
+    feather: float = 3.5
     eyes: dict = field(default_factory=lambda: dict(DEFAULT_EYES))
     mouths: dict = field(default_factory=lambda: dict(DEFAULT_MOUTHS))
     eye_kw: dict = field(default_factory=dict)

@@ -20,9 +20,9 @@ WHITE = hex_rgb("#fffdf6")
 STUBBLE = hex_rgb("#8a6a55")
 
 WAVY_EYES = {
-    "open": EyePose(up=0.8, dn=0.72, brow_arch=0.25),
+    "open": EyePose(up=0.8, dn=0.64, brow_arch=0.25),
     "closed": EyePose(closed=True, brow=-0.05, brow_arch=0.2),
-    "wide": EyePose(up=1.0, dn=0.86, brow=0.35, brow_arch=0.4),
+    "wide": EyePose(up=1.0, dn=0.76, brow=0.3, brow_arch=0.36),
     "angry": EyePose(up=0.6, dn=0.66, lid_drop=0.45, brow=-0.25, brow_tilt=0.5, brow_arch=0.05),
     "squint": EyePose(up=0.34, dn=0.5, lower_lift=0.3, brow=-0.1, brow_arch=0.15),
 }
@@ -59,7 +59,7 @@ class Wavy(Character):
     def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
         if not g.closed:
-            self.pen(s, sub_curve(g.lower + (0, 0.3 * hw + 2), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)  # baggy lids
+            self.pen(s, sub_curve(g.lower + (0, 0.2 * hw + 1), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)  # baggy lids
             opening = g.opening()
             clip = s.mask(opening)
             self.wash(s, opening, WHITE, rng, opacity=1.0)
@@ -168,5 +168,5 @@ def character() -> Wavy:
     return Wavy(slug="noodle", name="Noodle", style="wavy",
                 description="A loose, wobbly sepia line over off-register watercolour washes (the paper's 'Wavy').",
                 seed=23, skin=SKIN, paper_amount=0.02, eye_hw=38.0, eye_centers=((200.0, 216.0), (312.0, 216.0)),
-                eyes_box=(116, 144, 280, 126), mouth_box=(156, 330, 200, 122), mouth_center=(256.0, 374.0),
-                mouth_scale=54.0, eye_kw={"iris": 0.3, "brow_gap": 1.05})
+                eyes_box=(128, 136, 256, 134), mouth_box=(150, 330, 212, 122), mouth_center=(256.0, 380.0),
+                mouth_scale=54.0, eye_kw={"iris": 0.3, "brow_gap": 0.95})
