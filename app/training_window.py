@@ -186,14 +186,15 @@ class DrawingCard(QWidget):
         self.drawing = drawing_qimage(rgba)
         self.thumb: QImage | None = None
         self.frame_no: int | None = None
+        self.auto = False  # paired by the automatic default training (not a frame of this clip)
         self.active = False
         self.setFixedSize(QSize(268, 134))
         self.btn = QPushButton("Use this frame", self)
         self.btn.setGeometry(128, 98, 132, 28)
         self.btn.clicked.connect(lambda: self.pairRequested.emit(self.part, self.name))
 
-    def set_pair(self, thumb: QImage | None, frame_no: int | None) -> None:
-        self.thumb, self.frame_no = thumb, frame_no
+    def set_pair(self, thumb: QImage | None, frame_no: int | None, auto: bool = False) -> None:
+        self.thumb, self.frame_no, self.auto = thumb, frame_no, auto
         self.update()
 
     def mousePressEvent(self, _ev) -> None:
@@ -244,7 +245,7 @@ class DrawingCard(QWidget):
             p.setFont(f)
             p.setPen(QColor("#9ece6a"))
             p.drawText(QRectF(10, 100, 112, 24), Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter,
-                       f"frame {self.frame_no}")
+                       "auto" if self.auto else f"frame {self.frame_no}")
 
 
 # ------------------------------------------------------------------------------------------
@@ -458,6 +459,7 @@ class TrainingWindow(QMainWindow):
         self.recordingChanged = Hook()  # True while recording: the live input must be camera-size
         self._record_until = 0.0
         self._diag_worst: dict[str, int] = {}
+        self._auto: set[int] = set()  # ids of pairs made by "Pair automatically"
         self._live_feats: np.ndarray | None = None
         self.session = self._open_session()
 
@@ -744,6 +746,7 @@ class TrainingWindow(QMainWindow):
             self.status.setText(f"Automatic pairing failed: {_one_line(e)}")
             return
         self.session.pairs = list(d.pairs)
+        self._auto = {id(p) for p in d.pairs}
         if self.session.features is None and d.features is not None:
             self.session.features = d.features
         if self.session.reference_track is None and d.reference_track is not None:
@@ -776,7 +779,7 @@ class TrainingWindow(QMainWindow):
         for (part, name), card in self.cards.items():
             pr = by.get((part, name))
             card.set_pair(rgb_qimage(pr.thumbnail) if pr is not None and pr.thumbnail is not None else None,
-                          pr.frame if pr is not None else None)
+                          pr.frame if pr is not None else None, pr is not None and id(pr) in self._auto)
         part = self.part()
         names = self.artset.parts[part].names()
         self.space_title.setText(f"Expression space — {part} (PCA plane of the training points, Delaunay triangles)")

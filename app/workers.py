@@ -858,6 +858,7 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
         return
     finally:
         capture.stop()
+        capture.join(3.0)  # let it leave OpenCV before the process exits
         if recorder is not None:
             try:
                 recorder.finish()

@@ -294,3 +294,22 @@ def test_drop_video_and_art_folder(qtbot, window, tmp_path, performer):
     assert str(mine.resolve()) in window.strip.paths()
     assert str(mine.resolve()) in Settings().user_art_dirs()
     assert not window.open_path(str(tmp_path / "nothing.txt"))
+
+
+def test_calibration_auto_then_adjust(qtbot, performer):
+    pytest.importorskip("tracker.auto_init")
+    from app.calibration_window import POINTS, CalibrationWindow
+
+    dlg = CalibrationWindow(performer["frames"][0])
+    qtbot.addWidget(dlg)
+    assert dlg.auto(), dlg.info.text()
+    assert set(dlg.view.points) == set(POINTS)
+    assert dlg.calibration is not None and dlg.accept_btn.isEnabled()
+    truth = performer["clicks"]
+    for k in ("left_pupil", "right_pupil"):
+        assert np.hypot(*(np.subtract(dlg.view.points[k], truth[k]))) < 6.0
+    # dragging a point (here: setting it) recalibrates
+    pts = dict(dlg.view.points)
+    pts["mouth"] = tuple(truth["mouth"])
+    dlg.set_points(pts)
+    assert dlg.calibration is not None
