@@ -14,7 +14,7 @@ from benchmarks.harness import TIMING_COLUMNS, Table, Timing, benchmark, time_ea
 from morph.mappers import MAPPERS, make_mapper
 from training.diagnostics import leave_one_out
 from training.features import PART_SLICES, FeatureSpace
-from training.filters import Chain, ChaiFilter, Identity, OneEuroFilter, OutlierGate, RateFilter
+from training.filters import Chain, ChaiFilter, GatedOneEuro, Identity, OneEuroFilter, OutlierGate, RateFilter
 
 DRAWINGS = {
     "eyes": ["open", "closed", "wide", "angry", "squint"],
@@ -102,7 +102,8 @@ def _filters(db: np.ndarray):
         ("paper 10 fps (avg 3)", lambda: RateFilter(3)),
         ("one_euro", lambda: OneEuroFilter()),
         ("gate (Williams)", lambda: OutlierGate()),
-        ("gate+one_euro", lambda: Chain([OutlierGate(), OneEuroFilter()])),
+        ("gate then one_euro (plain chain)", lambda: Chain([OutlierGate(), OneEuroFilter()])),
+        ("gate+one_euro (confirmed jumps pass)", lambda: GatedOneEuro()),
         ("chai (W=10,K=100)", lambda: ChaiFilter(db, channels=range(3, 10))),
     ]
 

@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 from training.filters import (
     Chain,
     ChaiFilter,
+    GatedOneEuro,
     Identity,
     OneEuroFilter,
     OutlierGate,
@@ -39,7 +40,7 @@ def test_rate_filter_averages_the_paper_groups(fps, group):
 @given(c=st.floats(-5, 5), n=st.integers(1, 40))
 def test_filters_keep_a_constant_signal(c, n):
     db = np.random.default_rng(0).normal(scale=0.05, size=(80, 3)) + c
-    for f in [Identity(), OneEuroFilter(), OutlierGate(), Chain([OutlierGate(), OneEuroFilter()]), ChaiFilter(db, window=5)]:
+    for f in [Identity(), OneEuroFilter(), OutlierGate(), Chain([OutlierGate(), OneEuroFilter()]), GatedOneEuro(), ChaiFilter(db, window=5)]:
         out = run(f, [np.full(3, c)] * n)
         for y in out:
             np.testing.assert_allclose(y, c, atol=0.05 + 1e-9)
@@ -96,3 +97,43 @@ def test_make_filter():
     assert isinstance(make_filter("chai"), OneEuroFilter)  # no clip: falls back
     with pytest.raises(ValueError, match="unknown filter"):
         make_filter("kalman")
+
+
+def _blink(n_before: int = 40, depth: float = 0.2):
+    """A lid channel (ipd units, relative to neutral) with a fast blink: closing over two
+    frames, shut for one, opening over two (about 170 ms, a real blink)."""
+    prof = [-0.08, -0.66, -1.0, -0.89, -0.31]
+    xs = [0.0] * n_before + [p * depth for p in prof] + [0.0] * 20
+    return [np.array([x, 0.0]) for x in xs], n_before + 2
+
+
+@settings(max_examples=20, deadline=None)
+@given(depth=st.floats(0.12, 0.4), seed=st.integers(0, 1000))
+def test_gated_one_euro_lets_a_fast_blink_close_fully(depth, seed):
+    xs, shut = _blink(depth=depth)
+    rng = np.random.default_rng(seed)
+    xs = [x + rng.normal(scale=0.005, size=2) for x in xs]
+    gated = np.array(run(GatedOneEuro(), xs))[:, 0]
+    plain = np.array(run(Chain([OutlierGate(), OneEuroFilter()]), xs))[:, 0]
+    # the closed frame is shown (at most one frame late) nearly fully closed
+    assert gated[shut:shut + 2].min() < -0.85 * depth
+    assert gated[shut:shut + 2].min() < plain[shut:shut + 2].min() - 0.05 * depth
+    assert abs(gated[-1]) < 0.03  # and it opens again
+
+
+def test_gated_one_euro_is_as_smooth_as_one_euro_on_a_still_face_and_drops_glitches():
+    rng = np.random.default_rng(4)
+    still = [rng.normal(scale=0.01, size=3) for _ in range(300)]
+    a = np.array(run(GatedOneEuro(), still))
+    b = np.array(run(OneEuroFilter(), still))
+    assert np.std(np.diff(a[20:], axis=0)) <= 1.05 * np.std(np.diff(b[20:], axis=0))
+    glitchy = [x.copy() for x in still]
+    for i in range(30, 300, 25):
+        glitchy[i][1] += 0.3
+    g = np.array(run(GatedOneEuro(), glitchy))
+    assert np.abs(g[20:, 1]).max() < 0.06
+
+
+def test_make_filter_gate_one_euro_is_the_cooperating_pair():
+    f = make_filter("gate+one_euro")
+    assert isinstance(f, GatedOneEuro) and f.name == "gate+one_euro"

@@ -10,6 +10,9 @@ only :class:`RateFilter` does that) and ``reset()``.
 * :class:`OneEuroFilter` — adaptive low-pass (Casiez et al. 2012): smooth when still, quick when moving.
 * :class:`OutlierGate` — Williams 1990: replace a sample only when it is far from a smoothed
   estimate of the recent past; a jump that persists is accepted after ``max_hold`` frames.
+* :class:`GatedOneEuro` — the gate, then One-Euro; a jump the gate has confirmed as real (it
+  persisted) is passed straight through instead of being smoothed again, so fast motion such
+  as a blink reaches the drawing while a still face stays as smooth as with One-Euro alone.
 * :class:`ChaiFilter` — data-driven filter (Chai, Xiao & Hodgins 2003): the last W frames are
   projected onto a local PCA model of the K most similar windows of the performer's own training
   clip (99 % variance kept); overlapping windows' estimates are cross-faded.
@@ -27,6 +30,7 @@ import numpy as np
 __all__ = [
     "FILTERS",
     "Chain",
+    "GatedOneEuro",
     "ChaiFilter",
     "Identity",
     "OneEuroFilter",
@@ -154,6 +158,8 @@ class OutlierGate:
         self._hist: deque = deque(maxlen=self.window)
         self._noise = None
         self._held = None
+        self.confirmed: np.ndarray | None = None
+        """Channels whose last step accepted a held-back jump as real motion (bool mask)."""
 
     def step(self, z: np.ndarray, t: float | None = None) -> np.ndarray:
         z = np.asarray(z, dtype=np.float64)
@@ -161,6 +167,7 @@ class OutlierGate:
             self._hist.append(z.copy())
             self._noise = np.zeros_like(z)
             self._held = np.zeros(len(z), dtype=np.int64)
+            self.confirmed = np.zeros(len(z), dtype=bool)
             return z.copy()
         est = np.median(np.array(self._hist), axis=0)
         dev = np.abs(z - est)
@@ -168,6 +175,7 @@ class OutlierGate:
         bad = dev > thr
         force = bad & (self._held >= self.max_hold)
         bad &= ~force
+        self.confirmed = force
         out = np.where(bad, est, z)
         self._held = np.where(bad, self._held + 1, 0)
         good = ~bad & ~force
@@ -177,6 +185,40 @@ class OutlierGate:
             for h in self._hist:
                 h[force] = z[force]
         self._hist.append(out.copy())
+        return out
+
+
+class GatedOneEuro:
+    """:class:`OutlierGate` then :class:`OneEuroFilter`, cooperating.
+
+    The gate already holds back a large change for ``max_hold`` frames and accepts it only when
+    it persists; smoothing that confirmed change again with One-Euro (whose speed estimate needs
+    several frames to open its cutoff) would halve a fast blink. So on the channels where the
+    gate has just confirmed a jump the output takes the new value and the One-Euro state
+    restarts there. A still face never triggers the gate, so it is smoothed exactly as by
+    One-Euro alone. ``filters`` = ``[gate, one_euro]`` for callers that tune the parts.
+    """
+
+    name = "gate+one_euro"
+
+    def __init__(self, gate: OutlierGate | None = None, smooth: OneEuroFilter | None = None, fps: float = 30.0):
+        self.gate = gate if gate is not None else OutlierGate()
+        self.smooth = smooth if smooth is not None else OneEuroFilter(fps=fps)
+        self.filters = [self.gate, self.smooth]
+        self.lag_frames = 0
+
+    def reset(self) -> None:
+        self.gate.reset()
+        self.smooth.reset()
+
+    def step(self, z: np.ndarray, t: float | None = None) -> np.ndarray:
+        g = self.gate.step(z, t)
+        out = self.smooth.step(g, t)
+        jump = self.gate.confirmed
+        if jump is not None and jump.any():
+            self.smooth._x[jump] = g[jump]
+            self.smooth._dx[jump] = 0.0
+            out[jump] = g[jump]
         return out
 
 
@@ -336,7 +378,7 @@ def make_filter(name: str, fps: float = 30.0, database: np.ndarray | None = None
     if name == "gate":
         return OutlierGate()
     if name == "gate+one_euro":
-        return Chain([OutlierGate(), OneEuroFilter(fps=fps)])
+        return GatedOneEuro(fps=fps)
     if name == "chai":
         if database is None or len(database) < 12:
             return OneEuroFilter(fps=fps)
