@@ -183,7 +183,7 @@ class MouthFinder:
     @staticmethod
     def _crossing_y(poly: np.ndarray, x: float, centre_y: float) -> tuple[float, float]:
         """Smallest and largest y where the closed polygon crosses the vertical line ``x``."""
-        p1 = np.roll(poly, -1, axis=0)
+        p1 = np.concatenate([poly[1:], poly[:1]])
         x0, x1 = poly[:, 0], p1[:, 0]
         hit = (x0 <= x) != (x1 <= x)
         if not hit.any():
@@ -279,8 +279,8 @@ class MouthFinder:
         mixtures (high on lip, low on skin, e.g. a projection of BGR); edges are then placed
         where it crosses half-way between the lip's level and the level along the crop's
         border (skin), which is exact for anti-aliased or blurred edges; ``lip_level`` is
-        the lip's nominal value if known: the lip level is then the median over blob pixels
-        within ±50 % of it (the dark inside of an open mouth would bias a plain median). Without ``value`` the smoothed score is used.
+        the lip's nominal value if known: the lip level is then the mean over blob pixels
+        within ±50 % of it (the dark inside of an open mouth would bias a plain mean). Without ``value`` the smoothed score is used.
         """
         found = self.blob(score_u8, seed, min_area)
         if found is None:
@@ -301,7 +301,7 @@ class MouthFinder:
                 # only values near the lip's own (not the dark inside of an open mouth)
                 near = lip_vals[(lip_vals > 0.5 * lip_level) & (lip_vals < 1.5 * lip_level)]
                 lip_vals = near if len(near) >= 8 else lip_vals
-            hi_level = float(np.median(lip_vals)) if len(lip_vals) else lo_level + 1.0
+            hi_level = float(np.add.reduce(lip_vals)) / len(lip_vals) if len(lip_vals) else lo_level + 1.0
             span = hi_level - lo_level
             if abs(span) < 1e-6:
                 span = 1.0
