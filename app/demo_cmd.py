@@ -44,20 +44,22 @@ def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path
     import cv2
 
     from app.workers import (
-        PERFORMANCE_CALIBRATION,
         PuppetSpec,
+        SourceSpec,
         bundled_performance,
         default_art_path,
         load_artset,
         make_puppet,
-        resolve_calibration,
+        open_source,
+        performance_calibration,
     )
 
     art = art or default_art_path()
     if not art:
         raise RuntimeError("no bundled character is installed")
-    perf = bundled_performance(seconds=max(1.0, seconds), seed=0)
-    cal = resolve_calibration(PERFORMANCE_CALIBRATION)
+    seconds = max(1.0, seconds)
+    perf = bundled_performance(seconds=seconds, seed=0)
+    cal = performance_calibration(perf)
     puppet = make_puppet(load_artset(art), PuppetSpec(art=art, fps=fps, calibration=cal))
     out_p = Path(out)
     out_p.parent.mkdir(parents=True, exist_ok=True)
@@ -68,9 +70,10 @@ def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path
     last = None
     written = 0
     step = max(1, round(30 / fps))
+    src = open_source(SourceSpec("performance", seconds=seconds))  # played once, then cached as video
     try:
-        for i in range(n):
-            frame = perf.frame(i)
+        for fr in src:
+            i, frame = fr.index, fr.image
             pf = puppet.step(frame, i, i / 30.0)
             if pf is not None and getattr(pf, "rgba_pm", None) is not None:
                 last = pf.rgba_pm
@@ -86,6 +89,7 @@ def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path
             if sys.stderr.isatty():
                 print(f"\rrendering {i + 1}/{n} frames", end="", file=sys.stderr)
     finally:
+        src.close()
         if writer is not None:
             writer.release()
     if writer is None:
