@@ -409,7 +409,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         x0, y0 = int(round(px)) - tw // 2, int(round(py)) - th // 2
         if x0 < 0 or y0 < 0 or x0 + tw > cw or y0 + th > ch:
             raise CalibrationError("clicks: an eye is too close to the frame's edge")
-        # pupils sit at exact integer crop positions only if ox is integral; resample to be exact
+        # the pupil sits at a fractional crop position: cut with that sub-pixel shift so it is centred exactly
         M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
         t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
         temps.append(np.rint(t).astype(np.float32))
