@@ -313,3 +313,24 @@ def test_calibration_auto_then_adjust(qtbot, performer):
     pts["mouth"] = tuple(truth["mouth"])
     dlg.set_points(pts)
     assert dlg.calibration is not None
+
+
+def test_training_window_records_a_clip_from_live_frames(qtbot, performer):
+    from types import SimpleNamespace
+
+    from app.training_window import PerformanceClip, TrainingWindow
+
+    art = _bundled(1)[0]
+    w = TrainingWindow(art, performer="rec", calibration=performer["calibration"], clip=PerformanceClip(performer["perf"]))
+    qtbot.addWidget(w)
+    wanted = []
+    w.recordingChanged.connect(wanted.append)
+    w.start_recording(60.0)
+    assert wanted == [True]
+    for f in performer["frames"][:12]:
+        w.live_frame(SimpleNamespace(frame_bgr=f, params=None))
+    path = w._finish_recording()
+    assert wanted == [True, False]
+    assert path is not None and path.is_file() and path.parent.name == "clips"
+    assert len(w.clip) == 12
+    qtbot.waitUntil(lambda: w.track is not None and len(w.track) == 12, timeout=WAIT)
