@@ -19,7 +19,7 @@ import tempfile
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable
 
 import numpy as np
 
@@ -372,7 +372,6 @@ try:
         QHBoxLayout,
         QLabel,
         QLineEdit,
-        QMessageBox,
         QProgressBar,
         QPushButton,
         QVBoxLayout,

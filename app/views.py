@@ -7,8 +7,7 @@ tracking or rendering.
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 
