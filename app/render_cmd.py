@@ -1,14 +1,16 @@
 """``python -m app render``: drive a character from a video (or a recorded track) headless.
 
     python -m app render --video IN --art NAME --out OUT.mp4 [--init CLICKS.json]
-        [--training SESSION] [--fps 10|15|30] [--side-by-side] [--params TRACK.csv]
+        [--training SESSION] [--fps 10|15|30] [--side-by-side] [--params TRACK.csv|.ifs|.fap]
 
 The output kind follows ``--out``: ``.mp4`` / ``.avi`` (mp4v / MJPG, character over a paper
 background), ``.gif`` (Pillow) or a folder (no suffix, or an existing directory) of numbered PNGs
 with alpha. Without ``--init`` the clicks file ``<video stem>.clicks.json`` beside the video is
 used if present, else the face is found automatically. ``--params`` takes the ten values from a
-track CSV instead of tracking (the video, if given, still provides the calibration and the
-left half of ``--side-by-side``). Prints a progress line; errors are one line, exit code 2.
+track file instead of tracking: CSV, ``.ifs`` packet stream or ``.fap`` (``tracker.stream_codec.
+read_track``; the video, if given, still provides the calibration and the left half of
+``--side-by-side``; without a video the file's own ipd, neutral face and rate are used when it
+records them). Prints a progress line; errors are one line, exit code 2.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--training", metavar="SESSION", help="training session folder (default: automatic default training)")
     parser.add_argument("--fps", type=int, choices=(10, 15, 30), default=30, help="output rate; 10 / 15 average 3 / 2 frames (default 30)")
     parser.add_argument("--side-by-side", action="store_true", help="the performer's frame on the left, the character on the right")
-    parser.add_argument("--params", metavar="TRACK.csv", help="take the ten values from this track instead of tracking the video")
+    parser.add_argument("--params", metavar="TRACK", help="take the ten values from this track (CSV, .ifs packet stream or .fap) instead of tracking the video")
     parser.add_argument("--filter", default="gate+one_euro", help="temporal filter: none, one_euro, gate, gate+one_euro, chai (default gate+one_euro)")
     parser.add_argument("--strength", type=float, default=0.5, help="filter strength 0..1 (default 0.5)")
     parser.add_argument("--mapper", default="delaunay", help="expression mapper: delaunay (the paper's), cardinal, ridge, convex")
@@ -73,6 +75,14 @@ def _straight(rgba_pm: np.ndarray) -> np.ndarray:
     return np.concatenate([np.minimum(rgb, 255).astype(np.uint8), rgba_pm[..., 3:4]], axis=2)
 
 
+def _publish(tmp, target: Path) -> None:
+    """Move a finished temp file into place with ordinary permissions (mkstemp makes them 0600)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, target)
+
+
 class _Writer:
     """Collects RGB (or, for PNG folders, straight RGBA) frames and writes them atomically."""
 
@@ -102,7 +112,7 @@ class _Writer:
             fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=self.out)
             with os.fdopen(fd, "wb") as f:
                 Image.fromarray(image, mode).save(f, format="PNG")
-            os.replace(tmp, target)
+            _publish(tmp, target)
         elif self.kind == "gif":
             from PIL import Image
 
@@ -129,11 +139,11 @@ class _Writer:
             with os.fdopen(fd, "wb") as f:
                 self._gif[0].save(f, format="GIF", save_all=True, append_images=self._gif[1:],
                                   duration=round(1000 / self.fps), loop=0, disposal=1)
-            os.replace(tmp, self.out)
+            _publish(tmp, self.out)
         if self._vw is not None:
             self._vw.release()
             if ok:
-                os.replace(self._tmp, self.out)
+                _publish(self._tmp, self.out)
             else:
                 self._tmp.unlink(missing_ok=True)
 
@@ -255,21 +265,33 @@ def render(args, progress=True) -> int:
 
         session = TrainingSession.load(args.training, artset=artset, autosave=False)
 
-    video = _Video(Path(args.video)) if args.video else None
-    rows = None
+    rows = track = None
     if args.params:
-        from tracker.params import read_csv
+        from tracker.stream_codec import read_track
 
-        rows = read_csv(args.params)
+        if not Path(args.params).is_file():
+            raise RenderError(f"{args.params}: no such track file")
+        track = read_track(args.params)
+        rows = track.rows
         if not rows:
             raise RenderError(f"{args.params}: the track has no frames")
+    video = _Video(Path(args.video)) if args.video else None
     try:
         cal = _calibration(video, args.init, need=rows is None) if video is not None else None
         in_fps = video.fps if video is not None else 30.0
-        if rows is not None and video is None and len(rows) > 1 and rows[1].time > rows[0].time:
-            in_fps = 1.0 / (rows[1].time - rows[0].time)
+        features = None
+        if track is not None and video is None:
+            if track.fps:
+                in_fps = float(track.fps)
+            elif len(rows) > 1 and rows[1].time > rows[0].time:
+                in_fps = 1.0 / (rows[1].time - rows[0].time)
+        if cal is None and track is not None and track.ipd and track.neutral is not None:
+            from training.features import FeatureSpace
+
+            features = FeatureSpace.from_values(track.ipd, track.neutral)  # the file's own performer
         puppet = Puppet(artset, calibration=cal, session=session, fps=args.fps, filter=args.filter,
-                        strength=args.strength, mapper=args.mapper, gain=args.gain, input_fps=in_fps)
+                        strength=args.strength, mapper=args.mapper, gain=args.gain, input_fps=in_fps,
+                        features=features)
         total = len(rows) if rows is not None else video.count
         if args.max_frames > 0:
             total = min(total, args.max_frames) if total > 0 else args.max_frames
@@ -324,10 +346,12 @@ def render(args, progress=True) -> int:
 def run(args) -> int:
     from art_sets.io import ArtSetError
     from tracker.clicks import ClicksError
+    from tracker.fap import FapError
     from tracker.params import TrackFormatError
+    from tracker.stream_codec import StreamError
     from training.session import SessionError
 
-    expected = [RenderError, ArtSetError, ClicksError, TrackFormatError, SessionError]
+    expected = [RenderError, ArtSetError, ClicksError, TrackFormatError, SessionError, StreamError, FapError]
     try:
         from tracker.calibration import CalibrationError
 

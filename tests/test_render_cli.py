@@ -118,3 +118,42 @@ def test_no_face_and_no_clicks_is_a_one_line_error(art, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert rc == 2 and err.startswith("inkface: ") and "\n" not in err
     assert "--init" in err
+
+
+def _track_files(truth, d):
+    """The truth CSV re-written as a packet stream (.ifs) and an MPEG-4 FAP file (.fap)."""
+    from tracker.fap import write_fap
+    from tracker.params import read_csv
+    from tracker.stream_codec import write_track_stream
+
+    rows = read_csv(truth)
+    ipd = 80.0  # Performance's default inter-pupil distance
+    write_track_stream(d / "t.ifs", rows, (640, 480), ipd, fps=30.0, neutral=rows[0])
+    write_fap(d / "t.fap", rows, rows[0], ipd, fps=30.0)
+    return d / "t.ifs", d / "t.fap"
+
+
+def test_params_accepts_any_track_file(clip, art, tmp_path):
+    _, truth = clip
+    ifs, fap = _track_files(truth, tmp_path)
+    pics = {}
+    for src in (truth, ifs, fap):
+        out = tmp_path / f"png_{src.suffix[1:]}"
+        # gain 0: a FAP file has no head translation, so compare the expression only
+        assert cli(["render", "--params", str(src), "--art", art, "--out", str(out), "--gain", "0"]) == 0
+        frames = sorted(out.glob("frame_*.png"))
+        assert len(frames) == N
+        pics[src.suffix] = [np.asarray(Image.open(frames[i])).astype(np.int16) for i in (0, -1)]
+    moved = np.mean(np.abs(pics[".csv"][1] - pics[".csv"][0]))
+    # the same performance through any file gives (up to quantisation) the same character
+    for suffix in (".ifs", ".fap"):
+        assert np.mean(np.abs(pics[suffix][1] - pics[".csv"][1])) < 0.3 * moved, suffix
+
+
+def test_params_bad_track_file_is_a_one_line_error(art, tmp_path, capsys):
+    bad = tmp_path / "bad.ifs"
+    bad.write_bytes(b"\x00garbage\n")
+    for path in (bad, tmp_path / "missing.fap"):
+        rc = cli(["render", "--params", str(path), "--art", art, "--out", str(tmp_path / "x.mp4")])
+        err = capsys.readouterr().err.strip()
+        assert rc == 2 and err.startswith("inkface: ") and "\n" not in err and path.name in err, err
