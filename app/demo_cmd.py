@@ -125,10 +125,11 @@ def run(args) -> int:
             print(f"inkface: {msg[0] if msg else type(e).__name__}", file=sys.stderr)
             return 2
         return 0
-    from app.window_cmd import make_app, open_window
+    from app.window_cmd import make_app, open_window, quit_on_ctrl_c
     from app.workers import SourceSpec
 
     qapp = make_app()
+    quit_on_ctrl_c(qapp)
     win = open_window(SourceSpec("performance"), art, args.fps)
     rc = qapp.exec()
     del win

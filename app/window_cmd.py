@@ -55,6 +55,23 @@ def make_app(argv: list[str] | None = None):
     return qapp
 
 
+def quit_on_ctrl_c(qapp) -> None:
+    """Ctrl+C in the terminal closes the window cleanly (the engine process is stopped too)."""
+    import signal
+
+    from PySide6.QtCore import QTimer
+
+    def on_sigint(*_):
+        for w in qapp.topLevelWidgets():
+            w.close()
+        qapp.quit()
+
+    signal.signal(signal.SIGINT, on_sigint)
+    t = QTimer(qapp)  # lets the interpreter run now and then, so the handler gets its turn
+    t.timeout.connect(lambda: None)
+    t.start(250)
+
+
 def open_window(source=None, art: str | None = None, fps: int | None = None, performer: str | None = None,
                 calibration=None):
     from app.main_window import MainWindow
@@ -101,6 +118,7 @@ def run(args) -> int:
         print("inkface: no display to open a window on (set DISPLAY, or try `python -m app demo` "
               "which renders to out/demo.mp4 without one)", file=sys.stderr)
         return 2
+    quit_on_ctrl_c(qapp)
     win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None),
                       calibration)
     rc = qapp.exec()

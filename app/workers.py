@@ -475,7 +475,7 @@ class Capture(threading.Thread):
         self.realtime = realtime
         self._given_source = source
         self._events = events
-        self._stop = threading.Event()
+        self._halt = threading.Event()
         self._paused = threading.Event()
         self.frames_read = 0
 
@@ -483,7 +483,7 @@ class Capture(threading.Thread):
         self._events(name, args)
 
     def stop(self) -> None:
-        self._stop.set()
+        self._halt.set()
         self.slot.notify_taken()
 
     def set_paused(self, paused: bool) -> None:
@@ -504,30 +504,30 @@ class Capture(threading.Thread):
             t0 = time.perf_counter()
             shown = 0
             offset = 0  # index offset across loops
-            while not self._stop.is_set():
+            while not self._halt.is_set():
                 got_any = False
                 for fr in src:
                     got_any = True
-                    if self._stop.is_set():
+                    if self._halt.is_set():
                         break
-                    while self._paused.is_set() and not self._stop.is_set():
+                    while self._paused.is_set() and not self._halt.is_set():
                         time.sleep(0.03)
                         t0 = time.perf_counter() - shown / fps
                     if pace:
                         due = t0 + shown / fps
                         delay = due - time.perf_counter()
                         if delay > 0:
-                            self._stop.wait(delay)
+                            self._halt.wait(delay)
                         elif delay < -0.5:  # hopelessly behind (debugger, suspend): resync
                             t0 = time.perf_counter() - shown / fps
                     elif not self.realtime:
                         while not self.slot.wait_empty(0.1):
-                            if self._stop.is_set():
+                            if self._halt.is_set():
                                 break
                     shown += 1
                     self.frames_read += 1
                     self.slot.put((fr.index + offset, fr.time + offset / fps, fr.image))
-                if self._stop.is_set():
+                if self._halt.is_set():
                     break
                 if not (self.spec.loop and got_any and self.spec.kind != "camera"):
                     break
@@ -763,6 +763,9 @@ def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba, target
 def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake_source=None) -> None:
     """The engine process: capture thread + puppet + recorder; talks to the window over ``conn``."""
     import os
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the window's to handle; it stops us
 
     for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ.setdefault(v, "1")
@@ -1091,6 +1094,9 @@ _UNSENT = object()
 def _task_main(conn, target: str, args: tuple) -> None:
     """(Task process) run ``module:function(report, cancelled, *args)`` and report back."""
     import importlib
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     mod, fn = target.split(":")
     func = getattr(importlib.import_module(mod), fn)
