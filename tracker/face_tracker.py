@@ -190,7 +190,9 @@ class FaceTracker:
     @staticmethod
     def _level(crop: np.ndarray) -> np.ndarray:
         """Median B, G, R of a crop (subsampled): mostly skin, whatever the expression."""
-        return np.median(crop[::3, ::3].reshape(-1, 3), axis=0)
+        s = np.ascontiguousarray(crop[::3, ::3]).reshape(-1, 3)
+        k = len(s) // 2
+        return np.partition(s, k, axis=0)[k].astype(np.float64)
 
     def _balance(self, crop: np.ndarray, which: str) -> np.ndarray:
         """Undo a global gain / colour cast relative to the calibration frame.
