@@ -240,6 +240,12 @@ class FaceTracker:
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
         return FaceFrame.from_pupils(tuple(pupils[0]), tuple(pupils[1]), self.wi)
 
+    @staticmethod
+    def _rect_corners(rect) -> np.ndarray:
+        """The four corners (face coordinates) of a crop rectangle ``(x0, y0, w, h)``."""
+        x0, y0, w, h = rect
+        return np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]], dtype=np.float64)
+
     def _rect_polygon(self, ff: FaceFrame, rect) -> np.ndarray:
         x0, y0, w, h = rect
         return ff.to_image(np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]], dtype=np.float64))
@@ -330,6 +336,8 @@ class FaceTracker:
             [[plx, ply - brow_h[0]], [prx, pry - brow_h[1]]],
             [[plx, ply - lid_up[0]], [plx, ply + lid_down[0]], [prx, pry - lid_up[1]], [prx, pry + lid_down[1]]],
         ]
+        pts.append(self._rect_corners(self.eye_rect))
+        pts.append(self._rect_corners(mouth_rect))
         if mouth_res is not None:
             mo = np.array(mouth_origin, dtype=np.float64)
             mcx, mcy = mouth_res.centre[0] + mo[0], mouth_res.centre[1] + mo[1]
@@ -345,22 +353,18 @@ class FaceTracker:
         mid = 0.5 * (left + right)
         roll = math.degrees(math.atan2(-(right[1] - left[1]), right[0] - left[0]))
         vals = [mid[0], mid[1], roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
-        ov = Overlay(
-            pupils=pupils_img,
-            brows=img_pts[2:4],
-            lids=img_pts[4:8],
-            rois=[self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)],
-        )
+        ov = Overlay(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
         status = OK
         if mouth_res is not None:
             n = len(mouth_res.polygon)
-            corners = img_pts[8:10]
-            vals += [math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1]), mouth_res.lip_upper / k, mouth_res.lip_lower / k]
+            corners = img_pts[16:18]
+            width = math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1])
+            vals += [width, mouth_res.lip_upper / k, mouth_res.lip_lower / k]
             ov.mouth_corners = corners
-            ov.mouth_centre = img_pts[10]
-            ov.lip_points = img_pts[11:13]
-            ov.lip_polygon = img_pts[13 : 13 + n]
-            ov.lip_raw_polygon = img_pts[13 + n : 13 + 2 * n]
+            ov.mouth_centre = img_pts[18]
+            ov.lip_points = img_pts[19:21]
+            ov.lip_polygon = img_pts[21 : 21 + n]
+            ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             # the mouth centre in the face frame of the measured pupils, for the next crop

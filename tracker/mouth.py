@@ -92,6 +92,10 @@ class MouthFinder:
         n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
         if n <= 1:
             return None
+        if n == 2:  # a single component: nothing to choose or merge
+            if stats[1, cv2.CC_STAT_AREA] < min_area:
+                return None
+            return lab == 1, stats[1], int(stats[1, cv2.CC_STAT_AREA])
         areas = stats[1:, cv2.CC_STAT_AREA].astype(np.float64)
         score = areas
         if seed is not None:
