@@ -137,3 +137,13 @@ def test_gated_one_euro_is_as_smooth_as_one_euro_on_a_still_face_and_drops_glitc
 def test_make_filter_gate_one_euro_is_the_cooperating_pair():
     f = make_filter("gate+one_euro")
     assert isinstance(f, GatedOneEuro) and f.name == "gate+one_euro"
+
+
+def test_gate_does_not_take_two_opposite_glitches_for_a_persistent_jump():
+    xs = [np.zeros(1)] * 10 + [np.array([0.3]), np.array([-0.3])] + [np.zeros(1)] * 5
+    out = np.array(run(OutlierGate(), xs))[:, 0]
+    assert np.abs(out).max() < 1e-9
+    # while a jump that stays is accepted after one held frame
+    xs = [np.zeros(1)] * 10 + [np.array([0.3])] * 5
+    out = np.array(run(OutlierGate(), xs))[:, 0]
+    assert out[10] == 0.0 and out[11] == pytest.approx(0.3)

@@ -139,7 +139,9 @@ class OutlierGate:
     The estimate is the median of the last ``window`` outputs. A channel whose new sample differs
     from it by more than ``max(floor, k · noise)`` is replaced by the estimate; ``noise`` is a
     running mean absolute deviation of accepted samples (×1.25 ≈ σ for Gaussian noise). A change
-    still present after ``max_hold`` replaced frames is real motion and is accepted.
+    still present after ``max_hold`` replaced frames is real motion and is accepted: present means
+    on the same side of the estimate and at least half as far as the last replaced sample (two
+    glitches in opposite directions are not a persistent change).
     ``floor`` is in the filter's units (inter-pupil distances / radians).
     """
 
@@ -158,6 +160,7 @@ class OutlierGate:
         self._hist: deque = deque(maxlen=self.window)
         self._noise = None
         self._held = None
+        self._rej = None
         self.confirmed: np.ndarray | None = None
         """Channels whose last step accepted a held-back jump as real motion (bool mask)."""
 
@@ -167,14 +170,18 @@ class OutlierGate:
             self._hist.append(z.copy())
             self._noise = np.zeros_like(z)
             self._held = np.zeros(len(z), dtype=np.int64)
+            self._rej = np.zeros(len(z))
             self.confirmed = np.zeros(len(z), dtype=bool)
             return z.copy()
         est = np.median(np.array(self._hist), axis=0)
-        dev = np.abs(z - est)
+        sdev = z - est
+        dev = np.abs(sdev)
         thr = np.maximum(self.floor, self.k * 1.25 * self._noise)
         bad = dev > thr
-        force = bad & (self._held >= self.max_hold)
+        persists = (sdev * self._rej > 0) & (dev >= 0.5 * np.abs(self._rej))
+        force = bad & (self._held >= self.max_hold) & persists
         bad &= ~force
+        self._rej = np.where(bad, sdev, 0.0)
         self.confirmed = force
         out = np.where(bad, est, z)
         self._held = np.where(bad, self._held + 1, 0)
