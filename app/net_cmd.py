@@ -183,47 +183,6 @@ def _load_track(args) -> _Track:
     return _Track(rows, size, float(ipd), fps, neutral)
 
 
-@dataclass
-class _Frame:
-    index: int
-    time: float
-    image: np.ndarray
-
-
-class _CvSource:
-    """A minimal OpenCV reader used only when ``tracker.sources`` is not installed."""
-
-    def __init__(self, what: str | int) -> None:
-        import cv2
-
-        if isinstance(what, str) and not Path(what).is_file():
-            raise _Fail(f"{what}: no such video file")
-        self._cap = cv2.VideoCapture(what)
-        if not self._cap.isOpened():
-            raise _Fail(f"{what if isinstance(what, str) else f'camera {what}'}: cannot be opened")
-        fps = self._cap.get(cv2.CAP_PROP_FPS)
-        self.fps = float(fps) if fps and fps > 0 else 30.0
-        self.size = (int(self._cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self._cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-
-    def __iter__(self):
-        i = 0
-        while True:
-            ok, img = self._cap.read()
-            if not ok:
-                return
-            yield _Frame(i, i / self.fps, img)
-            i += 1
-
-    def close(self) -> None:
-        self._cap.release()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
 def _tracked_frames(args):
     """Yield ``(frame_size, ipd, neutral, fps)`` once, then FaceParams for every tracked frame."""
     try:
@@ -233,10 +192,8 @@ def _tracked_frames(args):
         raise _Fail(f"the tracker is not available in this build ({e}); replay a track with --params") from None
 
     def open_source():
-        try:
-            from tracker.sources import CameraSource, VideoFileSource
-        except ImportError:
-            return _CvSource(args.video if args.video else (args.camera or 0))
+        from tracker.sources import CameraSource, VideoFileSource
+
         return VideoFileSource(args.video) if args.video else CameraSource(args.camera or 0)
 
     if args.init:

@@ -209,43 +209,16 @@ class CoreMissing(RuntimeError):
 
 def open_source(spec: SourceSpec):
     """Open the frame source a :class:`SourceSpec` names (raises ``SourceError`` one-liners)."""
-    try:
-        from tracker import sources
-    except ImportError:  # the foundation's sources are not in this build: read with OpenCV directly
-        sources = None
+    from tracker import sources
+
     if spec.kind == "camera":
-        return sources.CameraSource(spec.camera) if sources else _Cv2Source(spec.camera, f"camera {spec.camera}")
+        return sources.CameraSource(spec.camera)
     if spec.kind == "video":
-        return sources.VideoFileSource(spec.video) if sources else _Cv2Source(spec.video, spec.video)
+        return sources.VideoFileSource(spec.video)
     cached = performance_cache_path(spec.seconds, spec.seed)
     if cached.is_file():
-        return sources.VideoFileSource(str(cached)) if sources else _Cv2Source(str(cached), str(cached))
+        return sources.VideoFileSource(str(cached))
     return CachingPerformanceSource(bundled_performance(spec.seconds, spec.seed), cached)
-
-
-class _Cv2Source:
-    """Minimal OpenCV reader used only when ``tracker.sources`` is unavailable."""
-
-    def __init__(self, what, name: str):
-        import cv2
-
-        self._cap = cv2.VideoCapture(what)
-        if not self._cap.isOpened():
-            raise ValueError(f"{name}: cannot be opened")
-        self.fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 30.0) or 30.0
-        self.size = (int(self._cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self._cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-
-    def __iter__(self):
-        i = 0
-        while True:
-            ok, img = self._cap.read()
-            if not ok:
-                return
-            yield _Frame(i, i / self.fps, img)
-            i += 1
-
-    def close(self) -> None:
-        self._cap.release()
 
 
 def cache_dir() -> Path:
@@ -273,13 +246,6 @@ def performance_cache_path(seconds: float = 20.0, seed: int = 0) -> Path:
     return cache_dir() / f"performance-{seconds:g}s-seed{seed}-{h}.avi"
 
 
-@dataclass
-class _Frame:
-    index: int
-    time: float
-    image: np.ndarray
-
-
 class CachingPerformanceSource:
     """Plays a synthetic :class:`Performance` and writes it to the cache file as it goes;
     the file is kept only when the whole performance was played."""
@@ -292,6 +258,8 @@ class CachingPerformanceSource:
 
     def __iter__(self):
         import cv2
+
+        from tracker.sources import Frame
 
         writer = None
         tmp = self.path.with_name(f".{self.path.stem}.{threading.get_ident()}.part.avi")
@@ -310,7 +278,7 @@ class CachingPerformanceSource:
                 img = self.perf.frame(i)
                 if writer is not None:
                     writer.write(img)
-                yield _Frame(i, i / self.fps, img)
+                yield Frame(i, i / self.fps, img)
             complete = True
         finally:
             if writer is not None:
