@@ -8,12 +8,14 @@ while the face is in view.
 
 from __future__ import annotations
 
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import TIMING_COLUMNS, Table, Timing, benchmark
-from tracker.calibration import calibrate
+from benchmarks.harness import TIMING_COLUMNS, Table, Timing, benchmark, time_call
+from tracker.calibration import Calibration, calibrate
 from tracker.clicks import Clicks
 from tracker.face_tracker import FaceTracker
 from tracker.params import PARAM_NAMES
@@ -95,9 +97,32 @@ def run(ctx):
     speed.add("track one frame, wall clock (all clips above)", *Timing(all_times).cells(), "29 ms")
     speed.add("track one frame, CPU time of this process", *Timing(all_cpu).cells(), "")
     speed.note = (
-        "target: median ≤ 3 ms. Wall clock includes time stolen by other processes on a shared machine; "
+        "targets: track median ≤ 3 ms; calibrate ≤ 500 ms, load ≤ 200 ms. Wall clock includes time stolen by other processes on a shared machine; "
         "CPU time counts only this process (clock resolution about 1 µs)."
     )
+
+    # the same clip tracked three times: each frame's fastest pass is what a quiet core does
+    perf = Performance(seconds=seconds, seed=5, style=STYLES["default"])
+    frames = [perf.frame(i) for i in range(len(perf))]
+    cal = calibrate(frames[0], Clicks.from_dict(perf.clicks()))
+    best = np.full(len(frames), np.inf)
+    for _ in range(3):
+        tr = FaceTracker(cal)
+        for i, img in enumerate(frames):
+            t0 = time.perf_counter()
+            tr.track(img, index=i)
+            best[i] = min(best[i], (time.perf_counter() - t0) * 1000.0)
+    speed.add("track one frame, wall clock, fastest of 3 passes (clean clip)", *Timing(list(best[2:])).cells(), "")
+
+    # starting a performer: learning the calibration from the clicks, or loading a saved one
+    clicks = Clicks.from_dict(perf.clicks())
+    speed.add("calibrate from five clicks (clean clip, frame 0)",
+              *time_call(lambda: calibrate(frames[0], clicks), ctx.runs(7, 2), warmup=1).cells(), "")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "performer.calibration.json"
+        cal.save(path)
+        speed.add("Calibration.load (JSON + eye PNGs, colour tables rebuilt)",
+                  *time_call(lambda: Calibration.load(path), ctx.runs(7, 2), warmup=1).cells(), "")
 
     rec = _recovery(ctx)
     return [acc, speed, rec]

@@ -96,6 +96,7 @@ class Gaussians:
 
 
 _GRID_CACHE: np.ndarray | None = None
+_GRID_FEATURES: np.ndarray | None = None
 
 
 def _bin_colours() -> np.ndarray:
@@ -106,6 +107,48 @@ def _bin_colours() -> np.ndarray:
         b, g, r = np.meshgrid(v, v, v, indexing="ij")
         _GRID_CACHE = np.stack([b.ravel(), g.ravel(), r.ravel()], axis=1)
     return _GRID_CACHE
+
+
+def _grid_features() -> np.ndarray:
+    """:func:`features` (luminance weight 1) of every bin centre, ``(64³, 3)`` float32, computed once."""
+    global _GRID_FEATURES
+    if _GRID_FEATURES is None:
+        _GRID_FEATURES = np.ascontiguousarray(features(_bin_colours(), 1.0), dtype=np.float32)
+    return _GRID_FEATURES
+
+
+def _grid_quad_forms(model: "Gaussians", y_weight: float) -> list[np.ndarray]:
+    """Mahalanobis distance² (float32) of every bin centre from each component of ``model``.
+
+    The luminance weight is folded into the component (mean and inverse covariance) instead
+    of rescaling the grid, so the cached grid features serve every classifier. With the
+    Cholesky factor ``L`` of the inverse covariance the distance² is ``|Lᵀ(f − μ)|²``: one
+    affine ``cv2.transform`` and a row-wise dot product.
+    """
+    f = _grid_features()
+    f3 = f.reshape(-1, 1, 3)
+    scale = np.array([y_weight, 1.0, 1.0])
+    out = []
+    for mu, ic in zip(model.means, model.icovs):
+        ic_s = np.asarray(ic, dtype=np.float64) * scale[:, None] * scale[None, :]
+        mu_s = np.asarray(mu, dtype=np.float64) / scale
+        try:
+            lt = np.linalg.cholesky(ic_s).T
+        except np.linalg.LinAlgError:  # not positive definite (a hand-edited file): the plain form
+            d = f - mu_s.astype(np.float32)
+            out.append(np.einsum("ni,ni->n", d @ ic_s.astype(np.float32), d))
+            continue
+        m = np.concatenate([lt, -(lt @ mu_s)[:, None]], axis=1).astype(np.float32)
+        z = cv2.transform(f3, m).reshape(-1, 3)
+        out.append(np.einsum("ni,ni->n", z, z))
+    return out
+
+
+def _lowest(arrays: list[np.ndarray]) -> np.ndarray:
+    out = arrays[0].copy()
+    for a in arrays[1:]:
+        np.minimum(out, a, out=out)
+    return out
 
 
 _INDEX_WEIGHTS = np.array([[1 << (2 * BITS), 1 << BITS, 1]], dtype=np.float32)
@@ -171,7 +214,17 @@ class ColourClassifier:
         return s
 
     def _bake(self) -> np.ndarray:
-        return (self.score_colours(_bin_colours()) * 255.0 + 0.5).astype(np.uint8)
+        """The 64³ table: :meth:`score_colours` of every bin centre, in one float32 pass."""
+        qt = _grid_quad_forms(self.target, self.y_weight)
+        qo = _grid_quad_forms(self.other, self.y_weight)
+        dt = _lowest([q + np.float32(ld) for q, ld in zip(qt, self.target.logdets)])
+        do = _lowest([q + np.float32(ld) for q, ld in zip(qo, self.other.logdets)])
+        inside = _lowest(qt)
+        # target score × fade-out far from every target component, as two logistic terms
+        z = np.clip((do - dt - np.float32(self.margin)) * np.float32(0.5), -30, 30)
+        g = np.clip(inside - np.float32(self.gate), -30, 30)
+        s = 1.0 / ((1.0 + np.exp(-z)) * (1.0 + np.exp(g)))
+        return (s * np.float32(255.0) + np.float32(0.5)).astype(np.uint8)
 
     def prob_u8(self, bgr: np.ndarray) -> np.ndarray:
         """Target score of every pixel as uint8 0..255 (same leading shape as ``bgr``)."""
