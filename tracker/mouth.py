@@ -72,6 +72,10 @@ class MouthFinder:
         self._smooth_all = np.linalg.inv(np.eye(n) + self._dtd)
         self._rows = np.arange(n)
         self._ray_cache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._dx32 = self.dirs[:, 0:1].astype(np.float32)
+        self._dy32 = self.dirs[:, 1:2].astype(np.float32)
+        self._off32 = self.offsets.astype(np.float32)[None, :]
+        self._border_cache: dict[tuple[int, int], np.ndarray] = {}
 
     # ------------------------------------------------------------------ blob
     @staticmethod
@@ -86,7 +90,7 @@ class MouthFinder:
         Holes are not filled: the radial spanning takes each ray's farthest blob pixel, so
         an open mouth's ring of lip gives its outer outline all the same.
         """
-        tags = (score_u8 >= 128).view(np.uint8)
+        _, tags = cv2.threshold(score_u8, 127, 1, cv2.THRESH_BINARY)
         tags = cv2.morphologyEx(tags, cv2.MORPH_OPEN, _CROSS)
         tags = cv2.morphologyEx(tags, cv2.MORPH_CLOSE, _CROSS)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
@@ -157,11 +161,10 @@ class MouthFinder:
         """
         r = r0.astype(np.float64)
         cx, cy = np.float32(centre[0]), np.float32(centre[1])
-        dx, dy = self.dirs[:, 0:1].astype(np.float32), self.dirs[:, 1:2].astype(np.float32)
-        off = self.offsets.astype(np.float32)
+        dx, dy, off = self._dx32, self._dy32, self._off32
         rows = self._rows
         for _ in range(iters):
-            rr = np.maximum(r.astype(np.float32)[:, None] + off[None, :], 0.0)
+            rr = np.maximum(r.astype(np.float32)[:, None] + off, 0.0)
             prof = cv2.remap(score, cx + dx * rr, cy + dy * rr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
             fall = prof[:, :-2] - prof[:, 2:]  # ∝ −d/dr, positive where the lip ends
             j = np.argmax(fall[:, 1:-1], axis=1) + 1
@@ -181,7 +184,24 @@ class MouthFinder:
         return np.maximum(r, 0.0)
 
     def polygon(self, centre: tuple[float, float], r: np.ndarray) -> np.ndarray:
-        return np.stack([centre[0] + self.dirs[:, 0] * r, centre[1] + self.dirs[:, 1] * r], axis=1)
+        """Vertices ``(n, 2)`` at radii ``r`` along the rays from ``centre``."""
+        return self.dirs * r[:, None] + np.array(centre, dtype=np.float64)
+
+    def _border_median(self, value: np.ndarray) -> float:
+        """Median of a 2-D array's border pixels (top and bottom rows, then the side columns)."""
+        h, w = value.shape
+        idx = self._border_cache.get((h, w))
+        if idx is None:
+            flat = np.arange(h * w).reshape(h, w)
+            idx = np.concatenate([flat[0], flat[-1], flat[1:-1, 0], flat[1:-1, -1]])
+            self._border_cache[(h, w)] = idx
+        v = value.take(idx)
+        n = len(v)
+        k = n // 2
+        if n % 2:
+            return float(np.partition(v, k)[k])
+        p = np.partition(v, (k - 1, k))
+        return float((p[k - 1] + p[k]) / v.dtype.type(2))
 
     # ------------------------------------------------------------------ measurements
     @staticmethod
@@ -298,8 +318,7 @@ class MouthFinder:
         r0 = self.radial(blob, centre, max_r)
         raw = self.polygon(centre, r0)
         if value is not None:
-            border = np.concatenate([value[0], value[-1], value[1:-1, 0], value[1:-1, -1]])
-            lo_level = float(np.median(border))
+            lo_level = self._border_median(value)
             lip_vals = value[y0 : y0 + bh, x0 : x0 + bw][sub & (score_u8[y0 : y0 + bh, x0 : x0 + bw] >= 128)]
             if lip_level is not None and len(lip_vals):
                 # only values near the lip's own (not the dark inside of an open mouth)
