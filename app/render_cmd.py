@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--params", metavar="TRACK", help="take the ten values from this track (CSV, .ifs packet stream or .fap) instead of tracking the video")
     parser.add_argument("--filter", default="gate+one_euro", help="temporal filter: none, one_euro, gate, gate+one_euro, chai (default gate+one_euro)")
     parser.add_argument("--strength", type=float, default=0.5, help="filter strength 0..1 (default 0.5)")
-    parser.add_argument("--mapper", default="delaunay", help="expression mapper: delaunay (the paper's), cardinal, ridge, convex")
+    parser.add_argument("--mapper", default="convex", help="expression mapper: convex (default), delaunay (the paper's), cardinal, ridge")
     parser.add_argument("--gain", type=float, default=1.0, help="head motion gain (0 = still head)")
     parser.add_argument("--overlay", action="store_true", help="draw the tracker's findings on the performer's frame")
     parser.add_argument("--max-frames", type=int, default=0, metavar="N", help="stop after N input frames")

@@ -163,3 +163,24 @@ def test_leaning_in_is_not_an_expression(art, session):
     # lengths grow 25 % with the lean; compensated, the face stays (nearly) neutral
     assert np.abs(feats[True][3:]).max() < 0.03
     assert np.abs(feats[False][3:]).max() > 0.05
+
+
+@pytest.mark.parametrize("name", [n for n, _ in list_bundled()])
+def test_a_still_neutral_face_with_tracker_noise_shows_the_rest_drawings(name):
+    """Noise of 1 % of the inter-pupil distance must not swing a neutral face to other drawings
+    (the paper's 2-D map put 'open' next to a sliver triangle: angry+wide ghosts on a still face)."""
+    art = load_artset(dict(list_bundled())[name])
+    p = Puppet(art, session=default_session(art), renderer=FakeRenderer())  # default filter and mapper
+    st = FaceState()
+    truth = face_truth(st)
+    rng = np.random.default_rng(0)
+    rest = {"eyes": art.parts["eyes"].names().index("open"), "mouth": art.parts["mouth"].names().index("neutral")}
+    for i in range(90):
+        v = truth.values()
+        v[3:] += rng.normal(scale=0.01 * st.ipd, size=7)
+        pf = p.step_params(FaceParams.from_values(v, frame=i, time=i / 30.0))
+        if i < 10:
+            continue
+        for part, k in rest.items():
+            idx, w = pf.weights[part]
+            assert sum(wi for ii, wi in zip(idx, w) if ii == k) > 0.7, (part, i, idx, w)

@@ -70,8 +70,10 @@ class Puppet:
     assumed, else the neutral face is estimated from the first frames); ``session``: a
     TrainingSession (None: the automatic default training); ``fps``: output rate 10, 15 or 30
     (from ``input_fps``); ``filter``: a name from :data:`training.filters.FILTERS` or a filter
-    object; ``strength`` 0..1 scales the smoothing; ``mapper``: ``"delaunay"`` (the paper's),
-    ``"cardinal"``, ``"ridge"`` or ``"convex"``; ``gain`` scales head motion (0 = still,
+    object; ``strength`` 0..1 scales the smoothing; ``mapper``: ``"convex"`` (default),
+    ``"delaunay"`` (the paper's), ``"cardinal"`` or ``"ridge"`` — the default is the convex fit
+    because the paper's 2-D projection can put the neutral drawing next to a sliver triangle, so
+    tracker noise on a still face swings the eyes to a ghostly blend of other drawings; ``gain`` scales head motion (0 = still,
     1 = as performed); ``expression_gain`` scales the expression around neutral (> 1 caricature);
     ``renderer``: a ready ``CharacterRenderer`` (built here if None); ``style``: switch on the
     expression-driven style (tremble and warm tint when the brows are raised high);
@@ -87,7 +89,7 @@ class Puppet:
         fps: int = 30,
         filter="gate+one_euro",
         strength: float = 0.5,
-        mapper: str = "delaunay",
+        mapper: str = "convex",
         gain: float = 1.0,
         expression_gain: float = 1.0,
         detail: bool = False,
