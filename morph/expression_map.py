@@ -119,15 +119,19 @@ class ExpressionMap:
         ext = up.max(axis=0) - up.min(axis=0)
         if ext[1] <= _FLAT_TOL * max(ext[0], 1e-300):
             return False
-        try:
-            tri = Delaunay(up)
-        except (QhullError, ValueError):
+        # Collinear points on the hull can leave a zero-area simplex; joggling the input ("QJ")
+        # keeps every point a vertex and every triangle invertible.
+        for options in (None, "QJ"):
+            try:
+                tri = Delaunay(up, qhull_options=options)
+            except (QhullError, ValueError):
+                continue
+            if len(tri.simplices) and np.all(np.isfinite(tri.transform)):
+                break
+        else:
             return False
         simp = tri.simplices
         T = tri.transform
-        good = np.all(np.isfinite(T), axis=(1, 2))
-        if not good.all() or len(simp) == 0:
-            return False
         self._delaunay = tri
         self.triangles = uniq[simp]  # in training-point indices
         # Barycentric tables: c = T[:2] @ (p - T[2]); b = (c0, c1, 1 - c0 - c1)
