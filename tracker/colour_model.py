@@ -151,17 +151,16 @@ def _lowest(arrays: list[np.ndarray]) -> np.ndarray:
     return out
 
 
-_INDEX_WEIGHTS = np.array([[1 << (2 * BITS), 1 << BITS, 1]], dtype=np.float32)
+_KEEP = (0xFF << _SHIFT) & 0xFF
+_INDEX_WEIGHTS = np.array([[1 << 2 * BITS, 1 << BITS, 1]], dtype=np.float32) / np.float32(1 << _SHIFT)
+"""Table index = Σ weight × (channel with its low bits cleared); every term is exact in float32."""
 
 
 def lut_index(bgr: np.ndarray) -> np.ndarray:
     """Table index of every pixel of a ``(..., 3)`` uint8 BGR array (int32, same leading shape)."""
-    q = np.right_shift(bgr, _SHIFT).astype(np.float32)
-    if q.ndim == 2:
-        q = q.reshape(1, -1, 3)
-        return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32).reshape(bgr.shape[:-1])
+    q = np.bitwise_and(bgr, _KEEP).astype(np.float32)
     if q.ndim != 3:
-        q = q.reshape(-1, 1, 3)
+        q = q.reshape(1, -1, 3) if q.ndim == 2 else q.reshape(-1, 1, 3)
         return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32).reshape(bgr.shape[:-1])
     return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32)
 
