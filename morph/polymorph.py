@@ -16,6 +16,7 @@ weight 1 is returned exactly as drawn.
 
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 import cv2
@@ -29,7 +30,6 @@ from morph.beier_neely import (
     as_lines,
     border_mode,
     field_at_batch,
-    normalise_weights,
     premultiply,
 )
 from morph.detail import detail_blend
@@ -109,18 +109,27 @@ class PartMorpher:
         return tables
 
     def active(self, indices: Sequence[int], weights: Sequence[float]) -> list[tuple[int, float]]:
-        """Distinct drawings with positive weight, weights clipped at 0 and normalised to sum 1."""
+        """Distinct drawings with positive weight, weights clipped at 0 and normalised to sum 1.
+
+        Plain Python on purpose: three numbers per frame, where numpy's per-call overhead costs
+        more than the arithmetic."""
         if len(indices) != len(weights):
             raise ValueError(f"{len(indices)} indices but {len(weights)} weights")
-        w = normalise_weights(weights)
         merged: dict[int, float] = {}
-        for i, wi in zip(indices, w):
+        total = 0.0
+        for i, wi in zip(indices, weights):
+            wi = float(wi)
+            if not math.isfinite(wi):
+                raise ValueError(f"morph weights must be finite with a positive sum, got {list(weights)}")
             i = int(i)
             if not 0 <= i < self.n:
                 raise ValueError(f"drawing index {i} out of range (part has {self.n} drawings)")
             if wi > 0:
-                merged[i] = merged.get(i, 0.0) + float(wi)
-        return list(merged.items())
+                merged[i] = merged.get(i, 0.0) + wi
+                total += wi
+        if total <= 0:
+            raise ValueError(f"morph weights must be finite with a positive sum, got {list(weights)}")
+        return [(i, w / total) for i, w in merged.items()]
 
     def displacement(self, a: int, b: int, alpha: float) -> np.ndarray:
         """``D_ab(α)`` on the mesh ``(m, m, 2)``, linear between the stored α steps."""
@@ -133,15 +142,39 @@ class PartMorpher:
     def meshes(self, indices: Sequence[int], weights: Sequence[float]) -> list[tuple[int, float, np.ndarray]]:
         """For each active drawing ``(index, weight, mesh)``: source positions in that drawing."""
         act = self.active(indices, weights)
+        stack = self._mesh_stack(act)
+        return [(ia, wa, stack[k]) for k, (ia, wa) in enumerate(act)]
+
+    def _mesh_stack(self, act: list[tuple[int, float]]) -> np.ndarray:
+        """``(len(act), m, m, 2)`` float32 meshes of the active drawings (see :meth:`meshes`).
+
+        All ordered pairs' table look-ups and α interpolations are done in one gather, so the
+        cost does not grow with numpy calls per pair."""
         if self.exact_three_way and len(act) > 2:
-            return self._exact_meshes(act)
-        out = []
-        for ia, wa in act:
-            mesh = self.vertices.copy()
+            return np.stack([mesh for _, _, mesh in self._exact_meshes(act)])
+        n = len(act)
+        if n == 1:
+            return self.vertices[None].copy()
+        top = self.alpha_steps - 1
+        pa, pb, pk, pf = [], [], [], []
+        for ia, _ in act:
             for ib, wb in act:
                 if ib != ia:
-                    mesh += self.displacement(ia, ib, wb)
-            out.append((ia, wa, mesh))
+                    t = min(max(wb, 0.0), 1.0) * top
+                    k = min(int(t), top - 1)
+                    pa.append(ia)
+                    pb.append(ib)
+                    pk.append(k)
+                    pf.append(t - k)
+        pa, pb, pk = np.array(pa), np.array(pb), np.array(pk)
+        lo = self.tables[pa, pb, pk]
+        d = self.tables[pa, pb, pk + 1]
+        d -= lo
+        d *= np.array(pf, np.float32)[:, None, None, None]
+        d += lo
+        m = self.grid.cells + 1
+        out = d.reshape(n, n - 1, m, m, 2).sum(axis=1)
+        out += self.vertices
         return out
 
     def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
@@ -170,10 +203,10 @@ class PartMorpher:
         of the heaviest drawing (``morph.detail``). ``jitter`` is an optional ``(m, m, 2)`` mesh
         displacement in pixels added to every drawing's warp (``morph.style``).
         """
-        parts = self.meshes(indices, weights)
+        parts = self.active(indices, weights)
         if len(parts) == 1 and jitter is None:
             return self.pm[parts[0][0]].copy()
-        stack = np.stack([mesh for _, _, mesh in parts])
+        stack = self._mesh_stack(parts)
         if jitter is not None:
             stack += np.asarray(jitter, dtype=np.float32)
         maps_x, maps_y = self.grid.upsample_many(stack, reuse=True)
@@ -182,9 +215,9 @@ class PartMorpher:
         warped = [
             cv2.remap(self.pm[ia], maps_x[k], maps_y[k], dst=self._warped[k], interpolation=cv2.INTER_LINEAR,
                       borderMode=self.border, borderValue=(0, 0, 0, 0))
-            for k, (ia, _, _) in enumerate(parts)
+            for k, (ia, _) in enumerate(parts)
         ]
-        wts = [wa for _, wa, _ in parts]
+        wts = [wa for _, wa in parts]
         plain = blend_u8(warped, wts)
         if detail and len(parts) > 1:
             return detail_blend(warped, wts, sigma=self.detail_sigma, plain=plain)
