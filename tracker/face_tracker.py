@@ -170,6 +170,9 @@ class FaceTracker:
             int(math.ceil((MOUTH_UP + MOUTH_DOWN) * wi)),
         )
         self.lip_axis = np.asarray(cal.lip_axis, dtype=np.float32).reshape(1, 3)
+        self._eye_corners = self._rect_corners(self.eye_rect)
+        self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts them
+        self._min_lip_area = max(int(0.12 * cal.mouth_area), 6)
         self.reset()
 
     # -------------------------------------------------------------- state
@@ -284,7 +287,7 @@ class FaceTracker:
         crop, grey, res, (ox, oy) = self._eyes(frame, ff, (self.sx, self.sy), self.eye_rect)
         closed = [r is None or r.closed for r in res]
         found = np.array([[r.x + ox, r.y + oy] if r is not None else [np.nan, np.nan] for r in res])
-        preds_f = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])
+        preds_f = self._pupils_face
         # a pupil found too far from where the pair says it should be is not trusted
         if not any(closed):
             d = found[1] - found[0]
@@ -336,7 +339,7 @@ class FaceTracker:
             [[plx, ply - brow_h[0]], [prx, pry - brow_h[1]]],
             [[plx, ply - lid_up[0]], [plx, ply + lid_down[0]], [prx, pry - lid_up[1]], [prx, pry + lid_down[1]]],
         ]
-        pts.append(self._rect_corners(self.eye_rect))
+        pts.append(self._eye_corners)
         pts.append(self._rect_corners(mouth_rect))
         if mouth_res is not None:
             mo = np.array(mouth_origin, dtype=np.float64)
@@ -398,8 +401,7 @@ class FaceTracker:
         score = self.cal.lip.prob_u8(crop)
         value = cv2.transform(crop.astype(np.float32), self.lip_axis)
         seed = (cx - rect[0], cy - rect[1])
-        min_area = max(int(0.12 * self.cal.mouth_area), 6)
-        res = self.mouth_finder.find(score, value=value, seed=seed, min_area=min_area, lip_level=1.0)
+        res = self.mouth_finder.find(score, value=value, seed=seed, min_area=self._min_lip_area, lip_level=1.0)
         if res is not None:
             if res.width < 0.2 * self.cal.mouth_width or res.width > 2.2 * self.cal.mouth_width:
                 res = None

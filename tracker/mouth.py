@@ -171,7 +171,7 @@ class MouthFinder:
             a, b, c = fall[rows, j - 1], fall[rows, j], fall[rows, j + 1]
             den = a - 2 * b + c
             den = np.where(np.abs(den) > 1e-9, den, -1e-9)
-            frac = np.clip(0.5 * (a - c) / den, -0.5, 0.5)
+            frac = np.minimum(np.maximum(0.5 * (a - c) / den, -0.5), 0.5)
             edge = rr[rows, j + 1] + frac * self.step
             good = b > 0.15 * float(b.max())
             if good.all():  # the usual case: every ray found the lip's edge
@@ -274,9 +274,10 @@ class MouthFinder:
         the outermost crossing from lip (≥ 0.5) to skin; ``y_est`` if there is none.
         """
         h, w = norm.shape
-        ys = np.clip(y_est + _VSTEPS * direction, 0, h - 1).astype(np.float32)
-        xs = np.full_like(ys, min(max(x, 0.0), w - 1.0))
-        vals = cv2.remap(norm, xs.reshape(1, -1), ys.reshape(1, -1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
+        ys = np.minimum(np.maximum(y_est + _VSTEPS_BY_DIR[direction], 0.0), h - 1).astype(np.float32).reshape(1, -1)
+        xs = np.full(ys.shape, min(max(x, 0.0), w - 1.0), dtype=np.float32)
+        vals = cv2.remap(norm, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
+        ys = ys.ravel()
         # half-way between the lip just inside and the skin just outside this very edge
         inner, outer = float(np.add.reduce(vals[:8])) * 0.125, float(np.add.reduce(vals[-4:])) * 0.25
         half = 0.5 * (inner + outer) if inner - outer > 0.3 else 0.5
@@ -359,3 +360,4 @@ class MouthFinder:
 
 
 _VSTEPS = np.arange(-3.0, 3.0 + 1e-9, 0.25)
+_VSTEPS_BY_DIR = {-1: _VSTEPS * -1, 1: _VSTEPS * 1}
