@@ -93,13 +93,17 @@ class MouthFinder:
         _, tags = cv2.threshold(score_u8, 127, 1, cv2.THRESH_BINARY)
         tags = cv2.morphologyEx(tags, cv2.MORPH_OPEN, _CROSS)
         tags = cv2.morphologyEx(tags, cv2.MORPH_CLOSE, _CROSS)
-        n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
+        # labels alone are several times cheaper than labels with statistics, and a single
+        # component (the usual case) is the tag image itself
+        n, _ = cv2.connectedComponents(tags, connectivity=4)
         if n <= 1:
             return None
         if n == 2:  # a single component: nothing to choose or merge
-            if stats[1, cv2.CC_STAT_AREA] < min_area:
+            area = cv2.countNonZero(tags)
+            if area < min_area:
                 return None
-            return lab == 1, stats[1], int(stats[1, cv2.CC_STAT_AREA])
+            return tags.view(bool), np.array([*cv2.boundingRect(tags), area], dtype=np.int32), int(area)
+        n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
         areas = stats[1:, cv2.CC_STAT_AREA].astype(np.float64)
         score = areas
         if seed is not None:
@@ -236,25 +240,26 @@ class MouthFinder:
         block = norm[ya:yb, lo : hi + 1]
         if side < 0:
             block = block[:, ::-1]
-        above = block >= 0.5
-        has = above.any(axis=1)
-        if not has.any():
-            return vx, vy
+        # a handful of rows and columns: plain Python beats a dozen numpy calls here
         m = block.shape[1]
-        last = m - 1 - np.argmax(above[:, ::-1], axis=1)  # last lip sample going outwards
-        ok = has & (last < m - 1)
-        if not ok.any():
+        rows, pos = [], []
+        for row, vals in enumerate(block.tolist()):
+            k = m - 1
+            while k >= 0 and not vals[k] >= 0.5:  # last lip sample going outwards
+                k -= 1
+            if k < 0 or k == m - 1:
+                continue
+            va, vb = block[row, k], block[row, k + 1]  # float32: the crossing in float32 as before
+            t = float((va - 0.5) / (va - vb)) if va != vb else 0.0
+            rows.append(row)
+            pos.append(k + t)
+        if not rows:
             return vx, vy
-        rows = np.nonzero(ok)[0]
-        i = last[rows]
-        va, vb = block[rows, i], block[rows, i + 1]
-        t = np.where(va != vb, (va - 0.5) / np.where(va != vb, va - vb, 1.0), 0.0)
-        pos = i + t
-        best = int(np.argmax(pos))
-        yb, xb = float(rows[best]), float(pos[best])
-        flat = pos >= pos[best] - 0.15
-        if flat.sum() > 1:  # a blunt corner: the middle of the rows that reach furthest
-            yb = 0.5 * float(rows[flat][0] + rows[flat][-1])
+        best = pos.index(max(pos))
+        yb, xb = float(rows[best]), pos[best]
+        flat = [r for r, p in zip(rows, pos) if p >= pos[best] - 0.15]
+        if len(flat) > 1:  # a blunt corner: the middle of the rows that reach furthest
+            yb = 0.5 * float(flat[0] + flat[-1])
         # a sharp tip lies between rows: fit a parabola through the best row and its neighbours
         elif 0 < best < len(rows) - 1 and rows[best - 1] == rows[best] - 1 and rows[best + 1] == rows[best] + 1:
             a_, b_, c_ = float(pos[best - 1]), float(pos[best]), float(pos[best + 1])
