@@ -102,19 +102,18 @@ class LidFinder:
         while pr < lim and q[pr] >= 64:
             pr += 1
         after = inside[pr:lim]
-        if not after.any():
+        j = int(after.argmax()) if len(after) else 0
+        if not len(after) or not after[j]:
             # no iris or white between the pupil and its rim: the lid crosses the pupil
             # (or the eye is shut) and the walk ends where the pupil's colour does
             return max(pr - 0.5, 0.0)
-        s = pr + int(after.argmax())  # the walk leaves the pupil into iris or white
+        s = pr + j  # the walk leaves the pupil into iris or white
         inside[:s] = True
         stop = ~inside
         if self.white is not None and n > 1:
             # a lone doubtful sample right before clear white (the blend of iris and white)
             # is not a lid
-            nxt_white = np.zeros(n, dtype=bool)
-            nxt_white[:-1] = inside[1:] & (lum[1:] >= self.white)
-            stop &= ~nxt_white
+            stop[:-1] &= ~(inside[1:] & (lum[1:] >= self.white))
         k = _first_run(stop, self.run)
         if k < 0:
             k = n

@@ -99,7 +99,7 @@ class PupilFinder:
         if not tags.any():
             tags[:] = True
         masked = np.where(tags, score, -2.0)
-        j, i = np.unravel_index(int(np.argmax(masked)), masked.shape)
+        j, i = divmod(int(masked.argmax()), masked.shape[1])
         best = float(score[j, i])
         fx, fy = subpixel_peak(score, int(i), int(j))
         x, y = fx + x0, fy + y0
