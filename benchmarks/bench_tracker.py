@@ -121,7 +121,7 @@ def run(ctx):
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "performer.calibration.json"
         cal.save(path)
-        speed.add("Calibration.load (JSON + eye PNGs, colour tables rebuilt)",
+        speed.add("Calibration.load (JSON + eye and colour-table PNGs)",
                   *time_call(lambda: Calibration.load(path), ctx.runs(7, 2), warmup=1).cells(), "")
 
     rec = _recovery(ctx)

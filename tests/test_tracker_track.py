@@ -30,10 +30,11 @@ def test_calibration_save_load_round_trip(cal, tmp_path):
     p = tmp_path / "perf" / "me.json"
     cal.save(p)
     assert (p.parent / "me.eye_l.png").exists() and (p.parent / "me.eye_r.png").exists()
-    assert json.loads(p.read_text())["format"] == 1
+    assert (p.parent / "me.colour_tables.png").exists()
+    assert json.loads(p.read_text())["format"] == 2
     back = Calibration.load(p)
-    assert np.array_equal(back.lip.table, cal.lip.table)
-    assert np.array_equal(back.pupil.table, cal.pupil.table)
+    for name in ("pupil", "lip", "eye"):
+        assert np.array_equal(getattr(back, name).table, getattr(cal, name).table)
     assert np.allclose(back.eye_templates[0], cal.eye_templates[0])
     assert back.neutral.values() == pytest.approx(cal.neutral.values())
     img, _ = render_face(BASE.with_expression("ah").replace(roll_deg=10.0))
@@ -41,6 +42,30 @@ def test_calibration_save_load_round_trip(cal, tmp_path):
     b = FaceTracker(back).track(img).params.values()
     assert np.allclose(a, b, atol=1e-6)
     assert not list(p.parent.glob(".*.tmp"))  # atomic writes leave no temporaries
+
+
+def test_format_1_calibration_rebuilds_its_colour_tables(cal, tmp_path):
+    p = tmp_path / "old.json"
+    cal.save(p)
+    d = json.loads(p.read_text())
+    d["format"] = 1
+    del d["colour_tables"]
+    p.write_text(json.dumps(d))
+    (tmp_path / "old.colour_tables.png").unlink()
+    back = Calibration.load(p)
+    for name in ("pupil", "lip", "eye"):
+        assert np.array_equal(getattr(back, name).table, getattr(cal, name).table)
+
+
+def test_calibration_with_a_broken_colour_table_image_names_it(cal, tmp_path):
+    p = tmp_path / "me.json"
+    cal.save(p)
+    cv2.imwrite(str(tmp_path / "me.colour_tables.png"), np.zeros((40, 30), np.uint8))
+    with pytest.raises(CalibrationError, match="me.colour_tables.png"):
+        Calibration.load(p)
+    (tmp_path / "me.colour_tables.png").unlink()
+    with pytest.raises(CalibrationError, match="me.colour_tables.png"):
+        Calibration.load(p)
 
 
 def test_calibration_load_errors(tmp_path):

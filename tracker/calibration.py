@@ -10,7 +10,10 @@ midpoint, x along the pupil line, y along the face's down axis, scaled so the in
 distance is ``work_ipd`` pixels (at most :data:`WORK_IPD_MAX`). The tracker crops every
 frame the same way, so rolling or leaning in changes nothing the finders see.
 
-Saved as JSON (``format`` 1) with the two eye pictures as PNGs beside it.
+Saved as JSON (``format`` 2) with PNGs beside it: the two eye pictures and the three baked
+colour tables (one grey image, three 512×512 tiles stacked top to bottom), so loading is a
+file read rather than a rebuild. ``format`` 1 files (no table image) still load: their
+tables are rebuilt from the colour models in the JSON.
 """
 
 from __future__ import annotations
@@ -27,10 +30,13 @@ import numpy as np
 
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
-from tracker.colour_model import ColourClassifier, Gaussians, features
+from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
 from tracker.params import FaceParams
 
-FORMAT = 1
+FORMAT = 2
+READABLE_FORMATS = (1, 2)
+CLASSIFIERS = ("pupil", "lip", "eye")
+"""Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
 
@@ -191,6 +197,7 @@ class Calibration:
             "pupil_radius": self.pupil_radius,
             "pupil_threshold": self.pupil_threshold,
             "classifiers": {"pupil": self.pupil.to_dict(), "lip": self.lip.to_dict(), "eye": self.eye.to_dict()},
+            "colour_tables": {"image": f"{stem}.colour_tables.png", "order": list(CLASSIFIERS)},
             "lip_axis": [float(v) for v in self.lip_axis],
             "neutral": {k: v for k, v in self.neutral.as_dict().items()},
             "white_threshold": self.white_threshold,
@@ -200,7 +207,8 @@ class Calibration:
         }
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write ``path`` (JSON) and ``<stem>.eye_l.png`` / ``<stem>.eye_r.png`` beside it, atomically."""
+        """Write ``path`` (JSON) and, beside it, ``<stem>.eye_l.png`` / ``<stem>.eye_r.png`` and
+        ``<stem>.colour_tables.png``, each atomically (the JSON last)."""
         path = Path(path)
         d = self.to_dict(path.stem)
         for name, t in zip(d["eye_templates"], self.eye_templates):
@@ -208,7 +216,29 @@ class Calibration:
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the eye picture")
             atomic_write_bytes(path.parent / name, buf.tobytes())
+        tiles = np.concatenate([table_to_tile(getattr(self, c).table) for c in CLASSIFIERS])
+        ok, buf = cv2.imencode(".png", tiles, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+        if not ok:
+            raise CalibrationError(f"{path}: could not encode the colour tables")
+        atomic_write_bytes(path.parent / d["colour_tables"]["image"], buf.tobytes())
         atomic_write_text(path, json.dumps(d, indent=1) + "\n")
+
+    @staticmethod
+    def _load_tables(path: Path, d: dict) -> dict[str, np.ndarray]:
+        """The baked colour tables named by a format-2 file (empty for format 1)."""
+        spec = d.get("colour_tables")
+        if d["format"] < 2 or spec is None:
+            return {}
+        name = spec["image"]
+        if not isinstance(name, str) or Path(name).name != name:
+            raise CalibrationError(f"{path}: colour table image {name!r} must sit beside the calibration")
+        order = list(spec["order"])
+        p = path.parent / name
+        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
+        th, tw = TILE_SHAPE
+        if img is None or img.dtype != np.uint8 or img.shape != (th * len(order), tw):
+            raise CalibrationError(f"{p}: missing or unreadable colour tables (need {tw}×{th * len(order)} 8-bit grey)")
+        return {c: tile_to_table(img[i * th : (i + 1) * th]) for i, c in enumerate(order)}
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "Calibration":
@@ -220,9 +250,12 @@ class Calibration:
             raise CalibrationError(f"{path}: cannot read calibration ({e.strerror or e})") from None
         except (json.JSONDecodeError, UnicodeDecodeError) as e:
             raise CalibrationError(f"{path}: not valid JSON ({e})") from None
-        if not isinstance(d, dict) or d.get("format") != FORMAT:
-            raise CalibrationError(f"{path}: not an Inkface calibration of format {FORMAT}")
+        if not isinstance(d, dict) or d.get("format") not in READABLE_FORMATS:
+            raise CalibrationError(
+                f"{path}: not an Inkface calibration of format {' or '.join(map(str, READABLE_FORMATS))}"
+            )
         try:
+            tables = cls._load_tables(path, d)
             temps = []
             for name in d["eye_templates"]:
                 p = path.parent / name
@@ -251,9 +284,9 @@ class Calibration:
                 mouth_area=float(d["mouth_area"]),
                 pupil_radius=float(d["pupil_radius"]),
                 pupil_threshold=float(d["pupil_threshold"]),
-                pupil=ColourClassifier.from_dict(d["classifiers"]["pupil"]),
-                lip=ColourClassifier.from_dict(d["classifiers"]["lip"]),
-                eye=ColourClassifier.from_dict(d["classifiers"]["eye"]),
+                pupil=ColourClassifier.from_dict(d["classifiers"]["pupil"], tables.get("pupil")),
+                lip=ColourClassifier.from_dict(d["classifiers"]["lip"], tables.get("lip")),
+                eye=ColourClassifier.from_dict(d["classifiers"]["eye"], tables.get("eye")),
                 lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
                 neutral=FaceParams(**neutral_d),
                 white_threshold=float(d["white_threshold"]) if d.get("white_threshold") is not None else None,

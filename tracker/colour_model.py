@@ -165,6 +165,22 @@ def lut_index(bgr: np.ndarray) -> np.ndarray:
     return cv2.transform(q, _INDEX_WEIGHTS).astype(np.int32)
 
 
+TILE_SHAPE = (_N * 8, _N * _N // 8)
+"""A table as a grey image: the 64 slices of constant B (64 G rows × 64 R columns), 8 across."""
+
+
+def table_to_tile(table: np.ndarray) -> np.ndarray:
+    """A baked ``(64³,)`` table as a ``(512, 512)`` uint8 image (see :data:`TILE_SHAPE`)."""
+    return np.ascontiguousarray(table.reshape(8, 8, _N, _N).transpose(0, 2, 1, 3).reshape(TILE_SHAPE))
+
+
+def tile_to_table(tile: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`table_to_tile`."""
+    if tile.shape != TILE_SHAPE or tile.dtype != np.uint8:
+        raise ValueError(f"colour table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
+    return np.ascontiguousarray(tile.reshape(8, _N, 8, _N).transpose(0, 2, 1, 3).reshape(-1))
+
+
 class ColourClassifier:
     """Target-vs-rest colour classifier baked into a lookup table.
 
@@ -236,7 +252,7 @@ class ColourClassifier:
         """Boolean tags (score ≥ 0.5)."""
         return self.prob_u8(bgr) >= 128
 
-    # --- persistence: the models are tiny, the table is rebuilt on load -----------------
+    # --- persistence: the models go to JSON; the table to a PNG tile (or is rebuilt) ----
     def to_dict(self) -> dict:
         def g(m: Gaussians) -> dict:
             return {
@@ -255,7 +271,8 @@ class ColourClassifier:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "ColourClassifier":
+    def from_dict(cls, d: dict, table: np.ndarray | None = None) -> "ColourClassifier":
+        """Rebuild from :meth:`to_dict`; ``table`` is the baked table if stored (else it is rebuilt)."""
         self = cls.__new__(cls)
         self.name = str(d.get("name", ""))
         self.y_weight = float(d["y_weight"])
@@ -273,5 +290,11 @@ class ColourClassifier:
 
         self.target = g(d["target"])
         self.other = g(d["other"])
-        self.table = self._bake()
+        if table is None:
+            self.table = self._bake()
+        else:
+            table = np.asarray(table)
+            if table.dtype != np.uint8 or table.size != _N**3:
+                raise ValueError(f"colour table must be {_N**3} uint8 values")
+            self.table = np.ascontiguousarray(table).reshape(-1)
         return self
