@@ -117,11 +117,15 @@ class FaceFrame:
             ]
         )
 
-    def crop(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> np.ndarray:
-        """The face-frame crop ``(x0, y0, w, h)`` (face px) of ``image``, bilinear."""
+    def crop(self, image: np.ndarray, rect: tuple[int, int, int, int], out: np.ndarray | None = None) -> np.ndarray:
+        """The face-frame crop ``(x0, y0, w, h)`` (face px) of ``image``, bilinear.
+
+        ``out`` (optional) is a buffer of the crop's shape and dtype to write into and return.
+        """
         x0, y0, w, h = rect
         return cv2.warpAffine(
-            image, self.matrix((x0, y0)), (int(w), int(h)), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+            image, self.matrix((x0, y0)), (int(w), int(h)), dst=out, flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_REPLICATE,
         )
 
     def to_image(self, pts: np.ndarray) -> np.ndarray:

@@ -173,6 +173,7 @@ class FaceTracker:
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts them
         self._min_lip_area = max(int(0.12 * cal.mouth_area), 6)
+        self._buffers: dict[tuple, np.ndarray] = {}
         self.reset()
 
     # -------------------------------------------------------------- state
@@ -240,6 +241,14 @@ class FaceTracker:
         return 0.4 * w <= m.width <= 1.8 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width
 
     # -------------------------------------------------------------- helpers
+    def _buffer(self, name: str, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
+        """A reusable per-frame array (crops are the same few sizes every frame)."""
+        key = (name, shape)
+        buf = self._buffers.get(key)
+        if buf is None:
+            buf = self._buffers[key] = np.empty(shape, dtype=dtype)
+        return buf
+
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
         return FaceFrame.from_pupils(tuple(pupils[0]), tuple(pupils[1]), self.wi)
 
@@ -255,9 +264,11 @@ class FaceTracker:
 
     def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int]):
         """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
-        crop = self._balance(ff.crop(frame, rect), "eye")
+        w, h = rect[2], rect[3]
+        crop = self._balance(ff.crop(frame, rect, self._buffer("eye", (h, w, 3))), "eye")
         self._last_eye_crop = crop
-        grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+        grey = self._buffer("eye grey", (h, w), np.float32)
+        np.copyto(grey, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY))
         ox, oy = rect[0], rect[1]
         preds = [(-0.5 * self.wi - ox, -oy), (0.5 * self.wi - ox, -oy)]
         res = [f.find(crop, grey, p, search, previous=p) for f, p in zip(self.pupil_finders, preds)]
@@ -396,10 +407,12 @@ class FaceTracker:
         mw, mh = self.mouth_size
         cx, cy = self.mouth_face
         rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
-        crop = self._balance(ff.crop(frame, rect), "mouth")
+        crop = self._balance(ff.crop(frame, rect, self._buffer("mouth", (mh, mw, 3))), "mouth")
         self._last_mouth_crop = crop
         score = self.cal.lip.prob_u8(crop)
-        value = cv2.transform(crop.astype(np.float32), self.lip_axis)
+        crop32 = self._buffer("mouth float", crop.shape, np.float32)
+        np.copyto(crop32, crop)
+        value = cv2.transform(crop32, self.lip_axis)
         seed = (cx - rect[0], cy - rect[1])
         res = self.mouth_finder.find(score, value=value, seed=seed, min_area=self._min_lip_area, lip_level=1.0)
         if res is not None:
