@@ -12,8 +12,9 @@ frame the same way, so rolling or leaning in changes nothing the finders see.
 
 Saved as JSON (``format`` 2) with PNGs beside it: the two eye pictures and the three baked
 colour tables (one grey image, three 512×512 tiles stacked top to bottom), so loading is a
-file read rather than a rebuild. ``format`` 1 files (no table image) still load: their
-tables are rebuilt from the colour models in the JSON.
+file read rather than a rebuild (the image is what classifies; the colour models stay in
+the JSON to inspect and to rebuild from). ``format`` 1 files (no table image) still load:
+their tables are rebuilt from the models.
 """
 
 from __future__ import annotations
