@@ -245,6 +245,11 @@ class ColourClassifier:
         """Target score of every pixel as uint8 0..255 (same leading shape as ``bgr``)."""
         return self.table.take(lut_index(bgr))
 
+    def prob_at(self, index: np.ndarray) -> np.ndarray:
+        """Target score (uint8) of pixels already turned into table indices by :func:`lut_index`
+        (several classifiers looking at the same pixels share one index computation)."""
+        return self.table.take(index)
+
     def prob(self, bgr: np.ndarray) -> np.ndarray:
         return self.prob_u8(bgr).astype(np.float32) * (1.0 / 255.0)
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.colour_model import ColourClassifier
+from tracker.colour_model import ColourClassifier, lut_index
 
 
 def _first_run(tags: np.ndarray, run: int) -> int:
@@ -85,8 +85,9 @@ class LidFinder:
         y0, y1 = max(yi - self.up_max, 0), min(yi + self.down_max + 1, h)
         strip = bgr[y0:y1, xi - hw : xi + hw + 1]
         inv = np.float32(1.0 / (2 * hw + 1))
-        p = np.add.reduce(self.interior.prob_u8(strip), axis=1, dtype=np.float32) * inv
-        q = self.pupil.prob_u8(strip[:, hw])
+        idx = lut_index(strip)
+        p = np.add.reduce(self.interior.prob_at(idx), axis=1, dtype=np.float32) * inv
+        q = self.pupil.prob_at(idx[:, hw])
         lum = np.add.reduce(grey[y0:y1, xi - hw : xi + hw + 1], axis=1) * inv
         c = yi - y0
         dy = yi - pupil[1]  # sample j of a walk sits j ∓ dy from the pupil
