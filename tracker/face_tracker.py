@@ -336,15 +336,16 @@ class FaceTracker:
         # lids and brows in the eye crop, along its up axis through each pupil
         k = ff.scale
         lid_up, lid_down, brow_h = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
+        pup_list = pup_f.tolist()  # plain floats: cheaper scalar arithmetic from here on
         for i in range(2):
-            pc = (pup_f[i, 0] - ox, pup_f[i, 1] - oy)
+            pc = (pup_list[i][0] - ox, pup_list[i][1] - oy)
             up, down = self.lid_finder.find(crop, grey, pc)
             if closed[i]:
                 up, down = min(up, 0.04 * wi), min(down, 0.04 * wi)
             hb, _ = self.brow_finders[i].find(grey, pc)
             lid_up[i], lid_down[i] = up, down
             brow_h[i] = hb if math.isfinite(hb) else self.cal.brow_heights[i]
-        (plx, ply), (prx, pry) = pup_f
+        (plx, ply), (prx, pry) = pup_list
         pts = [
             pup_f,
             [[plx, ply - brow_h[0]], [prx, pry - brow_h[1]]],
@@ -354,7 +355,7 @@ class FaceTracker:
         pts.append(self._rect_corners(mouth_rect))
         if mouth_res is not None:
             mo = np.array(mouth_origin, dtype=np.float64)
-            mcx, mcy = mouth_res.centre[0] + mo[0], mouth_res.centre[1] + mo[1]
+            mcx, mcy = mouth_res.centre[0] + mouth_origin[0], mouth_res.centre[1] + mouth_origin[1]
             pts += [
                 np.array([mouth_res.left, mouth_res.right, mouth_res.centre]) + mo,
                 [[mcx, mcy - mouth_res.lip_upper], [mcx, mcy + mouth_res.lip_lower]],
