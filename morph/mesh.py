@@ -38,7 +38,7 @@ def interpolation_matrix(n_pixels: int, cells: int) -> np.ndarray:
 class MeshGrid:
     """The vertex positions and upsampling weights for one image size ``(w, h)``."""
 
-    def __init__(self, size: tuple[int, int], cells: int = DEFAULT_CELLS):
+    def __init__(self, size: tuple[int, int], cells: int = DEFAULT_CELLS, band_cells: int = 6):
         self.w, self.h = int(size[0]), int(size[1])
         self.cells = int(cells)
         self.ry = interpolation_matrix(self.h, self.cells)  # (h, n)
@@ -50,6 +50,32 @@ class MeshGrid:
         self.vertices = np.stack([gx, gy], axis=-1)  # (n, n, 2) float64, [row j, col i] = (x, y)
         self._rows: np.ndarray | None = None  # scratch for upsample_many(reuse=True)
         self._dense: np.ndarray | None = None
+        # Banded x pass of ``upsample_xy``: output columns [x0, x1) (x and y interleaved) depend
+        # only on vertex columns [j0, j0 + band].
+        rx2 = np.zeros((2 * n, 2 * self.w), np.float32)
+        rx2[0::2, 0::2] = self.rx_t
+        rx2[1::2, 1::2] = self.rx_t
+        self._col_bands = [
+            (2 * x0, 2 * x1, 2 * j0, np.ascontiguousarray(rx2[2 * j0:2 * j0 + 2 * wts.shape[1], 2 * x0:2 * x1]))
+            for x0, x1, j0, wts in self._bands_of(self.w, band_cells)
+        ]
+        self._tmp: np.ndarray | None = None  # scratch for upsample_xy(reuse=True)
+        self._xy: np.ndarray | None = None
+
+    def _bands_of(self, n_pixels: int, band_cells: int) -> list[tuple[int, int, int, np.ndarray]]:
+        """``(p0, p1, j0, weights (p1−p0, band+1))``: pixels ``[p0, p1)`` of a side of
+        ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells)."""
+        band = max(1, min(int(band_cells), self.cells))
+        full = interpolation_matrix(n_pixels, self.cells)
+        cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
+        out = []
+        for c0 in range(0, self.cells, band):
+            c1 = min(c0 + band, self.cells)  # cells [c0, c1) use vertices c0..c1
+            ps = np.nonzero((cell >= c0) & (cell < c1))[0]
+            if len(ps):
+                p0, p1 = int(ps[0]), int(ps[-1]) + 1
+                out.append((p0, p1, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
+        return out
 
     @property
     def size(self) -> tuple[int, int]:
@@ -88,6 +114,31 @@ class MeshGrid:
             dense = rows.reshape(k * 2 * self.h, n) @ self.rx_t  # (2k*h, w)
         dense = dense.reshape(k, 2, self.h, self.w)
         return dense[:, 0], dense[:, 1]
+
+
+    def upsample_xy(self, meshes: np.ndarray, reuse: bool = False) -> np.ndarray:
+        """Dense interleaved maps ``(k, h, w, 2)`` float32 (``cv2.remap``'s CV_32FC2 map) for
+        ``k`` meshes ``(k, n, n, 2)``: the same bilinear interpolation, and the same float32
+        products and sums, as :meth:`upsample_many`.
+
+        The y pass works on the mesh columns (small); the x pass writes each output column from
+        the two vertex columns around it only, in bands of a few cells, instead of all ``n``.
+        """
+        meshes = np.asarray(meshes, dtype=np.float32)
+        k, n = meshes.shape[0], self.cells + 1
+        if reuse:
+            if self._tmp is None or self._tmp.shape[0] < k:
+                self._tmp = np.empty((k, self.h, 2 * n), np.float32)
+                self._xy = np.empty((k * self.h, 2 * self.w), np.float32)
+            rows = np.matmul(self.ry, meshes.reshape(k, n, 2 * n), out=self._tmp[:k])
+            xy = self._xy[: k * self.h]
+        else:
+            rows = np.matmul(self.ry, meshes.reshape(k, n, 2 * n))
+            xy = np.empty((k * self.h, 2 * self.w), np.float32)
+        rows = rows.reshape(k * self.h, 2 * n)
+        for x0, x1, r0, wts in self._col_bands:
+            np.matmul(rows[:, r0:r0 + wts.shape[0]], wts, out=xy[:, x0:x1])
+        return xy.reshape(k, self.h, self.w, 2)
 
 
 def mesh_map(

@@ -79,3 +79,18 @@ def test_mesh_field_is_close_to_the_exact_field_for_drawn_mouths():
 def test_warp_mesh_keeps_the_image_when_lines_do_not_move():
     img, lines = make_mouth(200, 120, *MOUTHS["smile"])
     assert np.array_equal(mesh.warp_mesh(img, lines, lines), bn.premultiply(img))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(2, 90), st.integers(2, 90), st.integers(1, 12), st.integers(1, 40), st.integers(0, 10**6))
+def test_banded_interleaved_upsampling_matches_the_dense_product(w, h, cells, band, seed):
+    g = mesh.MeshGrid((w, h), cells, band_cells=band)
+    rng = np.random.default_rng(seed)
+    meshes = (g.vertices[None] + rng.normal(0, 3, (2, cells + 1, cells + 1, 2))).astype(np.float32)
+    mx, my = g.upsample_many(meshes)
+    for reuse in (False, True, True):
+        g.upsample_xy(meshes[:1], reuse=True)
+        xy = g.upsample_xy(meshes, reuse=reuse)
+        assert xy.shape == (2, h, w, 2) and xy.dtype == np.float32
+        np.testing.assert_allclose(xy[..., 0], mx, atol=1e-4)
+        np.testing.assert_allclose(xy[..., 1], my, atol=1e-4)
