@@ -90,6 +90,7 @@ class Compositor:
         self.keep_in_frame = bool(keep_in_frame)
         self.margin = 0.03 * min(self.w, self.h) if margin is None else float(margin)
         self._head_hull = self._content_hull(above_pivot=True)
+        self._head_hull_xy = (self._head_hull[:, 0].copy(), self._head_hull[:, 1].copy())
         # One flat canvas per head: outside the boxes it always equals the head, so a frame
         # only rewrites the boxes.
         self._flats = [hd.copy() for hd in self.heads]
@@ -136,16 +137,18 @@ class Compositor:
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if not all(math.isfinite(v) for v in (dx, dy, roll)):
             raise ValueError(f"pose must be three finite numbers (dx, dy, roll_deg), got {tuple(pose)}")
-        m = cv2.getRotationMatrix2D(self.pivot, roll, 1.0)
+        # cv2.getRotationMatrix2D(pivot, roll, 1), written out (same double arithmetic, no call).
+        rad = roll * (math.pi / 180)
+        a, b = math.cos(rad), math.sin(rad)
+        cx, cy = self.pivot
+        tx, ty = (1 - a) * cx - b * cy, b * cx + (1 - a) * cy
         if self.keep_in_frame and len(self._head_hull):
-            pts = self._head_hull @ m[:, :2].T + m[:, 2]
-            lo = -self.margin - pts.min(axis=0)
-            hi = np.array([self.w, self.h]) + self.margin - pts.max(axis=0)
-            dx = _soft_clamp(dx, lo[0], hi[0])
-            dy = _soft_clamp(dy, lo[1], hi[1])
-        m[0, 2] += dx
-        m[1, 2] += dy
-        return m
+            hx, hy = self._head_hull_xy
+            px = hx * a + hy * b
+            py = hx * -b + hy * a
+            dx = _soft_clamp(dx, -self.margin - (px.min() + tx), self.w + self.margin - (px.max() + tx))
+            dy = _soft_clamp(dy, -self.margin - (py.min() + ty), self.h + self.margin - (py.max() + ty))
+        return np.array([[a, b, tx + dx], [-b, a, ty + dy]])
 
     def flat(self, parts: Mapping[str, np.ndarray], frame_no: int = 0) -> np.ndarray:
         """The untransformed character: parts under the head (an internal buffer, reused)."""
@@ -212,9 +215,21 @@ class Compositor:
         if len(pose) != 3:
             raise ValueError(f"pose must be (dx, dy, roll_deg), got {tuple(pose)}")
         m = self.matrix(pose)
-        if np.array_equal(m, _IDENTITY):
-            return flat.copy()
+        (a, b, tx), (c, d, ty) = m.tolist()
+        if a == 1.0 and b == 0.0 and c == 0.0 and d == 1.0 and tx.is_integer() and ty.is_integer():
+            return self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
         return self._warp_content(flat, m)
+
+    def _shift(self, flat: np.ndarray, dx: int, dy: int) -> np.ndarray:
+        """``flat`` moved by whole pixels (transparent where nothing moves in), a new array."""
+        if dx == 0 and dy == 0:
+            return flat.copy()
+        out = np.zeros_like(flat)
+        w, h = self.w - abs(dx), self.h - abs(dy)
+        if w > 0 and h > 0:
+            out[max(dy, 0):max(dy, 0) + h, max(dx, 0):max(dx, 0) + w] = \
+                flat[max(-dy, 0):max(-dy, 0) + h, max(-dx, 0):max(-dx, 0) + w]
+        return out
 
     def _warp_content(self, flat: np.ndarray, m: np.ndarray) -> np.ndarray:
         """One ``warpAffine`` over the bounding box of the moved content hull."""
@@ -234,9 +249,6 @@ class Compositor:
         cv2.warpAffine(flat, local, (x1 - x0, y1 - y0), dst=out[y0:y1, x0:x1], flags=cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
         return out
-
-
-_IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 def _soft_clamp(x: float, lo: float, hi: float) -> float:

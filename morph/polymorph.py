@@ -87,6 +87,8 @@ class PartMorpher:
         self.grid = MeshGrid(self.size, cells)
         self.vertices = self.grid.vertices.astype(np.float32)
         self.tables = self._build_tables()
+        self._flat_tables = self.tables.reshape(self.n * self.n * self.alpha_steps, -1)
+        self._flat_vertices = self.vertices.reshape(-1)
         self._warped: list[np.ndarray] = []  # per-frame scratch images, reused
 
     def _build_tables(self) -> np.ndarray:
@@ -156,26 +158,25 @@ class PartMorpher:
         if n == 1:
             return self.vertices[None].copy()
         top = self.alpha_steps - 1
-        pa, pb, pk, pf = [], [], [], []
+        rows, fracs = [], []  # rows of ``_flat_tables``: each pair's α step below, then above
         for ia, _ in act:
+            base = ia * self.n
             for ib, wb in act:
                 if ib != ia:
                     t = min(max(wb, 0.0), 1.0) * top
                     k = min(int(t), top - 1)
-                    pa.append(ia)
-                    pb.append(ib)
-                    pk.append(k)
-                    pf.append(t - k)
-        pa, pb, pk = np.array(pa), np.array(pb), np.array(pk)
-        lo = self.tables[pa, pb, pk]
-        d = self.tables[pa, pb, pk + 1]
+                    rows.append((base + ib) * self.alpha_steps + k)
+                    fracs.append(t - k)
+        pairs = len(rows)
+        both = self._flat_tables[rows + [r + 1 for r in rows]]
+        lo, d = both[:pairs], both[pairs:]
         d -= lo
-        d *= np.array(pf, np.float32)[:, None, None, None]
+        d *= np.array(fracs, np.float32)[:, None]
         d += lo
+        out = d[0::2] + d[1::2] if n == 3 else d.reshape(n, n - 1, -1).sum(axis=1)
+        out += self._flat_vertices
         m = self.grid.cells + 1
-        out = d.reshape(n, n - 1, m, m, 2).sum(axis=1)
-        out += self.vertices
-        return out
+        return out.reshape(n, m, m, 2)
 
     def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
         """The exact n-way field sampled on the mesh now (slower; no sum-of-two-way error)."""

@@ -231,3 +231,20 @@ def test_bundled_head_stays_on_the_canvas_for_an_extreme_pose():
         x0, y0, x1, y1 = _head_bbox_after(c, art.heads[0], pose)
         m = c.margin + 1
         assert x0 >= -m and y0 >= -m and x1 <= art.canvas[0] - 1 + m and y1 <= art.canvas[1] - 1 + m, pose
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(-130, 130), st.integers(-110, 110), st.integers(0, 10**6))
+def test_whole_pixel_moves_match_the_bilinear_warp(dx, dy, seed):
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    head = rng.integers(0, 256, (CANVAS[1], CANVAS[0], 4), dtype=np.uint8)
+    c = Compositor(CANVAS, (60, 50), [head], {"eyes": (10, 20, 30, 10)})
+    eyes = _part(30, 10, (0, 0, 200, 200))
+    flat = c.flat({"eyes": eyes}).copy()
+    out = c.compose({"eyes": eyes}, pose=(dx, dy, 0.0))
+    want = cv2.warpAffine(flat, np.array([[1.0, 0, dx], [0, 1.0, dy]]), CANVAS, flags=cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
+    assert np.array_equal(out, want)
+    assert out is not c.compose({"eyes": eyes}, pose=(dx, dy, 0.0))
