@@ -50,17 +50,11 @@ class MeshGrid:
         self.vertices = np.stack([gx, gy], axis=-1)  # (n, n, 2) float64, [row j, col i] = (x, y)
         self._rows: np.ndarray | None = None  # scratch for upsample_many(reuse=True)
         self._dense: np.ndarray | None = None
-        # Banded x pass of ``upsample_xy``: output columns [x0, x1) (x and y interleaved) depend
-        # only on vertex columns [j0, j0 + band].
-        rx2 = np.zeros((2 * n, 2 * self.w), np.float32)
-        rx2[0::2, 0::2] = self.rx_t
-        rx2[1::2, 1::2] = self.rx_t
+        # Banded x pass of ``upsample_many``: output columns [x0, x1) use vertex columns
+        # [j0, j0 + band] only; weights stored transposed, (band+1, x1−x0).
         self._col_bands = [
-            (2 * x0, 2 * x1, 2 * j0, np.ascontiguousarray(rx2[2 * j0:2 * j0 + 2 * wts.shape[1], 2 * x0:2 * x1]))
-            for x0, x1, j0, wts in self._bands_of(self.w, band_cells)
+            (x0, x1, j0, np.ascontiguousarray(wts.T)) for x0, x1, j0, wts in self._bands_of(self.w, band_cells)
         ]
-        self._tmp: np.ndarray | None = None  # scratch for upsample_xy(reuse=True)
-        self._xy: np.ndarray | None = None
 
     def _bands_of(self, n_pixels: int, band_cells: int) -> list[tuple[int, int, int, np.ndarray]]:
         """``(p0, p1, j0, weights (p1−p0, band+1))``: pixels ``[p0, p1)`` of a side of
@@ -94,9 +88,11 @@ class MeshGrid:
         return mx[0], my[0]
 
     def upsample_many(self, meshes: np.ndarray, reuse: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """Dense maps for ``k`` meshes ``(k, n, n, 2)`` in one matrix product.
+        """Dense maps for ``k`` meshes ``(k, n, n, 2)``: a y pass on the mesh, then a banded x pass.
 
         Returns ``(map_x, map_y)``, each ``(k, h, w)`` float32 with contiguous ``[i]`` slices.
+        The x pass takes each band of output columns from the few vertex columns around it
+        (``band_cells`` + 1 taps instead of all ``n``; the skipped weights are exact zeros).
         With ``reuse`` the result lives in buffers of this grid that the next call overwrites
         (the per-frame path: no fresh megabytes to fault in every frame).
         """
@@ -108,37 +104,15 @@ class MeshGrid:
                 self._rows = np.empty((2 * k, self.h, n), np.float32)
                 self._dense = np.empty((2 * k * self.h, self.w), np.float32)
             rows = np.matmul(self.ry, comps, out=self._rows[: 2 * k])
-            dense = np.matmul(rows.reshape(k * 2 * self.h, n), self.rx_t, out=self._dense[: 2 * k * self.h])
+            dense = self._dense[: 2 * k * self.h]
         else:
             rows = np.matmul(self.ry, comps)  # (2k, h, n)
-            dense = rows.reshape(k * 2 * self.h, n) @ self.rx_t  # (2k*h, w)
+            dense = np.empty((2 * k * self.h, self.w), np.float32)
+        rows = rows.reshape(k * 2 * self.h, n)
+        for x0, x1, j0, wts in self._col_bands:
+            np.matmul(rows[:, j0:j0 + wts.shape[0]], wts, out=dense[:, x0:x1])
         dense = dense.reshape(k, 2, self.h, self.w)
         return dense[:, 0], dense[:, 1]
-
-
-    def upsample_xy(self, meshes: np.ndarray, reuse: bool = False) -> np.ndarray:
-        """Dense interleaved maps ``(k, h, w, 2)`` float32 (``cv2.remap``'s CV_32FC2 map) for
-        ``k`` meshes ``(k, n, n, 2)``: the same bilinear interpolation, and the same float32
-        products and sums, as :meth:`upsample_many`.
-
-        The y pass works on the mesh columns (small); the x pass writes each output column from
-        the two vertex columns around it only, in bands of a few cells, instead of all ``n``.
-        """
-        meshes = np.asarray(meshes, dtype=np.float32)
-        k, n = meshes.shape[0], self.cells + 1
-        if reuse:
-            if self._tmp is None or self._tmp.shape[0] < k:
-                self._tmp = np.empty((k, self.h, 2 * n), np.float32)
-                self._xy = np.empty((k * self.h, 2 * self.w), np.float32)
-            rows = np.matmul(self.ry, meshes.reshape(k, n, 2 * n), out=self._tmp[:k])
-            xy = self._xy[: k * self.h]
-        else:
-            rows = np.matmul(self.ry, meshes.reshape(k, n, 2 * n))
-            xy = np.empty((k * self.h, 2 * self.w), np.float32)
-        rows = rows.reshape(k * self.h, 2 * n)
-        for x0, x1, r0, wts in self._col_bands:
-            np.matmul(rows[:, r0:r0 + wts.shape[0]], wts, out=xy[:, x0:x1])
-        return xy.reshape(k, self.h, self.w, 2)
 
 
 def mesh_map(

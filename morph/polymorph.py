@@ -210,11 +210,11 @@ class PartMorpher:
         stack = self._mesh_stack(parts)
         if jitter is not None:
             stack += np.asarray(jitter, dtype=np.float32)
-        maps = self.grid.upsample_xy(stack, reuse=True)
+        maps_x, maps_y = self.grid.upsample_many(stack, reuse=True)
         while len(self._warped) < len(parts):
             self._warped.append(np.empty_like(self.pm[0]))
         warped = [
-            cv2.remap(self.pm[ia], maps[k], None, dst=self._warped[k], interpolation=cv2.INTER_LINEAR,
+            cv2.remap(self.pm[ia], maps_x[k], maps_y[k], dst=self._warped[k], interpolation=cv2.INTER_LINEAR,
                       borderMode=self.border, borderValue=(0, 0, 0, 0))
             for k, (ia, _) in enumerate(parts)
         ]
