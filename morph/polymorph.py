@@ -90,6 +90,7 @@ class PartMorpher:
         self._flat_tables = self.tables.reshape(self.n * self.n * self.alpha_steps, -1)
         self._flat_vertices = self.vertices.reshape(-1)
         self._warped: list[np.ndarray] = []  # per-frame scratch images, reused
+        self._pair: np.ndarray | None = None
 
     def _build_tables(self) -> np.ndarray:
         """``(n, n, alpha_steps, m, m, 2)`` float32 displacements ``D_AB(α)`` (zero for A = B)."""
@@ -194,8 +195,10 @@ class PartMorpher:
         weights: Sequence[float],
         detail: bool = False,
         jitter: np.ndarray | None = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
-        """The morphed part, premultiplied RGBA uint8 ``(h, w, 4)`` (a new array).
+        """The morphed part, premultiplied RGBA uint8 ``(h, w, 4)`` (a new array, or ``out``
+        when given: a C-contiguous uint8 ``(h, w, 4)`` buffer to reuse; not with ``detail``).
 
         Scratch buffers are reused between calls, so one instance renders one frame at a time
         (use one ``PartMorpher`` per thread).
@@ -206,7 +209,10 @@ class PartMorpher:
         """
         parts = self.active(indices, weights)
         if len(parts) == 1 and jitter is None:
-            return self.pm[parts[0][0]].copy()
+            if out is None:
+                return self.pm[parts[0][0]].copy()
+            np.copyto(out, self.pm[parts[0][0]])
+            return out
         stack = self._mesh_stack(parts)
         if jitter is not None:
             stack += np.asarray(jitter, dtype=np.float32)
@@ -219,27 +225,35 @@ class PartMorpher:
             for k, (ia, _) in enumerate(parts)
         ]
         wts = [wa for _, wa in parts]
-        plain = blend_u8(warped, wts)
         if detail and len(parts) > 1:
-            return detail_blend(warped, wts, sigma=self.detail_sigma, plain=plain)
-        return plain
+            return detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
+        if len(parts) == 3:
+            if self._pair is None:
+                self._pair = np.empty_like(self.pm[0])
+            return _blend3_u8(warped, wts, out=out, scratch=self._pair)
+        return blend_u8(warped, wts, out=out)
 
 
-def blend_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:
-    """``Σ w_i · I_i`` of uint8 images (cv2, fast); within 1 of the exact sum, never above alpha."""
+def blend_u8(images: Sequence[np.ndarray], weights: Sequence[float], out: np.ndarray | None = None) -> np.ndarray:
+    """``Σ w_i · I_i`` of uint8 images (cv2, fast); within 1 of the exact sum, never above alpha.
+
+    ``out``: an optional uint8 buffer of the images' shape for the result."""
     if len(images) == 1:
-        return cv2.addWeighted(images[0], float(weights[0]), images[0], 0.0, 0.0)
+        return cv2.addWeighted(images[0], float(weights[0]), images[0], 0.0, 0.0, dst=out)
     if len(images) == 2:
-        return cv2.addWeighted(images[0], float(weights[0]), images[1], float(weights[1]), 0.0)
+        return cv2.addWeighted(images[0], float(weights[0]), images[1], float(weights[1]), 0.0, dst=out)
     if len(images) == 3:
-        return _blend3_u8(images, weights)
+        return _blend3_u8(images, weights, out=out)
     acc = cv2.addWeighted(images[0], float(weights[0]), images[1], float(weights[1]), 0.0, dtype=cv2.CV_32F)
     for img, wt in zip(images[2:-1], weights[2:-1]):
         acc = cv2.addWeighted(acc, 1.0, img, float(wt), 0.0, dtype=cv2.CV_32F)
-    return cv2.addWeighted(acc, 1.0, images[-1], float(weights[-1]), 0.0, dtype=cv2.CV_8U)
+    return cv2.addWeighted(acc, 1.0, images[-1], float(weights[-1]), 0.0, dst=out, dtype=cv2.CV_8U)
 
 
-def _blend3_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.ndarray:
+def _blend3_u8(
+    images: Sequence[np.ndarray], weights: Sequence[float], out: np.ndarray | None = None,
+    scratch: np.ndarray | None = None,
+) -> np.ndarray:
     """Three-image weighted sum in two uint8 passes (twice as fast as a float accumulator).
 
     Rounding twice can lose 1 only when the first partial sum ends in exactly .5; the image
@@ -249,5 +263,5 @@ def _blend3_u8(images: Sequence[np.ndarray], weights: Sequence[float]) -> np.nda
     frac = [abs((255.0 * float(w)) % 1.0 - 0.5) for w in weights]
     last = int(np.argmax(frac))
     i, j = (k for k in range(3) if k != last)
-    pair = cv2.addWeighted(images[i], float(weights[i]), images[j], float(weights[j]), 0.0)
-    return cv2.addWeighted(pair, 1.0, images[last], float(weights[last]), 0.0)
+    pair = cv2.addWeighted(images[i], float(weights[i]), images[j], float(weights[j]), 0.0, dst=scratch)
+    return cv2.addWeighted(pair, 1.0, images[last], float(weights[last]), 0.0, dst=out)

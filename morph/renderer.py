@@ -63,6 +63,7 @@ class CharacterRenderer:
                 )
             names = part.names()
             self.rest[name] = next((names.index(n) for n in _REST_NAMES.get(name, ()) if n in names), 0)
+        self._part_buffers = {n: np.empty_like(m.pm[0]) for n, m in self.morphers.items()}
         self.compositor = Compositor(
             artset.canvas, artset.pivot, artset.heads, {n: p.box for n, p in artset.parts.items()},
             gain=gain, shimmer_every=shimmer_every, keep_in_frame=keep_in_frame,
@@ -81,8 +82,11 @@ class CharacterRenderer:
     def gain(self, value: float) -> None:
         self.compositor.gain = float(value)
 
-    def render_part(self, name: str, weights: Weights | None, frame_no: int = 0, style_level: float = 0.0) -> np.ndarray:
-        """One part, premultiplied RGBA of its box size."""
+    def render_part(
+        self, name: str, weights: Weights | None, frame_no: int = 0, style_level: float = 0.0,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """One part, premultiplied RGBA of its box size (a new array unless ``out`` is given)."""
         m = self.morphers[name]
         if weights is None:
             idx, wts = (self.rest[name],), (1.0,)
@@ -92,7 +96,7 @@ class CharacterRenderer:
         if style_level > 0:
             part_no = list(self.morphers).index(name)
             jitter = self.style.jitter(style_level, frame_no, part_no, m.grid.cells)
-        return m.render(idx, wts, detail=self.detail, jitter=jitter)
+        return m.render(idx, wts, detail=self.detail, jitter=jitter, out=out)
 
     def render(
         self,
@@ -109,8 +113,9 @@ class CharacterRenderer:
         ``gain``; ``frame_no`` drives the head shimmer; ``style_level`` 0..1 the expression style.
         """
         given = {"eyes": eyes, "mouth": mouth}
-        parts = {
-            name: self.render_part(name, given.get(name), frame_no, style_level) for name in self.morphers
+        parts = {  # rendered into per-part buffers: the compositor copies them into the frame
+            name: self.render_part(name, given.get(name), frame_no, style_level, out=self._part_buffers[name])
+            for name in self.morphers
         }
         if style_level <= 0:
             return self.compositor.compose(parts, pose, frame_no)
