@@ -191,3 +191,13 @@ def test_parts_without_control_lines_cross_dissolve(mouths):
     got = m.render((0, 1), (0.5, 0.5)).astype(int)
     want = bn.blend_pm([bn.premultiply(imgs[0]), bn.premultiply(imgs[1])], [0.5, 0.5]).astype(int)
     assert np.abs(got - want).max() <= 1
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.lists(st.integers(0, 3), min_size=1, max_size=3), st.lists(st.floats(0.05, 1.0), min_size=3, max_size=3))
+def test_rendering_into_a_buffer_gives_the_same_image(morpher, idx, w):
+    buf = np.full(morpher.pm[0].shape, 7, np.uint8)
+    want = morpher.render(idx, w[: len(idx)])
+    got = morpher.render(idx, w[: len(idx)], out=buf)
+    assert got is buf
+    assert np.array_equal(got, want)
