@@ -4,9 +4,11 @@ The mesh has ``cells × cells`` quads (default 30×30, i.e. 31×31 vertices). Ve
 sits at pixel ``(i·(W−1)/cells, j·(H−1)/cells)``, so the corner vertices are exactly the corner
 pixel centres and pixel ``x`` has grid coordinate ``x·cells/(W−1)``. The dense map is the
 separable bilinear interpolation of the vertex values at those grid coordinates, computed with
-two small matrix products whose interpolation weights are precomputed per image size. (A plain
+two small matrix products whose interpolation weights are precomputed per image size (the
+second in bands of columns, each needing only the few vertex columns around it). (A plain
 ``cv2.resize`` of the 31×31 grid would put vertex centres on pixel-area centres and shift the
-map by pixels; ``cv2.remap`` of the grid quantises weights to 1/32 of a cell.)
+map by pixels; ``cv2.remap`` or ``cv2.warpAffine`` of the grid quantise weights to 1/32 of a
+cell — measured 0.4 px off for a 312×132 part, and no faster than the banded products.)
 
 Mesh values here are always *source positions* (absolute pixel coordinates), so the identity
 mesh is the vertex grid itself and bilinear upsampling of an affine field is exact.
