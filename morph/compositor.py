@@ -233,16 +233,20 @@ class Compositor:
 
     def _warp_content(self, flat: np.ndarray, m: np.ndarray) -> np.ndarray:
         """One ``warpAffine`` over the bounding box of the moved content hull."""
-        out = np.zeros((self.h, self.w, 4), np.uint8)
         if len(self._hull) == 0:
-            return out
+            return np.zeros((self.h, self.w, 4), np.uint8)
         poly = self._hull @ m[:, :2].T + m[:, 2]
         x0 = max(0, int(math.floor(poly[:, 0].min())) - 1)
         y0 = max(0, int(math.floor(poly[:, 1].min())) - 1)
         x1 = min(self.w, int(math.ceil(poly[:, 0].max())) + 2)
         y1 = min(self.h, int(math.ceil(poly[:, 1].max())) + 2)
         if x1 <= x0 or y1 <= y0:
-            return out
+            return np.zeros((self.h, self.w, 4), np.uint8)
+        out = np.empty((self.h, self.w, 4), np.uint8)  # zeroed around the box only, warped inside
+        out[:y0] = 0
+        out[y1:] = 0
+        out[y0:y1, :x0] = 0
+        out[y0:y1, x1:] = 0
         local = m.copy()
         local[0, 2] -= x0
         local[1, 2] -= y0
