@@ -39,8 +39,8 @@ class Compositor:
     up), as the performer's ``roll_deg`` does in the camera image.
 
     ``keep_in_frame`` softly limits the translation so the head (the content above the pivot, the
-    neck) never leaves the canvas by more than ``margin`` pixels (default 3 % of the smaller
-    side): small moves pass almost unchanged, large ones approach the limit along a tanh curve.
+    neck) never leaves the canvas by more than ``margin`` pixels (default 0: the bundled heads
+    fill most of the canvas, and a cut-off head reads as a bug): small moves pass almost unchanged, large ones approach the limit along a tanh curve.
     Rotation about the pivot is never changed; when a strong roll alone pushes the head out, the
     translation pulls it back. Off by default here (the maths stays plain); the renderer turns it on.
     """
@@ -88,7 +88,7 @@ class Compositor:
         ]
         self._hull = self._content_hull()
         self.keep_in_frame = bool(keep_in_frame)
-        self.margin = 0.03 * min(self.w, self.h) if margin is None else float(margin)
+        self.margin = 0.0 if margin is None else float(margin)
         self._head_hull = self._content_hull(above_pivot=True)
         self._head_hull_xy = (self._head_hull[:, 0].copy(), self._head_hull[:, 1].copy())
         # One flat canvas per head: outside the boxes it always equals the head, so a frame
