@@ -65,4 +65,4 @@ def immortalize_singletons() -> bool:
 
 
 prepare()
-immortalize_singletons()
+SINGLETONS_GUARDED: bool = immortalize_singletons()

@@ -9,39 +9,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import sys
 
-import app.qt_env  # noqa: F401  (choose a Qt platform before PySide6 loads)
-
-
-def keep_none_alive() -> bool:
-    """Work around PySide6 builds that return ``None``/``True``/``False`` without a new reference.
-
-    PySide6 6.12 assumes these singletons are immortal (true from CPython 3.12 on). On 3.11 every
-    call of a void Qt method (``QPainter.drawLine``, ``QWidget.update`` …) takes one reference from
-    ``None`` for good, and ``Signal.emit`` one from ``True``/``False``; after a few thousand calls
-    the interpreter aborts ("Fatal Python error: none_dealloc" / "bool_dealloc"), in any thread.
-    If a probe shows the leak, the three singletons get a reserve of 2**40 references each (they
-    are never freed anyway). Returns True when the reserve was added.
-    """
-    if sys.version_info >= (3, 12):
-        return False
-    import ctypes
-
-    from PySide6.QtGui import QColor
-
-    probe = QColor()
-    before = sys.getrefcount(None)
-    for _ in range(64):
-        probe.setRed(0)
-    if before - sys.getrefcount(None) < 32:
-        return False
-    for singleton in (None, True, False):
-        ctypes.c_ssize_t.from_address(id(singleton)).value += 1 << 40
-    return True
+import app.qt_env  # chooses a Qt platform before PySide6 loads; guards the singletons
 
 
-NONE_WORKAROUND = keep_none_alive()
+NONE_WORKAROUND: bool = app.qt_env.SINGLETONS_GUARDED
+"""True when app.qt_env guarded None/True/False against PySide6 builds that drop references."""
 
 
 def open_editor(path: str | Path | None = None, parent=None):
