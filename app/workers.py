@@ -705,7 +705,7 @@ def scale_for_view(img: np.ndarray, box: tuple[int, int] | None) -> np.ndarray:
 
 
 def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba, targets: dict, cache: dict) -> None:
-    """A frame over the pipe: the small fields pickled, the two pictures as raw bytes, scaled
+    """A frame over the pipe: the small fields as ordinary pipe messages, the two pictures as raw bytes, scaled
     to the views' sizes (``targets``) unless the window asked for full frames."""
     img = None
     if send_video and fr.frame_bgr is not None:
@@ -839,7 +839,7 @@ def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake
 
 def _portable(source):
     """A fake camera as ``("fake", frames, fps, loop)`` so it can cross to the engine process
-    (sources hold locks, which do not pickle); anything else as is."""
+    (sources hold locks, which cannot cross a process pipe); anything else as is."""
     if source is None or isinstance(source, tuple):
         return source
     frames = getattr(source, "frames", None)
