@@ -22,13 +22,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from tracker import atomic_file
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
@@ -44,28 +44,6 @@ WORK_IPD_MAX = 80.0
 
 class CalibrationError(ValueError):
     """Calibration failed or a calibration file is unusable (one-line message)."""
-
-
-# ---------------------------------------------------------------------------------------------
-# atomic files
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    atomic_write_bytes(path, text.encode("utf-8"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -220,13 +198,13 @@ class Calibration:
             ok, buf = cv2.imencode(".png", np.clip(np.rint(t), 0, 255).astype(np.uint8))
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the eye picture")
-            atomic_write_bytes(path.parent / name, buf.tobytes())
+            atomic_file.write_bytes(path.parent / name, buf.tobytes())
         tiles = np.concatenate([table_to_tile(getattr(self, c).table) for c in CLASSIFIERS])
         ok, buf = cv2.imencode(".png", tiles, [cv2.IMWRITE_PNG_COMPRESSION, 1])
         if not ok:
             raise CalibrationError(f"{path}: could not encode the colour tables")
-        atomic_write_bytes(path.parent / d["colour_tables"]["image"], buf.tobytes())
-        atomic_write_text(path, json.dumps(d, indent=1) + "\n")
+        atomic_file.write_bytes(path.parent / d["colour_tables"]["image"], buf.tobytes())
+        atomic_file.write_text(path, json.dumps(d, indent=1) + "\n")
 
     @staticmethod
     def _load_tables(path: Path, d: dict) -> dict[str, np.ndarray]:

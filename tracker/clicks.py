@@ -88,9 +88,9 @@ class Clicks:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write CLICKS.json atomically."""
-        from tracker.calibration import atomic_write_text
+        from tracker import atomic_file
 
-        atomic_write_text(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
+        atomic_file.write_text(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
 
     def points(self) -> dict[str, Point]:
         return {k: getattr(self, k) for k in POINT_KEYS}

@@ -65,11 +65,11 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
+from tracker import atomic_file
 from tracker.params import LOST, OK, PARAM_NAMES, FaceParams
 
 N_FAPS = 68
@@ -272,15 +272,7 @@ def write_fap(
         faps = params_to_faps(r, neutral, fapu, mirrored)
         lines.append(" ".join("1" if i in faps else "0" for i in range(1, N_FAPS + 1)))
         lines.append(" ".join([str(r.frame)] + [str(faps[i]) for i in sorted(faps)]))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write("\n".join(lines) + "\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_file.write_text(path, "\n".join(lines) + "\n")
     return fapu
 
 

@@ -25,12 +25,13 @@ import dataclasses
 import math
 import os
 import struct
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
+
+from tracker.atomic_file import replacing
 
 PARAM_NAMES: tuple[str, ...] = (
     "mid_x",
@@ -132,32 +133,17 @@ def _fmt(v: float) -> str:
     return f"{v:.4f}" if math.isfinite(v) else "nan"
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def write_csv(path: str | os.PathLike, rows: Iterable[FaceParams], extra: Sequence[str] = EXTRA_COLUMNS) -> None:
     """Write a track CSV atomically: the contract's columns, then ``extra`` fields of the record."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(list(CSV_COLUMNS) + list(extra))
-            for r in rows:
-                line = [str(r.frame)] + [_fmt(getattr(r, n)) for n in PARAM_NAMES]
-                for e in extra:
-                    v = getattr(r, e)
-                    line.append(_fmt(v) if isinstance(v, float) else str(v))
-                w.writerow(line)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with replacing(path) as tmp, open(tmp, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(list(CSV_COLUMNS) + list(extra))
+        for r in rows:
+            line = [str(r.frame)] + [_fmt(getattr(r, n)) for n in PARAM_NAMES]
+            for e in extra:
+                v = getattr(r, e)
+                line.append(_fmt(v) if isinstance(v, float) else str(v))
+            w.writerow(line)
 
 
 def read_csv(path: str | os.PathLike) -> list[FaceParams]:

@@ -46,13 +46,13 @@ from __future__ import annotations
 import json
 import os
 import struct
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
 
+from tracker import atomic_file
 from tracker.params import (
     LOST,
     OK,
@@ -565,20 +565,12 @@ class StreamHeader:
 
 def write_stream(path: str | os.PathLike, header: StreamHeader, packets: Iterable[bytes]) -> None:
     """Write a packet-stream file atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(json.dumps(header.to_dict()).encode() + b"\n")
-            for p in packets:
-                if len(p) > 0xFFFF:
-                    raise StreamError(f"packet of {len(p)} bytes is too long for a stream file")
-                f.write(_LEN.pack(len(p)) + p)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_file.replacing(path) as tmp, open(tmp, "wb") as f:
+        f.write(json.dumps(header.to_dict()).encode() + b"\n")
+        for p in packets:
+            if len(p) > 0xFFFF:
+                raise StreamError(f"packet of {len(p)} bytes is too long for a stream file")
+            f.write(_LEN.pack(len(p)) + p)
 
 
 def read_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[bytes]]:

@@ -37,7 +37,6 @@ import functools
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator, Mapping, Sequence
@@ -45,6 +44,7 @@ from typing import Callable, Iterator, Mapping, Sequence
 import cv2
 import numpy as np
 
+from tracker import atomic_file
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams, write_csv
 
 BGR = tuple[int, int, int]
@@ -1095,10 +1095,8 @@ class Performance:
             raise SynthError(f"{video_path}: unsupported video suffix (use .mp4, .avi or .mkv)")
         if not video_path.parent.is_dir():
             raise SynthError(f"{video_path}: folder {video_path.parent} does not exist")
-        fd, tmp = tempfile.mkstemp(prefix=f".{video_path.stem}.", suffix=video_path.suffix, dir=video_path.parent)
-        os.close(fd)
-        try:
-            writer = cv2.VideoWriter(tmp, cv2.VideoWriter_fourcc(*fourcc), self.fps, self.frame_size)
+        with atomic_file.replacing(video_path, suffix=video_path.suffix) as tmp:
+            writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*fourcc), self.fps, self.frame_size)
             if not writer.isOpened():
                 raise SynthError(f"{video_path}: cannot open a {fourcc} video writer")
             try:
@@ -1108,11 +1106,6 @@ class Performance:
                         progress(i + 1, self.n)
             finally:
                 writer.release()
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, video_path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
         if truth_csv_path is not None:
             write_csv(truth_csv_path, self.truths())
         clicks_path = video_path.with_name(video_path.stem + ".clicks.json")
@@ -1121,13 +1114,4 @@ class Performance:
 
 
 def _write_json(path: Path, data: Mapping) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-            f.write("\n")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_file.write_text(path, json.dumps(data, indent=1) + "\n")

@@ -18,13 +18,13 @@ import json
 import math
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
+from tracker import atomic_file
 from tracker.params import PARAM_NAMES, FaceParams
 from training.features import PART_SLICES, FeatureSpace
 
@@ -72,18 +72,6 @@ class Pair:
         if self.thumb_file:
             d["thumbnail"] = self.thumb_file
         return d
-
-
-def _atomic_write(target: Path, data: bytes) -> None:
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _thumb(image: np.ndarray, bgr: bool) -> np.ndarray:
@@ -341,12 +329,12 @@ class TrainingSession:
                     while (folder / name).exists():
                         self._thumb_seq += 1
                         name = f"{THUMB_DIR}/{p.part}-{stem}-{p.frame:06d}-{os.getpid()}-{self._thumb_seq}.png"
-                    _atomic_write(folder / name, _png(p.thumbnail))
+                    atomic_file.write_bytes(folder / name, _png(p.thumbnail))
                     p.thumb_file = name
                 if p.thumb_file:
                     used.add(p.thumb_file)
             target = folder / SESSION_FILE
-            _atomic_write(target, (json.dumps(self.to_dict(), indent=1) + "\n").encode())
+            atomic_file.write_bytes(target, (json.dumps(self.to_dict(), indent=1) + "\n").encode())
             tdir = folder / THUMB_DIR
             if tdir.is_dir():
                 for f in tdir.glob("*.png"):
