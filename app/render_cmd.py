@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tracker import atomic_file
+
 PAPER = (250, 248, 243)  # RGB behind the character where the output has no alpha
 
 
@@ -109,10 +111,8 @@ class _Writer:
 
             mode = "RGBA" if image.shape[2] == 4 else "RGB"
             target = self.out / f"frame_{self.count:05d}.png"
-            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=self.out)
-            with os.fdopen(fd, "wb") as f:
-                Image.fromarray(image, mode).save(f, format="PNG")
-            _publish(tmp, target)
+            with atomic_file.replacing(target) as tmp:
+                Image.fromarray(image, mode).save(tmp, format="PNG")
         elif self.kind == "gif":
             from PIL import Image
 
@@ -135,11 +135,9 @@ class _Writer:
 
     def close(self, ok: bool = True) -> None:
         if self.kind == "gif" and ok and self._gif:
-            fd, tmp = tempfile.mkstemp(prefix=f".{self.out.stem}.", suffix=".gif", dir=self.out.parent)
-            with os.fdopen(fd, "wb") as f:
-                self._gif[0].save(f, format="GIF", save_all=True, append_images=self._gif[1:],
+            with atomic_file.replacing(self.out) as tmp:
+                self._gif[0].save(tmp, format="GIF", save_all=True, append_images=self._gif[1:],
                                   duration=round(1000 / self.fps), loop=0, disposal=1)
-            _publish(tmp, self.out)
         if self._vw is not None:
             self._vw.release()
             if ok:
