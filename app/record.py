@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import os
 import queue
-import tempfile
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from tracker import atomic_file
 
 RECORD_FILTERS = [
     "MP4 video (*.mp4)",
@@ -157,15 +158,9 @@ class FrameWriter:
             if self.background is None:
                 kwargs["transparency"] = 0
             ims = [_gif_frame(im) for im in [first] + rest] if self.background is None else [first] + rest
-            fd, tmp = tempfile.mkstemp(suffix=".gif", dir=self.path.parent)
-            os.close(fd)
-            try:
-                kwargs["append_images"] = ims[1:]
+            kwargs["append_images"] = ims[1:]
+            with atomic_file.replacing(self.path) as tmp:
                 ims[0].save(tmp, format="GIF", **kwargs)
-                os.replace(tmp, self.path)
-            finally:
-                if os.path.exists(tmp):
-                    os.unlink(tmp)
             self._gif = []
         return self._png_dir if self._png_dir is not None else self.path
 
@@ -186,14 +181,8 @@ def _gif_frame(im):
 
 
 def _atomic_save(im, target: Path) -> None:
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=target.parent)
-    os.close(fd)
-    try:
+    with atomic_file.replacing(target) as tmp:
         im.save(tmp, format="PNG")
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 @dataclass
