@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from app.net import NetError, Sender, UdpReceiver, check_port, parse_address
-from tracker.params import LOST, OK, FaceParams, TrackFormatError, params_array, read_csv, write_csv
+from app.net import Sender, UdpReceiver, check_port, parse_address
+from tracker.params import LOST, OK, FaceParams, params_array, write_csv
 
 _MOUTH_PER_IPD = 0.8  # typical adult proportion, used only when a CSV track comes without its ipd
 

@@ -658,7 +658,6 @@ def _draw_face(frame: np.ndarray, st: FaceState, style: Style) -> None:
     body = _body_pose(st, pose)
     neck = np.concatenate([L(np.array([[-0.40 * u, 1.2 * u], [0.40 * u, 1.2 * u]])),
                            body.apply(np.array([[0.46 * u, 0.3 * u], [-0.46 * u, 0.3 * u]]))])
-    skin = np.asarray(style.skin, np.float32)
     if _Box.around([neck], w, h) is not None:
         cv2.fillPoly(frame, [np.round(np.clip(neck, -1e5, 1e5) * 16).astype(np.int32)],
                      tuple(float(v) * 0.8 for v in style.skin),

@@ -71,7 +71,6 @@ class Wavy(Character):
             self.pen(s, g.upper, 3.4, rng)
             self.pen(s, sub_curve(g.upper - (0, 0.22 * hw), 0.25, 0.8), 1.6, rng, passes=1, opacity=0.7)
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
-        hw = g.hw
         # a brow made of a few short scratchy strokes
         for k in range(4):
             u0 = 0.02 + 0.22 * k + rng.uniform(-0.03, 0.03)
