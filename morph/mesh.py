@@ -90,17 +90,21 @@ class MeshGrid:
         return mx[0], my[0]
 
     def upsample_many(self, meshes: np.ndarray, reuse: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """Dense maps for ``k`` meshes ``(k, n, n, 2)``: a y pass on the mesh, then a banded x pass.
-
-        Returns ``(map_x, map_y)``, each ``(k, h, w)`` float32 with contiguous ``[i]`` slices.
-        The x pass takes each band of output columns from the few vertex columns around it
-        (``band_cells`` + 1 taps instead of all ``n``; the skipped weights are exact zeros).
-        With ``reuse`` the result lives in buffers of this grid that the next call overwrites
-        (the per-frame path: no fresh megabytes to fault in every frame).
-        """
+        """Dense maps for ``k`` meshes ``(k, n, n, 2)``; see :meth:`upsample_planes`."""
         meshes = np.asarray(meshes, dtype=np.float32)
-        k, n = meshes.shape[0], self.cells + 1
-        comps = np.ascontiguousarray(np.moveaxis(meshes, -1, 1)).reshape(k * 2, n, n)  # (2k, n, n)
+        return self.upsample_planes(np.moveaxis(meshes, -1, 1), reuse=reuse)
+
+    def upsample_planes(self, planes: np.ndarray, reuse: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Dense maps for ``k`` meshes given as planes ``(k, 2, n, n)`` (x plane, y plane).
+
+        A y pass on the mesh, then a banded x pass: each band of output columns takes only the
+        few vertex columns around it (``band_cells`` + 1 taps instead of all ``n``; the skipped
+        weights are exact zeros). Returns ``(map_x, map_y)``, each ``(k, h, w)`` float32 with
+        contiguous ``[i]`` slices. With ``reuse`` the result lives in buffers of this grid that
+        the next call overwrites (the per-frame path: no fresh megabytes to fault in every frame).
+        """
+        k, n = planes.shape[0], self.cells + 1
+        comps = np.ascontiguousarray(planes, dtype=np.float32).reshape(k * 2, n, n)
         if reuse:
             if self._rows is None or self._rows.shape[0] < 2 * k:
                 self._rows = np.empty((2 * k, self.h, n), np.float32)

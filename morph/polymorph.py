@@ -86,9 +86,15 @@ class PartMorpher:
         self.border = border_mode(border)
         self.grid = MeshGrid(self.size, cells)
         self.vertices = self.grid.vertices.astype(np.float32)
-        self.tables = self._build_tables()
-        self._flat_tables = self.tables.reshape(self.n * self.n * self.alpha_steps, -1)
-        self._flat_vertices = self.vertices.reshape(-1)
+        m = self.grid.cells + 1
+        # Component-major rows: every (A, B, α step) row holds the x plane then the y plane of
+        # ``D_AB(α)``; one more row holds the vertex positions. A frame's meshes are then one
+        # gather and one small matrix product, already in the planar layout the upsampling reads.
+        self._planes = np.empty((self.n * self.n * self.alpha_steps + 1, 2 * m * m), np.float32)
+        self._planes[:-1] = np.moveaxis(self._build_tables(), -1, -3).reshape(-1, 2 * m * m)
+        self._planes[-1] = np.moveaxis(self.vertices, -1, 0).reshape(-1)
+        self._planes.flags.writeable = False
+        self._vertex_row = self._planes.shape[0] - 1
         self._warped: list[np.ndarray] = []  # per-frame scratch images, reused
         self._pair: np.ndarray | None = None
 
@@ -110,6 +116,12 @@ class PartMorpher:
             for k, ib in enumerate(others):
                 tables[ia, ib] = field[k]
         return tables
+
+    @property
+    def tables(self) -> np.ndarray:
+        """``(n, n, alpha_steps, m, m, 2)`` float32 displacements ``D_AB(α)`` (a read-only view)."""
+        m = self.grid.cells + 1
+        return np.moveaxis(self._planes[:-1].reshape(self.n, self.n, self.alpha_steps, 2, m, m), 3, -1)
 
     def active(self, indices: Sequence[int], weights: Sequence[float]) -> list[tuple[int, float]]:
         """Distinct drawings with positive weight, weights clipped at 0 and normalised to sum 1.
@@ -143,41 +155,43 @@ class PartMorpher:
         return tab[k] + f * (tab[k + 1] - tab[k])
 
     def meshes(self, indices: Sequence[int], weights: Sequence[float]) -> list[tuple[int, float, np.ndarray]]:
-        """For each active drawing ``(index, weight, mesh)``: source positions in that drawing."""
+        """For each active drawing ``(index, weight, mesh)``: source positions ``(m, m, 2)`` in that drawing."""
         act = self.active(indices, weights)
-        stack = self._mesh_stack(act)
-        return [(ia, wa, stack[k]) for k, (ia, wa) in enumerate(act)]
+        planes = self._mesh_planes(act)
+        return [(ia, wa, np.moveaxis(planes[k], 0, -1)) for k, (ia, wa) in enumerate(act)]
 
-    def _mesh_stack(self, act: list[tuple[int, float]]) -> np.ndarray:
-        """``(len(act), m, m, 2)`` float32 meshes of the active drawings (see :meth:`meshes`).
+    def _mesh_planes(self, act: list[tuple[int, float]]) -> np.ndarray:
+        """``(len(act), 2, m, m)`` float32 meshes of the active drawings, x plane then y plane.
 
-        All ordered pairs' table look-ups and α interpolations are done in one gather, so the
-        cost does not grow with numpy calls per pair."""
+        Drawing A's mesh is ``V + Σ_B lerp(D_AB, α = w_B)``: a weighted sum of table rows (each
+        pair's α step below and above, and the vertex row), done as one gather and one product."""
+        m = self.grid.cells + 1
         if self.exact_three_way and len(act) > 2:
-            return np.stack([mesh for _, _, mesh in self._exact_meshes(act)])
+            return np.ascontiguousarray(np.moveaxis(np.stack([mesh for _, _, mesh in self._exact_meshes(act)]), -1, 1))
         n = len(act)
         if n == 1:
-            return self.vertices[None].copy()
+            return self._planes[self._vertex_row].reshape(1, 2, m, m).copy()
         top = self.alpha_steps - 1
-        rows, fracs = [], []  # rows of ``_flat_tables``: each pair's α step below, then above
-        for ia, _ in act:
+        rows = [self._vertex_row]
+        coef = [[1.0] + [0.0] * (2 * n * (n - 1)) for _ in range(n)]
+        col = 1
+        for k, (ia, _) in enumerate(act):
             base = ia * self.n
             for ib, wb in act:
                 if ib != ia:
                     t = min(max(wb, 0.0), 1.0) * top
-                    k = min(int(t), top - 1)
-                    rows.append((base + ib) * self.alpha_steps + k)
-                    fracs.append(t - k)
-        pairs = len(rows)
-        both = self._flat_tables[rows + [r + 1 for r in rows]]
-        lo, d = both[:pairs], both[pairs:]
-        d -= lo
-        d *= np.array(fracs, np.float32)[:, None]
-        d += lo
-        out = d[0::2] + d[1::2] if n == 3 else d.reshape(n, n - 1, -1).sum(axis=1)
-        out += self._flat_vertices
-        m = self.grid.cells + 1
-        return out.reshape(n, m, m, 2)
+                    s = min(int(t), top - 1)
+                    r = (base + ib) * self.alpha_steps + s
+                    rows += (r, r + 1)
+                    coef[k][col] = 1.0 - (t - s)
+                    coef[k][col + 1] = t - s
+                    col += 2
+        out = np.matmul(np.array(coef, np.float32), self._planes[rows])
+        return out.reshape(n, 2, m, m)
+
+    def _mesh_stack(self, act: list[tuple[int, float]]) -> np.ndarray:
+        """``(len(act), m, m, 2)`` float32 meshes of the active drawings (see :meth:`meshes`)."""
+        return np.moveaxis(self._mesh_planes(act), 1, -1)
 
     def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
         """The exact n-way field sampled on the mesh now (slower; no sum-of-two-way error)."""
@@ -213,10 +227,10 @@ class PartMorpher:
                 return self.pm[parts[0][0]].copy()
             np.copyto(out, self.pm[parts[0][0]])
             return out
-        stack = self._mesh_stack(parts)
+        planes = self._mesh_planes(parts)
         if jitter is not None:
-            stack += np.asarray(jitter, dtype=np.float32)
-        maps_x, maps_y = self.grid.upsample_many(stack, reuse=True)
+            planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
+        maps_x, maps_y = self.grid.upsample_planes(planes, reuse=True)
         while len(self._warped) < len(parts):
             self._warped.append(np.empty_like(self.pm[0]))
         warped = [
