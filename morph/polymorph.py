@@ -275,7 +275,7 @@ def _blend3_u8(
     pixels at exactly 255. Rounding is monotonic, so colour <= alpha still holds.
     """
     frac = [abs((255.0 * float(w)) % 1.0 - 0.5) for w in weights]
-    last = int(np.argmax(frac))
+    last = frac.index(max(frac))
     i, j = (k for k in range(3) if k != last)
     pair = cv2.addWeighted(images[i], float(weights[i]), images[j], float(weights[j]), 0.0, dst=scratch)
     return cv2.addWeighted(pair, 1.0, images[last], float(weights[last]), 0.0, dst=out)
