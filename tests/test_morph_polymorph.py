@@ -103,6 +103,21 @@ def test_sum_of_two_way_meshes_targets_the_blended_lines(morpher, mouths):
         assert err.mean() < 1.5
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.permutations(range(4)), st.lists(st.floats(0.05, 1.0), min_size=3, max_size=3))
+def test_meshes_are_the_vertices_plus_interpolated_two_way_tables(morpher, order, raw):
+    """Each active drawing's mesh is V + D_AB(w_B) + D_AC(w_C), the tables read at those α."""
+    idx = tuple(order[:3])
+    w = np.array(raw) / sum(raw)
+    for ia, wa, mesh in morpher.meshes(idx, w):
+        want = morpher.vertices.astype(np.float64)
+        for ib, wb in zip(idx, w):
+            if ib != ia:
+                want = want + morpher.displacement(ia, ib, float(wb))
+        assert wa == pytest.approx(w[idx.index(ia)])
+        np.testing.assert_allclose(mesh, want, atol=2e-3)
+
+
 def test_duplicate_and_negative_weights_are_normalised(morpher):
     a = morpher.render((1, 1, 2), (0.3, 0.3, 0.4))
     b = morpher.render((1, 2, 0), (0.6, 0.4, 0.0))
