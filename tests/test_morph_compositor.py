@@ -248,3 +248,102 @@ def test_whole_pixel_moves_match_the_bilinear_warp(dx, dy, seed):
                           borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
     assert np.array_equal(out, want)
     assert out is not c.compose({"eyes": eyes}, pose=(dx, dy, 0.0))
+
+
+# ------------------------------------------------------------------ banded warp vs a full warp
+
+
+def _odd_head(seed: int = 0) -> np.ndarray:
+    """Premultiplied, non-convex: a ring with an eye hole, an L-shaped arm, shoulders cut by the
+    bottom edge; smooth colours inside, hard anti-aliased edges."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    colour = cv2.GaussianBlur(rng.integers(0, 256, (CANVAS[1], CANVAS[0], 3)).astype(np.float32), (0, 0), 6)
+    colour = cv2.normalize(colour, None, 0, 255, cv2.NORM_MINMAX)
+    alpha = np.zeros((CANVAS[1], CANVAS[0]), np.uint8)
+    cv2.circle(alpha, (55, 38), 30, 255, 12, cv2.LINE_AA)
+    cv2.rectangle(alpha, (88, 8), (98, 60), 255, -1)
+    cv2.rectangle(alpha, (88, 50), (115, 60), 255, -1)
+    cv2.ellipse(alpha, (60, 100), (55, 25), 0, 180, 360, 200, -1, cv2.LINE_AA)
+    head = np.dstack([colour.astype(np.uint8), alpha])
+    return premultiply(head)
+
+
+def _full_warp(flat: np.ndarray, m: np.ndarray) -> np.ndarray:
+    import cv2
+
+    return cv2.warpAffine(flat, m, (flat.shape[1], flat.shape[0]), flags=cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
+
+
+def _origin_tolerance(flat: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Per output pixel and channel: how far a warp of a sub-rectangle may differ from the full
+    warp. OpenCV samples on a 1/32-px grid found in fixed point from the destination origin, so
+    another origin can move a sample one step in x and y: at most (source contrast)/16 + 1."""
+    import cv2
+
+    pad = cv2.copyMakeBorder(flat, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(0, 0, 0, 0))
+    k = np.ones((3, 3), np.uint8)
+    contrast = cv2.dilate(pad, k) - cv2.erode(pad, k)
+    shifted = m.copy()
+    shifted[:, 2] -= m[:, :2] @ [2.0, 2.0]
+    near = cv2.warpAffine(contrast, shifted, (flat.shape[1], flat.shape[0]), flags=cv2.INTER_NEAREST,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0, 0))
+    return near.astype(int) / 16 + 1
+
+
+def _assert_matches_full_warp(c: Compositor, flat: np.ndarray, pose) -> np.ndarray:
+    m = c.matrix(pose)
+    got = c.transform(flat, pose)
+    want = _full_warp(flat, m)
+    d = np.abs(got.astype(int) - want.astype(int))
+    assert (d <= _origin_tolerance(flat, m)).all()
+    assert (d > 0).mean() < 0.02  # the differences are rare sampling steps, not a shift
+    covered = np.zeros(flat.shape[:2], bool)
+    for y0, y1, x0, x1 in c._bands(m):
+        covered[y0:y1, x0:x1] = True
+    assert not want[~covered].any()  # nothing the full warp shows lies outside the bands
+    return got
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-45, 45), st.floats(-60, 60), st.floats(-60, 60), st.floats(0.3, 1.5), st.integers(0, 3))
+def test_banded_warp_matches_a_full_warp_of_a_non_convex_head(roll, dx, dy, gain, seed):
+    head = _odd_head(seed)
+    c = Compositor(CANVAS, (60, 80), [head], {"eyes": (40, 30, 30, 16)}, gain=gain, heads_premultiplied=True)
+    eyes = _part(30, 16, (0, 90, 180, 200))
+    flat = c.flat({"eyes": eyes}).copy()
+    got = _assert_matches_full_warp(c, flat, (dx, dy, roll))
+    if abs(dx * gain) < 30 and abs(dy * gain) < 30:
+        assert got[:, :, 3].any()
+
+
+@pytest.mark.parametrize("pose", [(130, 0, 0.5), (-100, 45, 30), (0, -115, -20), (70, 70, 44), (400, 0, 10)])
+def test_banded_warp_with_content_moving_off_the_canvas(pose):
+    c = Compositor(CANVAS, (60, 80), [_odd_head(1)], {}, heads_premultiplied=True)
+    _assert_matches_full_warp(c, c.heads[0], pose)
+
+
+@pytest.mark.parametrize("band_rows", [12, 16, 48, 100, 1000])
+def test_banded_warp_for_any_band_height_including_one_band(band_rows):
+    c = Compositor(CANVAS, (60, 80), [_odd_head(2)], {}, heads_premultiplied=True, band_rows=band_rows)
+    for pose in ((3.5, -7.25, 12.0), (-20.2, 4.1, -33.0)):
+        _assert_matches_full_warp(c, c.heads[0], pose)
+    if band_rows >= CANVAS[1]:
+        assert len(c._bands(c.matrix((0.5, 0, 3)))) == 1
+
+
+def test_empty_heads_give_an_empty_frame_and_boxes_still_move():
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], {})
+    assert c._bands(c.matrix((2.5, 1, 10))) == []
+    assert not c.compose({}, pose=(2.5, 1, 10)).any()
+    c = Compositor(CANVAS, (60, 50), [_clear_head()], {"m": (30, 30, 20, 10)})
+    flat = c.flat({"m": _part(20, 10, (0, 200, 0, 255))}).copy()
+    got = _assert_matches_full_warp(c, flat, (2.5, 1, 10))
+    assert got[:, :, 3].sum() / 255 == pytest.approx(200, abs=2)
+
+
+def test_band_height_must_cover_the_bilinear_reach():
+    with pytest.raises(ValueError, match="band_rows"):
+        Compositor(CANVAS, (60, 50), [_odd_head()], {}, band_rows=4)
