@@ -98,9 +98,12 @@ class Compositor:
         self.margin = 0.0 if margin is None else float(margin)
         self._head_hull = self._content_hull(above_pivot=True)
         self._head_hull_xy = (self._head_hull[:, 0].copy(), self._head_hull[:, 1].copy())
-        # One flat canvas per head: outside the boxes it always equals the head, so a frame
-        # only rewrites the boxes.
-        self._flats = [hd.copy() for hd in self.heads]
+        # One flat canvas: outside the boxes it equals the current head, so a frame rewrites
+        # only the boxes, and the whole canvas when the shimmer changes the head. (One buffer
+        # per head, rewritten only in the boxes, measured 1–2 % slower a frame: more memory for
+        # the warp to read from farther caches.)
+        self._flat = self.heads[0].copy()
+        self._flat_head = 0
         self._overlaps = self._any_overlap()
 
     def _content_hull(self, above_pivot: bool = False) -> np.ndarray:
@@ -209,7 +212,10 @@ class Compositor:
         """The untransformed character: parts under the head (an internal buffer, reused)."""
         k = self.head_index(frame_no)
         head = self.heads[k]
-        out = self._flats[k]
+        out = self._flat
+        if k != self._flat_head:
+            np.copyto(out, head)
+            self._flat_head = k
         if self._overlaps:
             return self._flat_overlapping(parts, head, out)
         for name, ((x, y, bw, bh), _) in self._clip.items():

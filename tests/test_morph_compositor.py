@@ -347,3 +347,14 @@ def test_empty_heads_give_an_empty_frame_and_boxes_still_move():
 def test_band_height_must_cover_the_bilinear_reach():
     with pytest.raises(ValueError, match="band_rows"):
         Compositor(CANVAS, (60, 50), [_odd_head()], {}, band_rows=4)
+
+
+def test_shimmer_through_one_flat_buffer_matches_a_fresh_composite():
+    rng = np.random.default_rng(3)
+    heads = [rng.integers(0, 256, (CANVAS[1], CANVAS[0], 4), dtype=np.uint8) for _ in range(3)]
+    boxes = {"eyes": (10, 20, 30, 10), "mouth": (50, 60, 40, 20)}
+    c = Compositor(CANVAS, (60, 50), heads, boxes, shimmer_every=1)
+    for frame in (0, 1, 1, 2, 0, 2, 5, 3):
+        parts = {"eyes": _part(30, 10, (0, 0, 99, 99))} if frame % 2 else {"mouth": _part(40, 20, (9, 9, 9, 9))}
+        fresh = Compositor(CANVAS, (60, 50), [heads[frame % 3]], boxes)
+        assert np.array_equal(c.flat(parts, frame), fresh.flat(parts))
