@@ -49,6 +49,9 @@ class Compositor:
     fill most of the canvas, and a cut-off head reads as a bug): small moves pass almost unchanged, large ones approach the limit along a tanh curve.
     Rotation about the pivot is never changed; when a strong roll alone pushes the head out, the
     translation pulls it back. Off by default here (the maths stays plain); the renderer turns it on.
+
+    ``band_rows`` is the height of the output bands the warp is cut into (32 measured fastest
+    on 512×512 canvases: fewer warp calls against fewer wasted pixels).
     """
 
     def __init__(
@@ -151,7 +154,8 @@ class Compositor:
         self._outline[:, :2] = np.vstack([pts, pts])
         self._outline[:n, 2] = 1
         self._outline[n:, 3] = 1
-        # every moved point has |y − ty| ≤ _radius: bounds the band indices of a visible frame
+        # m only rotates and moves, so every moved point has |y − ty| ≤ _radius: bounds the
+        # band indices of any frame in which something is visible
         self._radius = float(np.hypot(pts[:, 0], pts[:, 1]).max()) if n else 0.0
         self._pad = int(math.ceil((2 * (self._radius + self._reach) + 1) / self.band_rows)) + 1
         span = self._n_bands + 2 * self._pad + 2
@@ -345,6 +349,7 @@ class Compositor:
 # Output pixels farther than this (px) from every moved content pixel centre stay transparent:
 # √2 for the bilinear footprint, plus OpenCV's 1/32-px sampling grid.
 _REACH = 1.5
+# Every 4th contour pixel: a quarter of the per-frame points for about 3 px more reach.
 _OUTLINE_STEP = 4
 
 
