@@ -263,12 +263,13 @@ def run(ctx):
             pix.add(pname, label, f"{d.mean():.3f}", f"{np.percentile(d, 99):.1f}", f"{(d > 32).mean() * 100:.2f} %")
         idx, w = trip[0]
         sel_i, sel_l = [imgs[i] for i in idx], [lines[i] for i in idx]
-        t_exact = time_call(lambda: bn.polymorph_exact(sel_i, sel_l, w), ctx.runs(9, 1), warmup=0)
-        t_mesh = time_call(lambda: m.render(idx, w), ctx.runs(500, 30))
+        m_ex = PartMorpher(imgs, lines, alpha_steps=2, exact_three_way=True)
+        t_exact, t_mesh, t_mex = _interleaved(
+            [lambda: bn.polymorph_exact(sel_i, sel_l, w), lambda: m.render(idx, w), lambda: m_ex.render(idx, w)],
+            rounds=ctx.runs(9, 1), per_round=[1, 50, 20],
+        )
         spd.add(pname, "exact per-pixel polymorph", *t_exact.cells(), "1×")
         spd.add(pname, "mesh + α tables (paper)", *t_mesh.cells(), f"{t_exact.median / t_mesh.median:.0f}×")
-        m_ex = PartMorpher(imgs, lines, alpha_steps=2, exact_three_way=True)
-        t_mex = time_call(lambda: m_ex.render(idx, w), ctx.runs(200, 10))
         spd.add(pname, "mesh, exact 3-way field each frame", *t_mex.cells(), f"{t_exact.median / t_mex.median:.0f}×")
     acc.note = ("goal (mesh sampling): ≤ 0.5 px mean, ≤ 2 px max. The largest errors sit within a pixel or two of "
                 "line endpoints and where lines of one drawing cross or nearly touch (e.g. a closed lid over a fixed "
@@ -322,6 +323,7 @@ def run(ctx):
         canvas = f"{a.canvas[0]}×{a.canvas[1]}"
         rend.add(a.name, canvas, "whole frame (goal ≤ 3 ms; paper 8 ms)", *t_all.cells())
         rend.add(a.name, canvas, "whole frame, CPU time of this thread", *_time_frames(whole, frames, cpu=True).cells())
+        rend.add(a.name, canvas, "whole frame, best of 3 runs per frame", *_best_of(whole, frames, 3).cells())
         em, mm = r.morphers["eyes"], r.morphers["mouth"]
         rend.add(a.name, canvas, f"eyes part {em.size[0]}×{em.size[1]}",
                  *_time_frames(lambda f: em.render(f[0], f[1]), frames).cells())
@@ -351,9 +353,47 @@ def run(ctx):
                       f"{np.mean(crisp) / np.mean(plain):.2f}×")
     rend.note = ("random weights inside the triangles, random pose (σ 8 px, 10°), heads cycling; the per-stage rows "
                  "time each stage alone. Wall-clock unless marked CPU time; CPU time (time.thread_time) leaves out "
-                 f"waiting for other processes (load average at the end: {_loadavg()}).")
+                 "waiting for other processes but not a busy sibling core or host. 'Best of 3' times each frame three "
+                 "times back to back and keeps the fastest: the frame's own cost. On a shared virtual machine the "
+                 "single-run median of the same frames moves by up to ±30 % from one run to the next "
+                 f"(load average at the end: {_loadavg()}).")
     tables += [rend, start, sharp]
     return tables
+
+
+def _interleaved(fns, rounds: int, per_round: list[int]):
+    """Time several functions in alternating rounds (``per_round[i]`` calls of ``fns[i]`` each),
+    so a ratio of their medians is not skewed by the host being busier during one of them."""
+    from benchmarks.harness import Timing
+
+    for fn in fns:
+        fn()
+    samples = [[] for _ in fns]
+    for _ in range(rounds):
+        for fn, n, out in zip(fns, per_round, samples):
+            for _ in range(n):
+                t0 = time.perf_counter()
+                fn()
+                out.append((time.perf_counter() - t0) * 1000.0)
+    return [Timing(s) for s in samples]
+
+
+def _best_of(fn, frames, repeats: int):
+    """Per frame the fastest of ``repeats`` back-to-back runs: the frame's own cost without
+    the bursts of interference a shared host adds to single runs."""
+    from benchmarks.harness import Timing
+
+    for f in frames[:3]:
+        fn(f)
+    out = []
+    for f in frames:
+        best = float("inf")
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            fn(f)
+            best = min(best, time.perf_counter() - t0)
+        out.append(best * 1000.0)
+    return Timing(out)
 
 
 def _time_frames(fn, frames, cpu: bool = False):
