@@ -49,7 +49,7 @@ class MeshGrid:
         ys = np.arange(n, dtype=np.float64) * (self.h - 1) / self.cells
         gx, gy = np.meshgrid(xs, ys)
         self.vertices = np.stack([gx, gy], axis=-1)  # (n, n, 2) float64, [row j, col i] = (x, y)
-        self._rows: np.ndarray | None = None  # scratch for upsample_planes(reuse=True)
+        self._cols: np.ndarray | None = None  # scratch for upsample_planes(reuse=True)
         self._dense: np.ndarray | None = None
         # Banded x pass of ``upsample_planes``: output columns [x0, x1) use vertex columns
         # [j0, j0 + band] only; weights stored transposed, (band+1, x1−x0).
@@ -108,10 +108,10 @@ class MeshGrid:
         k, n = planes.shape[0], self.cells + 1
         comps = np.ascontiguousarray(planes, dtype=np.float32).reshape(k * 2, n, n)
         if reuse:
-            if self._rows is None or self._rows.shape[0] < 2 * k:
-                self._rows = np.empty((2 * k, n, self.w), np.float32)
+            if self._cols is None or self._cols.shape[0] < 2 * k:
+                self._cols = np.empty((2 * k, n, self.w), np.float32)
                 self._dense = np.empty((2 * k, self.h, self.w), np.float32)
-            cols, dense = self._rows[: 2 * k], self._dense[: 2 * k]
+            cols, dense = self._cols[: 2 * k], self._dense[: 2 * k]
         else:
             cols = np.empty((2 * k, n, self.w), np.float32)
             dense = np.empty((2 * k, self.h, self.w), np.float32)

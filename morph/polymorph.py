@@ -167,7 +167,8 @@ class PartMorpher:
         pair's α step below and above, and the vertex row), done as one gather and one product."""
         m = self.grid.cells + 1
         if self.exact_three_way and len(act) > 2:
-            return np.ascontiguousarray(np.moveaxis(np.stack([mesh for _, _, mesh in self._exact_meshes(act)]), -1, 1))
+            exact = np.stack([mesh for _, _, mesh in self._exact_meshes(act)])
+            return np.ascontiguousarray(np.moveaxis(exact, -1, 1))
         n = len(act)
         if n == 1:
             return self._planes[self._vertex_row].reshape(1, 2, m, m).copy()
@@ -188,10 +189,6 @@ class PartMorpher:
                     col += 2
         out = np.matmul(np.array(coef, np.float32), self._planes[rows])
         return out.reshape(n, 2, m, m)
-
-    def _mesh_stack(self, act: list[tuple[int, float]]) -> np.ndarray:
-        """``(len(act), m, m, 2)`` float32 meshes of the active drawings (see :meth:`meshes`)."""
-        return np.moveaxis(self._mesh_planes(act), 1, -1)
 
     def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
         """The exact n-way field sampled on the mesh now (slower; no sum-of-two-way error)."""
