@@ -45,7 +45,7 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import cv2
 import numpy as np
@@ -56,6 +56,9 @@ from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams
 from tracker.track_cli import TrackCliError, _auto, _frame_at, _Video
+
+if TYPE_CHECKING:
+    from benchmarks.harness import Table
 
 REAL_DIR_ENV = "INKFACE_REAL_DIR"
 """Environment variable naming the folder of real clips (overrides ``../shared/real``)."""
@@ -70,10 +73,8 @@ ON_FACE = 8.0
 """Pupil-midpoint error (% IPD) under which a frame counts as on the face (re-acquisition)."""
 
 PEER_MS = (4.3, 4.7)
-PEER_MS_SOURCE = (
-    "stated constant, not measured here: MediaPipe Face Mesh with refined irises, per 512×512 frame "
-    "on one core of this machine, as given in issue 13 (MediaPipe is not a project dependency)"
-)
+PEER_MS_SOURCE = "stated constant from issue 13 (one core of this machine), not measured: MediaPipe is not a dependency"
+"""Where :data:`PEER_MS` comes from: MediaPipe Face Mesh with refined irises, per 512×512 frame."""
 
 # Targets of issue 13, per clip. "max" targets are upper bounds, "min" lower bounds.
 TARGETS: dict[str, tuple[str, float]] = {
@@ -499,21 +500,11 @@ def measure_clip(folder: Path, name: str, auto: bool = False, sheets: bool = Fal
     return ClipResult(name, run.mode, m, run.times_ms, run.calibrate_ms, sheet=sheet)
 
 
-def _job(args: tuple) -> ClipResult:
-    return measure_clip(*args)
-
-
 def measure_all(folder: Path, names: Sequence[str], modes: Sequence[bool] = (False, True), sheets: bool = False,
                 workers: int = 2, max_frames: int | None = None) -> list[ClipResult]:
     """Every clip in every mode (``False`` = clicks, ``True`` = auto); ``workers`` > 1 uses a
     process pool (at most 2: the machine has 2 cores). Results come back in clip, mode order."""
-    jobs = [(folder, n, a, sheets, max_frames) for n in names for a in modes]
-    if workers <= 1 or len(jobs) <= 1:
-        return [_job(j) for j in jobs]
-    import multiprocessing as mp
-
-    with mp.get_context("fork").Pool(min(workers, 2, len(jobs))) as pool:
-        return pool.map(_job, jobs, chunksize=1)
+    return _map(measure_clip, [(folder, n, a, sheets, max_frames) for n in names for a in modes], workers)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -580,7 +571,8 @@ def pooled_times(results: Sequence[ClipResult]) -> np.ndarray:
     return np.concatenate(ts) if ts else np.zeros(0)
 
 
-def print_table(results: Sequence[ClipResult], file=sys.stdout, timing_note: str = "") -> None:
+def results_table(results: Sequence[ClipResult], notes: Sequence[str] = ()) -> "Table":
+    """The per-clip table (clicks rows, targets, auto rows, targets) with the summaries under it."""
     from benchmarks.harness import Table
 
     t = Table("Real faces vs the peer (MediaPipe Face Mesh)", COLUMNS)
@@ -590,15 +582,33 @@ def print_table(results: Sequence[ClipResult], file=sys.stdout, timing_note: str
             t.add(*result_row(r))
         if rs:
             t.add(*target_row(auto))
-    notes = [summary(results, False), summary(results, True)]
-    allt = pooled_times(results)
-    if len(allt):
-        notes.append(f"all frames pooled: track {np.median(allt):.2f} ms median, {np.percentile(allt, 95):.2f} ms p95; "
-                     f"peer {PEER_MS[0]}–{PEER_MS[1]} ms ({PEER_MS_SOURCE})")
-    notes.append("* = misses its target; 'run' = longest run of lost frames; lost/mouth/closed = raw statuses."
-                 + (" " + timing_note if timing_note else ""))
-    t.note = "\n".join(n for n in notes if n)
-    print(t.render(), file=file)
+    lines = [summary(results, False), summary(results, True),
+             "* = misses its target; 'run' = longest run of lost frames; lost/mouth/closed = raw statuses; "
+             "ms = one track() call, every frame (re-acquisition included)."]
+    t.note = "\n".join(n for n in [*lines, *notes] if n)
+    return t
+
+
+def speed_table(results: Sequence[ClipResult]) -> "Table":
+    """Pooled per-frame cost per mode, calibration cost, and the peer's stated cost beside them."""
+    from benchmarks.harness import Table, Timing
+
+    t = Table("Real faces: tracking cost per frame, ours vs the peer's published cost",
+              ["what", "frames", "median ms", "p95 ms", "max ms", "source"])
+    for mode in ("clicks", "auto"):
+        rs = [r for r in results if r.mode == mode]
+        ts = pooled_times(rs)
+        if len(ts):
+            t.add(f"ours, {mode}, all clips pooled", str(len(ts)), f"{np.median(ts):.2f}",
+                  f"{np.percentile(ts, 95):.2f}", f"{ts.max():.1f}", "measured in this run")
+        cal = [r.calibrate_ms for r in rs if math.isfinite(r.calibrate_ms)]
+        if cal:
+            c = Timing(cal)
+            t.add(f"ours, {mode}: start (find face, calibrate; once a clip)", str(c.runs), f"{c.median:.1f}", "",
+                  f"{c.hi:.1f}", "measured in this run")
+    t.add("peer: MediaPipe Face Mesh + irises, 512×512", "", f"{PEER_MS[0]}–{PEER_MS[1]}", "", "", PEER_MS_SOURCE)
+    t.note = "targets: ours median ≤ 3 ms and p95 ≤ 8 ms on every clip, and faster than the peer."
+    return t
 
 
 # ---------------------------------------------------------------------------------------------
@@ -611,6 +621,7 @@ class SynthResult:
     returns: list[int]
     first_ok: list[int | None]
     first_on_face: list[int | None]
+    false_ok_away: int
     metrics: Metrics
 
 
@@ -651,11 +662,12 @@ def synthetic_away(seed: int, seconds: float = 10.0, away: tuple[float, float] =
         first_ok.append(int(k[0]) if len(k) else None)
         k = np.flatnonzero(ok[b:] & (err[b:] <= ON_FACE))
         first_on.append(int(k[0]) if len(k) else None)
-    return SynthResult(seed, returns, first_ok, first_on, m)
+    false_ok = int((ok & (tst[: len(ok)] == LOST)).sum())
+    return SynthResult(seed, returns, first_ok, first_on, false_ok, m)
 
 
 SYNTH_COLUMNS = ["seed", "return frame", "frames to first ok", "to first ok on face", "lost %", "run",
-                 "pupil med/p95 %IPD (ok frames)", "ok frames > 8 % IPD"]
+                 "pupil med/p95 %IPD (ok frames)", "ok frames > 8 % IPD", "ok while away"]
 
 
 def synth_row(s: SynthResult) -> list[str]:
@@ -663,31 +675,33 @@ def synth_row(s: SynthResult) -> list[str]:
     m = s.metrics
     bad = int((m.pupil_err > ON_FACE).sum())
     return [str(s.seed), f(s.returns), f(s.first_ok), f(s.first_on_face), f"{m.lost_pct:.1f}", str(m.longest_loss),
-            f"{m.pupil_med:.1f}/{m.pupil_p95:.1f}", str(bad)]
+            f"{m.pupil_med:.1f}/{m.pupil_p95:.1f}", str(bad), str(s.false_ok_away)]
 
 
-def _synth_job(seed: int) -> SynthResult:
-    return synthetic_away(seed)
+def measure_synthetic(seeds: Sequence[int] = (1, 2, 3, 4), workers: int = 2, seconds: float = 10.0) -> list[SynthResult]:
+    """:func:`synthetic_away` for each seed, over a pool of ``workers`` processes (at most 2)."""
+    return _map(synthetic_away, [(s, seconds) for s in seeds], workers)
 
 
-def measure_synthetic(seeds: Sequence[int] = (1, 2, 3, 4), workers: int = 2) -> list[SynthResult]:
-    if workers <= 1:
-        return [_synth_job(s) for s in seeds]
+def _map(fn, jobs: list[tuple], workers: int) -> list:
+    if workers <= 1 or len(jobs) <= 1:
+        return [fn(*j) for j in jobs]
     import multiprocessing as mp
 
-    with mp.get_context("fork").Pool(min(workers, 2, len(seeds))) as pool:
-        return pool.map(_synth_job, list(seeds), chunksize=1)
+    with mp.get_context("fork").Pool(min(workers, 2, len(jobs))) as pool:
+        return pool.starmap(fn, jobs, chunksize=1)
 
 
-def print_synth(results: Sequence[SynthResult], file=sys.stdout) -> None:
+def synth_table(results: Sequence[SynthResult], seconds: float = 10.0) -> "Table":
     from benchmarks.harness import Table
 
-    t = Table("Synthetic performer slides out of the frame and back (--away 2:3 --away-mode slide, 10 s)", SYNTH_COLUMNS)
+    t = Table(f"Synthetic performer slides out of the frame and back (--away 2:3 --away-mode slide, {seconds:g} s)",
+              SYNTH_COLUMNS)
     for s in results:
         t.add(*synth_row(s))
-    t.note = (f"target: back within {REACQUIRE_TARGET} frames of the return; ok frames on the face "
-              f"(p95 ≤ 8 %, median ≤ 3 % IPD). Return = first frame the whole face is in view again (truth ok).")
-    print(t.render(), file=file)
+    t.note = (f"target: back within {REACQUIRE_TARGET} frames of the return (first frame the whole face is in view "
+              "again, truth ok); ok frames on the face (p95 ≤ 8 %, median ≤ 3 % IPD); no ok while away.")
+    return t
 
 
 # ---------------------------------------------------------------------------------------------
@@ -735,12 +749,13 @@ def main(argv: list[str] | None = None) -> int:
         note = "timing: 2 clips in parallel (indicative only; use --serial for speed figures)."
     t0 = time.perf_counter()
     results = measure_all(folder, names, modes, sheets=args.sheets, workers=workers, max_frames=args.frames)
-    print_table(results, timing_note=note)
-    if args.sheets:
-        print("contact sheets: " + ", ".join(r.sheet for r in results if r.sheet))
+    sheets = [r.sheet for r in results if r.sheet]
+    print(results_table(results, [note, f"contact sheets (white dots = the peer's points): {OUT_DIR}/" if sheets else ""]).render())
+    print()
+    print(speed_table(results).render())
     if args.synth:
         print()
-        print_synth(measure_synthetic(workers=workers))
+        print(synth_table(measure_synthetic(workers=workers)).render())
     print(f"({time.perf_counter() - t0:.1f} s)")
     return 0
 
