@@ -40,6 +40,8 @@ CLASSIFIERS = ("pupil", "lip", "eye")
 """Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
+SNAP_REACH = 0.05
+"""Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
 
 
 class CalibrationError(ValueError):
@@ -156,6 +158,11 @@ class Calibration:
     iris_level: float | None = None
     eye_ref: tuple[float, float, float] | None = None
     mouth_ref: tuple[float, float, float] | None = None
+    face_patch: np.ndarray | None = None
+    """The upright grey face picture (brows, eyes, nose; :func:`tracker.face_finder.face_patch`)
+    that tells this face from anything else; None in files from before it existed."""
+    face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
+    """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -187,6 +194,8 @@ class Calibration:
             "iris_level": self.iris_level,
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
+            "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
+            "face_box_eyes": [list(p) for p in self.face_box_eyes] if self.face_box_eyes is not None else None,
         }
 
     def save(self, path: str | os.PathLike) -> None:
@@ -204,6 +213,11 @@ class Calibration:
         if not ok:
             raise CalibrationError(f"{path}: could not encode the colour tables")
         atomic_file.write_bytes(path.parent / d["colour_tables"]["image"], buf.tobytes())
+        if self.face_patch is not None:
+            ok, buf = cv2.imencode(".png", np.clip(np.rint(self.face_patch), 0, 255).astype(np.uint8))
+            if not ok:
+                raise CalibrationError(f"{path}: could not encode the face picture")
+            atomic_file.write_bytes(path.parent / d["face_patch"], buf.tobytes())
         atomic_file.write_text(path, json.dumps(d, indent=1) + "\n")
 
     @staticmethod
@@ -248,6 +262,20 @@ class Calibration:
                 if img is None:
                     raise CalibrationError(f"{p}: missing or unreadable eye picture")
                 temps.append(img.astype(np.float32))
+            face_patch = None
+            if d.get("face_patch") is not None:
+                name = d["face_patch"]
+                if not isinstance(name, str) or Path(name).name != name:
+                    raise CalibrationError(f"{path}: face picture {name!r} must sit beside the calibration")
+                img = cv2.imread(str(path.parent / name), cv2.IMREAD_GRAYSCALE)
+                if img is None:
+                    raise CalibrationError(f"{path.parent / name}: missing or unreadable face picture")
+                face_patch = img.astype(np.float32)
+            box_eyes = d.get("face_box_eyes")
+            if box_eyes is not None:
+                box_eyes = tuple((float(p[0]), float(p[1])) for p in box_eyes)
+                if len(box_eyes) != 2:
+                    raise ValueError("face_box_eyes must hold two points")
             neutral_d = dict(d["neutral"])
             cal = cls(
                 frame_size=(int(d["frame_size"][0]), int(d["frame_size"][1])),
@@ -276,6 +304,8 @@ class Calibration:
                 iris_level=float(d["iris_level"]) if d.get("iris_level") is not None else None,
                 eye_ref=tuple(float(v) for v in d["eye_ref"]) if d.get("eye_ref") is not None else None,
                 mouth_ref=tuple(float(v) for v in d["mouth_ref"]) if d.get("mouth_ref") is not None else None,
+                face_patch=face_patch,
+                face_box_eyes=box_eyes,
             )
         except CalibrationError:
             raise
@@ -391,9 +421,12 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     ipd0 = clicks.ipd()
     lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
     rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    # a careful click is trusted over a snap that wandered (onto lashes, a lid crease, make-up)
+    if math.dist(lp, clicks.left_pupil) > SNAP_REACH * ipd0:
+        lp = clicks.left_pupil
+    if math.dist(rp, clicks.right_pupil) > SNAP_REACH * ipd0:
+        rp = clicks.right_pupil
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
-    if not (0.7 * ipd0 < ipd < 1.3 * ipd0):
-        lp, rp, ipd = clicks.left_pupil, clicks.right_pupil, ipd0
     work_ipd = min(ipd, WORK_IPD_MAX)
     ff = FaceFrame.from_pupils(lp, rp, work_ipd)
     k = ff.scale
@@ -550,8 +583,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         white_threshold=white_threshold,
         iris_level=iris_level,
     )
-    # lids and the neutral values: measure the calibration frame the way the tracker will
+    # the face as a whole, to tell it from anything else and to find it again
+    from tracker.face_finder import face_patch, learn_eyes_in_box
     from tracker.face_tracker import FaceTracker
+    from tracker.head_motion import HeadMotion
+
+    hm = HeadMotion()
+    hm.set_scale(ipd)
+    pupil_px = np.array([lp, rp], dtype=np.float64)
+    # stored as 8-bit grey: round now, so a loaded calibration tracks exactly like this one
+    cal.face_patch = np.clip(np.rint(face_patch(hm.grey(frame_bgr), hm.scale, pupil_px)), 0, 255).astype(np.float32)
+    cal.face_box_eyes = learn_eyes_in_box(frame_bgr, pupil_px)
+    # lids and the neutral values: measure the calibration frame the way the tracker will
 
     tr = FaceTracker(cal)
     r = tr.track(frame_bgr, index=clicks.frame)
