@@ -130,7 +130,7 @@ BALANCE_EVERY = 4  # frames between colour-balance updates (lighting drifts slow
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
 GAZE_MAX = GAZE_X
 JAW_MAX = (0.25, 0.4)  # farthest the mouth centre may sit from its rigid place (x, y)
-FOLLOW_SHIFT = 0.02  # per frame pull of the rigid pose's position towards the measured pupils
+FOLLOW_SHIFT = 0.05  # per frame pull of the rigid pose's position towards the measured pupils
 FOLLOW_TURN = 0.1  # ... of its roll and scale (the gaze does not change those)
 FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrated face"
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
@@ -315,11 +315,12 @@ class FaceTracker:
         res = [f.find(crop, grey, p, search, previous=p) for f, p in zip(self.pupil_finders, preds)]
         return crop, grey, res, (ox, oy)
 
-    def _lost_result(self, index: int, time: float, rois=()) -> TrackResult:
+    def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
+        """Hold the last values and search for the face from the next frame; ``why`` goes to the debug values."""
         self.lost = True
         self._gains = dict(self._good_gains)
         p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
-        return TrackResult(p, Overlay(status=LOST, rois=list(rois)), {"reacquired": False})
+        return TrackResult(p, Overlay(status=LOST, rois=list(rois)), {"reacquired": False, "lost": why})
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
@@ -333,7 +334,7 @@ class FaceTracker:
             found = self._reacquire(frame_bgr)
             if found is None:
                 self.lost_frames += 1
-                return self._lost_result(index, time)
+                return self._lost_result(index, time, "not found")
             self.pose = similarity_from_pairs(self._cal_pupils, found)
             self.anchors = found
             self.velocity[:] = 0.0
@@ -356,14 +357,19 @@ class FaceTracker:
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
         if not np.all((anchors > -0.1 * wi) & (anchors < np.array([W, H]) + 0.1 * wi)):
-            return self._lost_result(index, time)
+            return self._lost_result(index, time, "left the frame")
         presence = None
         if self.cal.face_patch is not None:
             # the face picture pins the head's position (the flow drifts, the pupils follow the gaze)
             shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
                                           FACE_REACH if flow_ok else 2 * FACE_REACH)
-            if flow_ok and presence >= FACE_PRESENT:
-                anchors = anchors + FACE_FOLLOW * shift
+            if presence >= FACE_PRESENT:
+                if flow_ok:
+                    # a turned head changes the picture: the weaker the match, the less it pulls
+                    trust = min(max((presence - FACE_PRESENT) / (0.9 - FACE_PRESENT), 0.0), 1.0)
+                    anchors = anchors + FACE_FOLLOW * trust * shift
+                elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
+                    anchors = anchors + shift  # no flow to trust: the picture says where the head went
                 self.pose = similarity_from_pairs(self._cal_pupils, anchors)
         ff = self._frame(anchors)
         crop, grey, res, (ox, oy) = self._eyes(frame, ff, (self.sx, self.sy), self.eye_rect)
@@ -395,21 +401,24 @@ class FaceTracker:
             mouth_res = None
         scores = [r.score if r is not None else -1.0 for r in res]
         n_open = 2 - int(closed[0]) - int(closed[1])
+        why = ""
         if presence is not None and presence < FACE_ABSENT:
-            face_seen = False  # something else is where the face was (a hand, the background)
+            why = "not this face"  # something else is where the face was (a hand, the background)
         elif n_open == 2:
-            face_seen = True
-        elif flow_ok and (presence is None or presence >= FACE_PRESENT):
-            face_seen = True  # the head is followed and looks like this face: eyes shut, mouth hidden
+            pass
+        elif presence is not None and presence >= FACE_PRESENT:
+            pass  # it looks like this face where the head is: eyes shut, mouth hidden
+        elif flow_ok and presence is None:
+            pass
         elif mouth_res is None:
-            face_seen = False  # one eye-like patch alone is too little (edges can look like one)
-        else:
+            why = "no eyes, no mouth"  # one eye-like patch alone is too little (edges can look like one)
+        elif not (n_open == 1 or (flow_ok and self._same_colour(crop, self.cal.eye_ref))):
             # a wink or closed eyes: the mouth looks like this mouth; with no eye at all the
             # head must still be followed and the eye region have the calibrated face's colour
-            face_seen = n_open == 1 or (flow_ok and self._same_colour(crop, self.cal.eye_ref))
-        if not face_seen:
+            why = "no eyes"
+        if why:
             self.lost_frames = 1
-            return self._lost_result(index, time, [self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
+            return self._lost_result(index, time, why, [self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
 
         # lids and brows in the eye crop, along its up axis through each pupil
         k = ff.scale
@@ -487,8 +496,7 @@ class FaceTracker:
                 pinned: bool) -> None:
         """Pull the rigid pose towards the measured pupils (drift and gaze are slow, the flow fast).
 
-        ``pinned``: the face picture fixed the position this frame, so the pupils only turn and
-        scale the pose.
+        ``pinned``: the face picture fixed the position this frame, so the pupils pull less.
         """
         for i in range(2):
             if not closed[i]:
@@ -502,7 +510,7 @@ class FaceTracker:
         else:
             a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
             a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
-            mid = a_mid + (0.0 if pinned else FOLLOW_SHIFT) * (p_mid - a_mid)
+            mid = a_mid + (FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT) * (p_mid - a_mid)
             vec = a_vec + FOLLOW_TURN * (p_vec - a_vec)
             new = np.array([mid - 0.5 * vec, mid + 0.5 * vec])
         self.velocity = new - self.anchors
