@@ -219,7 +219,7 @@ def test_contact_sheet_tiles_and_peer_points():
 def test_results_table_shows_a_failed_start():
     failed = rf.ClipResult("x", "auto", None, np.zeros(0), math.nan, error="no face found")
     text = rf.results_table([failed]).render()
-    assert "FAILED: no face found" in text and "all targets: 0/1" in text
+    assert "no start" in text and "x auto: no start — no face found" in text and "all targets: 0/1" in text
 
 
 # ------------------------------------------------------------------ the tracker on real clips
@@ -252,3 +252,11 @@ def test_real_clip_meets_the_targets(real_results, name, auto):
     missed = [k for k, v in rf.misses(r.metrics, auto=auto).items() if v]  # no times: no speed targets
     vals = rf.metric_values(r.metrics)
     assert not missed, f"{name} {r.mode}: " + ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
+
+
+def test_settled_needs_a_run_of_right_frames():
+    right = np.array([1, 1, 0, 0, 1, 1, 1, 0, 1, 1, 1, 1], bool)
+    assert rf._settled(right, 0, 3) == 4  # the first run is too short
+    assert rf._settled(right, 5, 3) == 3  # a run cut by the start counts only from it
+    assert rf._settled(right, 9, 5) == 0  # shorter at the clip's end
+    assert rf._settled(np.zeros(5, bool), 0) is None
