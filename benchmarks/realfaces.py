@@ -426,7 +426,8 @@ def sheet_frames(n: int, tiles: int = 20) -> list[int]:
 
 def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None = None, cols: int = 5) -> np.ndarray:
     """A grid of our overlay frames (kept in ``run.overlays``) with the peer's points as white dots,
-    the frame index, our status and the pupil error on each tile."""
+    the frame index, our status and the pupil error on each tile; a title band names the clip, the
+    mode, the colours and (given ``metrics``) the clip's headline figures."""
     idx = sorted(run.overlays)
     if not idx:
         return np.zeros((TILE, TILE, 3), np.uint8)
@@ -435,7 +436,17 @@ def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None 
     th, tw = int(round(h0 * s)), int(round(w0 * s))
     band = 22
     rows = math.ceil(len(idx) / cols)
-    sheet = np.full((rows * (th + band), cols * tw, 3), 32, np.uint8)
+    head = 44
+    sheet = np.full((head + rows * (th + band), cols * tw, 3), 32, np.uint8)
+    title = f"{run.name} ({run.mode})"
+    if metrics is not None:
+        title += (f"   lost {metrics.lost_pct:.1f}%   pupil {metrics.pupil_med:.1f}/{metrics.pupil_p95:.1f}% ipd   "
+                  f"roll {metrics.roll_med:.2f} deg   r open {metrics.r_open:.2f}  width {metrics.r_width:.2f}  "
+                  f"eye {metrics.r_eye:.2f}  brow {metrics.r_brow:.2f}")
+    legend = ("white dots: the peer's points   ours: magenta pupils, blue brows, yellow lids, cyan mouth points, "
+              "green lip outline, orange lip blob, teal regions")
+    cv2.putText(sheet, title, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (255, 255, 255), 1, cv2.LINE_AA)
+    cv2.putText(sheet, legend, (6, 37), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (200, 200, 200), 1, cv2.LINE_AA)
     for k, i in enumerate(idx):
         tile = cv2.resize(run.overlays[i], (tw, th), interpolation=cv2.INTER_AREA)
         if peer is not None and i < len(peer):
@@ -450,7 +461,7 @@ def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None 
                 cv2.line(tile, tuple(int(round(v * s)) for v in lp[i]), tuple(int(round(v * s)) for v in rp[i]),
                          PEER_COLOUR, 1, cv2.LINE_AA)
         r, c = divmod(k, cols)
-        y, x = r * (th + band), c * tw
+        y, x = head + r * (th + band), c * tw
         sheet[y : y + th, x : x + tw] = tile
         st = run.params[i].status if i < len(run.params) else "?"
         label = f"#{i} {st}"

@@ -208,12 +208,14 @@ def test_contact_sheet_tiles_and_peer_points():
     peer = _peer(n=n)
     peer.points = {"left_pupil": np.tile([100.0, 100.0], (n, 1)), "right_pupil": np.tile([200.0, 100.0], (n, 1))}
     run = rf.ClipRun("c", "clicks", params=_ours(peer.values), overlays={i: np.zeros((480, 640, 3), np.uint8) for i in keep})
-    sheet = rf.contact_sheet(run, peer, cols=4)
-    assert sheet.shape[1] == 4 * rf.TILE and sheet.shape[0] == 2 * (240 + 22)
-    tile = sheet[:240, : rf.TILE]
+    sheet = rf.contact_sheet(run, peer, rf.compare(run.params, peer), cols=4)
+    head = sheet.shape[0] - 2 * (240 + 22)
+    assert sheet.shape[1] == 4 * rf.TILE and head > 0
+    assert (sheet[:head] > 150).any()  # the title band
+    tile = sheet[head : head + 240, : rf.TILE]
     s = rf.TILE / 640
     assert tile[int(100 * s), int(100 * s)].tolist() == [255, 255, 255]  # the peer's left pupil
-    assert (sheet[240:262, : rf.TILE] > 100).any()  # a label under the tile
+    assert (sheet[head + 240 : head + 262, : rf.TILE] > 100).any()  # a label under the tile
 
 
 def test_results_table_shows_a_failed_start():
