@@ -142,6 +142,7 @@ class PeerTrack:
 
     @property
     def visible(self) -> np.ndarray:
+        """(n,) bool: frames where the peer has a face (finite pose and a positive IPD)."""
         return np.all(np.isfinite(self.values[:, :3]), axis=1) & np.isfinite(self.ipd) & (self.ipd > 0)
 
 
@@ -402,6 +403,7 @@ def misses(m: Metrics, times_ms: np.ndarray | None = None, auto: bool = False) -
 
 
 def metric_values(m: Metrics, times_ms: np.ndarray | None = None) -> dict[str, float]:
+    """Target name → this clip's value (``ms_*`` from ``times_ms``, per-frame wall clock)."""
     vals = {k: getattr(m, k) for k in TARGETS if hasattr(m, k)}
     if times_ms is not None and len(times_ms):
         vals["ms_med"] = float(np.median(times_ms))
