@@ -208,18 +208,20 @@ def test_contact_sheet_tiles_and_peer_points():
     peer = _peer(n=n)
     peer.points = {"left_pupil": np.tile([100.0, 100.0], (n, 1)), "right_pupil": np.tile([200.0, 100.0], (n, 1))}
     run = rf.ClipRun("c", "clicks", params=_ours(peer.values), overlays={i: np.zeros((480, 640, 3), np.uint8) for i in keep})
-    sheet = rf.contact_sheet(run, peer, cols=4)
-    assert sheet.shape[1] == 4 * rf.TILE and sheet.shape[0] == 2 * (240 + 22)
-    tile = sheet[:240, : rf.TILE]
+    sheet = rf.contact_sheet(run, peer, rf.compare(run.params, peer), cols=4)
+    head = sheet.shape[0] - 2 * (240 + 22)
+    assert sheet.shape[1] == 4 * rf.TILE and head > 0
+    assert (sheet[:head] > 150).any()  # the title band
+    tile = sheet[head : head + 240, : rf.TILE]
     s = rf.TILE / 640
     assert tile[int(100 * s), int(100 * s)].tolist() == [255, 255, 255]  # the peer's left pupil
-    assert (sheet[240:262, : rf.TILE] > 100).any()  # a label under the tile
+    assert (sheet[head + 240 : head + 262, : rf.TILE] > 100).any()  # a label under the tile
 
 
 def test_results_table_shows_a_failed_start():
     failed = rf.ClipResult("x", "auto", None, np.zeros(0), math.nan, error="no face found")
     text = rf.results_table([failed]).render()
-    assert "FAILED: no face found" in text and "all targets: 0/1" in text
+    assert "no start" in text and "x auto: no start — no face found" in text and "all targets: 0/1" in text
 
 
 # ------------------------------------------------------------------ the tracker on real clips
@@ -252,3 +254,11 @@ def test_real_clip_meets_the_targets(real_results, name, auto):
     missed = [k for k, v in rf.misses(r.metrics, auto=auto).items() if v]  # no times: no speed targets
     vals = rf.metric_values(r.metrics)
     assert not missed, f"{name} {r.mode}: " + ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
+
+
+def test_settled_needs_a_run_of_right_frames():
+    right = np.array([1, 1, 0, 0, 1, 1, 1, 0, 1, 1, 1, 1], bool)
+    assert rf._settled(right, 0, 3) == 4  # the first run is too short
+    assert rf._settled(right, 5, 3) == 3  # a run cut by the start counts only from it
+    assert rf._settled(right, 9, 5) == 0  # shorter at the clip's end
+    assert rf._settled(np.zeros(5, bool), 0) is None
