@@ -132,6 +132,7 @@ GAZE_MAX = GAZE_X
 JAW_MAX = (0.25, 0.4)  # farthest the mouth centre may sit from its rigid place (x, y)
 FOLLOW_SHIFT = 0.05  # per frame pull of the rigid pose's position towards the measured pupils
 FOLLOW_TURN = 0.1  # ... of its roll and scale (the gaze does not change those)
+STRONG_EYES = 0.2  # eye-picture correlation above the calibrated threshold that outvotes the flow
 FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrated face"
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
 FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
@@ -376,8 +377,16 @@ class FaceTracker:
         closed = [r is None or r.closed for r in res]
         found = np.array([[r.x + ox, r.y + oy] if r is not None else [np.nan, np.nan] for r in res])
         preds_f = self._pupils_face
+        scores = [r.score if r is not None else -1.0 for r in res]
+        # two clear eye pictures outvote the flow's roll and scale (it drifts on plain skin);
+        # a doubtful one must agree with the head's pose
+        strong = not any(closed) and min(scores) >= self.cal.pupil_threshold + STRONG_EYES
+        if strong:
+            g = 0.5 * (found[0] + found[1] - preds_f[0] - preds_f[1]) / wi
+            if (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 > 1.0:
+                strong = False
         for i in range(2):  # an iris far from its eye's rigid centre is something else
-            if not closed[i]:
+            if not closed[i] and not strong:
                 gx, gy = (found[i] - preds_f[i]) / wi
                 if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
                     closed[i] = True
@@ -385,10 +394,11 @@ class FaceTracker:
             d = found[1] - found[0]
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: the pupils must agree with them
-            tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
+            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
             if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
-                worse = int(np.argmin([r.score for r in res]))
+                worse = int(np.argmin(scores))
                 closed[worse] = True
+                strong = False
         pup_f = found.copy()
         for i in range(2):
             if closed[i]:
@@ -399,7 +409,6 @@ class FaceTracker:
         mouth_res, mouth_origin, mouth_rect = self._mouth(frame, ff, predicted_mouth)
         if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
             mouth_res = None
-        scores = [r.score if r is not None else -1.0 for r in res]
         n_open = 2 - int(closed[0]) - int(closed[1])
         why = ""
         if presence is not None and presence < FACE_ABSENT:
@@ -482,7 +491,7 @@ class FaceTracker:
             conf *= 0.5
         params = FaceParams.from_values(vals, frame=index, time=time, status=status, confidence=conf)
         ov.status = status
-        self._follow(anchors, pupils_img, closed, found, flow_ok, flow_ok and presence is not None and presence >= FACE_PRESENT)
+        self._follow(anchors, pupils_img, closed, found, flow_ok, flow_ok and presence is not None and presence >= FACE_PRESENT, strong)
         self.pupils = pupils_img
         self.last = params
         self._good_gains = dict(self._gains)
@@ -493,10 +502,11 @@ class FaceTracker:
         return TrackResult(params, ov, debug)
 
     def _follow(self, anchors: np.ndarray, pupils_img: np.ndarray, closed: list, found_face: np.ndarray, flow_ok: bool,
-                pinned: bool) -> None:
+                pinned: bool, strong: bool = False) -> None:
         """Pull the rigid pose towards the measured pupils (drift and gaze are slow, the flow fast).
 
-        ``pinned``: the face picture fixed the position this frame, so the pupils pull less.
+        ``pinned``: the face picture fixed the position this frame, so the pupils pull less;
+        ``strong``: both eye pictures matched clearly, so they turn the pose faster.
         """
         for i in range(2):
             if not closed[i]:
@@ -511,7 +521,7 @@ class FaceTracker:
             a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
             a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
             mid = a_mid + (FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT) * (p_mid - a_mid)
-            vec = a_vec + FOLLOW_TURN * (p_vec - a_vec)
+            vec = a_vec + (0.5 if strong else FOLLOW_TURN) * (p_vec - a_vec)
             new = np.array([mid - 0.5 * vec, mid + 0.5 * vec])
         self.velocity = new - self.anchors
         self.anchors = new
