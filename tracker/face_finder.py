@@ -78,7 +78,7 @@ def learn_eyes_in_box(frame_bgr: np.ndarray, pupils: np.ndarray) -> tuple[tuple[
     for box in detect_faces(frame_bgr, ipd):
         x, y, w, h = box
         if all(x < px < x + w and y < py < y + h for px, py in p):
-            rel = tuple(((px - x) / w, (py - y) / h) for px, py in p)
+            rel = tuple((float((px - x) / w), float((py - y) / h)) for px, py in p)
             if abs(rel[1][0] - rel[0][0] - 1.0 / FACE_PER_IPD) < 0.2:
                 return rel  # type: ignore[return-value]
     return None
