@@ -142,6 +142,8 @@ def inside(folder: str | os.PathLike, rel: str) -> Path | None:
     p = PurePosixPath(rel)
     if p.is_absolute() or ".." in p.parts or ":" in p.parts[0]:
         return None
+    if len(rel) > 1024 or any(len(part.encode("utf-8", "surrogateescape")) > 255 for part in p.parts):
+        return None  # longer than a file system holds
     try:
         base = Path(folder).resolve()
         full = (Path(folder) / rel).resolve()

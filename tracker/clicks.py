@@ -65,6 +65,7 @@ class Clicks:
     def load(cls, path: str | os.PathLike) -> "Clicks":
         """Read a CLICKS.json file; raises :class:`ClicksError` naming the file."""
         path = Path(path)
+        atomic_file.sweep_temp(path.parent)
         d = safe_json.read(path, "clicks file", max_bytes=MAX_FILE_BYTES, error=ClicksError)
         return cls.from_dict(d, where=str(path))
 
