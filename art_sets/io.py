@@ -11,7 +11,6 @@ relative to the folder and may never leave it (no absolute paths, no ``..``, no 
 
 from __future__ import annotations
 
-import dataclasses
 import io as _io
 import json
 import math

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tracker import atomic_file, safe_json
+from tracker import atomic_file
 
 ROOT = Path(__file__).resolve().parents[1]
 SAVERS = ("artset", "autosave", "calibration", "session", "clicks")
