@@ -407,13 +407,18 @@ def _image_slots(art: ArtSet) -> list[tuple[str, np.ndarray, Callable[[str], Non
 
 
 def _files_named_by(folder: Path) -> list[str]:
-    """Every image path the manifest in ``folder`` names now: each string in it that is a safe
-    relative ``.png`` path (whatever key holds it), or none if there is no readable manifest."""
+    """Every image path the manifest in ``folder`` names now (none without a readable manifest)."""
     try:
         data = safe_json.read(folder / MANIFEST, "manifest", max_bytes=MAX_MANIFEST_BYTES, error=ArtSetError)
     except ArtSetError:
         return []
-    found, stack = [], [data]
+    return _png_paths(data, folder)
+
+
+def _png_paths(manifest, folder: Path) -> list[str]:
+    """Each string in ``manifest`` that is a safe relative ``.png`` path, whatever key holds it
+    (so files named by keys this version does not know are never taken for garbage)."""
+    found, stack = [], [manifest]
     while stack:
         v = stack.pop()
         if isinstance(v, dict):
@@ -460,8 +465,14 @@ def save_artset(art: ArtSet, path: str | os.PathLike, *, fast: bool = False, cac
         if cache is not None:
             cache[rel] = (name, img)
         rename(name)
-    text = json.dumps(manifest_dict(art), indent=1, ensure_ascii=False) + "\n"
-    gen.commit(text.encode("utf-8"))
+    manifest = manifest_dict(art)
+    for rel in _png_paths(manifest, folder):  # e.g. a picture an unknown key names: still in use
+        if rel in gen.current and rel not in gen.names:
+            try:
+                gen.keep(rel)
+            except KeyError:
+                pass
+    gen.commit((json.dumps(manifest, indent=1, ensure_ascii=False) + "\n").encode("utf-8"))
     if cache is not None:
         for rel in [r for r, (name, _) in cache.items() if name not in gen.names]:
             del cache[rel]

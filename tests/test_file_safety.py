@@ -150,3 +150,68 @@ def test_sigkill_during_save_long(saver, tmp_path, request):
     if "slow" not in (request.config.option.markexpr or ""):
         pytest.skip("the long version runs with -m slow")
     _check(_kill_run(saver, 500, 1515, tmp_path))
+
+
+# --------------------------------------------------------------------------- savers, one by one
+def test_resaving_an_art_set_keeps_files_it_does_not_own(tmp_path):
+    from art_sets.editing import clone
+    from art_sets.io import load_artset, save_artset
+    from kill_saves import _artset, _artset_key
+
+    a, b = _artset(0, 3), _artset(1, 4)
+    a.extra["preview"] = "preview.png"  # named by a key this version does not read
+    folder = save_artset(clone(a), tmp_path / "set")
+    (folder / "preview.png").write_bytes(b"not ours")
+    (folder / "notes.txt").write_text("the artist's")
+    b.extra["preview"] = "preview.png"
+    saved = clone(b)
+    save_artset(saved, folder)
+    assert (folder / "preview.png").read_bytes() == b"not ours" and (folder / "notes.txt").exists()
+    assert _artset_key(load_artset(folder)) == _artset_key(b)
+    # changed pictures went to their other names, the old ones are gone, unchanged ones stayed
+    named = set(saved.head_files) | {d.file for p in saved.parts.values() for d in p.drawings}
+    on_disk = {p.relative_to(folder).as_posix() for p in folder.rglob("*.png")}
+    assert on_disk == named | {"preview.png"}
+    assert any(".v2." in n for n in named)
+    save_artset(clone(a), folder)
+    assert _artset_key(load_artset(folder)) == _artset_key(a)
+    assert not any(".v2." in p.name for p in folder.rglob("*.png"))  # back to the plain names
+
+
+def test_autosave_cache_skips_unchanged_images_and_recovery_drops_version_names(tmp_path):
+    from app.editor.document import _plain_names, write_side_copy
+    from art_sets.editing import clone
+    from art_sets.io import load_artset
+    from kill_saves import _artset, _artset_key
+
+    a = _artset(0, 3)
+    cache: dict = {}
+    side = tmp_path / ".artset.autosave"
+    write_side_copy(clone(a), side, cache)
+    stamps = {p: p.stat().st_mtime_ns for p in side.rglob("*.png")}
+    b = clone(a)
+    b.mouth.drawings[0].image = b.mouth.drawings[0].image.copy()
+    b.mouth.drawings[0].image[0, 0] ^= 255
+    write_side_copy(clone(b), side, cache)
+    back = load_artset(side)
+    assert _artset_key(back) == _artset_key(b)
+    changed = [p for p in side.rglob("*.png") if stamps.get(p) != p.stat().st_mtime_ns]
+    assert [p.name for p in changed] == ["d0.v2.png"]  # one image encoded, the rest kept as they were
+    _plain_names(back)
+    assert back.mouth.drawings[0].file == "mouth/d0.png"
+
+
+def test_session_resave_keeps_thumbnails_and_removes_unused_ones(tmp_path):
+    from kill_saves import _session, _session_key
+    from training.session import TrainingSession
+
+    s = _session(0)
+    s.save(tmp_path / "s")
+    thumbs = {p.relative_to(tmp_path / "s").as_posix(): p.stat().st_mtime_ns for p in (tmp_path / "s" / "thumbs").iterdir()}
+    assert set(thumbs) == {p.thumb_file for p in s.pairs}
+    removed = s.remove_pair(0)
+    s.save()
+    now = {p.relative_to(tmp_path / "s").as_posix(): p.stat().st_mtime_ns for p in (tmp_path / "s" / "thumbs").iterdir()}
+    assert set(now) == {p.thumb_file for p in s.pairs} == set(thumbs) - {removed.thumb_file}
+    assert all(now[k] == thumbs[k] for k in now)  # kept, not rewritten
+    assert _session_key(TrainingSession.load(tmp_path / "s")) == _session_key(s)
