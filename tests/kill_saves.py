@@ -36,30 +36,11 @@ from art_sets.atomic_file import is_temp  # noqa: E402
 
 # --------------------------------------------------------------------------- the documents
 def _artset(seed: int, n_mouths: int):
-    from art_sets.model import ArtSet, Drawing, Part
+    from test_art_sets import tiny_artset
 
-    rng = np.random.default_rng(seed)
-
-    def img(w, h, alpha=255):
-        a = rng.integers(0, 256, (h, w, 4), dtype=np.uint8)
-        a[..., 3] = alpha
-        return a
-
-    def part(name, box, n):
-        w, h = box[2], box[3]
-        ds = []
-        for i in range(n):
-            lines = np.array([[1.0 + i, 1.0, w - 1.5, h / 2], [2, h - 1, w - 2 - seed, h - 1.25]])
-            ds.append(Drawing(f"d{i}", img(w, h), lines, f"{name}/d{i}.png"))
-        return Part(name, box, ds)
-
-    heads = [img(96, 96) for _ in range(2)]
-    for hd in heads:
-        hd[13:23, 11:53, 3] = 0
-        hd[39:47, 23:41, 3] = 60
-    return ArtSet(name=f"Kill{seed}", canvas=(96, 96), pivot=(48.0, 60.0 + seed), heads=heads,
-                  parts={"eyes": part("eyes", (8, 10, 48, 16), 3), "mouth": part("mouth", (20, 36, 40, 24), n_mouths)},
-                  author="kill test", head_files=["head-1.png", "head-2.png"])
+    art = tiny_artset(3, n_mouths, seed)
+    art.pivot = (32.0, 50.5 + seed)
+    return art
 
 
 def _artset_key(art) -> tuple:

@@ -107,10 +107,49 @@ def _damage(data, doc) -> bytes:
     return text.encode()
 
 
+def _copy_images(src: Path, dst: Path) -> None:
+    """The PNGs of a saved document, so a damaged copy of its JSON finds its pictures."""
+    for f in src.rglob("*.png"):
+        t = dst / f.relative_to(src)
+        t.parent.mkdir(parents=True, exist_ok=True)
+        t.write_bytes(f.read_bytes())
+
+
+def _edited(raw, edit) -> str:
+    """``raw`` changed by ``edit``, as JSON text (an overflowing float as the literal 1e400)."""
+    d = json.loads(json.dumps(raw))
+    edit(d)
+    return json.dumps(d).replace("Infinity", "1e400")
+
+
+def _check_refuses(file: Path, text: str, load, error: type[Exception]) -> str:
+    """``load(file)`` of ``text`` raises one line of ``error`` naming ``file``'s folder; its message."""
+    file.write_text(text)
+    with pytest.raises(error) as e:
+        load(file)
+    _assert_one_line(e.value, str(file.parent))
+    return str(e.value)
+
+
 def _refused(err: Exception, names: str) -> None:
     """In a fuzzer: the refusal is one line naming the file (counted in hypothesis' statistics)."""
     event(f"refused: {type(err).__name__}")
     _assert_one_line(err, names)
+
+
+def _fuzz_load(data, folder: Path, doc, src: Path | None, file: str, load, error: type[Exception], what: str):
+    """Write a damaged ``doc`` as ``folder/file`` (beside ``src``'s pictures) and ``load`` it:
+    the object, or None after checking the refusal is one line of ``error`` naming the folder."""
+    if src is not None:
+        _copy_images(src, folder)
+    (folder / file).write_bytes(_damage(data, doc))
+    try:
+        obj = load(folder / file)
+    except error as e:
+        _refused(e, str(folder))
+        return None
+    event(f"loaded a valid {what}")
+    return obj
 
 
 def _assert_one_line(err: Exception, names: str) -> None:
@@ -197,15 +236,9 @@ def test_clicks_file_refusals_name_the_file(tmp_path, text):
 @FUZZ
 @given(data=st.data())
 def test_fuzz_clicks(tmp_path, data):
-    p = tmp_path / "clicks.json"
-    p.write_bytes(_damage(data, GOOD_CLICKS))
-    try:
-        c = Clicks.load(p)
-    except ClicksError as e:
-        _refused(e, str(p))
-        return
-    event("loaded a valid clicks")
-    assert all(math.isfinite(v) for pt in c.points().values() for v in pt) and isinstance(c.frame, int)
+    c = _fuzz_load(data, tmp_path, GOOD_CLICKS, None, "clicks.json", Clicks.load, ClicksError, "clicks file")
+    if c is not None:
+        assert all(math.isfinite(v) for pt in c.points().values() for v in pt) and isinstance(c.frame, int)
 
 
 # --------------------------------------------------------------------------- sessions
@@ -246,31 +279,15 @@ def test_session_with_a_lost_frame_round_trips(session_doc):
     lambda d: d["calibration"].__setitem__("ipd", 1e308),
 ])
 def test_session_refuses_wrong_types(tmp_path, session_doc, edit):
-    _, raw = session_doc
-    d = json.loads(json.dumps(raw))
-    edit(d)
-    (tmp_path / "session.json").write_text(json.dumps(d))
-    with pytest.raises(SessionError) as e:
-        TrainingSession.load(tmp_path)
-    _assert_one_line(e.value, str(tmp_path))
+    _check_refuses(tmp_path / "session.json", _edited(session_doc[1], edit), TrainingSession.load, SessionError)
 
 
 @FUZZ
 @given(data=st.data())
 def test_fuzz_session(tmp_path_factory, session_doc, data):
     src, raw = session_doc
-    folder = tmp_path_factory.mktemp("fz")
-    (folder / "thumbs").mkdir()
-    for f in (src / "thumbs").iterdir():
-        (folder / "thumbs" / f.name).write_bytes(f.read_bytes())
-    (folder / "session.json").write_bytes(_damage(data, raw))
-    try:
-        s = TrainingSession.load(folder)
-    except SessionError as e:
-        _refused(e, str(folder))
-        return
-    event("loaded a valid session")
-    for p in s.pairs:
+    s = _fuzz_load(data, tmp_path_factory.mktemp("fz"), raw, src, "session.json", TrainingSession.load, SessionError, "session")
+    for p in s.pairs if s is not None else []:
         assert p.part in ("eyes", "mouth") and all(math.isfinite(v) for v in p.values)
         assert p.blend is None or all(math.isfinite(w) and w >= 0 for w in p.blend.values())
 
@@ -298,31 +315,17 @@ def calibration_doc(tmp_path_factory):
 ])
 def test_calibration_refuses_wrong_types(tmp_path, calibration_doc, edit):
     src, raw = calibration_doc
-    for f in src.glob("*.png"):
-        (tmp_path / f.name).write_bytes(f.read_bytes())
-    d = json.loads(json.dumps(raw))
-    edit(d)
-    (tmp_path / "me.json").write_text(json.dumps(d).replace("Infinity", "1e400"))
-    with pytest.raises(CalibrationError) as e:
-        Calibration.load(tmp_path / "me.json")
-    _assert_one_line(e.value, str(tmp_path))
+    _copy_images(src, tmp_path)
+    _check_refuses(tmp_path / "me.json", _edited(raw, edit), Calibration.load, CalibrationError)
 
 
 @FUZZ
 @given(data=st.data())
 def test_fuzz_calibration(tmp_path_factory, calibration_doc, data):
     src, raw = calibration_doc
-    folder = tmp_path_factory.mktemp("fz")
-    for f in src.glob("*.png"):
-        (folder / f.name).write_bytes(f.read_bytes())
-    (folder / "me.json").write_bytes(_damage(data, raw))
-    try:
-        cal = Calibration.load(folder / "me.json")
-    except CalibrationError as e:
-        _refused(e, str(folder))
-        return
-    event("loaded a valid calibration")
-    assert math.isfinite(cal.ipd) and cal.pupil.table.dtype == np.uint8 and len(cal.eye_templates) == 2
+    cal = _fuzz_load(data, tmp_path_factory.mktemp("fz"), raw, src, "me.json", Calibration.load, CalibrationError, "calibration")
+    if cal is not None:
+        assert math.isfinite(cal.ipd) and cal.pupil.table.dtype == np.uint8 and len(cal.eye_templates) == 2
 
 
 # --------------------------------------------------------------------------- art sets
@@ -352,27 +355,19 @@ def artset_doc(tmp_path_factory):
     return folder, json.loads((folder / "artset.json").read_text())
 
 
-def _copy_images(src: Path, dst: Path) -> None:
-    for f in src.rglob("*.png"):
-        t = dst / f.relative_to(src)
-        t.parent.mkdir(parents=True, exist_ok=True)
-        t.write_bytes(f.read_bytes())
-
-
 @FUZZ
 @given(data=st.data())
 def test_fuzz_artset_manifest(tmp_path_factory, artset_doc, data):
     src, raw = artset_doc
-    folder = tmp_path_factory.mktemp("fz")
-    _copy_images(src, folder)
-    (folder / "artset.json").write_bytes(_damage(data, raw))
-    assert all("\n" not in str(p) for p in validate(folder))  # the validator never raises either
-    try:
-        art = load_artset(folder, strict=data.draw(st.booleans(), label="strict"))
-    except ArtSetError as e:
-        _refused(e, str(folder))
+    strict = data.draw(st.booleans(), label="strict")
+
+    def load(manifest: Path):
+        assert all("\n" not in str(p) for p in validate(manifest.parent))  # the validator never raises either
+        return load_artset(manifest.parent, strict=strict)
+
+    art = _fuzz_load(data, tmp_path_factory.mktemp("fz"), raw, src, "artset.json", load, ArtSetError, "art set")
+    if art is None:
         return
-    event("loaded a valid art set")
     assert all(math.isfinite(v) and abs(v) <= 1e6 for v in art.pivot)
     for p in art.parts.values():
         assert len(p.drawings) <= MAX_DRAWINGS and all(np.isfinite(d.lines).all() for d in p.drawings)
@@ -391,9 +386,7 @@ def test_artset_bad_values_are_one_line_problems(tmp_path, artset_doc, edit, wor
     src, raw = artset_doc
     _copy_images(src, tmp_path)
     (tmp_path / "loop").symlink_to(tmp_path / "loop")
-    d = json.loads(json.dumps(raw))
-    edit(d)
-    (tmp_path / "artset.json").write_text(json.dumps(d))
+    (tmp_path / "artset.json").write_text(_edited(raw, edit))
     with pytest.raises(ArtSetError) as e:
         load_artset(tmp_path)
     _assert_one_line(e.value, str(tmp_path / "artset.json"))
