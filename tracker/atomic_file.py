@@ -48,7 +48,7 @@ def is_temp(name: str) -> bool:
 
 
 def _alive(pid: int) -> bool:
-    if pid == os.getpid():
+    if pid == os.getpid() or os.name == "nt":  # Windows' os.kill(pid, 0) would send a Ctrl-C: age decides there
         return True
     try:
         os.kill(pid, 0)
