@@ -199,7 +199,7 @@ class _Scan:
         pivot_raw = data.get("pivot", [canvas[0] / 2, canvas[1] / 2])
         pivot = _num_pair(pivot_raw)
         if pivot is None or not all(-c <= v <= 2 * c for v, c in zip(pivot, canvas)):
-            self.add(self.manifest_file, f"pivot must be [x, y] numbers within a canvas' width and height of the canvas, got {safe_json.show(pivot_raw)}")
+            self.add(self.manifest_file, f"pivot must be [x, y] numbers at most one canvas width or height outside the canvas, got {safe_json.show(pivot_raw)}")
             pivot = (canvas[0] / 2, canvas[1] / 2)
 
         heads, head_files = self.read_heads(data["heads"], canvas)

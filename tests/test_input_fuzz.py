@@ -444,3 +444,34 @@ def test_canvas_and_image_size_limits(tmp_path, artset_doc):
     (tmp_path / "artset.json").write_text(json.dumps(raw))
     with pytest.raises(ArtSetError, match="limit; refused without decoding"):
         load_artset(tmp_path)
+
+
+# --------------------------------------------------------------------------- the inputs, everywhere
+_HOSTILE = {"5000 digits": "1" * 5000, "400 digits": "1" * 400, "1e400": "1e400", "NaN": "NaN",
+            "Infinity": "Infinity", "-Infinity": "-Infinity", "a string": '"320"', "a boolean": "true"}
+_SET_NUMBER = {  # a number each format needs, where the hostile literal goes
+    "clicks": lambda d: d.__setitem__("frame", "@"),
+    "session": lambda d: d["pairs"][0]["values"].__setitem__("mid_x", "@"),
+    "calibration": lambda d: d.__setitem__("ipd", "@"),
+    "artset": lambda d: d["pivot"].__setitem__(0, "@"),
+}
+
+
+@pytest.mark.parametrize("kind", ["deep nesting", *_HOSTILE])
+@pytest.mark.parametrize("fmt", ["clicks", "session", "calibration", "artset"])
+def test_hostile_numbers_and_nesting_give_one_line_errors(tmp_path, fmt, kind, session_doc, calibration_doc, artset_doc):
+    docs = {
+        "clicks": (None, GOOD_CLICKS, "clicks.json", Clicks.load, ClicksError),
+        "session": (*session_doc, "session.json", TrainingSession.load, SessionError),
+        "calibration": (*calibration_doc, "me.json", Calibration.load, CalibrationError),
+        "artset": (*artset_doc, "artset.json", lambda f: load_artset(f.parent), ArtSetError),
+    }
+    src, raw, name, load, error = docs[fmt]
+    if src is not None:
+        _copy_images(src, tmp_path)
+    if kind == "deep nesting":
+        text = "[" * 100_000 + "]" * 100_000
+    else:
+        text = _edited(raw, _SET_NUMBER[fmt]).replace('"@"', _HOSTILE[kind])
+    msg = _check_refuses(tmp_path / name, text, load, error)
+    assert "@" not in msg
