@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from app.net import Sender, UdpReceiver, check_port, parse_address
-from tracker.params import LOST, OK, FaceParams, params_array, write_csv
+from tracker.params import LOST, OK, FaceParams, params_array, track_rate
 
 _MOUTH_PER_IPD = 0.8  # typical adult proportion, used only when a CSV track comes without its ipd
 
@@ -145,13 +145,6 @@ def _covering_size(rows: list[FaceParams]) -> tuple[int, int]:
     return max(int(mx) + 1, 640), max(int(my) + 1, 480)
 
 
-def _rate(rows: list[FaceParams]) -> float:
-    t = np.array([r.time for r in rows], dtype=np.float64)
-    dt = np.diff(t[np.isfinite(t)])
-    dt = dt[dt > 0]
-    return float(1.0 / np.median(dt)) if len(dt) else 30.0
-
-
 def _load_track(args) -> _Track:
     from tracker.stream_codec import read_track
 
@@ -161,7 +154,7 @@ def _load_track(args) -> _Track:
     if not rows:
         raise _Fail(f"{path}: the track has no frames")
     size = tf.frame_size or _frame_size(args.frame_size) or _covering_size(rows)
-    fps = tf.fps or _rate(rows)
+    fps = tf.fps or track_rate(rows)
     neutral = tf.neutral
     if neutral is None:  # a CSV: the median of the tracked frames stands in for the neutral face
         vals = params_array(r for r in rows if r.status != LOST)
