@@ -36,7 +36,7 @@ import numpy as np
 
 from morph.compositor import to_straight
 from tracker import atomic_file
-from tracker.outputs import OutputError, calibration_files, check_outputs, free_name
+from tracker.outputs import OutputError, PendingFile, calibration_files, check_outputs, free_name
 
 RECORD_FILTERS = [
     "MP4 video (*.mp4)",
@@ -374,7 +374,7 @@ class FrameWriter:
         self.format = format_of(self.path)
         self.background = _rgb_tuple(background)
         self.frames = 0
-        self._stack = contextlib.ExitStack()
+        self._pending = None  # tracker.outputs.PendingFile of a video or GIF
         self._video = None
         self._gif: GifStream | None = None
         self._file: BinaryIO | None = None
@@ -393,7 +393,8 @@ class FrameWriter:
             raise RecordError(f"{folder}: cannot create the folder ({e.strerror or e})") from None
 
     def _temp(self) -> Path:
-        return self._stack.enter_context(atomic_file.replacing(self.path, suffix=self.path.suffix))
+        self._pending = PendingFile(self.path, suffix=self.path.suffix)
+        return self._pending.tmp
 
     def write(self, rgba_pm: np.ndarray) -> None:
         """Append a premultiplied RGBA frame."""
@@ -461,7 +462,8 @@ class FrameWriter:
         for a PNG sequence)."""
         try:
             self._release()
-            self._stack.close()
+            if self._pending is not None:
+                self._pending.commit()
         except OSError as e:
             raise RecordError(f"{self.path}: cannot finish writing ({e.strerror or e})") from None
         if self._png_dir is not None:
@@ -474,7 +476,8 @@ class FrameWriter:
         try:
             self._release()
         finally:
-            self._stack.__exit__(RecordError, RecordError("aborted"), None)
+            if self._pending is not None:
+                self._pending.discard()
 
     def _remove_stale_pngs(self) -> None:
         pat = re.compile(rf"{re.escape(self._png_stem)}_(\d{{5,}})\.png")

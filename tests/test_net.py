@@ -244,7 +244,7 @@ def test_fuzzed_datagrams_never_raise_and_are_all_counted(datagrams, senders):
         rx.update_rates()
     s = rx.stats
     assert s.datagrams == len(datagrams)
-    assert s.frames + s.hellos + s.malformed + s.foreign + s.duplicates + s.late + s.waiting == s.datagrams
+    assert s.frames + s.hellos + s.malformed + s.foreign + s.duplicates + s.late + s.waiting + s.anomalies == s.datagrams
 
 
 @settings(max_examples=100, deadline=None)
@@ -265,7 +265,7 @@ def test_any_arrival_order_decodes_only_exact_frames(order, drop, dup, compress)
             seen.add(f.frame)
     s = rx.stats
     assert s.frames == len(seen)
-    assert s.frames + s.duplicates + s.late + s.waiting == s.datagrams - 1
+    assert s.frames + s.duplicates + s.late + s.waiting + s.anomalies == s.datagrams - 1
 
 
 def test_hello_round_trip_and_size():

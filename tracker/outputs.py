@@ -10,6 +10,7 @@ frames into a folder that already holds some; it never allows writing over an in
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 from typing import Callable, Iterable
@@ -165,3 +166,32 @@ def calibration_files(path: PathLike) -> list[Path]:
     :meth:`tracker.calibration.Calibration.save` writes beside it (keep the two in step)."""
     p = Path(path)
     return [p] + [p.parent / f"{p.stem}.{part}.png" for part in ("eye_l", "eye_r", "colour_tables")]
+
+
+class PendingFile:
+    """A file written over time under a temporary name beside ``path``
+    (:func:`tracker.atomic_file.replacing`): :meth:`commit` moves it into place, :meth:`discard`
+    removes it, and until then an earlier file at ``path`` stays as it was. For writers that
+    stream (tracks, packet files, videos) and so cannot use the ``with`` form."""
+
+    def __init__(self, path: PathLike, suffix: str = ".tmp"):
+        from tracker import atomic_file
+
+        self.path = Path(path)
+        self._stack = contextlib.ExitStack()
+        self.tmp: Path = self._stack.enter_context(atomic_file.replacing(self.path, suffix=suffix))
+        self.done = False
+
+    def commit(self) -> Path:
+        """Move the finished file into place (once); returns ``path``."""
+        if not self.done:
+            self.done = True
+            self._stack.close()
+        return self.path
+
+    def discard(self) -> None:
+        """Remove the temporary file (once); ``path`` is left as it was."""
+        if not self.done:
+            self.done = True
+            err = OutputError(f"{self.path}: discarded")
+            self._stack.__exit__(OutputError, err, None)

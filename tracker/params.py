@@ -20,7 +20,6 @@ Also here: the CSV track format of the command-line contract and the 8-bit wire 
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import dataclasses
 import math
@@ -152,12 +151,13 @@ class TrackCsvWriter:
     """
 
     def __init__(self, path: str | os.PathLike, extra: Sequence[str] = EXTRA_COLUMNS):
+        from tracker.outputs import PendingFile
+
         self.path = Path(path)
         self.extra = tuple(extra)
         self.rows = 0
-        self._stack = contextlib.ExitStack()
-        tmp = self._stack.enter_context(replacing(self.path))
-        self._f = open(tmp, "w", newline="")
+        self._pending = PendingFile(self.path)
+        self._f = open(self._pending.tmp, "w", newline="")
         self._w = csv.writer(self._f)
         self._w.writerow(list(CSV_COLUMNS) + list(self.extra))
 
@@ -172,19 +172,13 @@ class TrackCsvWriter:
 
     def close(self) -> Path:
         """Finish the file and move it into place; returns its path."""
-        if self._f.closed:
-            return self.path
         self._f.close()
-        self._stack.close()
-        return self.path
+        return self._pending.commit()
 
     def abort(self) -> None:
         """Discard what was written; a previous file at ``path`` stays as it was."""
-        if self._f.closed:
-            return
         self._f.close()
-        err = RuntimeError("aborted")
-        self._stack.__exit__(RuntimeError, err, None)
+        self._pending.discard()
 
     def __enter__(self) -> "TrackCsvWriter":
         return self
