@@ -148,7 +148,9 @@ def _calibration(video: _Video, init: str | None, need: bool):
         return None
 
 
-def _side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np.ndarray:
+def side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np.ndarray:
+    """The performer's frame (BGR, scaled to the character's height; grey when None), a dark
+    gap, then the character (RGB): one RGB picture."""
     import cv2
 
     ch = character_rgb.shape[0]
@@ -248,7 +250,7 @@ def render(args, progress=True) -> int:
                         left = frame
                         if left is not None and args.overlay and pf.overlay is not None and hasattr(pf.overlay, "draw"):
                             left = pf.overlay.draw(left.copy())
-                        writer.write_rgb(_side_by_side(left, over_rgb(pf.rgba_pm, PAPER)))
+                        writer.write_rgb(side_by_side(left, over_rgb(pf.rgba_pm, PAPER)))
                     else:
                         writer.write(pf.rgba_pm)
                 if progress and (i % 10 == 0 or i == total):
