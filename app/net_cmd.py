@@ -419,6 +419,49 @@ class _TrackFiles:
             w.abort()
 
 
+def _session(args, rx, drawing: _Drawing | None, files: _TrackFiles, where: str) -> str:
+    """Receive until ``--frames``, ``--timeout`` or Ctrl-C, passing each frame to the files and
+    the drawing; nothing is kept per frame. Returns the drawing's closing note."""
+    received = 0
+    start = time.monotonic()
+    last_note = start
+    ok = False
+    try:
+        try:
+            while True:
+                new = rx.poll(0.02 if drawing is not None else 0.1)
+                for f in new:
+                    received += 1
+                    files.add(rx, f)
+                    if drawing is not None:
+                        drawing.draw(rx, f)
+                    if args.frames and received >= args.frames:
+                        break
+                if drawing is not None and not new:  # late or stopped: hold, then ease to neutral
+                    for pose in rx.gap_poses():
+                        drawing.draw(rx, pose)
+                now = time.monotonic()
+                if args.frames and received >= args.frames:
+                    break
+                if received and args.timeout and now - rx.last_arrival > args.timeout:
+                    break
+                if not received and args.wait and now - start > args.wait:
+                    raise _Fail(f"nothing received on {where} within {args.wait:g} s")
+                if not args.quiet and sys.stderr.isatty() and now - last_note > 1.0:
+                    last_note = now
+                    print(f"\r{rx.stats.summary()}   ", end="", file=sys.stderr)
+        except KeyboardInterrupt:  # Ctrl-C ends the session; what arrived is kept
+            pass
+        ok = True
+    finally:
+        note = drawing.close(ok) if drawing is not None else ""
+        if ok:
+            files.close()
+        else:
+            files.abort()
+    return note
+
+
 def _receive(args) -> int:
     port = check_port(args.port)
     if args.frames is not None and args.frames < 1:
@@ -436,50 +479,13 @@ def _receive(args) -> int:
             raise _Fail(str(e)) from None
     check_outputs(files=[args.csv, args.record, args.fap, *out_files], folders=out_folders,
                   inputs=[art, args.training], force=args.force)  # fmt: skip
-    received = 0
     with UdpReceiver(port, bind=args.bind) as rx:
         bound = rx.address
         if not args.quiet:
             print(f"listening on {bound[0]}:{bound[1]}", file=sys.stderr, flush=True)
         # packets arriving while the character loads wait in the socket's buffer
         drawing = _Drawing(args) if art is not None else None
-        files = _TrackFiles(args)
-        start = time.monotonic()
-        last_note = start
-        ok = False
-        try:
-            try:
-                while True:
-                    new = rx.poll(0.02 if drawing is not None else 0.1)
-                    for f in new:
-                        received += 1
-                        files.add(rx, f)
-                        if drawing is not None:
-                            drawing.draw(rx, f)
-                        if args.frames and received >= args.frames:
-                            break
-                    if drawing is not None and not new:  # late or stopped: hold, then ease to neutral
-                        for pose in rx.gap_poses():
-                            drawing.draw(rx, pose)
-                    now = time.monotonic()
-                    if args.frames and received >= args.frames:
-                        break
-                    if received and args.timeout and now - rx.last_arrival > args.timeout:
-                        break
-                    if not received and args.wait and now - start > args.wait:
-                        raise _Fail(f"nothing received on {bound[0]}:{bound[1]} within {args.wait:g} s")
-                    if not args.quiet and sys.stderr.isatty() and now - last_note > 1.0:
-                        last_note = now
-                        print(f"\r{rx.stats.summary()}   ", end="", file=sys.stderr)
-            except KeyboardInterrupt:  # Ctrl-C ends the session; what arrived is kept
-                pass
-            ok = True
-        finally:
-            note = drawing.close(ok) if drawing is not None else ""
-            if ok:
-                files.close()
-            else:
-                files.abort()
+        note = _session(args, rx, drawing, _TrackFiles(args), f"{bound[0]}:{bound[1]}")
         stats = rx.stats
     if not args.quiet and sys.stderr.isatty():
         print(file=sys.stderr)

@@ -252,12 +252,30 @@ class GifStream:
         got = np.asarray(q.getpalette()[: 255 * 3], np.uint8).reshape(-1, 3)
         pal[: len(got)] = got
         pal[len(got) :] = got[-1] if len(got) else 0  # unused entries repeat a real colour
+        self._snap_flat_colours(pal, sample)
         self._palette = pal.tobytes()
         lut = Image.new("P", (1, 1))
         lut.putpalette(self._palette)
         self._lut = lut
         self._pal = pal
         self.palettes += 1
+
+    FLAT = 16  # the commonest colours of a frame (paper, fills, ink) get exact palette entries
+
+    def _snap_flat_colours(self, pal: np.ndarray, sample: np.ndarray) -> None:
+        """Make the commonest colours exact: the octree averages each into its neighbours, which
+        tints large flat areas by a level or two."""
+        px = sample.reshape(-1, 3)[:: max(1, sample.size // 3 // 65536)].astype(np.int32)
+        packed = (px[:, 0] << 16) | (px[:, 1] << 8) | px[:, 2]
+        colours, counts = np.unique(packed, return_counts=True)
+        taken = set()
+        for c in colours[np.argsort(counts)[::-1][: self.FLAT]]:
+            rgb = np.array([(c >> 16) & 255, (c >> 8) & 255, c & 255], np.int32)
+            d = np.abs(pal[: self.KEY].astype(np.int32) - rgb).max(axis=1)
+            k = int(np.argmin(d))
+            if d[k] <= self.MISFIT and k not in taken:
+                pal[k] = rgb
+                taken.add(k)
 
     def _map(self, rgb: np.ndarray) -> np.ndarray:
         from PIL import Image
