@@ -89,6 +89,7 @@ RESYNC_AFTER = 3
 """Consecutive packets outside the window, each following the one before (within
 :data:`SEQ_AHEAD`), that move the stream to them: a stray packet costs nothing, a real jump
 costs ``RESYNC_AFTER - 1`` frames."""
+_RUNS_KEPT = 64  # runs of agreeing anomalies followed at once (stray packets between do not break one)
 
 
 class NetError(ValueError):
@@ -377,7 +378,7 @@ class Receiver:
         self._decoder = StreamDecoder()
         self._last_seq: int | None = None
         self._missing: deque[int] = deque(maxlen=SEQ_BEHIND)
-        self._run: tuple[int, int] | None = None  # (last seq, length) of agreeing anomalies
+        self._runs: dict[int, int] = {}  # last seq of a run of agreeing anomalies -> its length
         self._last_from_sender = -math.inf
         self._window: deque[tuple[float, int, int]] = deque()
         self.last_frame: FaceParams | None = None
@@ -460,7 +461,7 @@ class Receiver:
             self._decoder.reset()
             self._last_seq = None
             self._missing.clear()
-            self._run = None
+            self._runs.clear()
         self.sender = addr
         self.hello = hello
         try:
@@ -486,7 +487,7 @@ class Receiver:
             for s in range(1, d):
                 self._missing.append((last + s) & 0xFFFFFFFF)
             self._last_seq = seq
-            self._run = None
+            self._runs.clear()
             return True
         if d == 0:
             st.duplicates += 1
@@ -499,10 +500,17 @@ class Receiver:
             else:
                 st.duplicates += 1
             return False
-        run = self._run
-        n = run[1] + 1 if run is not None and 0 < ((seq - run[0]) & 0xFFFFFFFF) <= SEQ_AHEAD else 1
+        runs = self._runs
+        n = 1
+        for k in range(1, SEQ_AHEAD + 1):  # does it follow one of the recent anomalies?
+            prev = (seq - k) & 0xFFFFFFFF
+            if prev in runs:
+                n = runs.pop(prev) + 1
+                break
         if n < RESYNC_AFTER:
-            self._run = (seq, n)
+            runs[seq] = n
+            if len(runs) > _RUNS_KEPT:
+                del runs[next(iter(runs))]
             st.anomalies += 1
             return False
         # the sender really is there now: follow it (frames between were lost if it went ahead)
@@ -510,7 +518,7 @@ class Receiver:
         if 0 < d <= 0xFFFF:
             st.lost += max(0, d - n)
         self._missing.clear()
-        self._run = None
+        runs.clear()
         self._last_seq = seq
         return True
 
