@@ -184,7 +184,7 @@ def _load_track(args) -> _Track:
 def _tracked_frames(args):
     """Yield ``(frame_size, ipd, neutral, fps)`` once, then FaceParams for every tracked frame."""
     try:
-        from tracker.calibration import calibrate
+        from tracker.calibration import CalibrationError, calibrate
         from tracker.face_tracker import FaceTracker
     except ImportError as e:
         raise _Fail(f"the tracker is not available in this build ({e}); replay a track with --params") from None
@@ -219,7 +219,12 @@ def _tracked_frames(args):
                 from tracker.auto_init import auto_clicks
 
                 clicks = auto_clicks(fr.image)
-            cal = calibrate(fr.image, clicks)
+            try:
+                cal = calibrate(fr.image, clicks)
+            except CalibrationError as e:
+                from app.render_cmd import calibration_message
+
+                raise _Fail(f"{args.video or 'camera'}: {calibration_message(e)} (frame {fr.index})") from None
             break
         if cal is None:
             raise _Fail(f"{args.video or 'camera'}: no frame {first} to calibrate on")

@@ -50,7 +50,7 @@ PAPER_WHITE = (250, 248, 243)  # RGB behind transparent characters in formats wi
 __all__ = [
     "RECORD_FILTERS", "RecordError", "FrameWriter", "GifStream", "Recorder", "RecordResult", "format_of",
     "track_path_for", "recording_files", "recording_conflicts", "free_recording_path", "check_render_output",
-    "over_rgb", "to_straight", "render_track", "render_task", "RerenderDialog",
+    "over_rgb", "to_straight", "render_track", "render_task",
 ]  # fmt: skip
 
 

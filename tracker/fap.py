@@ -69,6 +69,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
+from tracker.outputs import ClosingWriter, StreamedFile
 from tracker.params import LOST, OK, PARAM_NAMES, FaceParams
 
 N_FAPS = 68
@@ -246,7 +247,7 @@ class FapTrack:
     mirrored: bool
 
 
-class FapWriter:
+class FapWriter(ClosingWriter):
     """Writes a FAP file frame by frame (memory does not grow with the track's length).
 
     The frames go to an anonymous temporary file; :meth:`close` writes the header with the
@@ -288,8 +289,6 @@ class FapWriter:
     def close(self) -> Path:
         import shutil
 
-        from tracker.outputs import PendingFile
-
         fu = self.fapu
         head = "\n".join([
             "# inkface-fap 1",
@@ -298,30 +297,17 @@ class FapWriter:
             f"# mirrored {int(self.mirrored)}",
             f"2.1 {self.name} {self.fps:g} {self.frames}",
         ]) + "\n"  # fmt: skip
-        pending = PendingFile(self.path)
         try:
-            with open(pending.tmp, "wb") as f:
-                f.write(head.encode())
+            with StreamedFile(self.path) as out:
+                out._f.write(head.encode())
                 self._body.seek(0)
-                shutil.copyfileobj(self._body, f)
-        except BaseException:
-            pending.discard()
-            raise
+                shutil.copyfileobj(self._body, out._f)
         finally:
             self._body.close()
-        return pending.commit()
+        return self.path
 
     def abort(self) -> None:
         self._body.close()
-
-    def __enter__(self) -> "FapWriter":
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
 
 
 def write_fap(

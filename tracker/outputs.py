@@ -195,3 +195,45 @@ class PendingFile:
             self.done = True
             err = OutputError(f"{self.path}: discarded")
             self._stack.__exit__(OutputError, err, None)
+
+
+class ClosingWriter:
+    """The ``with`` protocol of a streaming writer: :meth:`close` on success, :meth:`abort` on an
+    error (subclasses define both)."""
+
+    def close(self) -> Path:
+        raise NotImplementedError
+
+    def abort(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+class StreamedFile(ClosingWriter):
+    """A file a writer fills over time and publishes whole: it is written under a temporary
+    name (:class:`PendingFile`) and appears at ``path`` only on :meth:`close`; :meth:`abort`
+    leaves ``path`` as it was. As a context manager it closes on success, aborts on an error.
+    Subclasses write to ``self._f`` (opened with ``mode`` and ``newline``)."""
+
+    def __init__(self, path: PathLike, mode: str = "wb", newline: str | None = None):
+        self.path = Path(path)
+        self._pending = PendingFile(self.path)
+        self._f = open(self._pending.tmp, mode, newline=newline)
+
+    def close(self) -> Path:
+        """Finish the file and move it into place; returns its path."""
+        self._f.close()
+        return self._pending.commit()
+
+    def abort(self) -> None:
+        """Discard what was written."""
+        self._f.close()
+        self._pending.discard()

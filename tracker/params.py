@@ -31,7 +31,8 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from tracker.atomic_file import replacing
+from tracker.outputs import StreamedFile
+
 
 PARAM_NAMES: tuple[str, ...] = (
     "mid_x",
@@ -142,7 +143,7 @@ def _fmt(v: float) -> str:
     return f"{v:.4f}" if math.isfinite(v) else "nan"
 
 
-class TrackCsvWriter:
+class TrackCsvWriter(StreamedFile):
     """Writes a track CSV one row at a time, so a stream of any length needs no memory for it.
 
     The rows go to a temporary file beside ``path``; :meth:`close` moves the finished file into
@@ -151,13 +152,9 @@ class TrackCsvWriter:
     """
 
     def __init__(self, path: str | os.PathLike, extra: Sequence[str] = EXTRA_COLUMNS):
-        from tracker.outputs import PendingFile
-
-        self.path = Path(path)
+        super().__init__(path, "w", newline="")
         self.extra = tuple(extra)
         self.rows = 0
-        self._pending = PendingFile(self.path)
-        self._f = open(self._pending.tmp, "w", newline="")
         self._w = csv.writer(self._f)
         self._w.writerow(list(CSV_COLUMNS) + list(self.extra))
 
@@ -169,25 +166,6 @@ class TrackCsvWriter:
             line.append(_fmt(v) if isinstance(v, float) else str(v))
         self._w.writerow(line)
         self.rows += 1
-
-    def close(self) -> Path:
-        """Finish the file and move it into place; returns its path."""
-        self._f.close()
-        return self._pending.commit()
-
-    def abort(self) -> None:
-        """Discard what was written; a previous file at ``path`` stays as it was."""
-        self._f.close()
-        self._pending.discard()
-
-    def __enter__(self) -> "TrackCsvWriter":
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
 
 
 def write_csv(path: str | os.PathLike, rows: Iterable[FaceParams], extra: Sequence[str] = EXTRA_COLUMNS) -> None:

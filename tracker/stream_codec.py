@@ -53,6 +53,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from tracker.outputs import StreamedFile
 from tracker.params import (
     LOST,
     OK,
@@ -564,7 +565,7 @@ class StreamHeader:
         }
 
 
-class StreamFileWriter:
+class StreamFileWriter(StreamedFile):
     """Writes a packet-stream file one packet at a time (memory does not grow with its length).
 
     Packets go to a temporary file beside ``path``; :meth:`close` moves the finished file into
@@ -573,13 +574,9 @@ class StreamFileWriter:
     """
 
     def __init__(self, path: str | os.PathLike, header: StreamHeader):
-        from tracker.outputs import PendingFile
-
-        self.path = Path(path)
+        super().__init__(path, "wb")
         self.header = header
         self.packets = 0
-        self._pending = PendingFile(self.path)
-        self._f = open(self._pending.tmp, "wb")
         self._f.write(json.dumps(header.to_dict()).encode() + b"\n")
 
     def write_packet(self, p: bytes) -> None:
@@ -587,23 +584,6 @@ class StreamFileWriter:
             raise StreamError(f"packet of {len(p)} bytes is too long for a stream file")
         self._f.write(_LEN.pack(len(p)) + p)
         self.packets += 1
-
-    def close(self) -> Path:
-        self._f.close()
-        return self._pending.commit()
-
-    def abort(self) -> None:
-        self._f.close()
-        self._pending.discard()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
 
 
 def write_stream(path: str | os.PathLike, header: StreamHeader, packets: Iterable[bytes]) -> None:
