@@ -89,6 +89,7 @@ RESYNC_AFTER = 3
 """Consecutive packets outside the window, each following the one before (within
 :data:`SEQ_AHEAD`), that move the stream to them: a stray packet costs nothing, a real jump
 costs ``RESYNC_AFTER - 1`` frames."""
+_RATE_TICKS = 10  # rate window resolution: sums per 1/10 s
 _RUNS_KEPT = 64  # runs of agreeing anomalies followed at once (stray packets between do not break one)
 
 
@@ -380,7 +381,7 @@ class Receiver:
         self._missing: deque[int] = deque(maxlen=SEQ_BEHIND)
         self._runs: dict[int, int] = {}  # last seq of a run of agreeing anomalies -> its length
         self._last_from_sender = -math.inf
-        self._window: deque[tuple[float, int, int]] = deque()
+        self._window: deque[list] = deque()  # [tick start s, datagram bytes, payload bytes]
         self.last_frame: FaceParams | None = None
         self.last_arrival = -math.inf
         self._gap_anchor = -math.inf
@@ -442,7 +443,7 @@ class Receiver:
         frame = self.codec.decode(codes, frame=p.seq, time=p.timestamp_ms / 1000.0, status=p.status)
         st.frames += 1
         st.payload_bytes += len(p.payload)
-        self._window[-1] = (now, len(data), len(p.payload))
+        self._window[-1][2] += len(p.payload)
         self.last_frame = frame
         self.last_arrival = now
         return frame
@@ -523,8 +524,15 @@ class Receiver:
         return True
 
     def _account(self, now: float, nbytes: int, payload: int) -> None:
+        """Add a datagram to the rate window: per-tenth-of-a-second sums, so a flood of datagrams
+        costs no more memory than a trickle."""
         w = self._window
-        w.append((now, nbytes, payload))
+        tick = math.floor(now * _RATE_TICKS) / _RATE_TICKS
+        if w and w[-1][0] == tick:
+            w[-1][1] += nbytes
+            w[-1][2] += payload
+        else:
+            w.append([tick, nbytes, payload])
         while w and w[0][0] < now - self.window_s:
             w.popleft()
 
