@@ -247,7 +247,7 @@ def test_fuzzed_datagrams_never_raise_and_are_all_counted(datagrams, senders):
     assert s.frames + s.hellos + s.malformed + s.foreign + s.duplicates + s.late + s.waiting + s.anomalies == s.datagrams
 
 
-@settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(st.binary(max_size=80), _mutations(_ALL)))
 def test_packet_parsers_give_their_own_error_or_a_valid_object(data):
     from tracker.params import PACKET_SIZE, Packet, PacketError, decode_packet
