@@ -539,8 +539,9 @@ class Recorder:
     the video frame for frame. Nothing existing is replaced unless ``overwrite``: otherwise a
     :class:`RecordError` names the file and proposes a free name (:func:`free_recording_path`).
 
-    Progress for a window: :attr:`frames` (written so far), :attr:`pending` (queued, not yet
-    written); :meth:`finish` takes ``progress(written, total)`` while it drains the queue.
+    Progress for a window: :attr:`frames` (written so far), :attr:`accepted` (queued in all),
+    :attr:`pending` (queued, not yet written); :meth:`finish` takes ``progress(written, total)``
+    while it drains the queue.
     """
 
     def __init__(self, path: str | os.PathLike, fps: float = 30.0, background=None, track: bool = True,
@@ -566,6 +567,7 @@ class Recorder:
         self._next_t: float | None = None
         self._last_t: float | None = None
         self.dropped = 0
+        self.accepted = 0  # frames queued for the writer (``frames`` of them are written so far)
         self.error: str = ""
         self._thread = threading.Thread(target=self._run, name="inkface-recorder", daemon=True)
         self._thread.start()
@@ -601,6 +603,7 @@ class Recorder:
             self._pending += item[1]
         try:
             self._q.put(item, block=block)
+            self.accepted += item[1]
         except queue.Full:
             with self._lock:
                 self._pending -= item[1]
