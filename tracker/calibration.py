@@ -204,7 +204,7 @@ class Calibration:
         at any moment leaves the previous calibration or this one, never a mix."""
         path = Path(path)
         d = self.to_dict(path.stem)
-        gen = atomic_file.Generation(path.parent, path.name, _files_named_by(path))
+        gen = atomic_file.Generation(path.parent, path.name, files_named_by(path))
         names = []
         for name, t in zip(d["eye_templates"], self.eye_templates):
             ok, buf = cv2.imencode(".png", np.clip(np.rint(t), 0, 255).astype(np.uint8))
@@ -579,7 +579,7 @@ MAX_PROFILE = 4096
 """Longest brow profile (samples) a calibration file may hold."""
 
 
-def _files_named_by(path: Path) -> list[str]:
+def files_named_by(path: Path) -> list[str]:
     """The picture files the calibration at ``path`` names now (none if it is missing or unreadable)."""
     try:
         d = safe_json.read(path, "calibration", max_bytes=MAX_FILE_BYTES, allow_nan=True, error=CalibrationError)

@@ -162,10 +162,15 @@ def free_name(path: PathLike, taken: Callable[[Path], bool] | None = None) -> Pa
 
 
 def calibration_files(path: PathLike) -> list[Path]:
-    """The files a calibration saved at ``path`` consists of: the JSON and the pictures
-    :meth:`tracker.calibration.Calibration.save` writes beside it (keep the two in step)."""
+    """The files a calibration saved at ``path`` consists of: the JSON, the pictures
+    :meth:`tracker.calibration.Calibration.save` first writes beside it, and whatever other
+    pictures (later generations) a calibration already there names."""
+    from tracker.calibration import files_named_by
+
     p = Path(path)
-    return [p] + [p.parent / f"{p.stem}.{part}.png" for part in ("eye_l", "eye_r", "colour_tables")]
+    first = [p.parent / f"{p.stem}.{part}.png" for part in ("eye_l", "eye_r", "colour_tables", "face")]
+    named = [p.parent / n for n in files_named_by(p)] if p.is_file() else []
+    return [p] + list(dict.fromkeys(first + named))
 
 
 class PendingFile:
