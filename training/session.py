@@ -53,6 +53,7 @@ class Pair:
     blend: dict[str, float] | None = None
     thumbnail: np.ndarray | None = field(default=None, repr=False)
     thumb_file: str = ""
+    source: str = ""  # where the frame came from when not the reference clip, e.g. "synthetic:smile"
 
     @property
     def is_blend(self) -> bool:
@@ -71,6 +72,8 @@ class Pair:
             d["blend"] = {k: float(v) for k, v in self.blend.items()}
         if self.thumb_file:
             d["thumbnail"] = self.thumb_file
+        if self.source:
+            d["source"] = self.source
         return d
 
 
@@ -387,7 +390,8 @@ class TrainingSession:
             vals = [float(vals[n]) for n in PARAM_NAMES] if isinstance(vals, dict) else [float(v) for v in vals]
             part = str(d["part"])
             cls._check_part(part)
-            p = Pair(part, d.get("drawing"), int(d.get("frame", 0)), _values10(vals), blend=d.get("blend"))
+            p = Pair(part, d.get("drawing"), int(d.get("frame", 0)), _values10(vals), blend=d.get("blend"),
+                     source=str(d.get("source", "")))
             if p.blend is None and not p.drawing:
                 raise SessionError(f"{f}: a pair has neither 'drawing' nor 'blend'")
             tf = d.get("thumbnail", "")
