@@ -254,7 +254,7 @@ class DrawingCard(QWidget):
         p.fillRect(pic, QColor(250, 248, 243))
         p.drawImage(fit_rect(self.drawing.width(), self.drawing.height(), pic), self.drawing)
         p.restore()
-        fr = QRectF(128, 8, 132, 84)
+        fr = QRectF(self.FRAME_RECT)
         if self.thumb is not None:
             path = QPainterPath()
             path.addRoundedRect(fr, 6, 6)
@@ -273,14 +273,29 @@ class DrawingCard(QWidget):
         f = QFont(p.font())
         f.setBold(True)
         p.setFont(f)
-        p.drawText(QRectF(10, 100, 112, 24), Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, self.name)
+        name = p.fontMetrics().elidedText(self.name, Qt.TextElideMode.ElideRight, int(self.NAME_RECT.width()))
+        p.drawText(self.NAME_RECT, Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, name)
         if self.frame_no is not None:
             f.setBold(False)
             f.setPointSizeF(8)
             p.setFont(f)
+            label, pill = self.label_layout(p.fontMetrics())
+            p.setPen(Qt.PenStyle.NoPen)
+            p.setBrush(QColor(20, 21, 24, 215))
+            p.drawRoundedRect(pill, 5, 5)
             p.setPen(QColor("#e0af68") if self.source else QColor("#9ece6a"))
-            label = p.fontMetrics().elidedText(self.pair_label(), Qt.TextElideMode.ElideRight, 112)
-            p.drawText(QRectF(10, 100, 112, 24), Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter, label)
+            p.drawText(pill, Qt.AlignmentFlag.AlignCenter, label)
+
+    NAME_RECT = QRectF(10, 100, 112, 24)  # the drawing's name, under its picture
+    FRAME_RECT = QRectF(128, 8, 132, 84)  # the paired frame's thumbnail
+
+    def label_layout(self, fm) -> tuple[str, QRectF]:
+        """Where the paired frame came from, fitted in a pill on the thumbnail's lower edge (so it
+        never runs into the drawing's name)."""
+        fr = self.FRAME_RECT
+        label = fm.elidedText(self.pair_label(), Qt.TextElideMode.ElideRight, int(fr.width()) - 18)
+        w = min(fm.horizontalAdvance(label) + 10, fr.width() - 8)
+        return label, QRectF(fr.left() + 4, fr.bottom() - 19, w, 16)
 
 
 # ------------------------------------------------------------------------------------------
@@ -993,7 +1008,9 @@ class TrainingWindow(QMainWindow):
                 lines.append(f"<span style='color:{col}'>■</span> {r.name}: {1 - r.weight_error:.2f} "
                              f"<span style='color:#9aa0aa'>(from {pred}; error {r.recon_error:.3f})</span>")
         cov = rep.get("coverage")
-        if cov is not None:
+        if cov is not None and not cov.hull:
+            lines.append(f"<br><b>Coverage</b>: {cov.suggestion[len(part) + 2:]}.")
+        elif cov is not None:
             lines.append(f"<br><b>Coverage</b>: {cov.outside_share:.0%} of the clip's {cov.frames} frames fall "
                          f"outside the drawings (max {cov.max_outside:.3f}).")
             if cov.worst_frame >= 0:

@@ -852,6 +852,7 @@ def test_the_editor_uses_the_main_windows_dark_theme(make_window, images, qtbot)
     img = win.grab().toImage()
     grey = [img.pixelColor(x, y).lightness() for x in range(0, img.width(), 17) for y in range(0, img.height(), 17)]
     assert np.median(grey) < 70  # the window looks dark, not just its palette
+    assert win.minimumSizeHint().width() <= 1366  # the theme's padding still fits a common laptop screen
     assert win.problems.item(0).foreground().color() in (views.OK_GREEN, views.BAD, views.WARN, views.ACCENT)
 
 
@@ -877,6 +878,7 @@ def test_strip_captions_never_overlap(make_window, images, tmp_path, qtbot):
             for text, box in caps:
                 assert fm.horizontalAdvance(text) <= box.width() + 0.5, (width, text)
             missing = [t for t, _ in caps[1:]]
+            assert len({"to place" in t for t in missing}) == 1  # every caption says it the same way
             if width >= 1100:
                 assert all(("to place" in t) or ("·" in t) for t in missing), missing
     win.strip.resize(1100, 120)

@@ -167,6 +167,11 @@ def test_pairs_say_which_frame_they_came_from_also_after_reopening(qtbot, perfor
         assert smile.pair_label() == "synthetic · smile"
         assert "synthetic performer" in smile.toolTip()
 
+    for card in w.cards.values():  # the label sits on the thumbnail, clear of the drawing's name
+        if card.frame_no is not None:
+            text, pill = card.label_layout(card.fontMetrics())
+            assert not pill.intersects(card.NAME_RECT) and card.FRAME_RECT.contains(pill)
+            assert card.fontMetrics().horizontalAdvance(text) <= pill.width()
     again = TrainingWindow(w.art_path, performer="labels", clip=PerformanceClip(performer["perf"]))
     qtbot.addWidget(again)
     assert {(pt, n): c.pair_label() for (pt, n), c in again.cards.items()} == labels
@@ -182,6 +187,8 @@ def test_diagnostics_show_no_nan_with_few_pairs(qtbot, performer, n_pairs):
     assert not re.search(r"\bnan\b|\binf\b", text, flags=re.I), text
     if n_pairs == 1:
         assert "the only pair so far" in text
+    if n_pairs < 3:  # no hull yet: the window says so instead of "0 % outside"
+        assert "pair at least three different drawings" in text and "fall outside" not in text
 
 
 def test_leave_one_out_numbers_are_finite_for_any_pairing():

@@ -47,6 +47,7 @@ class Coverage:
     max_outside: float
     worst_frame: int  # index in the reference track (-1 if none outside)
     suggestion: str
+    hull: bool = True  # False while fewer than three drawings are paired: no area to be outside of
 
 
 def _mean_points(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -94,6 +95,10 @@ def coverage(emap: ExpressionMap, feats: np.ndarray, part: str = "", frame_ids=N
     feats, ids = feats[ok], ids[ok]
     if len(feats) == 0:
         return Coverage(part, 0, 0.0, 0.0, 0.0, -1, f"{part}: no tracked frames in the reference clip to check")
+    if getattr(emap, "mode", "tri") != "tri":  # one drawing, or drawings on a line: no hull yet
+        return Coverage(part, len(feats), 0.0, 0.0, 0.0, -1,
+                        f"{part}: pair at least three different drawings to see which frames no drawing covers",
+                        hull=False)
     dist = np.array([emap.locate(x).outside for x in feats])
     out = dist > tol * emap.scale
     share = float(out.mean())

@@ -19,24 +19,36 @@ from .imaging import ImageCache, checker_brush, draw_control_line, qcolor_for_li
 CAPTION_H = 16  # px above each drawing of the part strip for its caption
 
 
-def strip_caption(fm, name: str, missing: int, width: float, line: int | None = None) -> str:
-    """A part-strip caption that fits ``width`` px in font metrics ``fm``: the drawing's name and,
-    when lines are still to place, how many (or which one, ``line``). The name is shortened
-    first ("ne…"), then the note ("· 2"), so captions of neighbouring drawings never overlap."""
+def _notes(missing: int, line: int | None) -> list[str]:
+    """The "to place" note of a caption, longest first."""
     if line is not None:
-        notes = [f" — line {line} to place", f" · line {line}", f" · {line}"]
-    elif missing:
-        notes = [f" — {missing} to place", f" · {missing} to place", f" · {missing}"]
-    else:
-        notes = [""]
+        return [f" — line {line} to place", f" · line {line}", f" · {line}"]
+    if missing:
+        return [f" — {missing} to place", f" · {missing} to place", f" · {missing}"]
+    return [""]
+
+
+def strip_caption(fm, name: str, missing: int, width: float, line: int | None = None, level: int = 0) -> str:
+    """A part-strip caption that fits ``width`` px in font metrics ``fm``: the drawing's name and,
+    when lines are still to place, how many (or which one, ``line``), in the ``level``-th
+    shortest form that fits; the name is shortened ("ne…") only when even the shortest note
+    leaves it no room. So captions of neighbouring drawings never overlap."""
+    notes = _notes(missing, line)
     width = int(width) - 1  # elidedText may come out a pixel wider than asked
-    for note in notes:
+    for note in notes[min(level, len(notes) - 1):]:
         rest = width - fm.horizontalAdvance(note)
         if fm.horizontalAdvance(name) <= rest:
             return name + note
-        if rest >= fm.horizontalAdvance(name[:2] + "…"):
-            return fm.elidedText(name, Qt.ElideRight, rest) + note
-    return fm.elidedText(name + notes[-1], Qt.ElideRight, width)
+    note = notes[-1]
+    rest = width - fm.horizontalAdvance(note)
+    if rest >= fm.horizontalAdvance(name[:2] + "…"):
+        return fm.elidedText(name, Qt.ElideRight, rest) + note
+    return fm.elidedText(name + note, Qt.ElideRight, width)
+
+
+def _fits(fm, name: str, missing: int, width: float, line: int | None, level: int) -> bool:
+    notes = _notes(missing, line)
+    return fm.horizontalAdvance(name + notes[min(level, len(notes) - 1)]) <= int(width) - 1
 
 
 def dropped_paths(mime) -> list[Path]:
@@ -154,14 +166,15 @@ class PartStrip(QWidget):
         miss = ed.missing_lines(art, self.doc.part)
         fm = self.fontMetrics()
         cw = self.cell_width()
-        out = []
+        rows = []
         for i, _r, _s in self._cells():
             d = part.drawings[i]
             missing = [k for k, names in miss.items() if d.name in names]
             line = self.doc.line if self.doc.line >= 0 and d.name in miss.get(self.doc.line, []) else None
-            box = QRectF(4 + i * cw + 2, 1, cw - 4, CAPTION_H)
-            out.append((strip_caption(fm, d.name, len(missing), box.width(), line), box))
-        return out
+            rows.append((d.name, len(missing), line, QRectF(4 + i * cw + 2, 1, cw - 4, CAPTION_H)))
+        # one form of the note for every drawing (the longest that fits them all), so they read alike
+        level = next((lv for lv in range(3) if all(_fits(fm, n, m, b.width(), ln, lv) for n, m, ln, b in rows)), 2)
+        return [(strip_caption(fm, n, m, b.width(), ln, level), b) for n, m, ln, b in rows]
 
     def _qimage(self, arr):
         hit = self._cache.get(id(arr))

@@ -372,7 +372,9 @@ class EditorWindow(QMainWindow):
         self.all_heads.setChecked(True)
         self.all_heads.toggled.connect(lambda v: setattr(self.head_canvas, "paint_all_heads", v))
         hb.addWidget(self.all_heads)
-        hb.addSpacing(10)
+        hb.addStretch(1)
+        hv.addLayout(hb)
+        hb = QHBoxLayout()  # a second row, so the editor fits a 1366-pixel-wide screen
         hb.addWidget(QLabel("feather"))
         self.radius_spin = QDoubleSpinBox()
         self.radius_spin.setRange(0, 100)
