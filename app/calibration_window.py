@@ -448,7 +448,8 @@ class CalibrationWindow(QDialog):
                                "the prompt above asks.")
             self._on_changed()
             return False
-        self._auto_note = "Found automatically — check each point, drag any that is off, then accept."
+        self._auto_note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, "
+                           "brow middles, mouth centre) and drag any that is off, then accept.")
         self.set_points(c.points())
         return True
 

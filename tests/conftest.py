@@ -18,3 +18,13 @@ def _user_folders_in_tmp(tmp_path_factory):
         mp.setenv("INKFACE_CACHE", str(home / "data" / "cache"))
         mp.setenv("INKFACE_SETTINGS", str(home / "settings.ini"))
         yield home
+
+
+@pytest.fixture
+def isolated_user_dirs(tmp_path, monkeypatch):
+    """Fresh folders for this one test: settings, data, characters and cache in ``tmp_path``."""
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
+    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
+    return tmp_path

@@ -17,10 +17,7 @@ from app.calibration_window import MASK_PLACEHOLDER, POINTS, CalibrationWindow  
 from tests.test_constellation import CLUSTER  # noqa: E402
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")
 
 
 @pytest.fixture

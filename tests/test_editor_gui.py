@@ -112,6 +112,16 @@ def _lines_everywhere(doc, part):
             doc.move_line(part, di, i, np.add(ln, [0, di, 0, di]))
 
 
+def _finished(win, name, images, holes=5):
+    """``win`` with a new character from ``images``: lines in every drawing, holes cut (valid)."""
+    heads, eyes, mouths = images
+    win.new_character(name, heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(holes)
+    return win
+
+
 # ----------------------------------------------------------------------------- tests
 
 
@@ -244,12 +254,7 @@ def test_crash_mid_save_leaves_previous_set_intact(make_window, images, tmp_path
 
 
 def test_autosave_appears_and_is_offered_back(make_window, images, tmp_path, qtbot):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Auto", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(6)
+    win = _finished(make_window(), "Auto", images, holes=6)
     folder = tmp_path / "auto"
     win.doc.save(folder)
     side = folder / ".artset.autosave" / "artset.json"
@@ -479,12 +484,7 @@ def test_unsaved_new_character_is_autosaved_and_recovered(make_window, images, q
 
 
 def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monkeypatch):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Busy", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Busy", images)
     asked = []
     win.ask_save_folder = lambda start, suggested: asked.append((start, suggested)) or tmp_path / "busy"
     assert win.save()  # no folder yet: asks for one (Save as)
@@ -540,12 +540,7 @@ def test_open_editor_with_parent_is_its_own_window(qtbot, tmp_path, monkeypatch)
 
 
 def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Live", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Live", images)
     pv = win.preview
     pv.tabs.setCurrentIndex(2)
     pv.live_button.setChecked(True)
@@ -562,12 +557,7 @@ def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
     assert pv.live is None and not pv.live_button.isChecked()
 
 def test_opening_a_set_with_wrong_sizes_offers_to_fit(make_window, images, tmp_path):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Odd", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Odd", images)
     folder = tmp_path / "odd"
     win.doc.save(folder)
     # an artist replaces a drawing and a head with bigger scans outside the editor
@@ -748,12 +738,7 @@ def _type_folder_and_press_enter(name):
 def test_save_as_into_a_new_folder_by_typing_its_name(make_window, images, tmp_path, qtbot):
     from PySide6.QtWidgets import QApplication, QMessageBox
 
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Typed", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Typed", images)
     act = _type_folder_and_press_enter("brand-new")
     seen = _answer_modal(qtbot, act)
     assert win.save_as()  # the real dialog: typed a folder that does not exist yet, pressed Enter

@@ -19,23 +19,19 @@ pytest.importorskip("pytestqt")
 from app.settings import Settings  # noqa: E402,F401  (imports Qt after conftest set the platform)
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
-    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")
 
 
 @pytest.fixture(scope="module")
 def performer():
+    """One second of the synthetic performer, its true ten values per frame, its calibration."""
     from tracker.synthetic import Performance
 
     from app.workers import performance_calibration
 
     perf = Performance(seconds=1.0, seed=5)
-    truth = np.array([perf.truth(i).values() for i in range(len(perf))])
-    return {"perf": perf, "truth": truth, "calibration": performance_calibration(perf)}
+    return {"perf": perf, "calibration": performance_calibration(perf),
+            "truth": np.array([p.values() for p in perf.truths()])}
 
 
 def _art() -> str:

@@ -687,7 +687,7 @@ class EditorWindow(QMainWindow):
         from art_sets.io import ArtSetError
 
         side = recoverable(None)
-        if side is None or not self.ask_recover("the unsaved character", side):
+        if side is None or not self.ask_recover("The character you had not saved yet", side):
             return False
         try:
             self.doc.open_recovered_untitled()
