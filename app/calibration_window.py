@@ -309,7 +309,8 @@ class CalibrationWindow(QDialog):
         self.error = ""
         self.saved_to: Path | None = None
 
-        self._auto_note = ""  # what Auto said, kept while the user places the points
+        self._auto_note = ""  # why Auto placed nothing, kept while the user places the points
+        self._auto_found = False  # the points on screen are Auto's (its caution is shown with the masks)
         self.view = ClickView(self.frame)
         self.view.changed.connect(self._on_changed)
         self.prompt = QLabel("")
@@ -418,6 +419,7 @@ class CalibrationWindow(QDialog):
     def reset(self) -> None:
         """Remove every point and everything said about them."""
         self._auto_note = ""
+        self._auto_found = False
         self.error = ""
         self.set_points({})
 
@@ -448,8 +450,7 @@ class CalibrationWindow(QDialog):
                                "the prompt above asks.")
             self._on_changed()
             return False
-        self._auto_note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, "
-                           "brow middles, mouth centre) and drag any that is off, then accept.")
+        self._auto_note, self._auto_found = "", True
         self.set_points(c.points())
         return True
 
@@ -470,10 +471,11 @@ class CalibrationWindow(QDialog):
             self.accept_btn.setEnabled(False)
             for mv in self.mask_views:
                 mv.set_image(None)
-            failed = self._auto_note and not self._auto_note.startswith("Found automatically")
-            self.info.setText(self._auto_note if failed else "Click the points in the order the prompt asks, or press Auto.")
+            self._auto_found = False
+            self.info.setText(self._auto_note or "Click the points in the order the prompt asks, or press Auto.")
             return
         self.prompt.setText("All five points placed — drag any that is off, check the masks, then accept")
+        self._auto_note = ""  # the points are there now: why Auto placed none no longer matters
         self._calibrate()
 
     def _shape_warning(self) -> str:
@@ -514,9 +516,10 @@ class CalibrationWindow(QDialog):
             else:
                 mv.set_image(None, "this tracker exposes no colour classifiers")
         ipd = getattr(self.calibration, "ipd", None)
-        note = self._auto_note if self._auto_note.startswith("Found automatically") else ""
+        note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, brow middles, "
+                "mouth centre) and drag any that is off, then accept. ") if self._auto_found else ""
         self.info.setText(
-            warn + (note + " " if note else "")
+            warn + note
             + (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
             + "Inside the boxes the tracker searches, coloured pixels are what each colour classifier "
             "accepts: the pupils, the lips and the eye whites should light up, little else."

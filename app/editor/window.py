@@ -4,9 +4,8 @@ menus, drag-and-drop, the canvases and the tests all take the same path."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import re
+from pathlib import Path
 
 from PySide6.QtCore import QDir, QSize, Qt
 from PySide6.QtGui import QKeySequence
