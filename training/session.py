@@ -53,6 +53,7 @@ class Pair:
     blend: dict[str, float] | None = None
     thumbnail: np.ndarray | None = field(default=None, repr=False)
     thumb_file: str = ""
+    source: str = ""  # where the frame came from when not the reference clip, e.g. "synthetic:smile"
 
     @property
     def is_blend(self) -> bool:
@@ -71,6 +72,8 @@ class Pair:
             d["blend"] = {k: float(v) for k, v in self.blend.items()}
         if self.thumb_file:
             d["thumbnail"] = self.thumb_file
+        if self.source:
+            d["source"] = self.source
         return d
 
 
@@ -405,7 +408,8 @@ class TrainingSession:
         if blend is None and not drawing:
             raise SessionError(f"{r.file}: a pair has neither 'drawing' nor 'blend'")
         frame = safe_json.integer(d.get("frame", 0), f"{r.file}: {where}.frame", SessionError, 0, int(safe_json.MAGNITUDE))
-        p = Pair(part, drawing, frame, r.values(d["values"], f"{where}.values"), blend=blend)
+        source = r.string(d["source"], f"{where}.source") if d.get("source") is not None else ""
+        p = Pair(part, drawing, frame, r.values(d["values"], f"{where}.values"), blend=blend, source=source)
         tf = d.get("thumbnail", "")
         if tf:
             full = atomic_file.inside(folder, r.string(tf, f"{where}.thumbnail"))
