@@ -111,7 +111,10 @@ def test_masks_appear_as_soon_as_auto_places_the_points(qtbot, performance, monk
 def test_masks_say_why_when_the_tracker_learns_nothing_from_five_points(qtbot, performance):
     frame = performance.frame(320)
     dlg = _dialog(qtbot, frame, frame_index=320)
-    dlg.set_points(CLUSTER)  # placed by hand: judged and warned about, not refused
+    # placed by hand, upside down (mouth above the eyes): judged and warned about, and the
+    # tracker refuses to learn from it
+    upside_down = dict(CLUSTER, mouth=(255.0, 110.0))
+    dlg.set_points(upside_down)
     assert dlg.calibration is None
     assert dlg.error
     assert all(mv.image is None and mv.note != MASK_PLACEHOLDER for mv in dlg.mask_views)

@@ -401,10 +401,17 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     # one generous crop of the whole face in the face frame
     mouth_f = ff.to_face(np.array([clicks.mouth]))[0]
     brows_f = ff.to_face(np.array([clicks.left_brow, clicks.right_brow]))
-    if not (mouth_f[1] > 0.2 * wi):
-        raise CalibrationError(f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the pupils")
-    if not all(b[1] < -0.05 * wi for b in brows_f):
+    # generous bounds on a face's proportions (real faces: mouth 1.0–1.4 ipd below the eyes,
+    # brows 0.2–0.55 above): clicks outside them are not on one face
+    if not (0.55 * wi < mouth_f[1] < 2.2 * wi and abs(mouth_f[0]) < 0.5 * wi):
+        raise CalibrationError(
+            f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the middle of the eyes, "
+            "about one eye distance down"
+        )
+    if not all(-1.0 * wi < b[1] < -0.05 * wi for b in brows_f):
         raise CalibrationError("clicks: the brows must be above the pupils")
+    if not all(abs(b[0] - px) < 0.6 * wi for b, px in zip(brows_f, (-0.5 * wi, 0.5 * wi))):
+        raise CalibrationError("clicks: each brow must be above its own eye")
     ox, oy = -1.3 * wi, min(brows_f[:, 1].min(), 0) - 0.6 * wi
     cw = int(round(2.6 * wi))
     ch = int(round(mouth_f[1] + 0.9 * wi - oy))
