@@ -113,6 +113,10 @@ def setup(migrate_old: bool = True) -> Path:
             if report and report.get("left"):
                 print(f"inkface: {len(report['left'])} old file(s) could not be moved into {root}; they are still "
                       f"where they were (see {root / FAILED})", file=sys.stderr)
+    if root.is_dir():
+        from tracker.atomic_file import sweep_temp
+
+        sweep_temp(root, recursive=True)  # what saves killed half-way left behind
     return root
 
 
