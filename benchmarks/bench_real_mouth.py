@@ -388,8 +388,8 @@ def old_method() -> Method:
 
 def new_method() -> Method:
     """The mouth finder of :mod:`tracker.mouth_finder` with :func:`tracker.mouth_model.learn_mouth`."""
-    from tracker.mouth_finder import MOUTH_RECT, SCORE_OK, MouthFinder
-    from tracker.mouth_model import learn_mouth
+    from tracker.mouth_finder import SCORE_OK, MouthFinder
+    from tracker.mouth_model import MOUTH_RECT, learn_mouth
 
     class State:
         pass
