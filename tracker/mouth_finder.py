@@ -1,49 +1,48 @@
-"""Mouth finder for real faces: lip colour → blob → radial polygon → snake → corners and lip edges.
+"""Mouth finder for real faces: colour classifier → blob → radial polygon → snake → corners and lip edges.
 
 Works in the upright mouth crop of :class:`~tracker.calibration.FaceFrame` (y down, the face's up
 is −y), cut with :data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth centre, with
 a :class:`~tracker.mouth_model.MouthModel` learned at calibration. Per frame:
 
-1. **classify**: one 64³ table lookup per pixel gives the evidence map — the lip score (cue
-   ``"colour"``) or the not-skin distance (cue ``"contrast"``: lips, dark inside, teeth and
-   shading all differ from the skin) — smoothed a little;
-2. **blob**: tag the map, cut thin vertical bridges (philtrum, creases) with a horizontal
-   opening, label the pieces; the core is the piece that best fits a mouth near the prediction,
-   joined by the pieces straight above or below it (upper and lower lip apart around teeth, a
-   tongue, a dark open mouth); every column between the top and bottom of the joined pieces is
-   filled, so the dark inside and the teeth count as mouth;
-3. **radial polygon**: the farthest blob pixel on each of :data:`N_RAYS` rays from its centre
-   (Toyama's radial spanning);
-4. **snake**: on each ray the sub-pixel position of the strongest fall of the edge value (the
-   lip axis for colour, the not-skin distance for contrast) near the polygon, balanced against a
-   second-difference smoothness term around the loop (a closed-form active contour);
+1. **classify**: one 64³ table lookup per pixel gives the mouth evidence — the log-likelihood
+   ratio of "lip, or the inside of a mouth (dark gap, teeth)" against everything else around the
+   mouth — smoothed a little;
+2. **blob**: the positive evidence is tagged and labelled; the blob is the piece with the most
+   evidence near the predicted centre (a red collar or the nose lose by distance and size);
+3. **radial polygon**: from the blob's centre, on each of :data:`~tracker.mouth_model.N_RAYS`
+   rays, the radius up to which the summed evidence along the ray is largest (Toyama's radial
+   spanning made robust: teeth or a dark inside between two lips keep a ray going as long as lip
+   follows, a stretch of skin before the nose or a chin's shadow stops it), then re-cast from the
+   polygon's own centre;
+4. **snake**: each ray's radius moves to the strongest fall of the edge value near it — the lip
+   axis of the upper lip above the mouth line and of the lower lip below it (cue ``"colour"``), or
+   the evidence itself (cue ``"contrast"``) — balanced against a second-difference smoothness
+   term around the loop (a closed-form active contour);
 5. **measure**: corners = the outline's extreme points along x, centre = their midpoint,
    ``lip_upper`` / ``lip_lower`` = from the centre up / down to the outline, refined to where the
    edge value crosses half-way between lip and skin on that column;
-6. **score** in 0..1 — "this is this person's mouth": the outline's size against the calibrated
-   mouth, its place against the prediction, how many rays found a lip edge, and how lip-like
-   (or how unlike skin) its outer band is. :data:`SCORE_OK` is the threshold for "on the mouth".
+6. **score** in 0..1 — "this is this person's mouth": the share of the outline with mouth just
+   inside and skin just outside, times the plausibility of its size against the calibrated mouth
+   and of its place against the prediction. :data:`SCORE_OK` is the threshold.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
 
 import cv2
 import numpy as np
 
 from tracker.colour_model import lut_index
-from tracker.mouth_model import N_RAYS, MouthModel, _smooth_loop, lip_weights
+from tracker.mouth_model import LLR_SCALE, N_RAYS, MouthModel
 
-RADIAL = "blob"
 SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
-LIP_TAG = 0.6
-"""Lip value (0 skin, 1 lip) at and above which a pixel is tagged as lip for the blob: above
-half-way, so shaded or stubbly skin next to the lips does not join them (the snake then finds
-the edge itself)."""
+INSIDE_NEAR = 0.5
+"""Evidence given to inside-like pixels next to the blob (see :meth:`MouthFinder.with_inside`)."""
+BIAS = 0.3
+"""Evidence (log-likelihood ratio) a sample along a ray must exceed to be worth including."""
 
 
 @dataclass
@@ -52,9 +51,9 @@ class MouthResult:
 
     ``left``/``right`` are the corners, ``centre`` their midpoint, ``lip_upper``/``lip_lower``
     the distances from the centre to the outer lip edges along up/down. ``polygon`` (k, 2) is
-    the snake outline, ``raw_polygon`` the radial polygon before it, ``blob`` the mouth blob
-    (bool, crop size), ``cue`` the evidence used this frame (``"colour"`` or ``"contrast"``),
-    ``score`` 0..1 (≥ :data:`SCORE_OK`: on this person's mouth).
+    the snake outline, ``raw_polygon`` the radial polygon before it, ``blob`` the blob the rays
+    start in (bool, crop size), ``cue`` the evidence the edges were placed on (``"colour"`` or
+    ``"contrast"``), ``score`` 0..1 (≥ :data:`SCORE_OK`: on this person's mouth).
     """
 
     left: tuple[float, float]
@@ -77,14 +76,6 @@ def ray_directions(n: int = N_RAYS) -> np.ndarray:
     """Unit vectors ``(n, 2)`` of the rays, ray 0 along +x, turning towards +y (down)."""
     a = np.arange(n) * (2.0 * math.pi / n)
     return np.stack([np.cos(a), np.sin(a)], axis=1)
-
-
-def sample_rays(img: np.ndarray, centre: tuple[float, float], dirs: np.ndarray, radii: np.ndarray,
-                interpolation: int = cv2.INTER_NEAREST) -> np.ndarray:
-    """``img`` at ``centre + r·dir`` for every ray (rows) and radius (columns); 0 outside the image."""
-    mx = (dirs[:, 0:1] * radii[None, :] + np.float32(centre[0])).astype(np.float32)
-    my = (dirs[:, 1:2] * radii[None, :] + np.float32(centre[1])).astype(np.float32)
-    return cv2.remap(img, mx, my, interpolation, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
 
 def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float, float], float, float]:
@@ -110,157 +101,47 @@ def column_fill(mask: np.ndarray) -> np.ndarray:
     top = np.argmax(mask, axis=0)
     bottom = h - 1 - np.argmax(mask[::-1], axis=0)
     ys = np.arange(h)[:, None]
-    return ((ys >= top[None, :]) & (ys <= bottom[None, :]) & has[None, :]).astype(np.uint8)
+    return ((ys >= top[None, :]) & (ys <= bottom[None, :]) & has[None, :]).view(np.uint8)
 
 
-def open_kernel(wi: float) -> np.ndarray:
-    """A horizontal line 0.12 wi long: opening with it cuts the thin vertical bridges (philtrum,
-    creases) that join the lips to the nose or the chin, and keeps the lips (horizontal bands)."""
-    return np.ones((1, max(int(round(0.12 * wi)) | 1, 3)), np.uint8)
-
-
-def find_blob(ev: np.ndarray, thr: float, pred: tuple[float, float], wi: float, width0: float, up0: float,
-              min_area: int, inside_like: Callable[[], np.ndarray], kernel: np.ndarray | None = None,
-              ) -> tuple[np.ndarray, tuple[int, int, int, int]] | None:
-    """The mouth blob in the evidence map ``ev`` (uint8; tagged at ``ev ≥ thr``): uint8 0/1 with
-    its columns filled, and its bounding box ``(x, y, w, h)``; None if nothing is tagged.
-
-    The tags are opened with :func:`open_kernel` and labelled; the *core* is the piece most like a
-    mouth of width ``width0`` near ``pred``. Pieces straight above or below it join it (the other
-    lip, across teeth, a tongue or a dark open mouth) when the gap between them is under 0.06 wi or
-    mostly ``inside_like()`` (a lazily computed bool map), and nothing joins from far above the
-    upper lip's expected top (``pred`` − ``up0`` − 0.3 wi: the upper lip hangs from the head).
-    """
-    if ev.dtype == np.uint8:
-        _, tags = cv2.threshold(ev, thr - 0.5, 1, cv2.THRESH_BINARY)
-    else:
-        tags = (ev >= thr).view(np.uint8)
-    tags = cv2.morphologyEx(tags, cv2.MORPH_OPEN, kernel if kernel is not None else open_kernel(wi))
-    n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
-    if n <= 1:
-        return None
-    areas = stats[1:, cv2.CC_STAT_AREA].astype(np.float64)
-    xs, ys, ws, hs = (stats[1:, i].astype(np.float64) for i in range(4))
-    good = areas >= min_area
-    if not good.any():
-        return None
-    dx = (cents[1:, 0] - pred[0]) / (0.3 * wi)
-    dy = (cents[1:, 1] - pred[1]) / (0.35 * wi)
-    near = np.exp(-0.5 * (dx * dx + dy * dy))
-    wide = np.minimum(ws / max(width0, 1.0), 1.0)
-    core = int(np.argmax(np.where(good, near * wide * np.sqrt(areas), -1.0)))
-    x0, x1 = xs[core], xs[core] + ws[core]
-    ov = np.minimum(xs + ws, x1) - np.maximum(xs, x0)
-    below = ys - (ys[core] + hs[core])
-    gap = np.maximum(np.maximum(below, ys[core] - (ys + hs)), 0.0)
-    cxs = cents[1:, 0]
-    cand = (
-        good
-        & (ov >= 0.5 * np.minimum(ws, ws[core]))
-        & (ws >= 0.4 * ws[core])
-        & (cxs >= x0) & (cxs <= x1)
-        & (gap <= 0.5 * wi)
-        & (ys >= pred[1] - up0 - 0.3 * wi)
-    )
-    cand[core] = False
-    keep = [core]
-    inside = None
-    for j in np.flatnonzero(cand):
-        if gap[j] > 0.06 * wi:
-            if inside is None:
-                inside = inside_like()
-            ga, gb = int(max(xs[j], x0)), int(min(xs[j] + ws[j], x1))
-            gy0, gy1 = (int(ys[core] + hs[core]), int(ys[j])) if below[j] > 0 else (int(ys[j] + hs[j]), int(ys[core]))
-            if gb <= ga or gy1 <= gy0 or float(inside[gy0:gy1, ga:gb].mean()) < 0.35:
-                continue
-        keep.append(int(j))
-    kk = np.array(keep)
-    m = (lab == core + 1).astype(np.uint8) if len(kk) == 1 else np.isin(lab, kk + 1).astype(np.uint8)
-    bx0, by0 = int(xs[kk].min()), int(ys[kk].min())
-    bx1, by1 = int((xs + ws)[kk].max()), int((ys + hs)[kk].max())
-    m[by0:by1, bx0:bx1] = column_fill(m[by0:by1, bx0:bx1])
-    return m, (bx0, by0, bx1 - bx0, by1 - by0)
-
-
-def blob_centre(blob: np.ndarray, box: tuple[int, int, int, int]) -> tuple[float, float] | None:
-    x, y, w, h = box
-    m = cv2.moments(blob[y : y + h, x : x + w], binaryImage=True)
-    if m["m00"] <= 0:
-        return None
-    return (m["m10"] / m["m00"] + x, m["m01"] / m["m00"] + y)
-
-
-def farthest_radii(blob: np.ndarray, centre: tuple[float, float], dirs: np.ndarray, radii: np.ndarray) -> np.ndarray:
-    """Radius of the farthest blob pixel on each ray (Toyama's radial spanning), to the pixel's outer
-    edge; 0 on a ray that meets none."""
-    inside = sample_rays(blob, centre, dirs, radii) > 0
-    last = len(radii) - 1 - np.argmax(inside[:, ::-1], axis=1)
-    r = radii[last].astype(np.float64) + 0.5
-    r[~inside.any(axis=1)] = 0.0
-    return r
-
-
-def exit_radii(mask: np.ndarray, centre: tuple[float, float], dirs: np.ndarray, radii: np.ndarray, gap: int) -> np.ndarray:
-    """Radius on each ray from ``centre`` where it leaves the region ``mask`` (uint8 0/1) for good:
-    the first run of ``gap`` samples outside it after the first inside one (half-way between the
-    last inside and first outside sample); the ray's end if it never leaves, 0 if it never enters."""
-    inside = sample_rays(mask, centre, dirs, radii) > 0
-    n, m = inside.shape
-    entered = np.maximum.accumulate(inside, axis=1)
-    out = np.concatenate([~inside & entered, np.ones((n, gap), bool)], axis=1)
-    c = np.zeros((n, m + gap + 1), np.int32)
-    np.cumsum(out, axis=1, out=c[:, 1:])
-    run = (c[:, gap : gap + m] - c[:, :m]) == gap
-    k = np.where(run.any(axis=1), np.argmax(run, axis=1), m - 1)
-    step = float(radii[1] - radii[0]) if len(radii) > 1 else 0.5
-    r = radii[np.clip(k, 0, m - 1)].astype(np.float64) - 0.5 * step
-    r[~entered[:, -1]] = 0.0
-    return np.maximum(r, 0.0)
-
-
-def outline_from_blob(found: np.ndarray, wi: float, n_rays: int = N_RAYS) -> np.ndarray | None:
-    """The radial polygon ``(n, 2)`` of a blob (uint8 0/1), spikes removed; None for an empty blob."""
-    ys, xs = np.nonzero(found)
-    if not len(xs):
-        return None
-    c = (float(xs.mean()), float(ys.mean()))
-    dirs = ray_directions(n_rays)
-    r = _smooth_loop(farthest_radii(found, c, dirs, np.arange(0.0, 0.85 * wi, 0.5, dtype=np.float32)))
-    return dirs * r[:, None] + np.array(c)
+def lip_weights(h: int, y_line: float, wi: float) -> np.ndarray:
+    """Per row (h, 1) float32: 0 above the mouth line ``y_line`` (the upper lip's axis), 1 below
+    (the lower lip's), blended over about ±0.03 wi."""
+    y = (np.arange(h, dtype=np.float32) - np.float32(y_line)) / np.float32(max(0.03 * wi, 1.0))
+    return (1.0 / (1.0 + np.exp(-y))).astype(np.float32).reshape(-1, 1)
 
 
 class MouthFinder:
     """Find one performer's mouth in mouth crops (see the module docstring).
 
     ``model`` comes from :func:`~tracker.mouth_model.learn_mouth`; ``work_ipd`` is the crop
-    frame's inter-eye distance (px). Ray directions, sample radii, kernels and the snake's
-    matrix are precomputed here.
+    frame's inter-eye distance (px). Ray directions and radii, kernels and the snake's matrices
+    are precomputed here.
     """
 
     def __init__(self, model: MouthModel, work_ipd: float, n_rays: int = N_RAYS, alpha: float = 0.6):
         self.model = model
         self.wi = wi = float(work_ipd)
         k = wi / model.work_ipd  # the model's lengths → this crop's
-        self.k = k
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
-        self.up0 = model.lip_upper * k
+        self.area0 = model.area * k * k
         self.n = n_rays
         self.dirs = ray_directions(n_rays)
-        self._dirs32 = self.dirs.astype(np.float32)
+        self._dx = self.dirs[:, 0:1].astype(np.float32)
+        self._dy = self.dirs[:, 1:2].astype(np.float32)
         self.step = 0.5
-        self.max_r = 0.85 * wi
-        self.radii = np.arange(0.0, self.max_r + 1e-9, self.step, dtype=np.float32)
-        self.search = np.arange(-0.05 * wi, 0.05 * wi + 1e-9, self.step, dtype=np.float32)
-        self.sigma = max(0.012 * wi, 0.6)
-        self.sigma_blob = max(0.022 * wi, 0.8)
-        self.exit_gap = max(int(round(0.035 * wi / self.step)), 2)
-        self.edge_level = {"colour": 0.5, "contrast": 1.0}
-        self._band = np.array([[1.5, 3.0]], np.float32)
-        g = max(int(round(0.08 * wi)) | 1, 3)
-        self.grow_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (g, g))
-        self.open_kernel = open_kernel(wi)
-        self.min_area = max(int(0.02 * model.area * k * k), 6)
+        self.radii = np.arange(0.0, 0.85 * wi + 1e-9, self.step, dtype=np.float32)
+        self._ox = self._dx * self.radii[None, :]
+        self._oy = self._dy * self.radii[None, :]
+        self.search = np.arange(-0.04 * wi, 0.08 * wi + 1e-9, self.step, dtype=np.float32)[None, :]
+        self.band = np.array([[-3.0, -1.5, 1.5, 3.0]], np.float32)
+        self.sigma = max(0.01 * wi, 0.6)
+        self.sigma_blob = max(0.02 * wi, 0.8)
+        self.min_area = max(int(0.02 * self.area0), 6)
+        g = max(int(round(0.2 * wi)) | 1, 3)
+        self.near_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (g, g))
+        self.colour = model.cue == "colour"
         self.axis_up = np.asarray(model.axis_up[:3], dtype=np.float32).reshape(1, 3)
         self.axis_dn = np.asarray(model.axis_down[:3], dtype=np.float32).reshape(1, 3)
         self.off_up, self.off_dn = float(model.axis_up[3]), float(model.axis_down[3])
@@ -271,14 +152,38 @@ class MouthFinder:
             d2[i, (i + 1) % n_rays] += 1.0
         self._dtd = alpha * d2.T @ d2
         self._rows = np.arange(n_rays)
+        self._diag = np.arange(n_rays) * (n_rays + 1)
 
     # ------------------------------------------------------------------ evidence
-    def tags(self, idx: np.ndarray, cue: str) -> tuple[np.ndarray, float]:
-        """The smoothed tag map (uint8) for ``cue`` from the crop's table indices, and its threshold:
-        the lip classifier's score for colour, the not-skin distance for contrast."""
-        if cue == "colour":
-            return cv2.GaussianBlur(self.model.lip.table.take(idx), (0, 0), self.sigma_blob), 128.0
-        return cv2.GaussianBlur(self.model.not_skin_table.take(idx), (0, 0), self.sigma), self.model.threshold
+    def evidence(self, crop: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The table value of every pixel (uint8, smoothed for the blob), the smoothed log-likelihood
+        ratio (float32) of "mouth" against everything else, and the table indices."""
+        idx = lut_index(crop)
+        raw = self.model.table.take(idx)
+        tags = cv2.GaussianBlur(raw, (0, 0), self.sigma_blob)
+        llr = cv2.GaussianBlur(raw, (0, 0), self.sigma).astype(np.float32)
+        llr -= np.float32(128.0)
+        llr *= np.float32(1.0 / LLR_SCALE)
+        return tags, llr, idx
+
+    def with_inside(self, llr: np.ndarray, inside: np.ndarray, blob: np.ndarray) -> np.ndarray:
+        """``llr`` raised to at least :data:`INSIDE_NEAR` where a pixel looks like a mouth's inside
+        (``inside``, uint8: dark and colourless, or teeth) between lip above and lip below in its
+        column, near the blob:
+        the gap between two lips, teeth and an open mouth belong to the mouth even when the hair or
+        the background has such colours — and a pale highlight above the upper lip does not."""
+        near = cv2.dilate(blob, self.near_kernel)
+        x, y, w, h = cv2.boundingRect(near)
+        if w == 0 or h == 0:
+            return llr
+        lipish = (llr[y : y + h, x : x + w] > 0.5) & (near[y : y + h, x : x + w] > 0)
+        between = column_fill(lipish.view(np.uint8)) & inside[y : y + h, x : x + w]
+        if not between.any():
+            return llr
+        out = llr.copy()
+        sub = out[y : y + h, x : x + w]
+        np.maximum(sub, np.where(between > 0, np.float32(INSIDE_NEAR), sub), out=sub)
+        return out
 
     def lip_value(self, crop: np.ndarray, y_line: float) -> np.ndarray:
         """The lip value (float32; 0 skin, 1 lip): the upper lip's axis above the mouth line ``y_line``,
@@ -287,65 +192,94 @@ class MouthFinder:
         vu = cv2.transform(c32, self.axis_up)
         vd = cv2.transform(c32, self.axis_dn)
         vu += np.float32(self.off_up)
-        vd -= vu
         vd += np.float32(self.off_dn)
+        vd -= vu
         vd *= lip_weights(crop.shape[0], y_line, self.wi)
         vd += vu
         return cv2.GaussianBlur(vd, (0, 0), 0.7)
 
-    def edge_value(self, crop: np.ndarray, idx: np.ndarray, y_line: float, cue: str) -> np.ndarray:
-        """The float32 value whose fall marks the outer lip edge: the lip value for colour, the
-        not-skin distance over its threshold for contrast."""
-        if cue == "colour":
-            return self.lip_value(crop, y_line)
-        d = cv2.GaussianBlur(self.model.not_skin_table.take(idx), (0, 0), self.sigma).astype(np.float32)
-        return d * np.float32(1.0 / self.model.threshold)
+    # ------------------------------------------------------------------ blob
+    def blob(self, tags: np.ndarray, pred: tuple[float, float]) -> tuple[np.ndarray, tuple[float, float]] | None:
+        """The blob (uint8 0/1) with the most evidence near ``pred``, and its evidence-weighted centre."""
+        wi = self.wi
+        _, mask = cv2.threshold(tags, 128.0 + 0.25 * LLR_SCALE, 1, cv2.THRESH_BINARY)
+        n, lab, stats, cents = cv2.connectedComponentsWithStats(mask, connectivity=4)
+        if n <= 1:
+            return None
+        ev = np.bincount(lab.ravel(), weights=tags.ravel().astype(np.float64) - 128.0, minlength=n)[1:]
+        area = stats[1:, cv2.CC_STAT_AREA]
+        dx = (cents[1:, 0] - pred[0]) / (0.3 * wi)
+        dy = (cents[1:, 1] - pred[1]) / (0.4 * wi)
+        near = np.exp(-0.5 * (dx * dx + dy * dy))
+        s = np.where((area >= self.min_area) & (near > 0.05), ev * near, -1.0)
+        j = int(np.argmax(s))
+        if s[j] <= 0:
+            return None
+        return (lab == j + 1).view(np.uint8), (float(cents[j + 1, 0]), float(cents[j + 1, 1]))
 
-    def blob(self, tags: np.ndarray, thr: float, pred: tuple[float, float], idx: np.ndarray
-             ) -> tuple[np.ndarray, tuple[int, int, int, int]] | None:
-        """The mouth blob and its box (:func:`find_blob` with this performer's sizes; teeth, the dark
-        inside and bright pixels between two lips let them join)."""
-        return find_blob(tags, thr, pred, self.wi, self.width0, self.up0, self.min_area,
-                         lambda: self.model.inside_table.take(idx) > 0, self.open_kernel)
+    # ------------------------------------------------------------------ radial polygon and snake
+    def spans(self, llr: np.ndarray, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """On each ray from ``centre``: the radius up to which the summed evidence (minus
+        :data:`BIAS` per sample) is largest, and that sum (the ray's confidence)."""
+        prof = cv2.remap(llr, self._ox + np.float32(centre[0]), self._oy + np.float32(centre[1]), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=-1.0)
+        prof -= np.float32(BIAS)
+        cs = np.cumsum(prof, axis=1)
+        k = np.argmax(cs, axis=1)
+        gain = cs[self._rows, k] * self.step
+        return self.radii[k].astype(np.float64) + 0.5 * self.step, np.maximum(gain, 0.0)
 
-    # ------------------------------------------------------------------ polygon and snake
-    def snake(self, value: np.ndarray, centre: tuple[float, float], r0: np.ndarray, iters: int = 2) -> tuple[np.ndarray, np.ndarray]:
-        """Radii refined to the outer lip edge near ``r0`` on each ray, smoothed around the loop; also
-        the fall found on each ray (edge strength).
+    def smooth(self, r: np.ndarray, weight: np.ndarray) -> np.ndarray:
+        """Radii balancing ``weight`` × (r − given)² against the loop's second differences."""
+        a = self._dtd.copy()
+        a.flat[self._diag] += weight
+        return np.linalg.solve(a, weight * r)
 
-        The edge on a ray is the *outermost* local maximum of the fall of ``value`` (inside → outside)
-        that is at least half the ray's strongest: an open mouth's or the lips' inner edges (lip to
-        teeth, to the dark gap) can be stronger than the outer one, and must not pull it in."""
-        r = r0.astype(np.float64)
-        cx, cy = np.float32(centre[0]), np.float32(centre[1])
-        dx, dy = self._dirs32[:, 0:1], self._dirs32[:, 1:2]
-        off = self.search[None, :]
+    def snake(self, value: np.ndarray, centre: tuple[float, float], r0: np.ndarray, w0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Radii moved to the strongest fall of ``value`` (inside → outside) within −0.04…+0.08 wi of ``r0``
+        on each ray, smoothed around the loop; also the fall found on each ray (edge strength).
+        Rays with a weak fall keep their radius from ``r0`` (weight ``w0``)."""
         rows = self._rows
-        strength = np.zeros(self.n)
-        m = len(self.search) - 2
-        pos = np.arange(m)[None, :]
-        for _ in range(iters):
-            rr = np.maximum(r.astype(np.float32)[:, None] + off, 0.0)
-            prof = cv2.remap(value, cx + dx * rr, cy + dy * rr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            fall = prof[:, :-2] - prof[:, 2:]
-            peak = np.zeros_like(fall, dtype=bool)
-            peak[:, 1:-1] = (fall[:, 1:-1] >= fall[:, :-2]) & (fall[:, 1:-1] >= fall[:, 2:])
-            best = fall[:, 1:-1].max(axis=1)
-            strong = peak & (fall >= 0.999 * best[:, None]) & (fall > 0)
-            strong[:, 0] = strong[:, -1] = False
-            j = np.where(strong.any(axis=1), np.max(np.where(strong, pos, -1), axis=1), np.argmax(fall[:, 1:-1], axis=1) + 1)
-            j = np.clip(j, 1, m - 2)
-            a, b, c = fall[rows, j - 1], fall[rows, j], fall[rows, j + 1]
-            den = a - 2 * b + c
-            den = np.where(np.abs(den) > 1e-9, den, -1e-9)
-            frac = np.clip(0.5 * (a - c) / den, -0.5, 0.5)
-            edge = rr[rows, j + 1] + frac * self.step
-            strength = b
-            wgt = np.clip(b / max(float(np.median(b)), 1e-6), 0.02, 1.0)
-            A = self._dtd.copy()
-            A[rows, rows] += wgt
-            r = np.linalg.solve(A, wgt * edge)
-        return np.maximum(r, 0.0), strength
+        rr = np.maximum(r0.astype(np.float32)[:, None] + self.search, 0.0)
+        prof = cv2.remap(value, self._dx * rr + np.float32(centre[0]), self._dy * rr + np.float32(centre[1]),
+                         cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        fall = prof[:, :-2] - prof[:, 2:]
+        j = np.argmax(fall[:, 1:-1], axis=1) + 1
+        a, b, c = fall[rows, j - 1], fall[rows, j], fall[rows, j + 1]
+        den = a - 2 * b + c
+        den = np.where(np.abs(den) > 1e-9, den, -1e-9)
+        frac = np.clip(0.5 * (a - c) / den, -0.5, 0.5)
+        edge = rr[rows, j + 1] + frac * self.step
+        strong = np.clip(b / max(float(np.median(b)), 1e-6), 0.0, 1.0)
+        target = strong * edge + (1.0 - strong) * r0
+        return self.smooth(target, np.maximum(w0, 0.05)), b
+
+    def outline(self, crop: np.ndarray, pred: tuple[float, float]):
+        """:meth:`outline_on` this model's evidence in ``crop``, also returning the table indices."""
+        tags, llr, idx = self.evidence(crop)
+        out = self.outline_on(tags, llr, self.model.inside_table.take(idx), pred)
+        return out
+
+    def outline_on(self, tags: np.ndarray, llr: np.ndarray, inside: np.ndarray, pred: tuple[float, float]):
+        """Blob, radial polygon and the smoothed outline (no edge refinement) on any evidence map
+        (``tags`` uint8 with 128 = no evidence, ``llr`` float32, ``inside`` uint8 inside-like pixels):
+        ``(poly, centre, blob, raw, llr, radii, weights)`` or None when there is no blob."""
+        found = self.blob(tags, pred)
+        if found is None:
+            return None
+        blob, c0 = found
+        llr = self.with_inside(llr, inside, blob)
+        r, gain = self.spans(llr, c0)
+        raw = self.dirs * r[:, None] + np.array(c0)
+        w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
+        poly = self.dirs * self.smooth(r, w)[:, None] + np.array(c0)
+        # again from the outline's own centre (a blob may be one lip, or off-centre)
+        left, right, up, down = polygon_measures(poly)
+        c1 = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
+        r, gain = self.spans(llr, c1)
+        w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
+        r1 = self.smooth(r, w)
+        return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, llr, r1, w
 
     # ------------------------------------------------------------------ measurements
     @staticmethod
@@ -371,76 +305,49 @@ class MouthFinder:
         t = (a - half) / (a - b) if a != b else 0.5
         return float(ys[0, i] + t * (ys[0, i + 1] - ys[0, i]))
 
-    def _score(self, res_w: float, res_h: float, centre, pred, fit: float) -> float:
-        """Score 0..1: ``fit`` (how well the outline separates mouth inside from skin outside) times
-        the plausibility of its width and height against the calibrated mouth and of its place
-        against the prediction."""
-        wi = self.wi
-        rho = res_w / max(self.width0, 1e-6)
-        s_w = float(np.clip((rho - 0.3) / 0.25, 0, 1) * np.clip((2.1 - rho) / 0.4, 0, 1))
-        s_h = float(np.clip((1.15 * wi - res_h) / (0.2 * wi), 0, 1) * np.clip(res_h / max(0.25 * self.height0, 1.0), 0, 1))
-        dx = (centre[0] - pred[0]) / (0.3 * wi)
-        dy = (centre[1] - pred[1]) / (0.45 * wi)
-        s_p = math.exp(-0.5 * (dx * dx + dy * dy))
-        return float(s_w * s_h * (0.3 + 0.7 * s_p) * fit)
-
-    def _fit(self, value: np.ndarray, level: float, centre, r: np.ndarray) -> float:
-        """Share of rays whose outline has mouth just inside (``value ≥ level`` 1.5–3 px in) times the
-        share with skin just outside (``value < level`` 1.5–3 px out)."""
-        rr = np.concatenate([np.maximum(r[:, None] - self._band, 0.5), r[:, None] + self._band], axis=1).astype(np.float32)
-        mx = self._dirs32[:, 0:1] * rr + np.float32(centre[0])
-        my = self._dirs32[:, 1:2] * rr + np.float32(centre[1])
-        v = cv2.remap(value, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        k = self._band.shape[1]
-        inside = float(np.mean(v[:, :k].mean(axis=1) >= level))
-        outside = float(np.mean(v[:, k:].mean(axis=1) < level))
+    def _fit(self, llr: np.ndarray, centre, r: np.ndarray) -> float:
+        """Share of rays with mouth evidence just inside the outline (1.5–3 px in) times the share
+        with skin just outside (1.5–3 px out)."""
+        rr = np.maximum(r[:, None] + self.band, 0.5).astype(np.float32)
+        v = cv2.remap(llr, self._dx * rr + np.float32(centre[0]), self._dy * rr + np.float32(centre[1]),
+                      cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        inside = float(np.mean(v[:, :2].mean(axis=1) > 0.0))
+        outside = float(np.mean(v[:, 2:].mean(axis=1) < 0.0))
         return inside * outside
+
+    def _score(self, width: float, height: float, centre, pred, fit: float) -> float:
+        """``fit`` times the plausibility of the width against the calibrated mouth (0.35–2×), of the
+        height (0.05–1.15 wi) and of the place against the prediction (full within ~0.3 wi)."""
+        wi = self.wi
+        rho = width / max(self.width0, 1e-6)
+        s_w = float(np.clip((rho - 0.3) / 0.15, 0, 1) * np.clip((2.1 - rho) / 0.3, 0, 1))
+        s_h = float(np.clip((1.15 * wi - height) / (0.15 * wi), 0, 1) * np.clip((height - 0.03 * wi) / (0.03 * wi), 0, 1))
+        dx = (centre[0] - pred[0]) / (0.3 * wi)
+        dy = (centre[1] - pred[1]) / (0.4 * wi)
+        d = math.sqrt(dx * dx + dy * dy)
+        s_p = 1.0 if d <= 1.0 else max(math.exp(-(d - 1.0)), 0.3)
+        return float(s_w * s_h * s_p * fit)
 
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float]) -> MouthResult | None:
         """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted centre),
         or None when nothing there can be a mouth."""
         crop = crop_bgr
         pred = (float(predicted_centre_crop[0]), float(predicted_centre_crop[1]))
-        cues = (self.model.cue,) if self.model.cue == "contrast" else ("colour", "contrast")
-        best = None
-        for cue in cues:
-            res = self._find(crop, pred, cue)
-            if res is not None and (best is None or res.score > best.score):
-                best = res
-        return best
-
-    def _find(self, crop: np.ndarray, pred: tuple[float, float], cue: str) -> MouthResult | None:
-        idx = lut_index(crop)
-        tag_map, thr = self.tags(idx, cue)
-        found = self.blob(tag_map, thr, pred, idx)
+        found = self.outline(crop, pred)
         if found is None:
             return None
-        blob, box = found
-        centre = blob_centre(blob, box)
-        if centre is None:
-            return None
-        value = self.edge_value(crop, idx, centre[1], cue)
-        # the mouth region seen from its centre: lip, or the inside (dark, teeth); each ray ends
-        # where it first leaves it for skin — the nose or a chin's shadow further out do not count
-        if RADIAL == "exit":
-            region = (value >= self.edge_level[cue]).view(np.uint8) | self.model.inside_table.take(idx)
-            r0 = exit_radii(region, centre, self.dirs, self.radii, self.exit_gap)
-        elif RADIAL == "blobexit":
-            region = blob | ((value >= self.edge_level[cue]).view(np.uint8) & cv2.dilate(blob, self.grow_kernel))
-            r0 = exit_radii(region, centre, self.dirs, self.radii, self.exit_gap)
-        else:
-            r0 = farthest_radii(blob, centre, self.dirs, self.radii)
-        raw = self.dirs * r0[:, None] + np.array(centre)
-        r, strength = self.snake(value, centre, r0)
-        poly = self.dirs * r[:, None] + np.array(centre)
+        _, c1, blob, raw, llr, r1, w = found
+        cue = "colour" if self.colour else "contrast"
+        value = self.lip_value(crop, c1[1]) if self.colour else llr
+        r, _ = self.snake(value, c1, r1, w)
+        poly = self.dirs * r[:, None] + np.array(c1)
         left, right, up, down = polygon_measures(poly)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
         reach = max(0.04 * self.wi, 2.0)
         top = self._refine_vertical(value, cx, cy - up, -1, reach)
         bottom = self._refine_vertical(value, cx, cy + down, +1, reach)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
-        fit = self._fit(value, self.edge_level[cue], centre, r)
-        score = self._score(width, bottom - top, (cx, cy), pred, fit)
+        score = self._score(width, bottom - top, (cx, cy), pred, self._fit(llr, c1, r))
         return MouthResult(
             left=left, right=right, centre=(cx, cy), lip_upper=cy - top, lip_lower=bottom - cy,
             polygon=poly, raw_polygon=raw, blob=blob.astype(bool), cue=cue, score=score,

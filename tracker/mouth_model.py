@@ -4,28 +4,27 @@ Everything lives in the upright, scale-normalised mouth crop of :class:`~tracker
 (x along the eye line, y down, ``work_ipd`` px between the eyes), cut with :data:`MOUTH_RECT`
 around the mouth click.
 
-The model does not assume what colour lips are. It learns:
+Nothing here assumes what colour lips or skin are. From the calibration crop the model learns
 
-* the **skin** around the mouth (a robust Gaussian of the pixels on an ellipse around the
-  click, plus any skin samples from elsewhere on the face) and bakes the Mahalanobis distance
-  of every colour from it into a 64³ table — the *not-skin* table. Lips, teeth, tongue and the
-  dark inside of the mouth are all far from the skin, so the mouth shows up as one region of
-  high distance whatever it is doing, even when the lips alone are barely redder than the skin;
-* the **mouth outline** on the calibration frame: rays from the click's not-skin region to where
-  the not-skin distance first falls to the skin's level (so the gap between closed lips or
-  an open mouth's inside count as mouth and the nose or chin shadow above and below do not);
-* the **lips** themselves: the outline's outer band minus the dark inside and the bright
-  teeth; from them a lip-vs-skin table (a Gaussian classifier, for the score and the overlay)
-  and a linear BGR *lip axis* (Fisher's discriminant: 0 on skin, 1 on lip, insensitive to the
-  skin's shading) on which the outer lip edges are placed to a fraction of a pixel;
-* the **cue** to rely on: ``"colour"`` when the lips stand out from the skin along the lip axis
-  (separation d′ ≥ :data:`COLOUR_SEPARATION`), else ``"contrast"`` — the mouth region's
-  difference from skin as a whole (its dark line or inside, teeth, shading), with the lip
-  edges placed on the not-skin distance instead.
+* the **lips**: a two-component Gaussian of their colour (the upper lip faces the floor and the
+  lower lip the light, so they differ), first from the rows right above and below the gap between
+  the lips (or the open mouth) at the click, then from the whole outline found with them;
+* **everything else** in the crop: skin lit and shaded, the nostrils, stubble, hair, background —
+  a Gaussian mixture of the pixels well away from the mouth;
+* a **mouth evidence** table: for every colour (a 64³ lookup), the log-likelihood ratio of lip
+  against everything else; colours that look like the inside of a mouth (dark, or the greys of
+  teeth) and that the calibration frame never showed outside the mouth count as mouth too, so an
+  open mouth, teeth and the gap between closed lips add to the mouth region instead of splitting it;
+* one **lip axis** per lip (Fisher's linear discriminant of that lip against the skin right next
+  to it, kept orthogonal to the skin's colour so shading does not move it): 0 on skin, 1 on lip,
+  linear in BGR, so outer lip edges can be placed to a fraction of a pixel;
+* the calibrated mouth's **geometry** (centre, width, lip heights, outline).
 
-:func:`learn_mouth` never refuses a frontal, lit face: if nothing near the click differs from
-the skin it still returns a model (cue ``"contrast"``, low separation) sized from the
-inter-eye distance, and the finder's score says how sure each frame is.
+The **cue** is ``"colour"`` when both lips stand out from their skin along their axes (d′ ≥
+:data:`COLOUR_SEPARATION`), else ``"contrast"``: the finder then leans on what else differs from
+the skin (the gap or the inside, teeth, shading) and places edges on the evidence map.
+:func:`learn_mouth` never refuses a face; a face with no visible mouth gets a model of a typical
+mouth at the click, and the finder's score says how sure each frame is.
 """
 
 from __future__ import annotations
@@ -38,12 +37,12 @@ import numpy as np
 
 from tracker.colour_model import (
     TILE_SHAPE,
-    ColourClassifier,
     Gaussians,
     _grid_features,
     _grid_quad_forms,
     _lowest,
     features,
+    lut_index,
     table_to_tile,
     tile_to_table,
 )
@@ -53,62 +52,57 @@ MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
 """Crop rectangle ``(x0, y0, w, h)`` in units of ``work_ipd``, relative to the predicted mouth centre
 (face px): wide enough for a grin (1.5× the width), a yawn (the centre drops ~0.3 wi, the lower lip
 another 0.6 wi) and the head-motion prediction's error."""
-SKIN_YW = 1.0
-"""Luminance weight of the skin features (the fitted covariance scales it further)."""
-DIST_SCALE = 16.0
-"""Not-skin table value = Mahalanobis distance × this (saturating at 255, i.e. distance ~16)."""
-COLOUR_SEPARATION = 2.0
-"""Lip-vs-skin d′ along the lip axis at and above which the lip colour is the cue."""
 N_RAYS = 48
-TABLE_NAMES = ("not_skin", "lip")
-"""Names of the colour-table images of :meth:`MouthModel.images` (one 512×512 grey tile each)."""
+COLOUR_SEPARATION = 2.0
+"""Lip-vs-skin d′ along the lip axes at and above which the lip colour is the cue."""
+LIP_YW = 0.6
+"""Luminance weight of the colour features of the lip and "everything else" models."""
+LLR_SCALE = 32.0
+"""Mouth table value = 128 + this × log-likelihood ratio (clipped to about ±4)."""
+INSIDE_LLR = 1.0
+"""Evidence of a colour that looks like a mouth's inside and was never seen outside the mouth."""
+TABLE_NAMES = ("mouth",)
+"""Names of the colour-table images of :meth:`MouthModel.images` (512×512 grey tiles)."""
+
+_MIN_STD = np.array([0.02 * LIP_YW, 0.006, 0.006])
 
 
-# --------------------------------------------------------------------------------------------- helpers
+# --------------------------------------------------------------------------------------------- tables
 
 
-def _robust_fit(x: np.ndarray, k: int = 1, spread: float = 2.5, min_std=None) -> Gaussians:
-    """Gaussians fitted to the rows of ``x`` within ``spread`` robust sigmas of the median."""
-    med = np.median(x, axis=0)
-    mad = np.median(np.abs(x - med), axis=0) * 1.4826 + 1e-6
-    keep = np.all(np.abs(x - med) <= spread * mad, axis=1)
-    y = x[keep] if keep.sum() >= 12 else x
-    ms = np.asarray(min_std if min_std is not None else [0.02, 0.006, 0.006], dtype=np.float64)
-    return Gaussians(y, k, ms)
-
-
-def _distance_table(model: Gaussians, y_weight: float) -> np.ndarray:
-    """Smallest Mahalanobis distance of every 64³ bin centre from ``model``, × :data:`DIST_SCALE`, uint8."""
-    d2 = _lowest(_grid_quad_forms(model, y_weight))
-    return np.minimum(np.sqrt(np.maximum(d2, 0.0)) * np.float32(DIST_SCALE) + np.float32(0.5), 255.0).astype(np.uint8)
-
-
-def _inside_table(dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
-    """1 for every 64³ bin that looks like the inside of a mouth: darker than ``dark``, or grey
-    (teeth: chroma under 55 % of the skin's and not dark, or under 80 % and brighter than the
-    skin); else 0 (uint8)."""
+def _inside(dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
+    """Bool per 64³ bin: looks like the inside of a mouth — dark (under ``dark``) with little colour
+    (absolute chroma under 60 % of the skin's: dark lipstick is dark but strongly coloured), or grey
+    (teeth: chroma under 55 % of the skin's and not dark, or under 80 % and brighter than the skin)."""
     f = _grid_features()
     lum = f[:, 0] * np.float32(255.0)
     sat = np.hypot(f[:, 1], f[:, 2])
+    black = (lum < np.float32(dark)) & (sat * lum < np.float32(0.6 * skin_sat * skin_level))
     grey = (sat < np.float32(0.55 * skin_sat)) & (lum > np.float32(0.45 * skin_level))
     white = (sat < np.float32(0.8 * skin_sat)) & (lum > np.float32(1.1 * skin_level))
-    return ((lum < np.float32(dark)) | grey | white).astype(np.uint8)
+    return black | grey | white
 
 
-def _inside_colours(skin_bgr: np.ndarray, skin_level: float) -> np.ndarray:
-    """Colours the lip classifier must call "not lip" though the calibration frame may not show them:
-    teeth (greys with a little of the skin's tint, 0.5–1.4 × the skin's luminance) and the black
-    inside of an open mouth (the skin's colour at 6–12 % of its brightness; darker lips than that
-    are rare, lipstick included)."""
-    s = np.asarray(skin_bgr, dtype=np.float64).reshape(3)
-    tint = s / max(float(s @ [0.114, 0.587, 0.299]), 1.0)
-    out = []
-    for k in np.linspace(0.5, 1.4, 10):
-        for mix in (0.0, 0.2, 0.4):
-            out.append(k * skin_level * ((1 - mix) * np.ones(3) + mix * tint))
-    for k in (0.06, 0.12):
-        out.append(k * s)
-    return np.clip(np.array(out), 0, 255).astype(np.uint8)
+def mouth_table(lip: Gaussians, other: Gaussians, dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
+    """The 64³ mouth evidence table (uint8, 128 + :data:`LLR_SCALE` × LLR).
+
+    LLR = log-likelihood of the lip model minus that of "everything else" (best component each);
+    colours far from the lips are at most −0.5 (not mouth, whatever the other model says);
+    inside-like colours (:func:`_inside`) far from everything seen outside the mouth are at least
+    :data:`INSIDE_LLR`."""
+    qt = _grid_quad_forms(lip, LIP_YW)
+    qo = _grid_quad_forms(other, LIP_YW)
+    dt = _lowest([q + np.float32(ld) for q, ld in zip(qt, lip.logdets)])
+    do = _lowest([q + np.float32(ld) for q, ld in zip(qo, other.logdets)])
+    llr = np.float32(0.5) * (do - dt)
+    llr = np.where(_lowest(qt) > 25.0, np.minimum(llr, -0.5), llr)
+    novel = _inside(dark, skin_level, skin_sat) & (_lowest(qo) > 12.0)
+    llr = np.where(novel, np.maximum(llr, INSIDE_LLR), llr)
+    return np.clip(np.float32(128.0) + np.float32(LLR_SCALE) * llr + np.float32(0.5), 0, 255).astype(np.uint8)
+
+
+def _fit_gaussians(bgr: np.ndarray, k: int) -> Gaussians:
+    return Gaussians(features(np.asarray(bgr).reshape(-1, 3), LIP_YW), k, _MIN_STD)
 
 
 def _gauss_dict(m: Gaussians) -> dict:
@@ -135,14 +129,12 @@ class MouthModel:
     ``centre`` is the calibrated mouth centre (midpoint of the corners) in the calibration crop's
     pixels; the tracker turns it into a face-frame offset. ``width``, ``lip_upper``, ``lip_lower``
     and ``area`` are the calibration frame's measurements; ``outline`` the mouth outline there,
-    relative to the centre. ``axis_up`` / ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c``
-    of the upper / lower lip (0 on the skin above / below it, 1 on the lip): upper and lower lips
-    differ in colour (one faces the light, one the floor) and so does the skin next to each.
-    ``lip`` is the lip-vs-everything-else colour classifier (both lips; teeth, the dark inside,
-    skin, nostrils, hair and background are "else"). ``skin`` is the skin's Gaussian (features of
-    :func:`~tracker.colour_model.features`), ``skin_level`` / ``skin_sat`` its median luminance
-    and chroma; ``dark`` the luminance under which a pixel is the mouth's dark inside;
-    ``threshold`` the not-skin distance (table units) that separates the mouth region from skin;
+    relative to the centre. ``lip`` / ``other`` are the Gaussians of the lips and of everything
+    else (features of :func:`~tracker.colour_model.features` with luminance weight
+    :data:`LIP_YW`); ``table`` the baked mouth evidence (:func:`mouth_table`). ``axis_up`` /
+    ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c`` of the upper / lower lip (0 on the
+    skin above / below it, 1 on the lip). ``skin_level`` / ``skin_sat`` are the skin's median
+    luminance and chroma, ``dark`` the luminance under which a pixel is the mouth's dark inside;
     ``separation`` the smaller lip-vs-skin d′ of the two axes; ``cue`` ``"colour"`` or ``"contrast"``.
     """
 
@@ -153,33 +145,27 @@ class MouthModel:
     lip_lower: float
     area: float
     outline: np.ndarray
-    skin: Gaussians
-    lip: ColourClassifier
+    lip: Gaussians
+    other: Gaussians
     axis_up: np.ndarray
     axis_down: np.ndarray
     skin_level: float
     skin_sat: float
     dark: float
-    threshold: float
     separation: float
     cue: str
-    not_skin_table: np.ndarray = field(repr=False, default=None)
+    table: np.ndarray = field(repr=False, default=None)
     inside_table: np.ndarray = field(repr=False, default=None)
 
     def __post_init__(self) -> None:
-        if self.not_skin_table is None:
-            self.not_skin_table = _distance_table(self.skin, SKIN_YW)
+        if self.table is None:
+            self.table = mouth_table(self.lip, self.other, self.dark, self.skin_level, self.skin_sat)
         if self.inside_table is None:
-            self.inside_table = _inside_table(self.dark, self.skin_level, self.skin_sat)
-
-    @property
-    def lip_table(self) -> np.ndarray:
-        """The lip classifier's 64³ table (lip score 0..255)."""
-        return self.lip.table
+            self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat).view(np.uint8)
 
     # ------------------------------------------------------------------ persistence
     def to_dict(self) -> dict:
-        """JSON-able description; the two baked tables are in :meth:`images`."""
+        """JSON-able description; the baked table is in :meth:`images`."""
         return {
             "format": FORMAT,
             "kind": "inkface-mouth",
@@ -190,39 +176,37 @@ class MouthModel:
             "lip_lower": self.lip_lower,
             "area": self.area,
             "outline": np.round(np.asarray(self.outline, dtype=np.float64), 3).tolist(),
-            "skin": _gauss_dict(self.skin),
-            "lip": self.lip.to_dict(),
+            "lip": _gauss_dict(self.lip),
+            "other": _gauss_dict(self.other),
             "axis_up": [float(v) for v in self.axis_up],
             "axis_down": [float(v) for v in self.axis_down],
             "skin_level": self.skin_level,
             "skin_sat": self.skin_sat,
             "dark": self.dark,
-            "threshold": self.threshold,
             "separation": self.separation,
             "cue": self.cue,
             "tables": list(TABLE_NAMES),
         }
 
     def images(self) -> dict[str, np.ndarray]:
-        """The baked colour tables as 512×512 uint8 grey images, by name (:data:`TABLE_NAMES`)."""
-        return {"not_skin": table_to_tile(self.not_skin_table), "lip": table_to_tile(self.lip.table)}
+        """The baked table as a 512×512 uint8 grey image, by name (:data:`TABLE_NAMES`)."""
+        return {"mouth": table_to_tile(self.table)}
 
     @classmethod
     def from_dict(cls, d: dict, images: dict[str, np.ndarray] | None = None) -> "MouthModel":
-        """Rebuild from :meth:`to_dict` (and :meth:`images`, if saved; else the tables are re-baked).
+        """Rebuild from :meth:`to_dict` (and :meth:`images`, if saved; else the table is re-baked).
 
         Raises ``ValueError`` (one line) on a malformed description or table image."""
+        if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("kind") != "inkface-mouth":
+            raise ValueError(f"not an Inkface mouth model of format {FORMAT}")
         try:
-            if d.get("format") != FORMAT or d.get("kind") != "inkface-mouth":
-                raise ValueError(f"not an Inkface mouth model of format {FORMAT}")
-            tables = {}
-            for name in TABLE_NAMES:
-                img = None if images is None else images.get(name)
-                if img is not None:
-                    img = np.asarray(img)
-                    if img.shape != TILE_SHAPE or img.dtype != np.uint8:
-                        raise ValueError(f"mouth colour table {name!r} must be a {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey image")
-                    tables[name] = tile_to_table(img)
+            table = None
+            img = None if images is None else images.get("mouth")
+            if img is not None:
+                img = np.asarray(img)
+                if img.shape != TILE_SHAPE or img.dtype != np.uint8:
+                    raise ValueError(f"mouth table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
+                table = tile_to_table(img)
             return cls(
                 work_ipd=float(d["work_ipd"]),
                 centre=(float(d["centre"][0]), float(d["centre"][1])),
@@ -231,17 +215,16 @@ class MouthModel:
                 lip_lower=float(d["lip_lower"]),
                 area=float(d["area"]),
                 outline=np.asarray(d["outline"], dtype=np.float64).reshape(-1, 2),
-                skin=_gauss_from(d["skin"]),
-                lip=ColourClassifier.from_dict(d["lip"], tables.get("lip")),
+                lip=_gauss_from(d["lip"]),
+                other=_gauss_from(d["other"]),
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
                 axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4),
                 skin_level=float(d["skin_level"]),
                 skin_sat=float(d["skin_sat"]),
                 dark=float(d["dark"]),
-                threshold=float(d["threshold"]),
                 separation=float(d["separation"]),
                 cue=str(d["cue"]),
-                not_skin_table=tables.get("not_skin"),
+                table=table,
             )
         except (KeyError, TypeError, IndexError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
@@ -256,12 +239,7 @@ def luminance(bgr: np.ndarray) -> np.ndarray:
     return c[..., 0] * np.float32(0.114) + c[..., 1] * np.float32(0.587) + c[..., 2] * np.float32(0.299)
 
 
-def _smooth_loop(r: np.ndarray) -> np.ndarray:
-    """Median of each radius and its two neighbours around the loop (removes one-ray spikes)."""
-    return np.median(np.stack([np.roll(r, 1), r, np.roll(r, -1)]), axis=0)
-
-
-def _fisher_axis(a: np.ndarray, b: np.ndarray, shading_free: bool = True) -> tuple[np.ndarray, float]:
+def fisher_axis(a: np.ndarray, b: np.ndarray, shading_free: bool = True) -> tuple[np.ndarray, float]:
     """Linear map ``w·x + c`` (4,) of BGR with mean of ``b`` (skin) → 0 and mean of ``a`` (lip) → 1
     that best separates the two (Fisher's discriminant), and the separation d′ along it.
 
@@ -277,8 +255,8 @@ def _fisher_axis(a: np.ndarray, b: np.ndarray, shading_free: bool = True) -> tup
     d = ma - mb
     if shading_free:
         u = mb / max(float(np.linalg.norm(mb)), 1e-6)
-        P = np.eye(3) - np.outer(u, u)
-        w = P @ np.linalg.pinv(P @ sw @ P) @ P @ d
+        p = np.eye(3) - np.outer(u, u)
+        w = p @ np.linalg.pinv(p @ sw @ p) @ p @ d
     else:
         w = np.linalg.solve(sw, d)
     span = float(w @ d)
@@ -289,138 +267,12 @@ def _fisher_axis(a: np.ndarray, b: np.ndarray, shading_free: bool = True) -> tup
     return np.concatenate([w, [-float(w @ mb)]]), span / sd
 
 
-def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], work_ipd: float,
-                skin_samples: np.ndarray | None = None, _trace: dict | None = None) -> MouthModel:
-    """Learn a :class:`MouthModel` from the calibration frame's mouth crop (see the module docstring).
-
-    ``crop_bgr`` is the :data:`MOUTH_RECT` crop around the click, ``mouth_click_crop`` the click in
-    its pixels (it may sit a few px off, on the gap between the lips or inside an open mouth),
-    ``skin_samples`` optional ``(n, 3)`` BGR skin pixels from elsewhere on the face (cheeks,
-    forehead). Never refuses a face; ``model.cue`` says which cue the finder will lean on.
-    """
-    from tracker.colour_model import lut_index
-    from tracker.mouth_finder import MouthFinder, find_blob, outline_from_blob, polygon_measures
-
-    crop = np.ascontiguousarray(crop_bgr)
-    if crop.ndim != 3 or crop.shape[2] != 3 or crop.dtype != np.uint8:
-        raise ValueError("mouth crop must be a uint8 (H, W, 3) BGR image")
-    wi = float(work_ipd)
-    H, W = crop.shape[:2]
-    cx, cy = float(mouth_click_crop[0]), float(mouth_click_crop[1])
-    yy, xx = np.mgrid[0:H, 0:W]
-    feats = features(crop.reshape(-1, 3), SKIN_YW).reshape(H, W, 3).astype(np.float32)
-    lum = luminance(crop)
-    crop32 = crop.astype(np.float32)
-    sigma = max(0.012 * wi, 0.6)
-
-    # skin: an ellipse around the click, outside any mouth, plus whatever skin the caller knows
-    e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
-    ring = (e <= 1.0) & (e >= 0.75**2)
-    skin_bgr = crop[ring]
-    if skin_samples is not None and len(skin_samples):
-        skin_bgr = np.concatenate([skin_bgr, np.asarray(skin_samples, dtype=np.uint8).reshape(-1, 3)])
-    fs = features(skin_bgr, SKIN_YW)
-    skin = _robust_fit(fs, k=1)
-    d_skin = np.sqrt(skin.mahalanobis2(fs))
-    skin_in = skin_bgr[d_skin <= np.percentile(d_skin, 90)]
-    skin_level = float(np.median(luminance(skin_in)))
-    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))
-    not_skin = _distance_table(skin, SKIN_YW)
-    dist_s = cv2.GaussianBlur(not_skin.take(lut_index(crop)), (0, 0), sigma)
-    win = (np.abs(xx - cx) < 0.55 * wi) & (yy - cy > -0.3 * wi) & (yy - cy < 0.45 * wi)
-    t_otsu, _ = cv2.threshold(dist_s[win].reshape(-1, 1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-    thr = float(np.clip(t_otsu, 2.5 * DIST_SCALE, 6.0 * DIST_SCALE))
-    idx = lut_index(crop)
-    inside = _inside_table(0.3 * skin_level, skin_level, skin_sat).take(idx).astype(bool)
-
-    # first guess at each lip: the rows next to the gap (or the open mouth) above and below the
-    # click; its own skin: just beyond its outer edge. One Fisher axis per lip.
-    seeds, rows = _seed_lips(crop, lum, inside, (cx, cy), wi)
-    # the dark inside is darker than either lip (dark lipstick is darker than skin by far)
-    lip_lums = [float(np.median(luminance(v))) for v in seeds.values() if len(v) >= 12]
-    dark = 0.6 * min([skin_level] + lip_lums)
-    inside = _inside_table(dark, skin_level, skin_sat).take(idx).astype(bool)
-    whiten = np.linalg.cholesky(skin.icovs[0]).T
-    near = _local_skin(crop, feats, (cx, cy), wi, rows, whiten)
-    axes = {}
-    for side in ("up", "down"):
-        lips_s = seeds.get(side)
-        if lips_s is None or len(lips_s) < 12:
-            continue
-        sk = near.get(side)
-        sk = np.concatenate([sk, skin_in[:: max(len(skin_in) // max(len(sk), 1), 1)]]) if sk is not None and len(sk) >= 12 else skin_in
-        axes[side] = (_best_axis(lips_s, sk), sk)
-    outline = None
-    y_line = rows.get("line", int(round(cy)))
-    if axes:
-        a_up = axes.get("up", axes.get("down"))[0][0]
-        a_dn = axes.get("down", axes.get("up"))[0][0]
-        v = _lip_value(crop32, a_up, a_dn, y_line, wi)
-        v = cv2.GaussianBlur(v, (0, 0), max(0.022 * wi, 0.8))
-        found = find_blob(v, 0.6, (cx, cy), wi, 0.8 * wi, 0.12 * wi, max(int(0.004 * wi * wi), 6),
-                          lambda: inside | (dist_s >= thr))
-        if _trace is not None:
-            _trace.update(rows=rows, v0=v)
-        if found is not None:
-            poly = outline_from_blob(found[0], wi)
-            if poly is not None:
-                left, right, up, down = polygon_measures(poly)
-                if right[0] - left[0] >= 0.25 * wi and up + down >= 0.04 * wi:
-                    outline = poly
-    if _trace is not None:
-        _trace["outline0"] = outline
-    seen = outline is not None
-    if outline is None:  # nothing near the click stands out from the skin: a typical mouth there
-        outline = _typical_outline((cx, cy), wi)
-
-    # the lips inside that outline, above and below the mouth line; the classifier and the axes
-    filled = _fill(outline, (H, W))
-    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
-    lipish = (filled > 0) & (depth >= 1.0) & ~inside
-    c_line = polygon_measures(outline)
-    y_mid = 0.5 * (c_line[0][1] + c_line[1][1])
-    parts = {"up": lipish & (yy < y_mid), "down": lipish & (yy >= y_mid)}
-    final_axes, seps = {}, []
-    for side in ("up", "down"):
-        px = crop[parts[side]]
-        sk = axes[side][1] if side in axes else skin_in
-        if len(px) < 12:
-            px = crop[lipish] if lipish.sum() >= 12 else (seeds.get(side) if seeds.get(side) is not None else crop[filled > 0])
-        (ax, sep) = _best_axis(px, sk)
-        final_axes[side] = ax
-        seps.append(sep)
-    lip_px = crop[lipish] if lipish.sum() >= 12 else crop[filled > 0]
-    if len(lip_px) < 12:
-        lip_px = crop[max(int(cy) - 2, 0) : int(cy) + 3, max(int(cx) - 8, 0) : int(cx) + 9].reshape(-1, 3)
-    k = int(round(0.1 * wi)) * 2 + 1
-    away = cv2.dilate(filled, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))) == 0
-    away[1::2, :] = False
-    away[:, 1::2] = False
-    other = np.concatenate([crop[away], _inside_colours(np.median(skin_in, axis=0), skin_level)])
-    lip = ColourClassifier(lip_px, other, y_weight=0.5, k_target=2, k_other=4, gate=16.0, margin=1.0, name="lip")
-    sep = float(min(seps))
-    cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
-
-    def model_for(outline_abs: np.ndarray) -> MouthModel:
-        left, right, up, down = polygon_measures(outline_abs)
-        centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
-        return MouthModel(
-            work_ipd=wi, centre=(float(centre[0]), float(centre[1])),
-            width=float(math.hypot(right[0] - left[0], right[1] - left[1])), lip_upper=float(up), lip_lower=float(down),
-            area=float(_fill(outline_abs, (H, W)).sum()), outline=outline_abs - np.array(centre), skin=skin, lip=lip,
-            axis_up=final_axes["up"], axis_down=final_axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark,
-            threshold=thr, separation=sep, cue=cue, not_skin_table=not_skin,
-        )
-
-    model = model_for(outline)
-    # measure the calibration frame the way every frame will be measured
-    if seen:
-        res = MouthFinder(model, wi)._find(crop, model.centre, cue)
-        if _trace is not None:
-            _trace["final"] = None if res is None else res.polygon
-        if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.6:
-            model = model_for(res.polygon)
-    return model
+def best_axis(lips: np.ndarray, skin: np.ndarray) -> tuple[np.ndarray, float]:
+    """The shading-free lip axis, or the plain one when the lips differ from the skin mostly in
+    brightness (its d′ at least 1.25 × the shading-free one's); and its d′."""
+    axis, sep = fisher_axis(lips, skin)
+    axis_b, sep_b = fisher_axis(lips, skin, shading_free=False)
+    return (axis_b, sep_b) if sep_b > 1.25 * sep else (axis, sep)
 
 
 def _fill(poly: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -429,38 +281,30 @@ def _fill(poly: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return m
 
 
-def _best_axis(lips: np.ndarray, skin: np.ndarray) -> tuple[np.ndarray, float]:
-    """The shading-free lip axis, or the plain one when the lips differ from the skin mostly in
-    brightness (its d′ at least 1.25 × the shading-free one's); and its d′."""
-    axis, sep = _fisher_axis(lips, skin)
-    axis_b, sep_b = _fisher_axis(lips, skin, shading_free=False)
-    return (axis_b, sep_b) if sep_b > 1.25 * sep else (axis, sep)
+def _overlap(a: np.ndarray, b: np.ndarray, shape: tuple[int, int]) -> float:
+    """Intersection over union of two closed polygons (px) rasterised on an image of ``shape``."""
+    ma, mb = _fill(a, shape), _fill(b, shape)
+    union = int(np.count_nonzero(ma | mb))
+    return int(np.count_nonzero(ma & mb)) / union if union else 0.0
 
 
-def lip_weights(h: int, y_line: float, wi: float) -> np.ndarray:
-    """Per row (h, 1) float32: 0 above the mouth line ``y_line`` (upper lip's axis), 1 below (lower
-    lip's), blended over ±0.03 wi."""
-    y = (np.arange(h, dtype=np.float32) - np.float32(y_line)) / np.float32(max(0.03 * wi, 1.0))
-    return (1.0 / (1.0 + np.exp(-y))).astype(np.float32).reshape(-1, 1)
-
-
-def _lip_value(crop32: np.ndarray, a_up: np.ndarray, a_dn: np.ndarray, y_line: float, wi: float) -> np.ndarray:
-    """The lip value (float32): the upper lip's axis above the mouth line, the lower lip's below."""
-    vu = cv2.transform(crop32, a_up[:3].reshape(1, 3).astype(np.float32)) + np.float32(a_up[3])
-    vd = cv2.transform(crop32, a_dn[:3].reshape(1, 3).astype(np.float32)) + np.float32(a_dn[3])
-    return vu + lip_weights(crop32.shape[0], y_line, wi) * (vd - vu)
+def _typical_outline(centre: tuple[float, float], wi: float) -> np.ndarray:
+    """A closed mouth of typical size (0.8 wi wide) at ``centre``, on :data:`N_RAYS` rays."""
+    a = np.arange(N_RAYS) * (2.0 * math.pi / N_RAYS)
+    s = np.sin(a)
+    return np.stack([centre[0] + 0.4 * wi * np.cos(a), centre[1] + np.where(s < 0, 0.09, 0.11) * wi * s], axis=1)
 
 
 def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tuple[float, float], wi: float
                ) -> tuple[dict[str, np.ndarray], dict[str, int]]:
     """BGR pixels that are lip on almost any mouth, per side (``"up"``, ``"down"``), and the rows
-    used (``"line"``: the gap; ``"up"``/``"down"``: the outermost seed row on that side).
+    used (``"line"``: the gap; ``"up"`` / ``"down"``: the outermost seed row on that side).
 
     In a band 0.24 wi wide through the click, the darkest row near the click is the gap between the
     lips or the open mouth's inside; walking out from it, up and down, past the dark valley (darker
     than a quarter of the way to the band's median: dark lipstick is darker than half-way) and past
-    rows that are mostly inside-like (teeth: grey or bright), the next 0.05 wi (above) / 0.06 wi
-    (below) of rows are lip."""
+    rows that are mostly inside-like (teeth), the next 0.05 wi (above) / 0.06 wi (below) of rows
+    are lip."""
     H, W = lum.shape
     cx, cy = click
     x0, x1 = max(int(round(cx - 0.12 * wi)), 0), min(int(round(cx + 0.12 * wi)) + 1, W)
@@ -470,8 +314,8 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
     ya, yb = max(int(round(cy - 0.1 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
     y_min = ya + int(np.argmin(rows[ya:yb]))
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
-    half = rows[y_min] + 0.25 * (float(np.median(rows[ra:rb])) - rows[y_min])
-    skip = (rows < half) | (teeth > 0.5)
+    level = rows[y_min] + 0.25 * (float(np.median(rows[ra:rb])) - rows[y_min])
+    skip = (rows < level) | (teeth > 0.5)
     seeds, used = {}, {"line": y_min}
     for side, direction, depth in (("up", -1, 0.05), ("down", 1, 0.06)):
         y, k, limit = y_min, 0, int(round(0.3 * wi))
@@ -482,7 +326,7 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
             continue
         y1 = min(max(y + direction * max(int(round(depth * wi)), 2), 0), H - 1)
         lo, hi = sorted((y, y1))
-        sel = (lum[lo : hi + 1, x0:x1] >= half) & ~inside[lo : hi + 1, x0:x1]
+        sel = (lum[lo : hi + 1, x0:x1] >= level) & ~inside[lo : hi + 1, x0:x1]
         seeds[side] = crop[lo : hi + 1, x0:x1][sel]
         used[side] = y1
     return seeds, used
@@ -520,15 +364,186 @@ def _local_skin(crop: np.ndarray, feats: np.ndarray, click: tuple[float, float],
     return out
 
 
-def _overlap(a: np.ndarray, b: np.ndarray, shape: tuple[int, int]) -> float:
-    """Intersection over union of two closed polygons (px) rasterised on an image of ``shape``."""
-    ma, mb = _fill(a, shape), _fill(b, shape)
-    union = int(np.count_nonzero(ma | mb))
-    return int(np.count_nonzero(ma & mb)) / union if union else 0.0
+def _robust_fit(x: np.ndarray) -> Gaussians:
+    """One Gaussian of the rows of ``x`` (colour features, luminance weight 1)."""
+    return Gaussians(x, 1, np.array([0.02, 0.006, 0.006]))
 
 
-def _typical_outline(centre: tuple[float, float], wi: float) -> np.ndarray:
-    """A closed mouth of typical size (0.8 wi wide) at ``centre``, on 48 rays."""
-    a = np.arange(48) * (2.0 * math.pi / 48)
-    s = np.sin(a)
-    return np.stack([centre[0] + 0.4 * wi * np.cos(a), centre[1] + np.where(s < 0, 0.09, 0.11) * wi * s], axis=1)
+def _plausible(poly: np.ndarray, click: tuple[float, float], wi: float) -> float:
+    """How much a calibration outline looks like a mouth at the click (0..1): 0.35–1.3 wi wide,
+    0.06–0.7 wi tall, no more than 0.3 wi above the corners, centred within ~0.2 wi of the click."""
+    from tracker.mouth_finder import polygon_measures
+
+    left, right, up, down = polygon_measures(poly)
+    w, h = right[0] - left[0], up + down
+    ramp = lambda v, a, b: float(np.clip((v - a) / (b - a), 0.0, 1.0))
+    c = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
+    d = math.hypot(c[0] - click[0], c[1] - click[1]) / wi
+    return (ramp(w, 0.3 * wi, 0.4 * wi) * ramp(-w, -1.4 * wi, -1.2 * wi) * ramp(h, 0.04 * wi, 0.08 * wi)
+            * ramp(-h, -0.8 * wi, -0.6 * wi) * ramp(-up, -0.35 * wi, -0.25 * wi) * ramp(-d, -0.3 * wi / wi, -0.15))
+
+
+def _boundary_contrast(crop: np.ndarray, poly: np.ndarray, inside: np.ndarray, wi: float) -> float:
+    """Fisher separation (d′ along the best direction, colour features) between a band just inside
+    the outline (without the mouth's inside) and a band just outside it: largest on the lips' outer
+    edge — smaller if the outline cuts through the lips or runs out into skin."""
+    H, W = crop.shape[:2]
+    filled = _fill(poly, (H, W))
+    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
+    out_depth = cv2.distanceTransform(1 - filled, cv2.DIST_L2, 3)
+    band_in = (filled > 0) & (depth >= 1.0) & (depth <= max(0.06 * wi, 2.5)) & (inside == 0)
+    band_out = (filled == 0) & (out_depth >= 1.5) & (out_depth <= max(0.1 * wi, 4.0))
+    if band_in.sum() < 12 or band_out.sum() < 12:
+        return 0.0
+    a, b = features(crop[band_in], 1.0), features(crop[band_out], 1.0)
+    d = a.mean(0) - b.mean(0)
+    sw = 0.5 * (np.cov(a.T) + np.cov(b.T)) + np.diag([1e-4, 1e-5, 1e-5])
+    return float(np.sqrt(max(d @ np.linalg.solve(sw, d), 0.0)))
+
+
+def _every(px: np.ndarray, n: int) -> np.ndarray:
+    """At most about ``n`` rows of ``px``, evenly spaced."""
+    return px[:: max(len(px) // max(n, 1), 1)]
+
+
+def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], work_ipd: float,
+                skin_samples: np.ndarray | None = None, _trace: dict | None = None) -> MouthModel:
+    """Learn a :class:`MouthModel` from the calibration frame's mouth crop (see the module docstring).
+
+    ``crop_bgr`` is the :data:`MOUTH_RECT` crop around the click, ``mouth_click_crop`` the click in
+    its pixels (it may sit a few px off, on the gap between the lips or inside an open mouth),
+    ``skin_samples`` optional ``(n, 3)`` BGR skin pixels from elsewhere on the face (cheeks,
+    forehead). Never refuses a face; ``model.cue`` says which cue the finder will lean on.
+    """
+    from tracker.mouth_finder import MouthFinder, polygon_measures
+
+    crop = np.ascontiguousarray(crop_bgr)
+    if crop.ndim != 3 or crop.shape[2] != 3 or crop.dtype != np.uint8:
+        raise ValueError("mouth crop must be a uint8 (H, W, 3) BGR image")
+    wi = float(work_ipd)
+    H, W = crop.shape[:2]
+    cx, cy = float(mouth_click_crop[0]), float(mouth_click_crop[1])
+    yy, xx = np.mgrid[0:H, 0:W]
+    feats = features(crop.reshape(-1, 3), 1.0).reshape(H, W, 3).astype(np.float32)
+    lum = luminance(crop)
+    idx = lut_index(crop)
+
+    # skin: an ellipse around the click, outside any mouth (its 90 % most typical pixels)
+    e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
+    ring = crop[(e <= 1.0) & (e >= 0.75**2)]
+    if skin_samples is not None and len(skin_samples):
+        ring = np.concatenate([ring, np.asarray(skin_samples, dtype=np.uint8).reshape(-1, 3)])
+    fs = features(ring, 1.0)
+    med = np.median(fs, axis=0)
+    mad = np.median(np.abs(fs - med), axis=0) * 1.4826 + 1e-6
+    dev = np.abs(fs - med) / mad
+    skin_in = ring[dev.max(axis=1) <= np.percentile(dev.max(axis=1), 90)]
+    fs_in = features(skin_in, 1.0)
+    skin_level = float(np.median(fs_in[:, 0]) * 255.0)
+    skin_sat = float(np.median(np.hypot(fs_in[:, 1], fs_in[:, 2])))
+    inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).take(idx)
+
+    # first guess at each lip: the rows next to the gap (or the open mouth) above and below the click;
+    # its own skin: just beyond its outer edge
+    seeds, rows = _seed_lips(crop, lum, inside0, (cx, cy), wi)
+    cov = np.cov(fs_in.T) + np.diag([1e-4, 1e-5, 1e-5])
+    near = _local_skin(crop, feats, (cx, cy), wi, rows, np.linalg.cholesky(np.linalg.inv(cov)).T)
+    lip_lums = [float(np.median(luminance(v))) for v in seeds.values() if len(v) >= 12]
+    dark = 0.6 * min([skin_level] + lip_lums)  # the inside is darker than either lip
+
+    def skin_next_to(side: str) -> np.ndarray:
+        sk = near.get(side)
+        if sk is None or len(sk) < 12:
+            return skin_in
+        return np.concatenate([sk, _every(skin_in, len(sk))])
+
+    seed_px = [v for v in seeds.values() if len(v) >= 6]
+    k = int(round(0.1 * wi)) * 2 + 1
+    ball = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    grid = (yy % 2 == 0) & (xx % 2 == 0)
+
+    def models(lip_px: np.ndarray, away: np.ndarray, k: int) -> tuple[Gaussians, Gaussians]:
+        other_px = np.concatenate([crop[away & grid]] + [skin_next_to(s) for s in ("up", "down")])
+        return _fit_gaussians(lip_px, k), _fit_gaussians(other_px, 6)
+
+    # pass 1: candidate outlines from three kinds of evidence — the seeds' colour against the
+    # surroundings, anything unlike the skin, redness — each traced the way the finder traces a
+    # mouth; the one on the strongest colour boundary wins
+    inside = _inside(dark, skin_level, skin_sat).take(idx)
+    e1 = ((xx - cx) / (0.55 * wi)) ** 2 + ((yy - cy) / (0.3 * wi)) ** 2
+    e2 = ((xx - cx) / (0.9 * wi)) ** 2 + ((yy - cy) / (0.55 * wi)) ** 2
+    lip0, other0 = models(np.concatenate(seed_px) if seed_px else crop[e1 <= 0.1], (e1 > 1.0) & (e2 <= 1.0), 2)
+    finder0 = MouthFinder(_provisional(wi, lip0, other0, skin_level, skin_sat, dark), wi)
+    sigma = max(0.01 * wi, 0.6)
+    maps = [finder0.evidence(crop)[:2]]
+    d_skin = np.sqrt(_robust_fit(fs_in).mahalanobis2(features(crop.reshape(-1, 3), 1.0))).reshape(H, W).astype(np.float32)
+    rg = features(skin_next_to("up"), 1.0)[:, 1]
+    z = (feats[..., 1] - np.float32(np.median(rg))) / np.float32(max(float(np.std(rg)), 0.004))
+    for ev in ((d_skin - 3.0) * 0.5, (z - 2.0) * 0.5):
+        ev = cv2.GaussianBlur(np.clip(ev, -4.0, 4.0).astype(np.float32), (0, 0), sigma)
+        maps.append((np.clip(128.0 + LLR_SCALE * ev, 0, 255).astype(np.uint8), ev))
+    candidates = []
+    for tags, llr in maps:
+        res = finder0.outline_on(cv2.GaussianBlur(tags, (0, 0), max(0.02 * wi, 0.8)), llr, inside, (cx, cy))
+        if res is not None:
+            q = _plausible(res[0], (cx, cy), wi)
+            if q > 0:
+                candidates.append((q * _boundary_contrast(crop, res[0], inside, wi), res[0]))
+    if _trace is not None:
+        _trace.update(rows=rows, candidates=candidates)
+    outline = max(candidates, key=lambda c: c[0])[1] if candidates else None
+    seen = outline is not None
+    if outline is None:  # nothing near the click stands out from the skin: a typical mouth there
+        outline = _typical_outline((cx, cy), wi)
+
+    # pass 2: the mouth's colours inside that outline (lips, the gap, teeth; not its rim), everything
+    # else outside it; the lips alone (not the inside) for the edge axes
+    filled = _fill(outline, (H, W))
+    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
+    inside = _inside(dark, skin_level, skin_sat).take(idx)
+    core = (filled > 0) & (depth >= 1.0)
+    lipish = core & ~inside
+    lip_px = crop[lipish] if lipish.sum() >= 12 else (np.concatenate(seed_px) if seed_px else crop[filled > 0])
+    mouth_px = crop[core] if core.sum() >= 12 else lip_px
+    lip, other = models(mouth_px, cv2.dilate(filled, ball) == 0, 3)
+    left, right, _, _ = polygon_measures(outline)
+    y_line = 0.5 * (left[1] + right[1])
+    axes, seps = {}, []
+    for side, part in (("up", lipish & (yy < y_line)), ("down", lipish & (yy >= y_line))):
+        px = crop[part] if part.sum() >= 12 else lip_px
+        axes[side], sep = best_axis(px, skin_next_to(side))
+        seps.append(sep)
+    sep = float(min(seps))
+    cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
+    table = mouth_table(lip, other, dark, skin_level, skin_sat)
+
+    def model_for(poly: np.ndarray) -> MouthModel:
+        left, right, up, down = polygon_measures(poly)
+        centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
+        return MouthModel(
+            work_ipd=wi, centre=(float(centre[0]), float(centre[1])),
+            width=float(math.hypot(right[0] - left[0], right[1] - left[1])), lip_upper=float(up), lip_lower=float(down),
+            area=float(_fill(poly, (H, W)).sum()), outline=poly - np.array(centre), lip=lip, other=other,
+            axis_up=axes["up"], axis_down=axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark,
+            separation=sep, cue=cue, table=table,
+        )
+
+    model = model_for(outline)
+    # measure the calibration frame the way every frame will be measured
+    if seen:
+        res = MouthFinder(model, wi).find(crop, model.centre)
+        if _trace is not None:
+            _trace["final"] = None if res is None else res.polygon
+        if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.5:
+            model = model_for(res.polygon)
+    return model
+
+
+def _provisional(wi: float, lip: Gaussians, other: Gaussians, skin_level: float, skin_sat: float, dark: float) -> MouthModel:
+    """A model with only the colours known (for the calibration's first outline)."""
+    nan_axis = np.array([0.0, 0.0, 0.0, 0.0])
+    return MouthModel(
+        work_ipd=wi, centre=(0.0, 0.0), width=0.8 * wi, lip_upper=0.1 * wi, lip_lower=0.12 * wi, area=0.15 * wi * wi,
+        outline=_typical_outline((0.0, 0.0), wi), lip=lip, other=other, axis_up=nan_axis, axis_down=nan_axis,
+        skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=0.0, cue="contrast",
+    )
