@@ -4,10 +4,11 @@ Works in the upright mouth crop of :class:`~tracker.calibration.FaceFrame` (y do
 is −y), cut with :data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth centre, with
 a :class:`~tracker.mouth_model.MouthModel` learned at calibration. Per frame:
 
-1. **classify**: one 64³ table lookup per pixel gives the mouth evidence — the log-likelihood
-   ratio of "lip, or the inside of a mouth (dark gap, teeth)" against everything else around the
-   mouth — smoothed a little;
-2. **blob**: the positive evidence is tagged and labelled; the blob is the piece with the most
+1. **classify**: each lip's linear colour classifier (its Fisher axis: 0 on the skin next to it,
+   1 on the lip) gives the lip value of every pixel — the upper lip's above the mouth line, the
+   lower lip's below — and one 64³ table lookup says which pixels look like the inside of a mouth
+   (dark and colourless, teeth);
+2. **blob**: lip-valued pixels are tagged and labelled; the blob is the piece with the most
    evidence near the predicted centre (a red collar or the nose lose by distance and size);
 3. **radial polygon**: from the blob's centre, on each of :data:`~tracker.mouth_model.N_RAYS`
    rays, the radius up to which the summed evidence along the ray is largest (Toyama's radial
@@ -35,14 +36,21 @@ import cv2
 import numpy as np
 
 from tracker.colour_model import lut_index
-from tracker.mouth_model import LLR_SCALE, N_RAYS, MouthModel
+from tracker.mouth_model import EV_SCALE, N_RAYS, MouthModel, lip_evidence, lip_value
+
 
 SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
 INSIDE_NEAR = 0.5
-"""Evidence given to inside-like pixels next to the blob (see :meth:`MouthFinder.with_inside`)."""
-BIAS = 0.3
-"""Evidence (log-likelihood ratio) a sample along a ray must exceed to be worth including."""
+"""Evidence given to the mouth's inside (see :meth:`MouthFinder.with_inside`)."""
+GAP = 0.3
+LIP_SURE = 0.4
+"""Evidence above which a pixel surely is lip (lip value 0.7), for :meth:`MouthFinder.with_inside`."""
+"""Tallest stretch (× wi) between lip above and lip below in a column that counts as the inside."""
+PRIOR = 1.0
+"""Weight (evidence units) of the shape prior on each ray's radius (see :meth:`MouthFinder.spans`)."""
+BIAS = 0.2
+"""Evidence (+1 lip, −1 skin) a sample along a ray must exceed to be worth including."""
 
 
 @dataclass
@@ -104,11 +112,16 @@ def column_fill(mask: np.ndarray) -> np.ndarray:
     return ((ys >= top[None, :]) & (ys <= bottom[None, :]) & has[None, :]).view(np.uint8)
 
 
-def lip_weights(h: int, y_line: float, wi: float) -> np.ndarray:
-    """Per row (h, 1) float32: 0 above the mouth line ``y_line`` (the upper lip's axis), 1 below
-    (the lower lip's), blended over about ±0.03 wi."""
-    y = (np.arange(h, dtype=np.float32) - np.float32(y_line)) / np.float32(max(0.03 * wi, 1.0))
-    return (1.0 / (1.0 + np.exp(-y))).astype(np.float32).reshape(-1, 1)
+def outline_radii(outline: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """Radius of a star-shaped closed outline (points relative to its centre) along each direction,
+    by linear interpolation in angle."""
+    ang = np.arctan2(outline[:, 1], outline[:, 0])
+    rad = np.hypot(outline[:, 0], outline[:, 1])
+    order = np.argsort(ang)
+    ang, rad = ang[order], rad[order]
+    ang = np.concatenate([ang - 2 * math.pi, ang, ang + 2 * math.pi])
+    rad = np.concatenate([rad, rad, rad])
+    return np.interp(np.arctan2(dirs[:, 1], dirs[:, 0]), ang, rad)
 
 
 class MouthFinder:
@@ -139,12 +152,10 @@ class MouthFinder:
         self.sigma = max(0.01 * wi, 0.6)
         self.sigma_blob = max(0.02 * wi, 0.8)
         self.min_area = max(int(0.02 * self.area0), 6)
-        g = max(int(round(0.2 * wi)) | 1, 3)
+        g = max(int(round(0.4 * wi)) | 1, 3)
         self.near_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (g, g))
-        self.colour = model.cue == "colour"
-        self.axis_up = np.asarray(model.axis_up[:3], dtype=np.float32).reshape(1, 3)
-        self.axis_dn = np.asarray(model.axis_down[:3], dtype=np.float32).reshape(1, 3)
-        self.off_up, self.off_dn = float(model.axis_up[3]), float(model.axis_down[3])
+        self.gap_kernel = np.ones((max(int(round(GAP * wi)) | 1, 3), 1), np.uint8)
+        self.corner_kernel = np.ones((3, max(int(round(0.1 * wi)) | 1, 3)), np.uint8)
         d2 = np.zeros((n_rays, n_rays))
         for i in range(n_rays):
             d2[i, (i - 1) % n_rays] += 1.0
@@ -153,60 +164,54 @@ class MouthFinder:
         self._dtd = alpha * d2.T @ d2
         self._rows = np.arange(n_rays)
         self._diag = np.arange(n_rays) * (n_rays + 1)
+        self._prior_cal = outline_radii(np.asarray(model.outline, dtype=np.float64) * k, self.dirs)
+        self.reset()
 
     # ------------------------------------------------------------------ evidence
-    def evidence(self, crop: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The table value of every pixel (uint8, smoothed for the blob), the smoothed log-likelihood
-        ratio (float32) of "mouth" against everything else, and the table indices."""
-        idx = lut_index(crop)
-        raw = self.model.table.take(idx)
-        tags = cv2.GaussianBlur(raw, (0, 0), self.sigma_blob)
-        llr = cv2.GaussianBlur(raw, (0, 0), self.sigma).astype(np.float32)
-        llr -= np.float32(128.0)
-        llr *= np.float32(1.0 / LLR_SCALE)
-        return tags, llr, idx
+    def lip_value(self, crop: np.ndarray, y_line: float) -> np.ndarray:
+        """The lip value (float32; 0 skin, 1 lip), split at the mouth line ``y_line``, smoothed a little."""
+        v = lip_value(crop.astype(np.float32), self.model.axis_up, self.model.axis_down, y_line, self.wi)
+        return cv2.GaussianBlur(v, (0, 0), self.sigma)
 
-    def with_inside(self, llr: np.ndarray, inside: np.ndarray, blob: np.ndarray) -> np.ndarray:
-        """``llr`` raised to at least :data:`INSIDE_NEAR` where a pixel looks like a mouth's inside
-        (``inside``, uint8: dark and colourless, or teeth) between lip above and lip below in its
-        column, near the blob:
-        the gap between two lips, teeth and an open mouth belong to the mouth even when the hair or
-        the background has such colours — and a pale highlight above the upper lip does not."""
+    def inside(self, crop: np.ndarray) -> np.ndarray:
+        """1 where a pixel looks like the inside of a mouth (uint8; one table lookup)."""
+        return self.model.inside_table.take(lut_index(crop))
+
+    def with_inside(self, ev: np.ndarray, inside: np.ndarray, blob: np.ndarray, fill: bool = True) -> np.ndarray:
+        """``ev`` raised to at least :data:`INSIDE_NEAR` on the mouth's inside near the blob: every
+        pixel with lip above and lip below it in its column within :data:`GAP` (teeth, a tongue, the
+        dark gap or an open mouth, whatever their colour), and inside-like pixels (``inside``, uint8:
+        dark and colourless, or teeth) touching that — the dark corners of a grin. Without ``fill``
+        (the calibration's first outlines, on noisier evidence) only inside-like pixels between lip
+        above and below count."""
         near = cv2.dilate(blob, self.near_kernel)
         x, y, w, h = cv2.boundingRect(near)
         if w == 0 or h == 0:
-            return llr
-        lipish = (llr[y : y + h, x : x + w] > 0.5) & (near[y : y + h, x : x + w] > 0)
-        between = column_fill(lipish.view(np.uint8)) & inside[y : y + h, x : x + w]
+            return ev
+        lipish = ((ev[y : y + h, x : x + w] > LIP_SURE) & (near[y : y + h, x : x + w] > 0)).view(np.uint8)
+        if fill:
+            between = cv2.morphologyEx(lipish, cv2.MORPH_CLOSE, self.gap_kernel)
+            between |= inside[y : y + h, x : x + w] & cv2.dilate(between, self.corner_kernel)
+        else:  # only inside-like pixels between lip above and below
+            between = column_fill(lipish) & inside[y : y + h, x : x + w]
         if not between.any():
-            return llr
-        out = llr.copy()
+            return ev
+        out = ev.copy()
         sub = out[y : y + h, x : x + w]
         np.maximum(sub, np.where(between > 0, np.float32(INSIDE_NEAR), sub), out=sub)
         return out
 
-    def lip_value(self, crop: np.ndarray, y_line: float) -> np.ndarray:
-        """The lip value (float32; 0 skin, 1 lip): the upper lip's axis above the mouth line ``y_line``,
-        the lower lip's below, blended across it."""
-        c32 = crop.astype(np.float32)
-        vu = cv2.transform(c32, self.axis_up)
-        vd = cv2.transform(c32, self.axis_dn)
-        vu += np.float32(self.off_up)
-        vd += np.float32(self.off_dn)
-        vd -= vu
-        vd *= lip_weights(crop.shape[0], y_line, self.wi)
-        vd += vu
-        return cv2.GaussianBlur(vd, (0, 0), 0.7)
-
     # ------------------------------------------------------------------ blob
-    def blob(self, tags: np.ndarray, pred: tuple[float, float]) -> tuple[np.ndarray, tuple[float, float]] | None:
-        """The blob (uint8 0/1) with the most evidence near ``pred``, and its evidence-weighted centre."""
+    def blob(self, ev: np.ndarray, pred: tuple[float, float]) -> tuple[np.ndarray, tuple[float, float]] | None:
+        """The blob (uint8 0/1) of positive evidence (smoothed) with the most evidence near ``pred``,
+        and its centroid."""
         wi = self.wi
-        _, mask = cv2.threshold(tags, 128.0 + 0.25 * LLR_SCALE, 1, cv2.THRESH_BINARY)
+        tags = cv2.GaussianBlur(ev, (0, 0), self.sigma_blob)
+        mask = (tags > 0.25).view(np.uint8)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(mask, connectivity=4)
         if n <= 1:
             return None
-        ev = np.bincount(lab.ravel(), weights=tags.ravel().astype(np.float64) - 128.0, minlength=n)[1:]
+        ev = np.bincount(lab.ravel(), weights=tags.ravel(), minlength=n)[1:]
         area = stats[1:, cv2.CC_STAT_AREA]
         dx = (cents[1:, 0] - pred[0]) / (0.3 * wi)
         dy = (cents[1:, 1] - pred[1]) / (0.4 * wi)
@@ -218,22 +223,34 @@ class MouthFinder:
         return (lab == j + 1).view(np.uint8), (float(cents[j + 1, 0]), float(cents[j + 1, 1]))
 
     # ------------------------------------------------------------------ radial polygon and snake
-    def spans(self, llr: np.ndarray, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    def spans(self, llr: np.ndarray, centre: tuple[float, float], prior: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
         """On each ray from ``centre``: the radius up to which the summed evidence (minus
-        :data:`BIAS` per sample) is largest, and that sum (the ray's confidence)."""
+        :data:`BIAS` per sample) is largest, and that sum (the ray's confidence). With ``prior``
+        radii (the last confident frame's, or the calibrated mouth's), a radius far from the prior's
+        costs up to :data:`PRIOR` per (35 % of it + 0.05 wi)² — a mouth changes shape fast, but a ray
+        does not jump from the lip to a collar or the nose in one frame."""
         prof = cv2.remap(llr, self._ox + np.float32(centre[0]), self._oy + np.float32(centre[1]), cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=-1.0)
         prof -= np.float32(BIAS)
         cs = np.cumsum(prof, axis=1)
+        if prior is not None:
+            z = (self.radii[None, :] - prior[:, None].astype(np.float32)) / (0.35 * prior[:, None].astype(np.float32) + np.float32(0.05 * self.wi))
+            cs -= np.float32(PRIOR / self.step) * np.minimum(z * z, 4.0)
         k = np.argmax(cs, axis=1)
         gain = cs[self._rows, k] * self.step
         return self.radii[k].astype(np.float64) + 0.5 * self.step, np.maximum(gain, 0.0)
 
     def smooth(self, r: np.ndarray, weight: np.ndarray) -> np.ndarray:
-        """Radii balancing ``weight`` × (r − given)² against the loop's second differences."""
+        """Radii balancing ``weight`` × (r − given)² against the loop's second differences; a ray far
+        from the median of its five neighbours (a spike up the philtrum, down a chin's crease) counts
+        for little."""
+        med = np.median(np.stack([np.roll(r, k) for k in (-2, -1, 0, 1, 2)]), axis=0)
+        z = (r - med) / (0.2 * med + 1.5)
+        weight = weight * np.exp(-z * z)
         a = self._dtd.copy()
-        a.flat[self._diag] += weight
-        return np.linalg.solve(a, weight * r)
+        a.flat[self._diag] += np.maximum(weight, 1e-3)
+        return np.linalg.solve(a, weight * r + 1e-3 * med * (weight < 1e-3))
 
     def snake(self, value: np.ndarray, centre: tuple[float, float], r0: np.ndarray, w0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Radii moved to the strongest fall of ``value`` (inside → outside) within −0.04…+0.08 wi of ``r0``
@@ -254,32 +271,32 @@ class MouthFinder:
         target = strong * edge + (1.0 - strong) * r0
         return self.smooth(target, np.maximum(w0, 0.05)), b
 
-    def outline(self, crop: np.ndarray, pred: tuple[float, float]):
-        """:meth:`outline_on` this model's evidence in ``crop``, also returning the table indices."""
-        tags, llr, idx = self.evidence(crop)
-        out = self.outline_on(tags, llr, self.model.inside_table.take(idx), pred)
-        return out
+    def outline(self, crop: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None = None):
+        """:meth:`outline_on` this performer's lip evidence in ``crop`` (split at the predicted centre)."""
+        return self.outline_on(lip_evidence(self.lip_value(crop, pred[1])), self.inside(crop), pred, prior)
 
-    def outline_on(self, tags: np.ndarray, llr: np.ndarray, inside: np.ndarray, pred: tuple[float, float]):
-        """Blob, radial polygon and the smoothed outline (no edge refinement) on any evidence map
-        (``tags`` uint8 with 128 = no evidence, ``llr`` float32, ``inside`` uint8 inside-like pixels):
-        ``(poly, centre, blob, raw, llr, radii, weights)`` or None when there is no blob."""
-        found = self.blob(tags, pred)
+    def outline_on(self, ev: np.ndarray, inside: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None = None,
+                   fill: bool = True):
+        """Blob, radial polygon and the smoothed outline (no edge refinement) on an evidence map
+        (``ev`` float32, +1 lip, −1 skin; ``inside`` uint8 inside-like pixels), the mouth expected
+        at ``pred`` with ``prior`` radii (see :meth:`spans`): ``(poly, centre, blob, raw, ev, radii,
+        weights)`` or None when there is no blob."""
+        found = self.blob(ev, pred)
         if found is None:
             return None
         blob, c0 = found
-        llr = self.with_inside(llr, inside, blob)
-        r, gain = self.spans(llr, c0)
+        ev = self.with_inside(ev, inside, blob, fill)
+        r, gain = self.spans(ev, c0)
         raw = self.dirs * r[:, None] + np.array(c0)
         w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
         poly = self.dirs * self.smooth(r, w)[:, None] + np.array(c0)
         # again from the outline's own centre (a blob may be one lip, or off-centre)
         left, right, up, down = polygon_measures(poly)
         c1 = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
-        r, gain = self.spans(llr, c1)
+        r, gain = self.spans(ev, c1, prior)
         w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
         r1 = self.smooth(r, w)
-        return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, llr, r1, w
+        return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, ev, r1, w
 
     # ------------------------------------------------------------------ measurements
     @staticmethod
@@ -328,17 +345,43 @@ class MouthFinder:
         s_p = 1.0 if d <= 1.0 else max(math.exp(-(d - 1.0)), 0.3)
         return float(s_w * s_h * s_p * fit)
 
-    def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float]) -> MouthResult | None:
-        """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted centre),
-        or None when nothing there can be a mouth."""
+    def reset(self) -> None:
+        """Forget the frames so far: the next frame's shape prior is the calibrated mouth (call it
+        when the face was lost and is found again)."""
+        self._prior = self._prior_cal.copy()
+        self._offset = np.zeros(2)
+        self._misses = 0
+
+    def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float], remember: bool = True
+             ) -> MouthResult | None:
+        """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted centre,
+        the calibrated mouth centre under the head's motion), or None when nothing there can be a
+        mouth. A confident result (score ≥ :data:`SCORE_OK`) becomes the next frame's shape prior and
+        expected offset from the prediction unless ``remember`` is False; after five frames without
+        one the prior falls back to the calibrated mouth."""
         crop = crop_bgr
-        pred = (float(predicted_centre_crop[0]), float(predicted_centre_crop[1]))
-        found = self.outline(crop, pred)
+        p0 = (float(predicted_centre_crop[0]), float(predicted_centre_crop[1]))
+        pred = (p0[0] + float(self._offset[0]), p0[1] + float(self._offset[1]))
+        res = self._find(crop, pred, self._prior)
+        if remember:
+            if res is not None and res.score >= SCORE_OK:
+                self._prior = self._last_radii
+                self._offset = np.array(self._last_centre) - np.array(p0)
+                self._misses = 0
+            else:
+                self._misses += 1
+                if self._misses >= 5:
+                    self.reset()
+        return res
+
+    def _find(self, crop: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None) -> MouthResult | None:
+        found = self.outline(crop, pred, prior)
         if found is None:
             return None
-        _, c1, blob, raw, llr, r1, w = found
-        cue = "colour" if self.colour else "contrast"
-        value = self.lip_value(crop, c1[1]) if self.colour else llr
+        _, c1, blob, raw, ev, r1, w = found
+        value = self.lip_value(crop, c1[1]) if abs(c1[1] - pred[1]) > 0.02 * self.wi else None
+        if value is None:
+            value = 0.5 * (ev + 1.0)
         r, _ = self.snake(value, c1, r1, w)
         poly = self.dirs * r[:, None] + np.array(c1)
         left, right, up, down = polygon_measures(poly)
@@ -347,8 +390,9 @@ class MouthFinder:
         top = self._refine_vertical(value, cx, cy - up, -1, reach)
         bottom = self._refine_vertical(value, cx, cy + down, +1, reach)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
-        score = self._score(width, bottom - top, (cx, cy), pred, self._fit(llr, c1, r))
+        score = self._score(width, bottom - top, (cx, cy), pred, self._fit(ev, c1, r))
+        self._last_radii, self._last_centre = r, c1
         return MouthResult(
             left=left, right=right, centre=(cx, cy), lip_upper=cy - top, lip_lower=bottom - cy,
-            polygon=poly, raw_polygon=raw, blob=blob.astype(bool), cue=cue, score=score,
+            polygon=poly, raw_polygon=raw, blob=blob.astype(bool), cue=self.model.cue, score=score,
         )

@@ -6,25 +6,25 @@ around the mouth click.
 
 Nothing here assumes what colour lips or skin are. From the calibration crop the model learns
 
-* the **lips**: a two-component Gaussian of their colour (the upper lip faces the floor and the
-  lower lip the light, so they differ), first from the rows right above and below the gap between
-  the lips (or the open mouth) at the click, then from the whole outline found with them;
-* **everything else** in the crop: skin lit and shaded, the nostrils, stubble, hair, background —
-  a Gaussian mixture of the pixels well away from the mouth;
-* a **mouth evidence** table: for every colour (a 64³ lookup), the log-likelihood ratio of lip
-  against everything else; colours that look like the inside of a mouth (dark, or the greys of
-  teeth) and that the calibration frame never showed outside the mouth count as mouth too, so an
-  open mouth, teeth and the gap between closed lips add to the mouth region instead of splitting it;
-* one **lip axis** per lip (Fisher's linear discriminant of that lip against the skin right next
-  to it, kept orthogonal to the skin's colour so shading does not move it): 0 on skin, 1 on lip,
-  linear in BGR, so outer lip edges can be placed to a fraction of a pixel;
+* the mouth's **outline**: a first guess at each lip is the rows right above and below the gap
+  between the lips (or the open mouth) at the click; three kinds of evidence — those rows' colour
+  against the skin next to them, anything unlike the skin, redness — are each traced the way the
+  finder traces a mouth, and the outline lying on the strongest colour boundary wins;
+* one **lip axis** per lip: Fisher's linear discriminant of the lip's pixels inside that outline
+  against the skin just outside it (the upper lip faces the floor and the lower lip the light, and
+  the skin above and below them differs too), kept orthogonal to the skin's colour so shading
+  does not move it — a linear colour classifier, 0 on skin and 1 on lip, linear in BGR so outer
+  lip edges can be placed to a fraction of a pixel;
+* what the **inside** of a mouth looks like next to this skin (a 64³ table): dark and colourless,
+  or the greys of teeth — so an open mouth, teeth and the gap between closed lips add to the mouth
+  instead of splitting it;
 * the calibrated mouth's **geometry** (centre, width, lip heights, outline).
 
 The **cue** is ``"colour"`` when both lips stand out from their skin along their axes (d′ ≥
-:data:`COLOUR_SEPARATION`), else ``"contrast"``: the finder then leans on what else differs from
-the skin (the gap or the inside, teeth, shading) and places edges on the evidence map.
-:func:`learn_mouth` never refuses a face; a face with no visible mouth gets a model of a typical
-mouth at the click, and the finder's score says how sure each frame is.
+:data:`COLOUR_SEPARATION`), else ``"contrast"``: the lips barely differ in colour, so the finder
+leans on what else sets the mouth apart — its dark gap or inside and teeth — and on the weak lip
+edges its axes still see. :func:`learn_mouth` never refuses a face; a face with no visible mouth
+gets a typical mouth at the click, and the finder's score says how sure each frame is.
 """
 
 from __future__ import annotations
@@ -35,17 +35,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import (
-    TILE_SHAPE,
-    Gaussians,
-    _grid_features,
-    _grid_quad_forms,
-    _lowest,
-    features,
-    lut_index,
-    table_to_tile,
-    tile_to_table,
-)
+from tracker.colour_model import TILE_SHAPE, Gaussians, _grid_features, features, lut_index, table_to_tile
 
 FORMAT = 1
 MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
@@ -55,16 +45,10 @@ another 0.6 wi) and the head-motion prediction's error."""
 N_RAYS = 48
 COLOUR_SEPARATION = 2.0
 """Lip-vs-skin d′ along the lip axes at and above which the lip colour is the cue."""
-LIP_YW = 0.6
-"""Luminance weight of the colour features of the lip and "everything else" models."""
-LLR_SCALE = 32.0
-"""Mouth table value = 128 + this × log-likelihood ratio (clipped to about ±4)."""
-INSIDE_LLR = 1.0
-"""Evidence of a colour that looks like a mouth's inside and was never seen outside the mouth."""
-TABLE_NAMES = ("mouth",)
-"""Names of the colour-table images of :meth:`MouthModel.images` (512×512 grey tiles)."""
-
-_MIN_STD = np.array([0.02 * LIP_YW, 0.006, 0.006])
+EV_SCALE = 32.0
+"""Evidence maps as uint8: 128 + this × evidence (+1 lip, −1 skin)."""
+TABLE_NAMES = ("inside",)
+"""Names of the colour-table images of :meth:`MouthModel.images` (512×512 grey tiles, 255 = inside-like)."""
 
 
 # --------------------------------------------------------------------------------------------- tables
@@ -83,42 +67,6 @@ def _inside(dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
     return black | grey | white
 
 
-def mouth_table(lip: Gaussians, other: Gaussians, dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
-    """The 64³ mouth evidence table (uint8, 128 + :data:`LLR_SCALE` × LLR).
-
-    LLR = log-likelihood of the lip model minus that of "everything else" (best component each);
-    colours far from the lips are at most −0.5 (not mouth, whatever the other model says);
-    inside-like colours (:func:`_inside`) far from everything seen outside the mouth are at least
-    :data:`INSIDE_LLR`."""
-    qt = _grid_quad_forms(lip, LIP_YW)
-    qo = _grid_quad_forms(other, LIP_YW)
-    dt = _lowest([q + np.float32(ld) for q, ld in zip(qt, lip.logdets)])
-    do = _lowest([q + np.float32(ld) for q, ld in zip(qo, other.logdets)])
-    llr = np.float32(0.5) * (do - dt)
-    llr = np.where(_lowest(qt) > 25.0, np.minimum(llr, -0.5), llr)
-    novel = _inside(dark, skin_level, skin_sat) & (_lowest(qo) > 12.0)
-    llr = np.where(novel, np.maximum(llr, INSIDE_LLR), llr)
-    return np.clip(np.float32(128.0) + np.float32(LLR_SCALE) * llr + np.float32(0.5), 0, 255).astype(np.uint8)
-
-
-def _fit_gaussians(bgr: np.ndarray, k: int) -> Gaussians:
-    return Gaussians(features(np.asarray(bgr).reshape(-1, 3), LIP_YW), k, _MIN_STD)
-
-
-def _gauss_dict(m: Gaussians) -> dict:
-    return {"means": [mu.tolist() for mu in m.means], "icovs": [ic.tolist() for ic in m.icovs], "logdets": list(m.logdets)}
-
-
-def _gauss_from(d: dict) -> Gaussians:
-    m = Gaussians.__new__(Gaussians)
-    m.means = [np.asarray(v, dtype=np.float64) for v in d["means"]]
-    m.icovs = [np.asarray(v, dtype=np.float64) for v in d["icovs"]]
-    m.logdets = [float(v) for v in d["logdets"]]
-    if not m.means or any(mu.shape != (3,) for mu in m.means) or any(ic.shape != (3, 3) for ic in m.icovs):
-        raise ValueError("malformed colour model")
-    return m
-
-
 # --------------------------------------------------------------------------------------------- the model
 
 
@@ -129,13 +77,12 @@ class MouthModel:
     ``centre`` is the calibrated mouth centre (midpoint of the corners) in the calibration crop's
     pixels; the tracker turns it into a face-frame offset. ``width``, ``lip_upper``, ``lip_lower``
     and ``area`` are the calibration frame's measurements; ``outline`` the mouth outline there,
-    relative to the centre. ``lip`` / ``other`` are the Gaussians of the lips and of everything
-    else (features of :func:`~tracker.colour_model.features` with luminance weight
-    :data:`LIP_YW`); ``table`` the baked mouth evidence (:func:`mouth_table`). ``axis_up`` /
-    ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c`` of the upper / lower lip (0 on the
-    skin above / below it, 1 on the lip). ``skin_level`` / ``skin_sat`` are the skin's median
-    luminance and chroma, ``dark`` the luminance under which a pixel is the mouth's dark inside;
-    ``separation`` the smaller lip-vs-skin d′ of the two axes; ``cue`` ``"colour"`` or ``"contrast"``.
+    relative to the centre. ``axis_up`` / ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c``
+    of the upper / lower lip (0 on the skin next to it, 1 on the lip). ``skin_level`` /
+    ``skin_sat`` are the skin's median luminance and chroma (:func:`~tracker.colour_model.features`),
+    ``dark`` the luminance under which a colourless pixel is the mouth's dark inside; they define
+    ``inside_table`` (64³, 1 = inside-like). ``separation`` is the smaller lip-vs-skin d′ of the two
+    axes; ``cue`` ``"colour"`` or ``"contrast"``.
     """
 
     work_ipd: float
@@ -145,8 +92,6 @@ class MouthModel:
     lip_lower: float
     area: float
     outline: np.ndarray
-    lip: Gaussians
-    other: Gaussians
     axis_up: np.ndarray
     axis_down: np.ndarray
     skin_level: float
@@ -154,18 +99,15 @@ class MouthModel:
     dark: float
     separation: float
     cue: str
-    table: np.ndarray = field(repr=False, default=None)
     inside_table: np.ndarray = field(repr=False, default=None)
 
     def __post_init__(self) -> None:
-        if self.table is None:
-            self.table = mouth_table(self.lip, self.other, self.dark, self.skin_level, self.skin_sat)
         if self.inside_table is None:
             self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat).view(np.uint8)
 
     # ------------------------------------------------------------------ persistence
     def to_dict(self) -> dict:
-        """JSON-able description; the baked table is in :meth:`images`."""
+        """JSON-able description (the table is rebuilt from it; :meth:`images` shows it)."""
         return {
             "format": FORMAT,
             "kind": "inkface-mouth",
@@ -176,8 +118,6 @@ class MouthModel:
             "lip_lower": self.lip_lower,
             "area": self.area,
             "outline": np.round(np.asarray(self.outline, dtype=np.float64), 3).tolist(),
-            "lip": _gauss_dict(self.lip),
-            "other": _gauss_dict(self.other),
             "axis_up": [float(v) for v in self.axis_up],
             "axis_down": [float(v) for v in self.axis_down],
             "skin_level": self.skin_level,
@@ -190,23 +130,18 @@ class MouthModel:
 
     def images(self) -> dict[str, np.ndarray]:
         """The baked table as a 512×512 uint8 grey image, by name (:data:`TABLE_NAMES`)."""
-        return {"mouth": table_to_tile(self.table)}
+        return {"inside": table_to_tile(self.inside_table * np.uint8(255))}
 
     @classmethod
     def from_dict(cls, d: dict, images: dict[str, np.ndarray] | None = None) -> "MouthModel":
-        """Rebuild from :meth:`to_dict` (and :meth:`images`, if saved; else the table is re-baked).
-
-        Raises ``ValueError`` (one line) on a malformed description or table image."""
+        """Rebuild from :meth:`to_dict` (``images`` are accepted and checked but not needed: the
+        table is rebuilt from the description). Raises ``ValueError`` (one line) when malformed."""
         if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("kind") != "inkface-mouth":
             raise ValueError(f"not an Inkface mouth model of format {FORMAT}")
+        img = None if images is None else images.get("inside")
+        if img is not None and (np.asarray(img).shape != TILE_SHAPE or np.asarray(img).dtype != np.uint8):
+            raise ValueError(f"mouth table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
         try:
-            table = None
-            img = None if images is None else images.get("mouth")
-            if img is not None:
-                img = np.asarray(img)
-                if img.shape != TILE_SHAPE or img.dtype != np.uint8:
-                    raise ValueError(f"mouth table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
-                table = tile_to_table(img)
             return cls(
                 work_ipd=float(d["work_ipd"]),
                 centre=(float(d["centre"][0]), float(d["centre"][1])),
@@ -215,8 +150,6 @@ class MouthModel:
                 lip_lower=float(d["lip_lower"]),
                 area=float(d["area"]),
                 outline=np.asarray(d["outline"], dtype=np.float64).reshape(-1, 2),
-                lip=_gauss_from(d["lip"]),
-                other=_gauss_from(d["other"]),
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
                 axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4),
                 skin_level=float(d["skin_level"]),
@@ -224,9 +157,8 @@ class MouthModel:
                 dark=float(d["dark"]),
                 separation=float(d["separation"]),
                 cue=str(d["cue"]),
-                table=table,
             )
-        except (KeyError, TypeError, IndexError) as e:
+        except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
 
 
@@ -364,11 +296,6 @@ def _local_skin(crop: np.ndarray, feats: np.ndarray, click: tuple[float, float],
     return out
 
 
-def _robust_fit(x: np.ndarray) -> Gaussians:
-    """One Gaussian of the rows of ``x`` (colour features, luminance weight 1)."""
-    return Gaussians(x, 1, np.array([0.02, 0.006, 0.006]))
-
-
 def _plausible(poly: np.ndarray, click: tuple[float, float], wi: float) -> float:
     """How much a calibration outline looks like a mouth at the click (0..1): 0.35–1.3 wi wide,
     0.06–0.7 wi tall, no more than 0.3 wi above the corners, centred within ~0.2 wi of the click."""
@@ -427,6 +354,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     feats = features(crop.reshape(-1, 3), 1.0).reshape(H, W, 3).astype(np.float32)
     lum = luminance(crop)
     idx = lut_index(crop)
+    crop32 = crop.astype(np.float32)
 
     # skin: an ellipse around the click, outside any mouth (its 90 % most typical pixels)
     e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
@@ -435,8 +363,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         ring = np.concatenate([ring, np.asarray(skin_samples, dtype=np.uint8).reshape(-1, 3)])
     fs = features(ring, 1.0)
     med = np.median(fs, axis=0)
-    mad = np.median(np.abs(fs - med), axis=0) * 1.4826 + 1e-6
-    dev = np.abs(fs - med) / mad
+    dev = np.abs(fs - med) / (np.median(np.abs(fs - med), axis=0) * 1.4826 + 1e-6)
     skin_in = ring[dev.max(axis=1) <= np.percentile(dev.max(axis=1), 90)]
     fs_in = features(skin_in, 1.0)
     skin_level = float(np.median(fs_in[:, 0]) * 255.0)
@@ -450,6 +377,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     near = _local_skin(crop, feats, (cx, cy), wi, rows, np.linalg.cholesky(np.linalg.inv(cov)).T)
     lip_lums = [float(np.median(luminance(v))) for v in seeds.values() if len(v) >= 12]
     dark = 0.6 * min([skin_level] + lip_lums)  # the inside is darker than either lip
+    inside = _inside(dark, skin_level, skin_sat).take(idx)
 
     def skin_next_to(side: str) -> np.ndarray:
         sk = near.get(side)
@@ -457,34 +385,22 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
             return skin_in
         return np.concatenate([sk, _every(skin_in, len(sk))])
 
-    seed_px = [v for v in seeds.values() if len(v) >= 6]
-    k = int(round(0.1 * wi)) * 2 + 1
-    ball = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    grid = (yy % 2 == 0) & (xx % 2 == 0)
-
-    def models(lip_px: np.ndarray, away: np.ndarray, k: int) -> tuple[Gaussians, Gaussians]:
-        other_px = np.concatenate([crop[away & grid]] + [skin_next_to(s) for s in ("up", "down")])
-        return _fit_gaussians(lip_px, k), _fit_gaussians(other_px, 6)
-
-    # pass 1: candidate outlines from three kinds of evidence — the seeds' colour against the
-    # surroundings, anything unlike the skin, redness — each traced the way the finder traces a
-    # mouth; the one on the strongest colour boundary wins
-    inside = _inside(dark, skin_level, skin_sat).take(idx)
-    e1 = ((xx - cx) / (0.55 * wi)) ** 2 + ((yy - cy) / (0.3 * wi)) ** 2
-    e2 = ((xx - cx) / (0.9 * wi)) ** 2 + ((yy - cy) / (0.55 * wi)) ** 2
-    lip0, other0 = models(np.concatenate(seed_px) if seed_px else crop[e1 <= 0.1], (e1 > 1.0) & (e2 <= 1.0), 2)
-    finder0 = MouthFinder(_provisional(wi, lip0, other0, skin_level, skin_sat, dark), wi)
-    sigma = max(0.01 * wi, 0.6)
-    maps = [finder0.evidence(crop)[:2]]
-    d_skin = np.sqrt(_robust_fit(fs_in).mahalanobis2(features(crop.reshape(-1, 3), 1.0))).reshape(H, W).astype(np.float32)
+    # pass 1: candidate outlines from three kinds of evidence, each traced the way the finder traces
+    # a mouth; the one on the strongest colour boundary wins
+    finder0 = MouthFinder(_provisional(wi, skin_level, skin_sat, dark), wi)
+    evidence = []
+    if len(seeds.get("up", ())) >= 6 or len(seeds.get("down", ())) >= 6:
+        a_up = best_axis(seeds.get("up") if len(seeds.get("up", ())) >= 6 else seeds["down"], skin_next_to("up"))[0]
+        a_dn = best_axis(seeds.get("down") if len(seeds.get("down", ())) >= 6 else seeds["up"], skin_next_to("down"))[0]
+        evidence.append(lip_evidence(lip_value(crop32, a_up, a_dn, rows["line"], wi)))
+    d_skin = np.sqrt(Gaussians(fs_in, 1, np.array([0.02, 0.006, 0.006])).mahalanobis2(features(crop.reshape(-1, 3), 1.0)))
+    evidence.append((d_skin.reshape(H, W).astype(np.float32) - 3.0) * 0.5)
     rg = features(skin_next_to("up"), 1.0)[:, 1]
-    z = (feats[..., 1] - np.float32(np.median(rg))) / np.float32(max(float(np.std(rg)), 0.004))
-    for ev in ((d_skin - 3.0) * 0.5, (z - 2.0) * 0.5):
-        ev = cv2.GaussianBlur(np.clip(ev, -4.0, 4.0).astype(np.float32), (0, 0), sigma)
-        maps.append((np.clip(128.0 + LLR_SCALE * ev, 0, 255).astype(np.uint8), ev))
+    evidence.append((feats[..., 1] - np.float32(np.median(rg))) / np.float32(max(float(np.std(rg)), 0.004)) * 0.5 - 1.0)
     candidates = []
-    for tags, llr in maps:
-        res = finder0.outline_on(cv2.GaussianBlur(tags, (0, 0), max(0.02 * wi, 0.8)), llr, inside, (cx, cy))
+    for ev in evidence:
+        ev = cv2.GaussianBlur(np.clip(ev, -2.0, 2.0).astype(np.float32), (0, 0), finder0.sigma)
+        res = finder0.outline_on(ev, inside, (cx, cy), fill=False)
         if res is not None:
             q = _plausible(res[0], (cx, cy), wi)
             if q > 0:
@@ -496,54 +412,84 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     if outline is None:  # nothing near the click stands out from the skin: a typical mouth there
         outline = _typical_outline((cx, cy), wi)
 
-    # pass 2: the mouth's colours inside that outline (lips, the gap, teeth; not its rim), everything
-    # else outside it; the lips alone (not the inside) for the edge axes
-    filled = _fill(outline, (H, W))
-    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
-    inside = _inside(dark, skin_level, skin_sat).take(idx)
-    core = (filled > 0) & (depth >= 1.0)
-    lipish = core & ~inside
-    lip_px = crop[lipish] if lipish.sum() >= 12 else (np.concatenate(seed_px) if seed_px else crop[filled > 0])
-    mouth_px = crop[core] if core.sum() >= 12 else lip_px
-    lip, other = models(mouth_px, cv2.dilate(filled, ball) == 0, 3)
-    left, right, _, _ = polygon_measures(outline)
-    y_line = 0.5 * (left[1] + right[1])
-    axes, seps = {}, []
-    for side, part in (("up", lipish & (yy < y_line)), ("down", lipish & (yy >= y_line))):
-        px = crop[part] if part.sum() >= 12 else lip_px
-        axes[side], sep = best_axis(px, skin_next_to(side))
-        seps.append(sep)
-    sep = float(min(seps))
+    # pass 2: each lip's axis, from its pixels inside the outline against the skin just outside it
+    axes, sep = _axes_for(crop, outline, inside, wi, skin_next_to)
     cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
-    table = mouth_table(lip, other, dark, skin_level, skin_sat)
 
-    def model_for(poly: np.ndarray) -> MouthModel:
+    def model_for(poly: np.ndarray, axes: dict, sep: float) -> MouthModel:
         left, right, up, down = polygon_measures(poly)
         centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
         return MouthModel(
             work_ipd=wi, centre=(float(centre[0]), float(centre[1])),
             width=float(math.hypot(right[0] - left[0], right[1] - left[1])), lip_upper=float(up), lip_lower=float(down),
-            area=float(_fill(poly, (H, W)).sum()), outline=poly - np.array(centre), lip=lip, other=other,
-            axis_up=axes["up"], axis_down=axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark,
-            separation=sep, cue=cue, table=table,
+            area=float(_fill(poly, (H, W)).sum()), outline=poly - np.array(centre), axis_up=axes["up"],
+            axis_down=axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep, cue=cue,
         )
 
-    model = model_for(outline)
-    # measure the calibration frame the way every frame will be measured
+    model = model_for(outline, axes, sep)
+    # measure the calibration frame the way every frame will be measured (and learn the axes again
+    # from that outline if it agrees with the first)
     if seen:
-        res = MouthFinder(model, wi).find(crop, model.centre)
+        res = MouthFinder(model, wi).find(crop, model.centre, remember=False)
         if _trace is not None:
             _trace["final"] = None if res is None else res.polygon
-        if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.5:
-            model = model_for(res.polygon)
+        if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.7:
+            axes2, sep2 = _axes_for(crop, res.polygon, inside, wi, skin_next_to)
+            model = model_for(res.polygon, axes2, sep2)
     return model
 
 
-def _provisional(wi: float, lip: Gaussians, other: Gaussians, skin_level: float, skin_sat: float, dark: float) -> MouthModel:
-    """A model with only the colours known (for the calibration's first outline)."""
-    nan_axis = np.array([0.0, 0.0, 0.0, 0.0])
+def _axes_for(crop: np.ndarray, outline: np.ndarray, inside: np.ndarray, wi: float, skin_next_to) -> tuple[dict, float]:
+    """Lip axes for the upper and lower lip of ``outline`` (pixels inside it, neither its rim nor the
+    mouth's inside, above / below the corners' line, against a band 1.5 px to 0.1 wi outside it on the
+    same side), and the smaller of their d′."""
+    from tracker.mouth_finder import polygon_measures
+
+    H, W = crop.shape[:2]
+    yy = np.arange(H)[:, None]
+    filled = _fill(outline, (H, W))
+    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
+    out_depth = cv2.distanceTransform(1 - filled, cv2.DIST_L2, 3)
+    lipish = (filled > 0) & (depth >= 1.0) & (inside == 0)
+    skin = (filled == 0) & (out_depth >= 1.5) & (out_depth <= max(0.1 * wi, 4.0))
+    left, right, _, _ = polygon_measures(outline)
+    y_line = 0.5 * (left[1] + right[1])
+    xs = (np.arange(W)[None, :] >= left[0]) & (np.arange(W)[None, :] <= right[0])
+    axes, seps = {}, []
+    for side, half in (("up", yy < y_line), ("down", yy >= y_line)):
+        lp = lipish & half
+        sk = skin & half & xs
+        lips = crop[lp] if lp.sum() >= 12 else crop[lipish] if lipish.sum() >= 12 else crop[filled > 0]
+        sk_px = crop[sk] if sk.sum() >= 12 else skin_next_to(side)
+        axes[side], s = best_axis(lips, sk_px)
+        seps.append(s)
+    return axes, float(min(seps))
+
+
+def lip_value(crop32: np.ndarray, a_up: np.ndarray, a_dn: np.ndarray, y_line: float, wi: float) -> np.ndarray:
+    """The lip value (float32; 0 skin, 1 lip) of a float32 BGR crop: the upper lip's axis above the
+    mouth line ``y_line``, the lower lip's below, blended over about ±0.03 wi."""
+    vu = cv2.transform(crop32, a_up[:3].reshape(1, 3).astype(np.float32))
+    vd = cv2.transform(crop32, a_dn[:3].reshape(1, 3).astype(np.float32))
+    vu += np.float32(a_up[3])
+    vd += np.float32(a_dn[3])
+    vd -= vu
+    y = (np.arange(crop32.shape[0], dtype=np.float32) - np.float32(y_line)) / np.float32(max(0.03 * wi, 1.0))
+    vd *= (1.0 / (1.0 + np.exp(-y))).astype(np.float32).reshape(-1, 1)
+    vd += vu
+    return vd
+
+
+def lip_evidence(v: np.ndarray) -> np.ndarray:
+    """Evidence (+1 lip, −1 skin, float32) from a lip value map: ``2·v − 1`` clipped to [−2, 2]."""
+    return np.clip(np.float32(2.0) * v - np.float32(1.0), -2.0, 2.0)
+
+
+def _provisional(wi: float, skin_level: float, skin_sat: float, dark: float) -> MouthModel:
+    """A model with only the sizes and the inside known (for the calibration's first outlines)."""
+    zero = np.zeros(4)
     return MouthModel(
         work_ipd=wi, centre=(0.0, 0.0), width=0.8 * wi, lip_upper=0.1 * wi, lip_lower=0.12 * wi, area=0.15 * wi * wi,
-        outline=_typical_outline((0.0, 0.0), wi), lip=lip, other=other, axis_up=nan_axis, axis_down=nan_axis,
-        skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=0.0, cue="contrast",
+        outline=_typical_outline((0.0, 0.0), wi), axis_up=zero, axis_down=zero, skin_level=skin_level,
+        skin_sat=skin_sat, dark=dark, separation=0.0, cue="contrast",
     )
