@@ -285,7 +285,7 @@ def run_case(case: Case, method: Method, seed: int = 3, sheet_every: int = 0, sh
             for dx, dy in DISPLACED:
                 c2 = (centre_f[0] + dx * wi_i, centre_f[1] + dy * wi_i)
                 crop2, o2 = _crop(frame, ff, c2, rel)
-                f2 = method.find(state, crop2, (c2[0] - o2[0], c2[1] - o2[1]), False)
+                f2 = method.find(state, crop2, (c2[0] - o2[0], c2[1] - o2[1]))
                 if f2 is not None and f2.score >= method.threshold:
                     ce, te, be, *_ = _errors(case, i, ff, f2, o2)
                     res.judged += 1
@@ -377,7 +377,7 @@ def old_method() -> Method:
         s.centre = (float(mc[0]), float(mc[1]))
         return s
 
-    def find(s, crop, pred, remember=True):
+    def find(s, crop, pred):
         score = s.cal.lip.prob_u8(crop)
         value = cv2.transform(crop.astype(np.float32), s.axis)
         r = s.finder.find(score, value=value, seed=pred, min_area=s.min_area, lip_level=1.0)
@@ -406,8 +406,8 @@ def new_method() -> Method:
         s.centre = s.model.centre
         return s
 
-    def find(s, crop, pred, remember=True):
-        r = s.finder.find(crop, pred, remember)
+    def find(s, crop, pred):
+        r = s.finder.find(crop, pred)
         if r is None:
             return None
         return Found(r.left, r.right, r.lip_upper, r.lip_lower, r.score, r.cue, r.polygon)

@@ -47,8 +47,7 @@ GAP = 0.3
 LIP_SURE = 0.4
 """Evidence above which a pixel surely is lip (lip value 0.7), for :meth:`MouthFinder.with_inside`."""
 """Tallest stretch (× wi) between lip above and lip below in a column that counts as the inside."""
-PRIOR = 1.0
-"""Weight (evidence units) of the shape prior on each ray's radius (see :meth:`MouthFinder.spans`)."""
+
 BIAS = 0.2
 """Evidence (+1 lip, −1 skin) a sample along a ray must exceed to be worth including."""
 
@@ -112,18 +111,6 @@ def column_fill(mask: np.ndarray) -> np.ndarray:
     return ((ys >= top[None, :]) & (ys <= bottom[None, :]) & has[None, :]).view(np.uint8)
 
 
-def outline_radii(outline: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-    """Radius of a star-shaped closed outline (points relative to its centre) along each direction,
-    by linear interpolation in angle."""
-    ang = np.arctan2(outline[:, 1], outline[:, 0])
-    rad = np.hypot(outline[:, 0], outline[:, 1])
-    order = np.argsort(ang)
-    ang, rad = ang[order], rad[order]
-    ang = np.concatenate([ang - 2 * math.pi, ang, ang + 2 * math.pi])
-    rad = np.concatenate([rad, rad, rad])
-    return np.interp(np.arctan2(dirs[:, 1], dirs[:, 0]), ang, rad)
-
-
 class MouthFinder:
     """Find one performer's mouth in mouth crops (see the module docstring).
 
@@ -152,8 +139,7 @@ class MouthFinder:
         self.sigma = max(0.01 * wi, 0.6)
         self.sigma_blob = max(0.02 * wi, 0.8)
         self.min_area = max(int(0.02 * self.area0), 6)
-        g = max(int(round(0.4 * wi)) | 1, 3)
-        self.near_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (g, g))
+        self.near_px = max(int(round(0.2 * wi)), 2)
         self.gap_kernel = np.ones((max(int(round(GAP * wi)) | 1, 3), 1), np.uint8)
         self.corner_kernel = np.ones((3, max(int(round(0.1 * wi)) | 1, 3)), np.uint8)
         d2 = np.zeros((n_rays, n_rays))
@@ -164,17 +150,28 @@ class MouthFinder:
         self._dtd = alpha * d2.T @ d2
         self._rows = np.arange(n_rays)
         self._diag = np.arange(n_rays) * (n_rays + 1)
-        self._prior_cal = outline_radii(np.asarray(model.outline, dtype=np.float64) * k, self.dirs)
-        self.reset()
+        self._five = (np.arange(n_rays)[:, None] + np.arange(-2, 3)[None, :]) % n_rays
+        ang = np.degrees(np.arctan2(self.dirs[:, 1], self.dirs[:, 0])) % 360.0
+        self._upper = (ang > 200.0) & (ang < 340.0)
+        self._lower = (ang > 20.0) & (ang < 160.0)
+
 
     # ------------------------------------------------------------------ evidence
-    def lip_value(self, crop: np.ndarray, y_line: float) -> np.ndarray:
-        """The lip value (float32; 0 skin, 1 lip), split at the mouth line ``y_line``, smoothed a little."""
-        v = lip_value(crop.astype(np.float32), self.model.axis_up, self.model.axis_down, y_line, self.wi)
+    def lip_value(self, crop: np.ndarray, y_line: float, gains: np.ndarray | None = None) -> np.ndarray:
+        """The lip value (float32; 0 skin, 1 lip), split at the mouth line ``y_line``, smoothed a little;
+        ``gains`` (3,) scale the crop's channels first (folded into the axes: no extra pass)."""
+        a_up, a_dn = self.model.axis_up, self.model.axis_down
+        if gains is not None:
+            a_up = np.concatenate([a_up[:3] * gains, a_up[3:]])
+            a_dn = np.concatenate([a_dn[:3] * gains, a_dn[3:]])
+        v = lip_value(crop.astype(np.float32), a_up, a_dn, y_line, self.wi)
         return cv2.GaussianBlur(v, (0, 0), self.sigma)
 
-    def inside(self, crop: np.ndarray) -> np.ndarray:
-        """1 where a pixel looks like the inside of a mouth (uint8; one table lookup)."""
+    def inside(self, crop: np.ndarray, gains: np.ndarray | None = None) -> np.ndarray:
+        """1 where a pixel looks like the inside of a mouth (uint8; one table lookup of the crop,
+        its channels scaled by ``gains`` first)."""
+        if gains is not None:
+            crop = cv2.transform(crop, np.diag(gains).astype(np.float32))
         return self.model.inside_table.take(lut_index(crop))
 
     def with_inside(self, ev: np.ndarray, inside: np.ndarray, blob: np.ndarray, fill: bool = True) -> np.ndarray:
@@ -184,11 +181,14 @@ class MouthFinder:
         dark and colourless, or teeth) touching that — the dark corners of a grin. Without ``fill``
         (the calibration's first outlines, on noisier evidence) only inside-like pixels between lip
         above and below count."""
-        near = cv2.dilate(blob, self.near_kernel)
-        x, y, w, h = cv2.boundingRect(near)
-        if w == 0 or h == 0:
+        bx, by, bw, bh = cv2.boundingRect(blob)
+        H, W = ev.shape
+        m = self.near_px
+        x, y = max(bx - m, 0), max(by - m, 0)
+        w, h = min(bx + bw + m, W) - x, min(by + bh + m, H) - y
+        if bw == 0 or w <= 0 or h <= 0:
             return ev
-        lipish = ((ev[y : y + h, x : x + w] > LIP_SURE) & (near[y : y + h, x : x + w] > 0)).view(np.uint8)
+        lipish = (ev[y : y + h, x : x + w] > LIP_SURE).view(np.uint8)
         if fill:
             between = cv2.morphologyEx(lipish, cv2.MORPH_CLOSE, self.gap_kernel)
             between |= inside[y : y + h, x : x + w] & cv2.dilate(between, self.corner_kernel)
@@ -223,20 +223,13 @@ class MouthFinder:
         return (lab == j + 1).view(np.uint8), (float(cents[j + 1, 0]), float(cents[j + 1, 1]))
 
     # ------------------------------------------------------------------ radial polygon and snake
-    def spans(self, llr: np.ndarray, centre: tuple[float, float], prior: np.ndarray | None = None
-              ) -> tuple[np.ndarray, np.ndarray]:
+    def spans(self, llr: np.ndarray, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
         """On each ray from ``centre``: the radius up to which the summed evidence (minus
-        :data:`BIAS` per sample) is largest, and that sum (the ray's confidence). With ``prior``
-        radii (the last confident frame's, or the calibrated mouth's), a radius far from the prior's
-        costs up to :data:`PRIOR` per (35 % of it + 0.05 wi)² — a mouth changes shape fast, but a ray
-        does not jump from the lip to a collar or the nose in one frame."""
+        :data:`BIAS` per sample) is largest, and that sum (the ray's confidence)."""
         prof = cv2.remap(llr, self._ox + np.float32(centre[0]), self._oy + np.float32(centre[1]), cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=-1.0)
         prof -= np.float32(BIAS)
         cs = np.cumsum(prof, axis=1)
-        if prior is not None:
-            z = (self.radii[None, :] - prior[:, None].astype(np.float32)) / (0.35 * prior[:, None].astype(np.float32) + np.float32(0.05 * self.wi))
-            cs -= np.float32(PRIOR / self.step) * np.minimum(z * z, 4.0)
         k = np.argmax(cs, axis=1)
         gain = cs[self._rows, k] * self.step
         return self.radii[k].astype(np.float64) + 0.5 * self.step, np.maximum(gain, 0.0)
@@ -245,7 +238,7 @@ class MouthFinder:
         """Radii balancing ``weight`` × (r − given)² against the loop's second differences; a ray far
         from the median of its five neighbours (a spike up the philtrum, down a chin's crease) counts
         for little."""
-        med = np.median(np.stack([np.roll(r, k) for k in (-2, -1, 0, 1, 2)]), axis=0)
+        med = np.partition(r[self._five], 2, axis=1)[:, 2]
         z = (r - med) / (0.2 * med + 1.5)
         weight = weight * np.exp(-z * z)
         a = self._dtd.copy()
@@ -271,16 +264,14 @@ class MouthFinder:
         target = strong * edge + (1.0 - strong) * r0
         return self.smooth(target, np.maximum(w0, 0.05)), b
 
-    def outline(self, crop: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None = None):
+    def outline(self, crop: np.ndarray, pred: tuple[float, float], gains: np.ndarray | None = None):
         """:meth:`outline_on` this performer's lip evidence in ``crop`` (split at the predicted centre)."""
-        return self.outline_on(lip_evidence(self.lip_value(crop, pred[1])), self.inside(crop), pred, prior)
+        return self.outline_on(lip_evidence(self.lip_value(crop, pred[1], gains)), self.inside(crop, gains), pred)
 
-    def outline_on(self, ev: np.ndarray, inside: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None = None,
-                   fill: bool = True):
+    def outline_on(self, ev: np.ndarray, inside: np.ndarray, pred: tuple[float, float], fill: bool = True):
         """Blob, radial polygon and the smoothed outline (no edge refinement) on an evidence map
         (``ev`` float32, +1 lip, −1 skin; ``inside`` uint8 inside-like pixels), the mouth expected
-        at ``pred`` with ``prior`` radii (see :meth:`spans`): ``(poly, centre, blob, raw, ev, radii,
-        weights)`` or None when there is no blob."""
+        at ``pred``: ``(poly, centre, blob, raw, ev, radii, weights)`` or None when there is no blob."""
         found = self.blob(ev, pred)
         if found is None:
             return None
@@ -293,7 +284,7 @@ class MouthFinder:
         # again from the outline's own centre (a blob may be one lip, or off-centre)
         left, right, up, down = polygon_measures(poly)
         c1 = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
-        r, gain = self.spans(ev, c1, prior)
+        r, gain = self.spans(ev, c1)
         w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
         r1 = self.smooth(r, w)
         return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, ev, r1, w
@@ -322,19 +313,21 @@ class MouthFinder:
         t = (a - half) / (a - b) if a != b else 0.5
         return float(ys[0, i] + t * (ys[0, i + 1] - ys[0, i]))
 
-    def _fit(self, llr: np.ndarray, centre, r: np.ndarray) -> float:
-        """Share of rays with mouth evidence just inside the outline (1.5–3 px in) times the share
-        with skin just outside (1.5–3 px out)."""
+    def _contrast(self, value: np.ndarray, centre, r: np.ndarray) -> float:
+        """How clearly the outline is a lip edge: on the upper arc and on the lower arc, the median of
+        (lip value 1.5–3 px inside − lip value 1.5–3 px outside), averaged (1 on calibrated lips
+        against their skin, about 0 on an outline through skin or shading)."""
         rr = np.maximum(r[:, None] + self.band, 0.5).astype(np.float32)
-        v = cv2.remap(llr, self._dx * rr + np.float32(centre[0]), self._dy * rr + np.float32(centre[1]),
+        v = cv2.remap(value, self._dx * rr + np.float32(centre[0]), self._dy * rr + np.float32(centre[1]),
                       cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        inside = float(np.mean(v[:, :2].mean(axis=1) > 0.0))
-        outside = float(np.mean(v[:, 2:].mean(axis=1) < 0.0))
-        return inside * outside
+        d = v[:, :2].mean(axis=1) - v[:, 2:].mean(axis=1)
+        return float(0.5 * (np.median(d[self._upper]) + np.median(d[self._lower])))
 
-    def _score(self, width: float, height: float, centre, pred, fit: float) -> float:
-        """``fit`` times the plausibility of the width against the calibrated mouth (0.35–2×), of the
-        height (0.05–1.15 wi) and of the place against the prediction (full within ~0.3 wi)."""
+    def _score(self, width: float, height: float, centre, pred, contrast: float) -> float:
+        """The lip edge's clarity (:meth:`_contrast`, full at 0.45) times the plausibility of the width
+        against the calibrated mouth (0.35–2×), of the height (0.05–1.15 wi) and of the place against
+        the prediction (full within ~0.3 wi)."""
+        fit = float(np.clip((contrast - 0.1) / 0.35, 0.0, 1.0))
         wi = self.wi
         rho = width / max(self.width0, 1e-6)
         s_w = float(np.clip((rho - 0.3) / 0.15, 0, 1) * np.clip((2.1 - rho) / 0.3, 0, 1))
@@ -345,43 +338,32 @@ class MouthFinder:
         s_p = 1.0 if d <= 1.0 else max(math.exp(-(d - 1.0)), 0.3)
         return float(s_w * s_h * s_p * fit)
 
-    def reset(self) -> None:
-        """Forget the frames so far: the next frame's shape prior is the calibrated mouth (call it
-        when the face was lost and is found again)."""
-        self._prior = self._prior_cal.copy()
-        self._offset = np.zeros(2)
-        self._misses = 0
-
-    def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float], remember: bool = True
-             ) -> MouthResult | None:
+    def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float]) -> MouthResult | None:
         """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted centre,
         the calibrated mouth centre under the head's motion), or None when nothing there can be a
-        mouth. A confident result (score ≥ :data:`SCORE_OK`) becomes the next frame's shape prior and
-        expected offset from the prediction unless ``remember`` is False; after five frames without
-        one the prior falls back to the calibrated mouth."""
-        crop = crop_bgr
-        p0 = (float(predicted_centre_crop[0]), float(predicted_centre_crop[1]))
-        pred = (p0[0] + float(self._offset[0]), p0[1] + float(self._offset[1]))
-        res = self._find(crop, pred, self._prior)
-        if remember:
-            if res is not None and res.score >= SCORE_OK:
-                self._prior = self._last_radii
-                self._offset = np.array(self._last_centre) - np.array(p0)
-                self._misses = 0
-            else:
-                self._misses += 1
-                if self._misses >= 5:
-                    self.reset()
-        return res
+        mouth. The crop's light is first matched to the calibration's (:meth:`gains`)."""
+        pred = (float(predicted_centre_crop[0]), float(predicted_centre_crop[1]))
+        return self._find(crop_bgr, pred, self.gains(crop_bgr))
 
-    def _find(self, crop: np.ndarray, pred: tuple[float, float], prior: np.ndarray | None) -> MouthResult | None:
-        found = self.outline(crop, pred, prior)
+    def gains(self, crop: np.ndarray) -> np.ndarray | None:
+        """Per-channel gains (3,) that bring the crop's median colour — mostly skin — to the calibration
+        crop's, or None when they are within 4 % of 1: light that dims, brightens or changes colour
+        after calibration (auto exposure, a lamp, the sun) moves every colour, and the lip axes and
+        the inside table were learned under the calibration's light. Clamped to 0.33–3×."""
+        ref = self.model.crop_median
+        if ref is None:
+            return None
+        sub = crop[::4, ::4].reshape(-1, 3)
+        med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].astype(np.float64)
+        g = np.clip(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33, 3.0)
+        return None if np.all(np.abs(g - 1.0) < 0.04) else g
+
+    def _find(self, crop: np.ndarray, pred: tuple[float, float], gains: np.ndarray | None = None) -> MouthResult | None:
+        found = self.outline(crop, pred, gains)
         if found is None:
             return None
         _, c1, blob, raw, ev, r1, w = found
-        value = self.lip_value(crop, c1[1]) if abs(c1[1] - pred[1]) > 0.02 * self.wi else None
-        if value is None:
-            value = 0.5 * (ev + 1.0)
+        value = self.lip_value(crop, c1[1], gains)
         r, _ = self.snake(value, c1, r1, w)
         poly = self.dirs * r[:, None] + np.array(c1)
         left, right, up, down = polygon_measures(poly)
@@ -390,8 +372,7 @@ class MouthFinder:
         top = self._refine_vertical(value, cx, cy - up, -1, reach)
         bottom = self._refine_vertical(value, cx, cy + down, +1, reach)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
-        score = self._score(width, bottom - top, (cx, cy), pred, self._fit(ev, c1, r))
-        self._last_radii, self._last_centre = r, c1
+        score = self._score(width, bottom - top, (cx, cy), pred, self._contrast(value, c1, r))
         return MouthResult(
             left=left, right=right, centre=(cx, cy), lip_upper=cy - top, lip_lower=bottom - cy,
             polygon=poly, raw_polygon=raw, blob=blob.astype(bool), cue=self.model.cue, score=score,

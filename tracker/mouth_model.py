@@ -82,7 +82,8 @@ class MouthModel:
     ``skin_sat`` are the skin's median luminance and chroma (:func:`~tracker.colour_model.features`),
     ``dark`` the luminance under which a colourless pixel is the mouth's dark inside; they define
     ``inside_table`` (64³, 1 = inside-like). ``separation`` is the smaller lip-vs-skin d′ of the two
-    axes; ``cue`` ``"colour"`` or ``"contrast"``.
+    axes; ``cue`` ``"colour"`` or ``"contrast"``. ``crop_median`` is the calibration crop's median
+    BGR (mostly skin), the reference the finder matches each frame's light to.
     """
 
     work_ipd: float
@@ -99,6 +100,7 @@ class MouthModel:
     dark: float
     separation: float
     cue: str
+    crop_median: tuple[float, float, float] | None = None
     inside_table: np.ndarray = field(repr=False, default=None)
 
     def __post_init__(self) -> None:
@@ -125,6 +127,7 @@ class MouthModel:
             "dark": self.dark,
             "separation": self.separation,
             "cue": self.cue,
+            "crop_median": None if self.crop_median is None else [float(v) for v in self.crop_median],
             "tables": list(TABLE_NAMES),
         }
 
@@ -157,6 +160,7 @@ class MouthModel:
                 dark=float(d["dark"]),
                 separation=float(d["separation"]),
                 cue=str(d["cue"]),
+                crop_median=None if d.get("crop_median") is None else tuple(float(v) for v in d["crop_median"]),
             )
         except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
@@ -235,8 +239,8 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
     In a band 0.24 wi wide through the click, the darkest row near the click is the gap between the
     lips or the open mouth's inside; walking out from it, up and down, past the dark valley (darker
     than a quarter of the way to the band's median: dark lipstick is darker than half-way) and past
-    rows that are mostly inside-like (teeth), the next 0.05 wi (above) / 0.06 wi (below) of rows
-    are lip."""
+    rows that are mostly inside-like (teeth) — and past a tongue between two rows of teeth — the
+    next 0.05 wi (above) / 0.06 wi (below) of rows are lip."""
     H, W = lum.shape
     cx, cy = click
     x0, x1 = max(int(round(cx - 0.12 * wi)), 0), min(int(round(cx + 0.12 * wi)) + 1, W)
@@ -256,6 +260,19 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
             k += 1
         if k >= limit or not 0 <= y < H:
             continue
+        # a tongue between two rows of teeth is not the lip: if more teeth follow within 0.15 wi,
+        # the lip is past them (not past a shadow: only teeth count here)
+        reach = [y + direction * j for j in range(1, int(round(0.15 * wi)))]
+        reach = [v for v in reach if 0 <= v < H]
+        flags = [bool(teeth[v] > 0.5) for v in reach]
+        for j in range(len(flags) - 1):
+            if flags[j] and flags[j + 1]:
+                v = reach[j]
+                while 0 <= v < H and skip[v] and abs(v - y) < int(round(0.35 * wi)):
+                    v += direction
+                if 0 <= v < H and not skip[v]:
+                    y = v
+                break
         y1 = min(max(y + direction * max(int(round(depth * wi)), 2), 0), H - 1)
         lo, hi = sorted((y, y1))
         sel = (lum[lo : hi + 1, x0:x1] >= level) & ~inside[lo : hi + 1, x0:x1]
@@ -355,6 +372,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     lum = luminance(crop)
     idx = lut_index(crop)
     crop32 = crop.astype(np.float32)
+    sub = crop[::4, ::4].reshape(-1, 3)
+    crop_median = tuple(float(v) for v in np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2])
 
     # skin: an ellipse around the click, outside any mouth (its 90 % most typical pixels)
     e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
@@ -424,13 +443,14 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
             width=float(math.hypot(right[0] - left[0], right[1] - left[1])), lip_upper=float(up), lip_lower=float(down),
             area=float(_fill(poly, (H, W)).sum()), outline=poly - np.array(centre), axis_up=axes["up"],
             axis_down=axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep, cue=cue,
+            crop_median=crop_median,
         )
 
     model = model_for(outline, axes, sep)
     # measure the calibration frame the way every frame will be measured (and learn the axes again
     # from that outline if it agrees with the first)
     if seen:
-        res = MouthFinder(model, wi).find(crop, model.centre, remember=False)
+        res = MouthFinder(model, wi).find(crop, model.centre)
         if _trace is not None:
             _trace["final"] = None if res is None else res.polygon
         if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.7:
