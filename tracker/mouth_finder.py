@@ -101,6 +101,19 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     return left, right, float(cy - ys.min()), float(ys.max() - cy)
 
 
+def _extent_at(poly: np.ndarray, cx: float, cy: float) -> tuple[float, float]:
+    """Upper and lower extent of a closed polygon on the vertical through ``cx``, as distances up and
+    down from ``cy``."""
+    p1 = np.roll(poly, -1, axis=0)
+    x0, x1 = poly[:, 0], p1[:, 0]
+    hit = (x0 <= cx) != (x1 <= cx)
+    if not hit.any():
+        return 0.0, 0.0
+    t = (cx - x0[hit]) / (x1[hit] - x0[hit])
+    ys = poly[hit, 1] + t * (p1[hit, 1] - poly[hit, 1])
+    return float(cy - ys.min()), float(ys.max() - cy)
+
+
 def column_fill(mask: np.ndarray) -> np.ndarray:
     """``mask`` (uint8 0/1) with every column filled from its topmost to its bottommost set pixel."""
     h = mask.shape[0]
@@ -153,6 +166,8 @@ class MouthFinder:
         self._five = (np.arange(n_rays)[:, None] + np.arange(-2, 3)[None, :]) % n_rays
         ang = np.degrees(np.arctan2(self.dirs[:, 1], self.dirs[:, 0])) % 360.0
         self._upper = (ang > 200.0) & (ang < 340.0)
+        self._corner_dy = np.arange(-0.04 * wi, 0.04 * wi + 1e-9, 0.5, dtype=np.float32)
+        self._corner_dx = np.arange(-0.06 * wi, 0.1 * wi + 1e-9, 0.25, dtype=np.float32)
         self._lower = (ang > 20.0) & (ang < 160.0)
 
 
@@ -290,6 +305,40 @@ class MouthFinder:
         return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, ev, r1, w
 
     # ------------------------------------------------------------------ measurements
+    def _corner(self, value: np.ndarray, start: tuple[float, float], side: int) -> tuple[float, float]:
+        """Sub-pixel mouth corner on ``side`` (−1 left, +1 right) near the outline's extreme point:
+        on the rows within 0.04 wi of it, the farthest point outwards where ``value`` crosses 0.5; a
+        sharp tip between rows by a parabola through the best row and its neighbours."""
+        h, w = value.shape
+        dy = self._corner_dy
+        ys = np.clip(start[1] + dy, 0, h - 1).astype(np.float32)
+        xs = np.clip(start[0] + side * self._corner_dx, 0, w - 1).astype(np.float32)
+        vals = cv2.remap(value, np.broadcast_to(xs[None, :], (len(ys), len(xs))).copy(),
+                         np.broadcast_to(ys[:, None], (len(ys), len(xs))).copy(), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE)
+        ins = vals >= 0.5
+        m = len(xs)
+        # last inside sample going outwards, per row (rows that are never inside: -1)
+        last = np.where(ins.any(axis=1), m - 1 - np.argmax(ins[:, ::-1], axis=1), -1)
+        ok = (last >= 0) & (last < m - 1)
+        if not ok.any():
+            return start
+        rows = np.flatnonzero(ok)
+        a = vals[rows, last[rows]]
+        b = vals[rows, last[rows] + 1]
+        t = np.where(a != b, (a - 0.5) / (a - b), 0.5)
+        pos = self._corner_dx[last[rows]] + t * (self._corner_dx[1] - self._corner_dx[0])
+        k = int(np.argmax(pos))
+        yb, xb = float(ys[rows[k]]), float(pos[k])
+        if 0 < k < len(rows) - 1 and rows[k - 1] == rows[k] - 1 and rows[k + 1] == rows[k] + 1:
+            p0, p1, p2 = float(pos[k - 1]), float(pos[k]), float(pos[k + 1])
+            den = p0 - 2 * p1 + p2
+            if den < -1e-6:
+                d = min(max(0.5 * (p0 - p2) / den, -0.5), 0.5)
+                yb += d * float(ys[1] - ys[0])
+                xb = p1 - 0.25 * (p0 - p2) * d
+        return (float(start[0] + side * xb), yb)
+
     @staticmethod
     def _refine_vertical(value: np.ndarray, x: float, y: float, direction: int, reach: float) -> float:
         """Sub-pixel y near ``y`` on the column through ``x`` where ``value`` crosses half-way between
@@ -367,7 +416,11 @@ class MouthFinder:
         r, _ = self.snake(value, c1, r1, w)
         poly = self.dirs * r[:, None] + np.array(c1)
         left, right, up, down = polygon_measures(poly)
+        corner_map = 0.5 * (ev + 1.0)  # the evidence with the inside: a grin's dark corners count
+        left = self._corner(corner_map, left, -1)
+        right = self._corner(corner_map, right, +1)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
+        up, down = _extent_at(poly, cx, cy)
         reach = max(0.04 * self.wi, 2.0)
         top = self._refine_vertical(value, cx, cy - up, -1, reach)
         bottom = self._refine_vertical(value, cx, cy + down, +1, reach)
