@@ -101,6 +101,12 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     return left, right, float(cy - ys.min()), float(ys.max() - cy)
 
 
+def _median(v: np.ndarray) -> float:
+    """Median of a small 1-D array (the upper middle element for an even length)."""
+    k = len(v) // 2
+    return float(np.partition(v, k)[k])
+
+
 def _extent_at(poly: np.ndarray, cx: float, cy: float) -> tuple[float, float]:
     """Upper and lower extent of a closed polygon on the vertical through ``cx``, as distances up and
     down from ``cy``."""
@@ -164,23 +170,42 @@ class MouthFinder:
         self._rows = np.arange(n_rays)
         self._diag = np.arange(n_rays) * (n_rays + 1)
         self._five = (np.arange(n_rays)[:, None] + np.arange(-2, 3)[None, :]) % n_rays
+        self._rows_y = np.arange(int(math.ceil(2.0 * wi)) + 8, dtype=np.float32)
         ang = np.degrees(np.arctan2(self.dirs[:, 1], self.dirs[:, 0])) % 360.0
         self._upper = (ang > 200.0) & (ang < 340.0)
         self._corner_dy = np.arange(-0.04 * wi, 0.04 * wi + 1e-9, 0.5, dtype=np.float32)
         self._corner_dx = np.arange(-0.06 * wi, 0.1 * wi + 1e-9, 0.25, dtype=np.float32)
+        self._corner_grid = (np.ascontiguousarray(np.broadcast_to(self._corner_dx[None, :], (len(self._corner_dy), len(self._corner_dx)))),
+                             np.ascontiguousarray(np.broadcast_to(self._corner_dy[:, None], (len(self._corner_dy), len(self._corner_dx)))))
         self._lower = (ang > 20.0) & (ang < 160.0)
 
 
     # ------------------------------------------------------------------ evidence
-    def lip_value(self, crop: np.ndarray, y_line: float, gains: np.ndarray | None = None) -> np.ndarray:
-        """The lip value (float32; 0 skin, 1 lip), split at the mouth line ``y_line``, smoothed a little;
+    def lip_maps(self, crop: np.ndarray, gains: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The upper and the lower lip's value maps (float32; 0 skin, 1 lip), smoothed a little;
         ``gains`` (3,) scale the crop's channels first (folded into the axes: no extra pass)."""
-        a_up, a_dn = self.model.axis_up, self.model.axis_down
-        if gains is not None:
-            a_up = np.concatenate([a_up[:3] * gains, a_up[3:]])
-            a_dn = np.concatenate([a_dn[:3] * gains, a_dn[3:]])
-        v = lip_value(crop.astype(np.float32), a_up, a_dn, y_line, self.wi)
-        return cv2.GaussianBlur(v, (0, 0), self.sigma)
+        c32 = crop.astype(np.float32)
+        out = []
+        for a in (self.model.axis_up, self.model.axis_down):
+            w = a[:3] if gains is None else a[:3] * gains
+            v = cv2.transform(c32, w.reshape(1, 3).astype(np.float32))
+            v += np.float32(a[3])
+            out.append(cv2.GaussianBlur(v, (0, 0), self.sigma))
+        return out[0], out[1]
+
+    def blend(self, maps: tuple[np.ndarray, np.ndarray], y_line: float) -> np.ndarray:
+        """The lip value: the upper lip's above the mouth line ``y_line``, the lower lip's below,
+        blended over about ±0.03 wi."""
+        vu, vd = maps
+        if vu.shape[0] > len(self._rows_y):
+            self._rows_y = np.arange(vu.shape[0], dtype=np.float32)
+        y = (self._rows_y - np.float32(y_line)) * np.float32(1.0 / max(0.03 * self.wi, 1.0))
+        wgt = (1.0 / (1.0 + np.exp(-np.clip(y, -30, 30)))).astype(np.float32)[: vu.shape[0], None]
+        return vu + wgt * (vd - vu)
+
+    def lip_value(self, crop: np.ndarray, y_line: float, gains: np.ndarray | None = None) -> np.ndarray:
+        """The lip value (float32; 0 skin, 1 lip) of ``crop``, split at the mouth line ``y_line``."""
+        return self.blend(self.lip_maps(crop, gains), y_line)
 
     def inside(self, crop: np.ndarray, gains: np.ndarray | None = None) -> np.ndarray:
         """1 where a pixel looks like the inside of a mouth (uint8; one table lookup of the crop,
@@ -221,21 +246,26 @@ class MouthFinder:
         """The blob (uint8 0/1) of positive evidence (smoothed) with the most evidence near ``pred``,
         and its centroid."""
         wi = self.wi
-        tags = cv2.GaussianBlur(ev, (0, 0), self.sigma_blob)
+        h, w = ev.shape
+        half = cv2.resize(ev, ((w + 1) // 2, (h + 1) // 2), interpolation=cv2.INTER_AREA)  # tags at half size
+        tags = cv2.GaussianBlur(half, (0, 0), 0.5 * self.sigma_blob)
         mask = (tags > 0.25).view(np.uint8)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(mask, connectivity=4)
         if n <= 1:
             return None
         ev = np.bincount(lab.ravel(), weights=tags.ravel(), minlength=n)[1:]
-        area = stats[1:, cv2.CC_STAT_AREA]
-        dx = (cents[1:, 0] - pred[0]) / (0.3 * wi)
-        dy = (cents[1:, 1] - pred[1]) / (0.4 * wi)
+        area = stats[1:, cv2.CC_STAT_AREA] * 4
+        cx = 2.0 * cents[1:, 0] + 0.5
+        cy = 2.0 * cents[1:, 1] + 0.5
+        dx = (cx - pred[0]) / (0.3 * wi)
+        dy = (cy - pred[1]) / (0.4 * wi)
         near = np.exp(-0.5 * (dx * dx + dy * dy))
         s = np.where((area >= self.min_area) & (near > 0.05), ev * near, -1.0)
         j = int(np.argmax(s))
         if s[j] <= 0:
             return None
-        return (lab == j + 1).view(np.uint8), (float(cents[j + 1, 0]), float(cents[j + 1, 1]))
+        blob = cv2.resize((lab == j + 1).view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST)
+        return blob, (float(cx[j]), float(cy[j]))
 
     # ------------------------------------------------------------------ radial polygon and snake
     def spans(self, llr: np.ndarray, centre: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -275,13 +305,14 @@ class MouthFinder:
         den = np.where(np.abs(den) > 1e-9, den, -1e-9)
         frac = np.clip(0.5 * (a - c) / den, -0.5, 0.5)
         edge = rr[rows, j + 1] + frac * self.step
-        strong = np.clip(b / max(float(np.median(b)), 1e-6), 0.0, 1.0)
+        strong = np.clip(b / max(_median(b), 1e-6), 0.0, 1.0)
         target = strong * edge + (1.0 - strong) * r0
         return self.smooth(target, np.maximum(w0, 0.05)), b
 
-    def outline(self, crop: np.ndarray, pred: tuple[float, float], gains: np.ndarray | None = None):
-        """:meth:`outline_on` this performer's lip evidence in ``crop`` (split at the predicted centre)."""
-        return self.outline_on(lip_evidence(self.lip_value(crop, pred[1], gains)), self.inside(crop, gains), pred)
+    def outline(self, crop: np.ndarray, pred: tuple[float, float], maps, gains: np.ndarray | None = None):
+        """:meth:`outline_on` this performer's lip evidence (``maps`` of :meth:`lip_maps`, split at the
+        predicted centre)."""
+        return self.outline_on(lip_evidence(self.blend(maps, pred[1])), self.inside(crop, gains), pred)
 
     def outline_on(self, ev: np.ndarray, inside: np.ndarray, pred: tuple[float, float], fill: bool = True):
         """Blob, radial polygon and the smoothed outline (no edge refinement) on an evidence map
@@ -294,13 +325,13 @@ class MouthFinder:
         ev = self.with_inside(ev, inside, blob, fill)
         r, gain = self.spans(ev, c0)
         raw = self.dirs * r[:, None] + np.array(c0)
-        w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
+        w = np.clip(gain / max(_median(gain), 1e-6), 0.05, 1.0)
         poly = self.dirs * self.smooth(r, w)[:, None] + np.array(c0)
         # again from the outline's own centre (a blob may be one lip, or off-centre)
         left, right, up, down = polygon_measures(poly)
         c1 = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
         r, gain = self.spans(ev, c1)
-        w = np.clip(gain / max(float(np.median(gain)), 1e-6), 0.05, 1.0)
+        w = np.clip(gain / max(_median(gain), 1e-6), 0.05, 1.0)
         r1 = self.smooth(r, w)
         return self.dirs * r1[:, None] + np.array(c1), c1, blob, raw, ev, r1, w
 
@@ -309,35 +340,32 @@ class MouthFinder:
         """Sub-pixel mouth corner on ``side`` (−1 left, +1 right) near the outline's extreme point:
         on the rows within 0.04 wi of it, the farthest point outwards where ``value`` crosses 0.5; a
         sharp tip between rows by a parabola through the best row and its neighbours."""
-        h, w = value.shape
-        dy = self._corner_dy
-        ys = np.clip(start[1] + dy, 0, h - 1).astype(np.float32)
-        xs = np.clip(start[0] + side * self._corner_dx, 0, w - 1).astype(np.float32)
-        vals = cv2.remap(value, np.broadcast_to(xs[None, :], (len(ys), len(xs))).copy(),
-                         np.broadcast_to(ys[:, None], (len(ys), len(xs))).copy(), cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REPLICATE)
+        gx, gy = self._corner_grid
+        vals = cv2.remap(value, gx * np.float32(side) + np.float32(start[0]), gy + np.float32(start[1]),
+                         cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         ins = vals >= 0.5
-        m = len(xs)
-        # last inside sample going outwards, per row (rows that are never inside: -1)
-        last = np.where(ins.any(axis=1), m - 1 - np.argmax(ins[:, ::-1], axis=1), -1)
-        ok = (last >= 0) & (last < m - 1)
+        m = ins.shape[1]
+        rev = ins[:, ::-1]
+        last = m - 1 - np.argmax(rev, axis=1)
+        ok = rev.any(axis=1) & (last < m - 1)
         if not ok.any():
             return start
         rows = np.flatnonzero(ok)
-        a = vals[rows, last[rows]]
-        b = vals[rows, last[rows] + 1]
-        t = np.where(a != b, (a - 0.5) / (a - b), 0.5)
-        pos = self._corner_dx[last[rows]] + t * (self._corner_dx[1] - self._corner_dx[0])
+        lr = last[rows]
+        a, b = vals[rows, lr], vals[rows, lr + 1]
+        t = np.where(a != b, (a - 0.5) / np.where(a != b, a - b, 1.0), 0.5)
+        dx = self._corner_dx
+        pos = dx[lr] + t * (dx[1] - dx[0])
         k = int(np.argmax(pos))
-        yb, xb = float(ys[rows[k]]), float(pos[k])
+        yb, xb = float(self._corner_dy[rows[k]]), float(pos[k])
         if 0 < k < len(rows) - 1 and rows[k - 1] == rows[k] - 1 and rows[k + 1] == rows[k] + 1:
             p0, p1, p2 = float(pos[k - 1]), float(pos[k]), float(pos[k + 1])
             den = p0 - 2 * p1 + p2
             if den < -1e-6:
                 d = min(max(0.5 * (p0 - p2) / den, -0.5), 0.5)
-                yb += d * float(ys[1] - ys[0])
+                yb += d * float(self._corner_dy[1] - self._corner_dy[0])
                 xb = p1 - 0.25 * (p0 - p2) * d
-        return (float(start[0] + side * xb), yb)
+        return (float(start[0] + side * xb), float(start[1] + yb))
 
     @staticmethod
     def _refine_vertical(value: np.ndarray, x: float, y: float, direction: int, reach: float) -> float:
@@ -370,7 +398,7 @@ class MouthFinder:
         v = cv2.remap(value, self._dx * rr + np.float32(centre[0]), self._dy * rr + np.float32(centre[1]),
                       cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         d = v[:, :2].mean(axis=1) - v[:, 2:].mean(axis=1)
-        return float(0.5 * (np.median(d[self._upper]) + np.median(d[self._lower])))
+        return float(0.5 * (_median(d[self._upper]) + _median(d[self._lower])))
 
     def _score(self, width: float, height: float, centre, pred, contrast: float) -> float:
         """The lip edge's clarity (:meth:`_contrast`, full at 0.45) times the plausibility of the width
@@ -408,11 +436,12 @@ class MouthFinder:
         return None if np.all(np.abs(g - 1.0) < 0.04) else g
 
     def _find(self, crop: np.ndarray, pred: tuple[float, float], gains: np.ndarray | None = None) -> MouthResult | None:
-        found = self.outline(crop, pred, gains)
+        maps = self.lip_maps(crop, gains)
+        found = self.outline(crop, pred, maps, gains)
         if found is None:
             return None
         _, c1, blob, raw, ev, r1, w = found
-        value = self.lip_value(crop, c1[1], gains)
+        value = self.blend(maps, c1[1])
         r, _ = self.snake(value, c1, r1, w)
         poly = self.dirs * r[:, None] + np.array(c1)
         left, right, up, down = polygon_measures(poly)
