@@ -239,7 +239,7 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
     In a band 0.24 wi wide through the click, the darkest row near the click is the gap between the
     lips or the open mouth's inside; walking out from it, up and down, past the dark valley (darker
     than a quarter of the way to the band's median: dark lipstick is darker than half-way) and past
-    rows that are mostly inside-like (teeth) — and past a tongue between two rows of teeth — the
+    rows that are mostly inside-like (teeth) — and, below, past a tongue on the lower teeth — the
     next 0.05 wi (above) / 0.06 wi (below) of rows are lip."""
     H, W = lum.shape
     cx, cy = click
@@ -260,9 +260,9 @@ def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tup
             k += 1
         if k >= limit or not 0 <= y < H:
             continue
-        # a tongue between two rows of teeth is not the lip: if more teeth follow within 0.15 wi,
-        # the lip is past them (not past a shadow: only teeth count here)
-        reach = [y + direction * j for j in range(1, int(round(0.15 * wi)))]
+        # a tongue on the lower teeth is not the lower lip: if more teeth follow below it within
+        # 0.15 wi, the lip is past them (not past a shadow: only teeth count here)
+        reach = [y + direction * j for j in range(1, int(round(0.15 * wi)))] if direction > 0 else []
         reach = [v for v in reach if 0 <= v < H]
         flags = [bool(teeth[v] > 0.5) for v in reach]
         for j in range(len(flags) - 1):
