@@ -43,7 +43,9 @@ SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
 INSIDE_NEAR = 0.5
 """Evidence given to the mouth's inside (see :meth:`MouthFinder.with_inside`)."""
-GAP = 0.3
+GAP = 0.2
+"""Tallest gap (× wi) between lip above and lip below near the blob that counts as the inside."""
+REACH = 0.45
 LIP_SURE = 0.4
 """Evidence above which a pixel surely is lip (lip value 0.7), for :meth:`MouthFinder.with_inside`."""
 """Tallest stretch (× wi) between lip above and lip below in a column that counts as the inside."""
@@ -158,7 +160,8 @@ class MouthFinder:
         self.sigma = max(0.01 * wi, 0.6)
         self.sigma_blob = max(0.02 * wi, 0.8)
         self.min_area = max(int(0.02 * self.area0), 6)
-        self.near_px = max(int(round(0.2 * wi)), 2)
+        self.near_px = max(int(round(0.15 * wi)), 2)
+        self.reach_px = max(int(round(REACH * wi)), 3)
         self.gap_kernel = np.ones((max(int(round(GAP * wi)) | 1, 3), 1), np.uint8)
         self.corner_kernel = np.ones((3, max(int(round(0.1 * wi)) | 1, 3)), np.uint8)
         d2 = np.zeros((n_rays, n_rays))
@@ -215,31 +218,62 @@ class MouthFinder:
         return self.model.inside_table.take(lut_index(crop))
 
     def with_inside(self, ev: np.ndarray, inside: np.ndarray, blob: np.ndarray, fill: bool = True) -> np.ndarray:
-        """``ev`` raised to at least :data:`INSIDE_NEAR` on the mouth's inside near the blob: every
-        pixel with lip above and lip below it in its column within :data:`GAP` (teeth, a tongue, the
-        dark gap or an open mouth, whatever their colour), and inside-like pixels (``inside``, uint8:
-        dark and colourless, or teeth) touching that — the dark corners of a grin. Without ``fill``
-        (the calibration's first outlines, on noisier evidence) only inside-like pixels between lip
-        above and below count."""
+        """``ev`` raised to at least :data:`INSIDE_NEAR` on the mouth's inside.
+
+        The other lip is a lip-coloured piece at least 60 % as wide as the blob and mostly over or
+        under it, within 0.45 wi (a wide-open mouth): touching it (a grin's lips meet at the corners),
+        above it across a gap under :data:`THIN` or across teeth / the dark inside, or below it across teeth / the
+        dark inside; every pixel between the two in their common columns is the inside (teeth, a
+        tongue, the dark gap, whatever their colour) — the nostrils and a chin's shading are narrower,
+        or skin lies between. Inside-
+        like pixels (``inside``, uint8: dark and colourless, or teeth) next to the blob or that inside
+        count too (a grin's dark corners). Without ``fill`` (the calibration's first outlines, on
+        noisier evidence) only inside-like pixels between lip above and below count."""
         bx, by, bw, bh = cv2.boundingRect(blob)
-        H, W = ev.shape
-        m = self.near_px
-        x, y = max(bx - m, 0), max(by - m, 0)
-        w, h = min(bx + bw + m, W) - x, min(by + bh + m, H) - y
-        if bw == 0 or w <= 0 or h <= 0:
+        if bw == 0:
             return ev
+        H, W = ev.shape
+        mx, my = self.near_px, self.reach_px
+        x, y = max(bx - mx, 0), max(by - my, 0)
+        w, h = min(bx + bw + mx, W) - x, min(by + bh + my, H) - y
         lipish = (ev[y : y + h, x : x + w] > LIP_SURE).view(np.uint8)
-        if fill:
-            between = cv2.morphologyEx(lipish, cv2.MORPH_CLOSE, self.gap_kernel)
+        if not fill:
+            between = column_fill(lipish & blob[y : y + h, x : x + w] | lipish) & inside[y : y + h, x : x + w]
+        else:
+            # near the blob, any gap up to GAP between lip above and lip below; further out (a wide-open
+            # mouth), only a wide lip piece across teeth or the dark inside
+            between = self._joined(lipish, blob[y : y + h, x : x + w], inside[y : y + h, x : x + w], bx - x, by - y, bw, bh)
+            c0, c1 = max(by - self.near_px, 0) - y, min(by + bh + self.near_px, H) - y
+            between[c0:c1] |= cv2.morphologyEx(lipish[c0:c1], cv2.MORPH_CLOSE, self.gap_kernel)
+            between |= blob[y : y + h, x : x + w]
             between |= inside[y : y + h, x : x + w] & cv2.dilate(between, self.corner_kernel)
-        else:  # only inside-like pixels between lip above and below
-            between = column_fill(lipish) & inside[y : y + h, x : x + w]
         if not between.any():
             return ev
         out = ev.copy()
         sub = out[y : y + h, x : x + w]
         np.maximum(sub, np.where(between > 0, np.float32(INSIDE_NEAR), sub), out=sub)
         return out
+
+    def _joined(self, lipish, sub_blob, sub_in, b0, top, bw, bh):
+        union = sub_blob.copy()
+        n, lab, st, _ = cv2.connectedComponentsWithStats(lipish, connectivity=8)
+        b1, bottom = b0 + bw, top + bh
+        for j in range(1, n):
+            px, py, pw, ph, pa = (int(v) for v in st[j])
+            ov = min(px + pw, b1) - max(px, b0)
+            if pw < 0.6 * bw or ov < 0.5 * pw or pa < 4:
+                continue
+            a0, a1 = max(px, b0), min(px + pw, b1)
+            if a1 <= a0:
+                continue
+            if py >= bottom:  # below the blob: only across what looks like a mouth's inside
+                if py > bottom and sub_in[bottom:py, a0:a1].mean() < 0.4:
+                    continue
+            elif py + ph <= top:  # above: an upper lip spans the mouth, across teeth or the dark inside
+                if py + ph < top and (pw < 0.8 * bw or sub_in[py + ph : top, a0:a1].mean() < 0.3):
+                    continue
+            union |= (lab == j).view(np.uint8)
+        return column_fill(union)
 
     # ------------------------------------------------------------------ blob
     def blob(self, ev: np.ndarray, pred: tuple[float, float]) -> tuple[np.ndarray, tuple[float, float]] | None:

@@ -435,8 +435,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     axes, sep = _axes_for(crop, outline, inside, wi, skin_next_to)
     cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
 
-    def model_for(poly: np.ndarray, axes: dict, sep: float) -> MouthModel:
-        left, right, up, down = polygon_measures(poly)
+    def model_for(poly: np.ndarray, axes: dict, sep: float, measured=None) -> MouthModel:
+        left, right, up, down = polygon_measures(poly) if measured is None else measured
         centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
         return MouthModel(
             work_ipd=wi, centre=(float(centre[0]), float(centre[1])),
@@ -455,7 +455,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
             _trace["final"] = None if res is None else res.polygon
         if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.7:
             axes2, sep2 = _axes_for(crop, res.polygon, inside, wi, skin_next_to)
-            model = model_for(res.polygon, axes2, sep2)
+            model = model_for(res.polygon, axes2, sep2, (res.left, res.right, res.lip_upper, res.lip_lower))
     return model
 
 
