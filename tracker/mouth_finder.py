@@ -8,23 +8,31 @@ a :class:`~tracker.mouth_model.MouthModel` learned at calibration. Per frame:
    1 on the lip) gives the lip value of every pixel — the upper lip's above the mouth line, the
    lower lip's below — and one 64³ table lookup says which pixels look like the inside of a mouth
    (dark and colourless, teeth);
-2. **blob**: lip-valued pixels are tagged and labelled; the blob is the piece with the most
-   evidence near the predicted centre (a red collar or the nose lose by distance and size);
+2. **blob**: lip-valued pixels are tagged (at half size) and labelled; the blob is the piece
+   with the most evidence near the predicted centre (a red collar or the nose lose by distance and
+   size). The other lip, if the blob is one lip, joins it (:meth:`MouthFinder.with_inside`), and
+   everything between the two — teeth, a tongue, the dark gap or inside — counts as mouth;
 3. **radial polygon**: from the blob's centre, on each of :data:`~tracker.mouth_model.N_RAYS`
    rays, the radius up to which the summed evidence along the ray is largest (Toyama's radial
-   spanning made robust: teeth or a dark inside between two lips keep a ray going as long as lip
-   follows, a stretch of skin before the nose or a chin's shadow stops it), then re-cast from the
-   polygon's own centre;
-4. **snake**: each ray's radius moves to the strongest fall of the edge value near it — the lip
-   axis of the upper lip above the mouth line and of the lower lip below it (cue ``"colour"``), or
-   the evidence itself (cue ``"contrast"``) — balanced against a second-difference smoothness
-   term around the loop (a closed-form active contour);
-5. **measure**: corners = the outline's extreme points along x, centre = their midpoint,
-   ``lip_upper`` / ``lip_lower`` = from the centre up / down to the outline, refined to where the
-   edge value crosses half-way between lip and skin on that column;
-6. **score** in 0..1 — "this is this person's mouth": the share of the outline with mouth just
-   inside and skin just outside, times the plausibility of its size against the calibrated mouth
-   and of its place against the prediction. :data:`SCORE_OK` is the threshold.
+   spanning made robust: a stretch of skin before the nose or a chin's shadow stops a ray), then
+   re-cast from the polygon's own centre;
+4. **snake**: each ray's radius moves to the strongest fall of the lip value near it (the upper
+   lip's axis above the mouth line, the lower lip's below), balanced against a second-difference
+   smoothness term around the loop (a closed-form active contour); a ray far from its neighbours
+   counts for little;
+5. **measure**: corners = where the evidence ends on the rows near the outline's extreme points
+   (sub-pixel; a grin's dark corners count), centre = their midpoint, ``lip_upper`` /
+   ``lip_lower`` = from the centre up / down to the outline, refined to where the lip value crosses
+   half-way between lip and skin on that column;
+6. **score** in 0..1 — "this is this person's mouth": how clearly the outline is a lip edge (lip
+   value just inside minus just outside, on the upper and the lower arc), times the plausibility
+   of its size against the calibrated mouth and of its place against the prediction.
+   :data:`SCORE_OK` is the threshold.
+
+Each frame's light is first matched to the calibration's (:meth:`MouthFinder.gains`): a slow or
+sudden change of brightness or colour cast moves every colour, and the lip axes were learned
+under the calibration's light. The cue (``model.cue``) says what the lip axes rest on: clear lip
+colour, or — ``"contrast"`` — weak lip colour helped by the mouth's dark gap, inside and teeth.
 """
 
 from __future__ import annotations
@@ -36,7 +44,7 @@ import cv2
 import numpy as np
 
 from tracker.colour_model import lut_index
-from tracker.mouth_model import EV_SCALE, N_RAYS, MouthModel, lip_evidence, lip_value
+from tracker.mouth_model import N_RAYS, MouthModel, lip_evidence
 
 
 SCORE_OK = 0.5
@@ -44,12 +52,12 @@ SCORE_OK = 0.5
 INSIDE_NEAR = 0.5
 """Evidence given to the mouth's inside (see :meth:`MouthFinder.with_inside`)."""
 GAP = 0.2
-"""Tallest gap (× wi) between lip above and lip below near the blob that counts as the inside."""
+"""Tallest gap (× wi) between lip above and lip below near the blob that counts as the inside
+whatever is in it (teeth of any colour); wider gaps only across teeth or the dark inside."""
 REACH = 0.45
+"""How far (× wi) above or below the blob the other lip may be (a wide-open mouth)."""
 LIP_SURE = 0.4
 """Evidence above which a pixel surely is lip (lip value 0.7), for :meth:`MouthFinder.with_inside`."""
-"""Tallest stretch (× wi) between lip above and lip below in a column that counts as the inside."""
-
 BIAS = 0.2
 """Evidence (+1 lip, −1 skin) a sample along a ray must exceed to be worth including."""
 
@@ -92,15 +100,8 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     the vertical through their midpoint, as distances from it (``lip_upper``, ``lip_lower``)."""
     i0, i1 = int(np.argmin(poly[:, 0])), int(np.argmax(poly[:, 0]))
     left, right = (float(poly[i0, 0]), float(poly[i0, 1])), (float(poly[i1, 0]), float(poly[i1, 1]))
-    cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
-    p1 = np.roll(poly, -1, axis=0)
-    x0, x1 = poly[:, 0], p1[:, 0]
-    hit = (x0 <= cx) != (x1 <= cx)
-    if not hit.any():
-        return left, right, 0.0, 0.0
-    t = (cx - x0[hit]) / (x1[hit] - x0[hit])
-    ys = poly[hit, 1] + t * (p1[hit, 1] - poly[hit, 1])
-    return left, right, float(cy - ys.min()), float(ys.max() - cy)
+    up, down = _extent_at(poly, 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
+    return left, right, up, down
 
 
 def _median(v: np.ndarray) -> float:
@@ -238,7 +239,7 @@ class MouthFinder:
         w, h = min(bx + bw + mx, W) - x, min(by + bh + my, H) - y
         lipish = (ev[y : y + h, x : x + w] > LIP_SURE).view(np.uint8)
         if not fill:
-            between = column_fill(lipish & blob[y : y + h, x : x + w] | lipish) & inside[y : y + h, x : x + w]
+            between = column_fill(lipish) & inside[y : y + h, x : x + w]
         else:
             # near the blob, any gap up to GAP between lip above and lip below; further out (a wide-open
             # mouth), only a wide lip piece across teeth or the dark inside

@@ -45,8 +45,6 @@ another 0.6 wi) and the head-motion prediction's error."""
 N_RAYS = 48
 COLOUR_SEPARATION = 2.0
 """Lip-vs-skin d′ along the lip axes at and above which the lip colour is the cue."""
-EV_SCALE = 32.0
-"""Evidence maps as uint8: 128 + this × evidence (+1 lip, −1 skin)."""
 TABLE_NAMES = ("inside",)
 """Names of the colour-table images of :meth:`MouthModel.images` (512×512 grey tiles, 255 = inside-like)."""
 
