@@ -12,8 +12,10 @@ distance; edges along the face's up axis), Pearson r of mouth opening (``lip_upp
 lip_lower``) and width with the peer over the clip (frames without a confident result hold
 the last value, as the tracker does), % of frames with no confident result, "wrong ok" (%
 of results that claim this mouth but are more than 15 % IPD off, counted over the normal
-crops and over crops predicted 0.6 wi too low / too high and 1 wi to the side), and the
-finder's time per call. ``python -m benchmarks --only real_mouth``; the real clips are read
+crops and over crops predicted 0.6 wi too low / too high and 1 wi to the side; in brackets:
+% of the frames whose normal crop gave such a result), and the
+finder's CPU time per call (this process only: other processes on a shared machine do not count,
+though they still slow it through the caches). ``python -m benchmarks --only real_mouth``; the real clips are read
 from ``../shared/real/`` (skipped with one line when absent). Set ``INKFACE_MOUTH_SHEETS=1``
 to write contact sheets of crops with the results drawn to ``out/real_mouth/``.
 """
@@ -252,9 +254,9 @@ def run_case(case: Case, method: Method, seed: int = 3, sheet_every: int = 0, sh
         ff = _perturbed_frame(pup, wi_i, rng)
         crop, origin = _crop(frame, ff, centre_f, rel)
         pred = (centre_f[0] - origin[0], centre_f[1] - origin[1])
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         f = method.find(state, crop, pred)
-        res.ms.append((time.perf_counter() - t0) * 1000.0)
+        res.ms.append((time.process_time() - t0) * 1000.0)
         ok = f is not None and f.score >= method.threshold
         if f is not None:
             res.cues[f.cue] = res.cues.get(f.cue, 0) + 1
@@ -445,7 +447,7 @@ def table(method: Method, cs: list[Case], sheets: bool = False) -> Table:
     t = Table(
         f"Mouth finder '{method.name}' vs the peer (real) / truth (synthetic), crop frame perturbed",
         ["clip", "frames", "cue", "corner %", "top %", "bottom %", "r open", "r width", "no result %", "wrong ok % (on crops %)",
-         "ms med/p95"],
+         "cpu ms med/p95"],
     )
     misses = []
     all_ms: list[float] = []
@@ -476,7 +478,7 @@ def table(method: Method, cs: list[Case], sheets: bool = False) -> Table:
         "the reference over the clip; targets on the real clips: r open ≥ 0.85, r width ≥ 0.7, wrong ok ≈ 0.\n"
         + (f"finder time per call over all clips: median {np.median(all_ms):.3f} ms, p95 {np.percentile(all_ms, 95):.3f} ms; "
            if all_ms else "")
-        + ("all real-clip targets met" if not misses else "missed: " + "; ".join(misses))
+        + ("all real-clip targets met on the clips run" if not misses else "missed: " + "; ".join(misses))
     )
     if synth:
         for name, r in synth:
