@@ -295,7 +295,10 @@ class MouthFinder:
         dx = (cx - pred[0]) / (0.3 * wi)
         dy = (cy - pred[1]) / (0.4 * wi)
         near = np.exp(-0.5 * (dx * dx + dy * dy))
-        s = np.where((area >= self.min_area) & (near > 0.05), ev * near, -1.0)
+        # a mouth's centre stays within ~0.55 wi sideways and −0.35…+0.6 wi up/down of the prediction
+        # (a yawn drops it): hair or a collar at the crop's edge is not considered
+        inside = (np.abs(dx) < 0.55 / 0.3) & (dy > -0.35 / 0.4) & (dy < 0.6 / 0.4)
+        s = np.where((area >= self.min_area) & inside, ev * near, -1.0)
         j = int(np.argmax(s))
         if s[j] <= 0:
             return None
@@ -437,12 +440,13 @@ class MouthFinder:
 
     def _score(self, width: float, height: float, centre, pred, contrast: float) -> float:
         """The lip edge's clarity (:meth:`_contrast`, full at 0.45) times the plausibility of the width
-        against the calibrated mouth (0.35–2×), of the height (0.05–1.15 wi) and of the place against
-        the prediction (full within ~0.3 wi)."""
+        (0.35–2.5× the calibrated mouth's and 0.3–1.4 wi), of the height (0.05–1.15 wi) and of the
+        place against the prediction (full within ~0.3 wi)."""
         fit = float(np.clip((contrast - 0.1) / 0.35, 0.0, 1.0))
         wi = self.wi
         rho = width / max(self.width0, 1e-6)
-        s_w = float(np.clip((rho - 0.3) / 0.15, 0, 1) * np.clip((2.1 - rho) / 0.3, 0, 1))
+        s_w = float(np.clip((rho - 0.3) / 0.15, 0, 1) * np.clip((3.0 - rho) / 0.5, 0, 1)
+                    * np.clip((width - 0.2 * wi) / (0.1 * wi), 0, 1) * np.clip((1.6 * wi - width) / (0.2 * wi), 0, 1))
         s_h = float(np.clip((1.15 * wi - height) / (0.15 * wi), 0, 1) * np.clip((height - 0.03 * wi) / (0.03 * wi), 0, 1))
         dx = (centre[0] - pred[0]) / (0.3 * wi)
         dy = (centre[1] - pred[1]) / (0.4 * wi)
