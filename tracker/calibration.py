@@ -32,6 +32,7 @@ from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
+from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
 FORMAT = 2
@@ -163,6 +164,9 @@ class Calibration:
     that tells this face from anything else; None in files from before it existed."""
     face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
     """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
+    mouth_model: MouthModel | None = None
+    """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
+    which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -195,6 +199,7 @@ class Calibration:
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
             "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
+            "mouth_model": self.mouth_model.to_dict() if self.mouth_model is not None else None,
             "face_box_eyes_flat": [float(v) for p in self.face_box_eyes for v in p] if self.face_box_eyes is not None else None,
         }
 
@@ -278,6 +283,7 @@ class Calibration:
             mouth_ref=r.optional_numbers("mouth_ref", 3),
             face_patch=face_patch,
             face_box_eyes=None if box_eyes is None else ((box_eyes[0], box_eyes[1]), (box_eyes[2], box_eyes[3])),
+            mouth_model=_mouth_model(path, d.get("mouth_model")),
         )
         return cal
 
@@ -371,11 +377,10 @@ def _ellipse_pixels(img: np.ndarray, cx: float, cy: float, ax: float, ay: float,
 def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     """Learn a :class:`Calibration` from one frame and the five clicks on it.
 
-    Raises :class:`CalibrationError` (one line) when the frame or the clicks are unusable,
-    e.g. a point outside the frame or no lip colour that differs from the skin.
+    Raises :class:`CalibrationError` (one line) when the frame or the clicks are unusable
+    (a point outside the frame, points that are not a face's proportions); a real face with
+    weak lip colour is not refused (the mouth model leans on its gap and inside instead).
     """
-    from tracker.mouth import MouthFinder
-
     if not (isinstance(frame_bgr, np.ndarray) and frame_bgr.ndim == 3 and frame_bgr.shape[2] == 3 and frame_bgr.dtype == np.uint8):
         raise CalibrationError("calibration frame must be a uint8 (H, W, 3) BGR image")
     H, W = frame_bgr.shape[:2]
@@ -475,39 +480,31 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         if hi_m - lo_m > 40:
             white_threshold = 0.5 * (lo_m + hi_m)
 
-    # lips: pixels near the mouth click that the skin model does not explain
-    # (mostly by chroma: shading and nostrils make the skin's brightness vary more than its hue)
+    # --- the mouth: this performer's lips, gap and inside (never refuses a face; says which cue it uses)
+    mrect = mouth_rect(mouth_f, wi)
+    mcrop = ff.crop(frame_bgr, mrect)
+    mouth_model = learn_mouth(mcrop, (mouth_f[0] - mrect[0], mouth_f[1] - mrect[1]), wi)
+    mcx = mrect[0] + mouth_model.centre[0]
+    mcy = mrect[1] + mouth_model.centre[1]
+
+    # lips as a colour class too (the whole-frame search by lip colour after a loss): the pixels
+    # inside the mouth's outline that are neither skin-like nor the dark inside
+    lips = _lip_pixels(mcrop, mouth_model)
     yw = 0.3
     skin_g = Gaussians(features(np.concatenate([skin_px, ring]), yw), 3, np.array([0.035 * yw, 0.012, 0.012]))
-    cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
-    fc = features(cand, yw)
-    not_skin = skin_g.mahalanobis2(fc) > 12.0
-    lum = fc[:, 0]
-    med = np.median(lum[not_skin]) if not_skin.any() else 0.0
-    lips = cand[not_skin & (lum > 0.55 * med)]
-    if len(lips) < 12:
-        raise CalibrationError(
-            "calibration: no lip colour distinct from the skin near the mouth click "
-            f"({clicks.mouth[0]:g}, {clicks.mouth[1]:g})"
-        )
+    if len(lips) >= 12:
+        distinct = lips[skin_g.mahalanobis2(features(lips, yw)) > 6.0]
+        lips = distinct if len(distinct) >= 12 else lips
+    else:  # no outline to speak of: the reddest pixels round the click
+        cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
+        red = features(cand, 1.0)[:, 1]
+        lips = cand[red >= np.percentile(red, 80)]
     # a BGR direction that reads ~0 on skin and ~1 on lip, linear in colour mixtures (sub-pixel edges)
     diff = lips.astype(np.float64).mean(0) - ring.astype(np.float64).mean(0)
     lip_axis = diff / max(float(diff @ diff), 1e-6)
     lip_cls = ColourClassifier(
         lips, np.concatenate([skin_px, ring, pupil_px, brow_px, eye_interior]), y_weight=0.5, name="lip"
     )
-
-    # --- mouth geometry on the calibration frame
-    mf = MouthFinder()
-    mh, mw = int(round(0.8 * wi)), int(round(1.4 * wi))
-    mx0, my0 = int(round(mx - mw / 2)), int(round(my - mh / 2))
-    mcrop = crop[max(my0, 0) : my0 + mh, max(mx0, 0) : mx0 + mw]
-    mval = cv2.transform(mcrop.astype(np.float32), lip_axis.astype(np.float32).reshape(1, 3))
-    res = mf.find(lip_cls.prob_u8(mcrop), value=mval, seed=(mx - max(mx0, 0), my - max(my0, 0)))
-    if res is None or res.width < 0.15 * wi:
-        raise CalibrationError("calibration: no lip blob found at the mouth click")
-    mcx = res.centre[0] + max(mx0, 0) + ox
-    mcy = res.centre[1] + max(my0, 0) + oy
 
     # --- brows: cross-section through each pupil, centred on the brow's middle line
     brow_profiles, brow_centres, brow_heights = [], [], []
@@ -544,9 +541,9 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         lid_up=[0.0, 0.0],
         lid_down=[0.0, 0.0],
         mouth_offset=(float(mcx), float(mcy)),
-        mouth_width=float(res.width),
-        mouth_height=float(res.lip_upper + res.lip_lower),
-        mouth_area=float(res.area),
+        mouth_width=float(mouth_model.width),
+        mouth_height=float(mouth_model.lip_upper + mouth_model.lip_lower),
+        mouth_area=float(mouth_model.area),
         pupil_radius=float(prad),
         pupil_threshold=0.5,
         pupil=pupil_cls,
@@ -555,6 +552,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         lip_axis=lip_axis,
         white_threshold=white_threshold,
         iris_level=iris_level,
+        mouth_model=mouth_model,
     )
     # the face as a whole, to tell it from anything else and to find it again
     from tracker.face_finder import face_patch, learn_eyes_in_box
@@ -688,6 +686,34 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+def _mouth_model(path: Path, d) -> MouthModel | None:
+    if d is None:
+        return None
+    try:
+        return MouthModel.from_dict(d)
+    except ValueError as e:
+        raise CalibrationError(f"{path}: mouth_model: {e}") from None
+
+
+def mouth_rect(centre_face: tuple[float, float], work_ipd: float) -> tuple[int, int, int, int]:
+    """The mouth crop ``(x0, y0, w, h)`` (face px) around a mouth centre in face coordinates."""
+    x0, y0, w, h = MOUTH_RECT
+    return (int(math.floor(centre_face[0] + x0 * work_ipd)), int(math.floor(centre_face[1] + y0 * work_ipd)),
+            int(math.ceil(w * work_ipd)), int(math.ceil(h * work_ipd)))
+
+
+def _lip_pixels(crop: np.ndarray, model: MouthModel) -> np.ndarray:
+    """BGR pixels inside the model's mouth outline that are not the mouth's dark inside."""
+    from tracker.colour_model import lut_index
+
+    mask = np.zeros(crop.shape[:2], np.uint8)
+    poly = np.asarray(model.outline, dtype=np.float64) + np.asarray(model.centre, dtype=np.float64)
+    if len(poly) >= 3:
+        cv2.fillPoly(mask, [np.round(poly).astype(np.int32)], 1)
+    inside = model.inside_table.take(lut_index(crop)).astype(bool)
+    return crop[(mask > 0) & ~inside]
 
 
 def _load_picture(path: Path, name, what: str = "eye picture") -> np.ndarray:

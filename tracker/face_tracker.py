@@ -31,7 +31,10 @@ from tracker.calibration import Calibration, FaceFrame
 from tracker.face_finder import DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
 from tracker.lids import LidFinder
-from tracker.mouth import MouthFinder
+from tracker.calibration import mouth_rect
+from tracker.mouth import MouthFinder as LipBlobFinder
+from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
+from tracker.mouth_finder import MouthFinder
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
 from tracker.pupils import PupilFinder
 
@@ -46,7 +49,9 @@ class Overlay:
     ``blob`` the lip blob (bool mask of the mouth crop; :meth:`blob_contour` gives its
     outline in frame px); ``mouth_corners`` (2,2);
     ``mouth_centre`` (2,); ``lip_points`` (2,2) outer edges of the upper and lower lip;
-    ``rois`` a list of 4-corner polygons (4,2); ``status`` the frame's status.
+    ``rois`` a list of 4-corner polygons (4,2); ``status`` the frame's status; ``mouth_cue`` what
+    the mouth was found by ("colour": the lips' own colour, "contrast": weak lip colour helped by
+    the gap and the inside).
     """
 
     pupils: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
@@ -61,6 +66,7 @@ class Overlay:
     lip_points: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     rois: list = field(default_factory=list)
     status: str = OK
+    mouth_cue: str = ""
 
     def blob_contour(self) -> np.ndarray:
         """Outline (m,2) of the lip blob in frame px (empty without a blob)."""
@@ -107,6 +113,8 @@ class Overlay:
         if ok(self.pupils):
             cv2.line(img, P(self.pupils[0]), P(self.pupils[1]), (255, 0, 255), 1, cv2.LINE_AA, S)
         cv2.putText(img, self.status, (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.6, colour, 2, cv2.LINE_AA)
+        if self.mouth_cue:
+            cv2.putText(img, f"mouth: {self.mouth_cue}", (8, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 0), 1, cv2.LINE_AA)
         return img
 
 
@@ -165,7 +173,8 @@ class FaceTracker:
             cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius,
             white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level,
         )
-        self.mouth_finder = MouthFinder()
+        # the mouth model's finder; calibrations from before it have the plain lip-blob finder
+        self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LipBlobFinder()
         brow_top = max(BROW_HI * h + (len(p) - c) + 2 for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights))
         gx = int(math.ceil(GAZE_MAX * wi * 0.5))
 
@@ -478,6 +487,7 @@ class FaceTracker:
             ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
+            ov.mouth_cue = getattr(mouth_res, "cue", "") or ("lip colour" if self.cal.mouth_model is None else "")
             jaw = np.array([mcx, mcy]) - rigid_mouth
             self.jaw = np.clip(jaw, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
         else:
@@ -537,6 +547,14 @@ class FaceTracker:
 
     def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray):
         """Crop around the predicted mouth centre (face coordinates) and run the mouth finder."""
+        if self.cal.mouth_model is not None:
+            rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
+            crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
+            self._last_mouth_crop = crop
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
+            if res is not None and res.score < MOUTH_SCORE_OK:
+                res = None
+            return res, (rect[0], rect[1]), rect
         mw, mh = self.mouth_size
         cx, cy = float(centre[0]), float(centre[1])
         rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
