@@ -1,0 +1,649 @@
+"""The eye finder for real faces: iris centre, lids and brow of both eyes in an upright face crop.
+
+Works in the face frame of :class:`tracker.calibration.FaceFrame` (x along the eye line
+towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per eye:
+
+* **iris** — a dark disc of the calibrated radius: the darkness of a disc against the
+  skin around it, the agreement of the grey gradients pointing away from one centre at
+  that radius (radial symmetry), and the normalised correlation with the calibrated
+  iris picture (iris plus the white beside it). Both eyes are searched together: gaze and
+  a badly predicted crop shift both irises alike, so the pair maximises the sum of both
+  score maps with a small slack between the eyes. Eye corners, lash lines, brows and
+  nostrils do not look like a disc of that size on both sides at once.
+* **lids** — the *interior* of the eye is what is not this person's skin (sclera, iris,
+  pupil, lashes; a Mahalanobis distance from the skin colour learned at calibration). The
+  upper and lower lid distances are the lengths of the interior run up and down from the
+  iris centre in a strip of columns through it; soft membership makes them sub-pixel
+  and blurred edges count by halves.
+* **closed eyes** — when the run is short against the calibrated opening, the eye is
+  closed and its point moves to the middle of what is visible of the eye (the slit
+  between the lids), as a landmark tracker does.
+* **brow** — the calibrated vertical cross-section of the brow matched above the eye.
+* **score** — how much the region around the eye looks like the calibrated eye picture
+  (0..1, normalised correlation), the "this is this person's eye" test.
+
+All lengths are crop pixels; lid and brow distances are along up (−y) from the eye point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from tracker.brows import brow_centre, column_profile
+from tracker.pupils import parabola_offset
+
+FORMAT = 1
+
+# geometry, as fractions of the work ipd
+SEARCH_X, SEARCH_Y = 0.22, 0.12
+"""Half-size of the window the iris centre is searched in, around the predicted eye centre."""
+PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
+"""How far one eye's iris may move relative to the other's when both are searched together."""
+LID_RANGE = 0.3
+"""How far the lid runs go up and down from the eye point."""
+SOCKET_HW, SOCKET_HH = 0.3, 0.17
+"""Half-size of the stored eye picture used for the score."""
+BROW_LO, BROW_HI = 0.55, 1.6
+"""Brow search range, × the calibrated brow height."""
+RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
+"""Plausible iris radii (× work ipd) and the one used when none is measurable."""
+NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
+"""Mahalanobis distances from the skin colour at which a pixel starts / is fully eye interior."""
+CLOSED_BELOW = 0.35
+"""An eye whose lid gap is below this fraction of the calibrated one is closed."""
+
+# YCrCb from BGR (linear part of OpenCV's conversion; the offsets cancel in the whitening)
+_YCC = np.array(
+    [[0.114, 0.587, 0.299], [-0.081312, -0.418688, 0.5], [0.5, -0.331264, -0.168736]], dtype=np.float64
+)
+_YCC_FLOOR = np.array([6.0, 2.0, 2.0])
+"""Smallest skin spread (std, grey levels) per YCrCb channel: noise and shading always add this."""
+
+
+class EyeModelError(ValueError):
+    """The calibration crop cannot give an eye model (one-line message)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# small image helpers
+
+
+def _odd(v: float, lo: int = 3) -> int:
+    n = max(int(round(v)), lo)
+    return n if n % 2 else n + 1
+
+
+def disc_kernel(radius: float) -> np.ndarray:
+    """A normalised disc of ``radius`` px with anti-aliased rim (float32, odd square)."""
+    k = int(math.ceil(radius + 0.5))
+    yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
+    w = np.clip(radius + 0.5 - np.hypot(xx, yy), 0.0, 1.0).astype(np.float32)
+    return w / w.sum()
+
+
+def subpixel_cut(grey: np.ndarray, cx: float, cy: float, hw: int, hh: int) -> np.ndarray:
+    """The ``(2hh+1, 2hw+1)`` patch of ``grey`` centred exactly on ``(cx, cy)`` (bilinear, float32)."""
+    M = np.float32([[1, 0, cx - hw], [0, 1, cy - hh]])
+    return cv2.warpAffine(
+        np.asarray(grey, dtype=np.float32), M, (2 * hw + 1, 2 * hh + 1),
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE,
+    )
+
+
+def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) -> float:
+    """Iris radius (px) from the strongest dark-to-light steps left and right of ``centre``.
+
+    The limbus is the largest rise of brightness going outwards along the rows through the
+    centre (a catch-light only makes falls); the two sides are averaged, or the one that is
+    plausible is taken. Falls back to :data:`RADIUS_DEFAULT` × ``work_ipd``.
+    """
+    wi = work_ipd
+    h, w = grey.shape
+    x, y = int(round(centre[0])), int(round(centre[1]))
+    lo, hi = max(int(math.floor(RADIUS_LO * wi)), 2), int(math.ceil(RADIUS_HI * wi)) + 1
+    if not (hi + 1 <= x < w - hi - 1 and 2 <= y < h - 2):
+        return RADIUS_DEFAULT * wi
+    row = grey[y - 2 : y + 3].astype(np.float32).mean(0)
+    row = np.convolve(row, [0.25, 0.5, 0.25], mode="same")
+    d = np.diff(row)  # d[k]: step between k and k+1
+    found = []
+    for seg, sign in ((d[x + lo : x + hi], 1.0), (d[x - hi : x - lo][::-1], -1.0)):
+        s = sign * seg
+        k = int(np.argmax(s))
+        if s[k] <= 4.0:
+            continue
+        off = parabola_offset(s[k - 1], s[k], s[k + 1]) if 0 < k < len(s) - 1 else 0.0
+        found.append(lo + k + off + 0.5)
+    if not found:
+        return RADIUS_DEFAULT * wi
+    r = float(np.mean(found)) if len(found) == 1 or abs(found[0] - found[1]) < 0.3 * max(found) else min(found)
+    return float(np.clip(r, RADIUS_LO * wi, RADIUS_HI * wi))
+
+
+# ---------------------------------------------------------------------------------------------
+# the model
+
+
+@dataclass
+class EyeModel:
+    """What the eye finder learned from the calibration crop (crop px at ``work_ipd``).
+
+    Per eye (lists of two, image-left first): ``radius`` iris radius; ``iris_pictures`` grey
+    picture of the iris and the white beside it (iris at its centre); ``eye_pictures`` grey
+    picture of the whole eye (the score); ``brow_profiles`` / ``brow_centres`` /
+    ``brow_heights`` the brow cross-section through the iris, its middle line's index and
+    its height above the iris; ``lid_open`` the calibrated upper + lower lid distance.
+    ``skin_mean`` / ``skin_cov`` the skin colour (YCrCb, grey levels) around the eyes,
+    ``skin_bgr`` its median BGR (to follow the light); ``skin_offsets`` where (relative to
+    each eye centre) skin was sampled.
+    """
+
+    work_ipd: float
+    radius: list[float]
+    iris_pictures: list[np.ndarray]
+    eye_pictures: list[np.ndarray]
+    brow_profiles: list[np.ndarray]
+    brow_centres: list[float]
+    brow_heights: list[float]
+    lid_open: list[float]
+    skin_mean: np.ndarray
+    skin_cov: np.ndarray
+    skin_bgr: np.ndarray
+    skin_offsets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+    IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
+    """Keys of :meth:`images` (grey pictures, saved as 8-bit PNGs beside the calibration)."""
+
+    def images(self) -> dict[str, np.ndarray]:
+        """The pictures to save as PNGs (uint8 grey), by name."""
+        pics = self.iris_pictures + self.eye_pictures
+        return {k: np.clip(np.rint(p), 0, 255).astype(np.uint8) for k, p in zip(self.IMAGE_NAMES, pics)}
+
+    def to_dict(self) -> dict:
+        """JSON-able description (pictures are in :meth:`images`)."""
+        return {
+            "format": FORMAT,
+            "work_ipd": self.work_ipd,
+            "radius": [float(v) for v in self.radius],
+            "images": list(self.IMAGE_NAMES),
+            "brow_profiles": [np.asarray(p, dtype=float).round(3).tolist() for p in self.brow_profiles],
+            "brow_centres": [float(v) for v in self.brow_centres],
+            "brow_heights": [float(v) for v in self.brow_heights],
+            "lid_open": [float(v) for v in self.lid_open],
+            "skin_mean": np.asarray(self.skin_mean, dtype=float).round(4).tolist(),
+            "skin_cov": np.asarray(self.skin_cov, dtype=float).round(4).tolist(),
+            "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
+            "skin_offsets": np.asarray(self.skin_offsets, dtype=float).round(3).tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict, images: dict[str, np.ndarray]) -> "EyeModel":
+        """Rebuild from :meth:`to_dict` and the pictures of :meth:`images`; :class:`EyeModelError` if malformed."""
+        try:
+            if d.get("format") != FORMAT:
+                raise EyeModelError(f"eye model: unknown format {d.get('format')!r} (need {FORMAT})")
+            pics = []
+            for k in cls.IMAGE_NAMES:
+                if k not in images or images[k] is None:
+                    raise EyeModelError(f"eye model: picture {k!r} is missing")
+                p = np.asarray(images[k], dtype=np.float32)
+                if p.ndim != 2 or p.shape[0] % 2 == 0 or p.shape[1] % 2 == 0:
+                    raise EyeModelError(f"eye model: picture {k!r} must be grey with odd sides, got {p.shape}")
+                pics.append(p)
+            m = cls(
+                work_ipd=float(d["work_ipd"]),
+                radius=[float(v) for v in d["radius"]],
+                iris_pictures=pics[:2],
+                eye_pictures=pics[2:],
+                brow_profiles=[np.asarray(p, dtype=np.float32) for p in d["brow_profiles"]],
+                brow_centres=[float(v) for v in d["brow_centres"]],
+                brow_heights=[float(v) for v in d["brow_heights"]],
+                lid_open=[float(v) for v in d["lid_open"]],
+                skin_mean=np.asarray(d["skin_mean"], dtype=np.float64).reshape(3),
+                skin_cov=np.asarray(d["skin_cov"], dtype=np.float64).reshape(3, 3),
+                skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
+                skin_offsets=np.asarray(d.get("skin_offsets", []), dtype=np.float64).reshape(-1, 2),
+            )
+        except EyeModelError:
+            raise
+        except (KeyError, TypeError, ValueError) as e:
+            raise EyeModelError(f"eye model: malformed ({type(e).__name__}: {e})") from None
+        if len(m.radius) != 2 or len(m.brow_profiles) != 2 or len(m.lid_open) != 2:
+            raise EyeModelError("eye model: every per-eye list must have two entries")
+        return m
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass
+class EyeObservation:
+    """One eye in one frame (crop px).
+
+    ``x, y`` the eye point: the iris centre when the eye is open, the middle of the slit
+    between the lids when it is closed; ``score`` 0..1 how much the eye region looks like
+    the calibrated eye; ``open`` whether the iris is visible; ``upper`` / ``lower`` the lid
+    distances from the eye point along up / down; ``brow`` the brow's middle line above the
+    eye point; ``iris`` the iris centre found (even when closed: where the darkest disc was)
+    and ``radius`` its radius.
+    """
+
+    x: float
+    y: float
+    score: float
+    open: bool
+    upper: float
+    lower: float
+    brow: float
+    iris: tuple[float, float]
+    radius: float
+    brow_score: float = 0.0
+
+    def points(self) -> dict[str, tuple[float, float]]:
+        """Overlay points (crop px): eye point, upper and lower lid, brow."""
+        return {
+            "eye": (self.x, self.y),
+            "upper_lid": (self.x, self.y - self.upper),
+            "lower_lid": (self.x, self.y + self.lower),
+            "brow": (self.x, self.y - self.brow),
+        }
+
+
+@dataclass
+class EyeResult:
+    """Both eyes (image-left first)."""
+
+    eyes: tuple[EyeObservation, EyeObservation]
+
+    @property
+    def score(self) -> float:
+        """The lower of the two eye scores."""
+        return min(e.score for e in self.eyes)
+
+
+# ---------------------------------------------------------------------------------------------
+# learning
+
+
+def calibration_crop(work_ipd: float) -> tuple[int, int, int, int]:
+    """A face-frame rectangle ``(x0, y0, w, h)`` that holds everything :func:`learn_eyes` looks at
+    when the brows sit up to one work ipd above the eyes (a generous crop also works)."""
+    wi = work_ipd
+    return (int(math.floor(-1.05 * wi)), int(math.floor(-1.2 * wi)), int(math.ceil(2.1 * wi)), int(math.ceil(1.7 * wi)))
+
+
+def _skin_offsets(wi: float) -> np.ndarray:
+    """Where skin is sampled relative to each eye centre (crop px): below the eye, under the brow
+    middle is avoided (it may be a brow), beside the eye towards the nose bridge."""
+    return np.array([[-0.12, 0.27], [0.0, 0.3], [0.12, 0.27], [-0.2, 0.2], [0.2, 0.2]]) * wi
+
+
+def _skin_pixels(crop: np.ndarray, centres: np.ndarray, offsets: np.ndarray, half: int) -> np.ndarray:
+    h, w = crop.shape[:2]
+    out = []
+    for c in centres:
+        for o in offsets:
+            x, y = int(round(c[0] + o[0])), int(round(c[1] + o[1]))
+            x0, x1, y0, y1 = max(x - half, 0), min(x + half + 1, w), max(y - half, 0), min(y + half + 1, h)
+            if x1 > x0 and y1 > y0:
+                out.append(crop[y0:y1, x0:x1].reshape(-1, 3))
+    return np.concatenate(out) if out else np.zeros((0, 3), np.uint8)
+
+
+def learn_eyes(
+    crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_crop, work_ipd: float
+) -> EyeModel:
+    """Learn an :class:`EyeModel` from the calibration frame's face crop.
+
+    ``pupils_crop`` (2, 2) the refined iris centres and ``brows_crop`` (2, 2) the brow
+    clicks, crop px, image-left first; the crop is in the face frame of ``work_ipd``.
+    Raises :class:`EyeModelError` only for unusable input (not a BGR crop, eyes outside it).
+    """
+    crop = np.asarray(crop_bgr)
+    if crop.ndim != 3 or crop.shape[2] != 3 or crop.dtype != np.uint8:
+        raise EyeModelError("eye model: the calibration crop must be uint8 BGR")
+    grey = np.asarray(crop_grey, dtype=np.float32)
+    wi = float(work_ipd)
+    pupils = np.asarray(pupils_crop, dtype=np.float64).reshape(2, 2)
+    brows = np.asarray(brows_crop, dtype=np.float64).reshape(2, 2)
+    h, w = grey.shape
+    mx, my = int(math.ceil((SOCKET_HW + 0.05) * wi)), int(math.ceil((LID_RANGE + 0.05) * wi))
+    for p in pupils:
+        if not (mx <= p[0] < w - mx and my <= p[1] < h - my):
+            raise EyeModelError(f"eye model: an eye ({p[0]:.0f}, {p[1]:.0f}) is too close to the crop's edge")
+
+    radius = [iris_radius(grey, tuple(p), wi) for p in pupils]
+    iris_pics, eye_pics = [], []
+    for p, r in zip(pupils, radius):
+        iris_pics.append(subpixel_cut(grey, p[0], p[1], int(round(1.5 * r)), max(int(round(0.8 * r)), 2)))
+        eye_pics.append(subpixel_cut(grey, p[0], p[1], int(round(SOCKET_HW * wi)), int(round(SOCKET_HH * wi))))
+
+    # skin around the eyes
+    offs = _skin_offsets(wi)
+    skin = _skin_pixels(crop, pupils, offs, max(int(round(0.04 * wi)), 1)).astype(np.float64)
+    if len(skin) < 8:
+        raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
+    ycc = skin @ _YCC.T
+    skin_mean = ycc.mean(0)
+    skin_cov = np.cov(ycc.T) + np.diag(_YCC_FLOOR**2)
+    skin_bgr = np.median(skin, axis=0)
+
+    # brows: cross-section through each iris, centred on the brow's middle line
+    brow_profiles, brow_centres, brow_heights = [], [], []
+    half = max(int(round(0.13 * wi)), 4)
+    for (px, py), b in zip(pupils, brows):
+        top = int(math.floor(py - 1.1 * wi))
+        prof = column_profile(grey, px, top, int(py), 2)
+        guess = int(round(b[1] - top))
+        c = brow_centre(prof, min(max(guess, 0), len(prof) - 1), max(int(round(0.08 * wi)), 3))
+        height = py - (top + c)
+        if not (0.08 * wi < height < 1.0 * wi):
+            height = float(np.clip(py - b[1], 0.15 * wi, 0.9 * wi))
+        cy_b = py - height
+        start = int(math.floor(cy_b)) - half
+        brow_profiles.append(column_profile(grey, px, start, start + 2 * half + 1, 2))
+        brow_centres.append(half + (cy_b - math.floor(cy_b)))
+        brow_heights.append(float(height))
+
+    model = EyeModel(
+        work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
+        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin_mean=skin_mean,
+        skin_cov=skin_cov, skin_bgr=skin_bgr, skin_offsets=offs,
+    )
+    # the calibrated lid gap: measured the way the finder measures it
+    f = EyeFinder(model, wi)
+    for i, p in enumerate(pupils):
+        up, down = f.lids(crop, i, (float(p[0]), float(p[1])))
+        model.lid_open[i] = max(up + down, 0.05 * wi)
+    return model
+
+
+# ---------------------------------------------------------------------------------------------
+# finding
+
+
+class EyeFinder:
+    """Find both eyes in a face crop (see the module docstring).
+
+    ``rect`` is the face-frame rectangle ``(x0, y0, w, h)`` (eye centres at ``(±work_ipd/2, 0)``)
+    whose crop holds everything :meth:`find` looks at when the eyes are where predicted.
+    """
+
+    def __init__(self, model: EyeModel, work_ipd: float):
+        self.model = model
+        self.wi = wi = float(work_ipd)
+        if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
+            raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
+        self.sx, self.sy = max(int(round(SEARCH_X * wi)), 2), max(int(round(SEARCH_Y * wi)), 2)
+        self.slack = (max(int(round(PAIR_SLACK_X * wi)), 1), max(int(round(PAIR_SLACK_Y * wi)), 1))
+        self._dilate = np.ones((2 * self.slack[1] + 1, 2 * self.slack[0] + 1), np.uint8)
+        self.radius = [float(r) for r in model.radius]
+        self._disc = [disc_kernel(0.75 * r) for r in self.radius]
+        self._iris = [np.ascontiguousarray(p, dtype=np.float32) for p in model.iris_pictures]
+        self._eye = [np.ascontiguousarray(p, dtype=np.float32) for p in model.eye_pictures]
+        self.pad = [
+            max(int(math.ceil(2.2 * r)) + 2, t.shape[1] // 2 + 1, t.shape[0] // 2 + 1) for r, t in zip(self.radius, self._iris)
+        ]
+        self.lid_range = int(math.ceil(LID_RANGE * wi))
+        self.lid_hw = [max(1, int(round(0.3 * r))) for r in self.radius]
+        # skin: whitening of YCrCb so that |z| is the Mahalanobis distance from the skin
+        L = np.linalg.cholesky(np.linalg.inv(model.skin_cov))  # inv = L L^T
+        self._white = (L.T @ _YCC).astype(np.float64)  # z = white @ bgr - white_mean
+        self._white_mean = L.T @ model.skin_mean
+        self._skin_half = max(int(round(0.04 * wi)), 1)
+        self.brow_lo = [BROW_LO * h for h in model.brow_heights]
+        self.brow_hi = [BROW_HI * h for h in model.brow_heights]
+        self._brow_t = [np.asarray(p, dtype=np.float32).reshape(-1, 1) for p in model.brow_profiles]
+        # crop rectangle
+        hw_e = max(self.sx + self.pad[i] for i in range(2))
+        hh_e = max(self.sy + self.pad[i] for i in range(2))
+        top = max(self.brow_hi[i] + len(model.brow_profiles[i]) for i in range(2)) + self.sy + 3
+        top = max(top, hh_e, self.lid_range + self.sy + 2, SOCKET_HH * wi + self.sy + 2)
+        bottom = max(hh_e, self.lid_range + self.sy + 2, SOCKET_HH * wi + self.sy + 2, 0.32 * wi + self.sy + 2)
+        left = 0.5 * wi + max(hw_e, SOCKET_HW * wi + self.sx + 2, 0.25 * wi + self.sx + 2) + 1
+        self.rect = (int(math.floor(-left)), int(math.floor(-top)), int(math.ceil(2 * left)), int(math.ceil(top + bottom)))
+
+    # ------------------------------------------------------------------ pieces
+    def _window(self, grey: np.ndarray, centre, i: int):
+        """Search window of eye ``i`` (float32) and the crop px of its candidate (0, 0)."""
+        h, w = grey.shape
+        p = self.pad[i]
+        cx, cy = int(round(centre[0])), int(round(centre[1]))
+        x0, y0 = cx - self.sx - p, cy - self.sy - p
+        x1, y1 = cx + self.sx + p + 1, cy + self.sy + p + 1
+        if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
+            win = cv2.copyMakeBorder(
+                grey[max(y0, 0) : min(y1, h), max(x0, 0) : min(x1, w)],
+                max(-y0, 0), max(y1 - h, 0), max(-x0, 0), max(x1 - w, 0), cv2.BORDER_REPLICATE,
+            )
+        else:
+            win = grey[y0:y1, x0:x1]
+        return np.asarray(win, dtype=np.float32), (x0 + p, y0 + p)
+
+    def score_map(self, win: np.ndarray, i: int) -> np.ndarray:
+        """Iris score of every candidate centre of a search window (see the module docstring)."""
+        p, r = self.pad[i], self.radius[i]
+        inner = (slice(p, win.shape[0] - p), slice(p, win.shape[1] - p))
+        sub = win[::2, ::2]
+        k = sub.size // 2
+        level = float(np.partition(sub.ravel(), k)[k])
+        D = cv2.filter2D(win, -1, self._disc[i], borderType=cv2.BORDER_REPLICATE)[inner]
+        dark = np.maximum((level - D) * (1.0 / max(level, 8.0)), 0.0)
+        votes = self._radial_votes(win, r)[inner]
+        t = self._iris[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        ncc = cv2.matchTemplate(win[p - th : win.shape[0] - p + th, p - tw : win.shape[1] - p + tw], t, cv2.TM_CCOEFF_NORMED)
+        return dark * (1.0 + votes) * (1.0 + np.maximum(ncc, 0.0))
+
+    @staticmethod
+    def _radial_votes(win: np.ndarray, r: float) -> np.ndarray:
+        """Radial symmetry at radius ``r``: strong gradients vote for the point ``r`` px against
+        their direction (a dark disc's rim all votes for its centre); blurred, max 1."""
+        gx = cv2.Sobel(win, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(win, cv2.CV_32F, 0, 1, ksize=3)
+        mag = cv2.magnitude(gx, gy)
+        flat = mag.ravel()
+        k = int(0.7 * flat.size)
+        t = float(np.partition(flat, k)[k])
+        idx = np.flatnonzero(flat > t)
+        h, w = win.shape
+        if len(idx) < 3:
+            return np.zeros_like(win)
+        m = flat[idx]
+        ux, uy = gx.ravel()[idx] / m, gy.ravel()[idx] / m
+        ys, xs = np.divmod(idx, w)
+        wt = np.minimum(m, 3.0 * t)
+        acc = np.zeros(h * w, np.float64)
+        for rr in (0.85 * r, r, 1.15 * r):
+            cx = np.rint(xs - rr * ux).astype(np.intp)
+            cy = np.rint(ys - rr * uy).astype(np.intp)
+            ok = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
+            acc += np.bincount(cy[ok] * w + cx[ok], weights=wt[ok], minlength=h * w)
+        acc = cv2.GaussianBlur(acc.reshape(h, w).astype(np.float32), (0, 0), 0.3 * r)
+        return acc * (1.0 / max(float(acc.max()), 1e-6))
+
+    def _not_skin(self, bgr: np.ndarray, gain: np.ndarray | None) -> np.ndarray:
+        """Mahalanobis distance of every pixel of ``bgr`` from the (light-corrected) skin colour."""
+        M = self._white if gain is None else self._white * gain[None, :]
+        M34 = np.concatenate([M, -self._white_mean[:, None]], axis=1).astype(np.float32)
+        z = cv2.transform(np.asarray(bgr, dtype=np.float32), M34)
+        return np.sqrt(np.einsum("...i,...i->...", z, z))
+
+    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
+        """``(upper, lower)`` lid distances (crop px) from ``at`` through eye ``i``: soft lengths
+        of the eye-interior runs up and down a strip of columns through ``at``."""
+        h, w = crop.shape[:2]
+        hw, R = self.lid_hw[i], self.lid_range
+        xi = min(max(int(round(at[0])), hw), w - 1 - hw)
+        yi = min(max(int(round(at[1])), 0), h - 1)
+        y0, y1 = max(yi - R, 0), min(yi + R + 1, h)
+        ns = self._not_skin(crop[y0:y1, xi - hw : xi + hw + 1], gain)
+        e = np.clip((ns.mean(axis=1) - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO)), 0.0, 1.0)
+        c = yi - y0
+        dy = yi - at[1]
+        return max(_run(e[c::-1]) - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+
+    def _gain(self, crop: np.ndarray, centres: np.ndarray) -> np.ndarray | None:
+        """Per-channel gain that brings the skin around the eyes back to its calibrated colour."""
+        px = _skin_pixels(crop, centres, self.model.skin_offsets, self._skin_half)
+        if len(px) < 8:
+            return None
+        med = np.median(px, axis=0).astype(np.float64)
+        g = np.clip(np.asarray(self.model.skin_bgr) / np.maximum(med, 1.0), 0.5, 2.0)
+        return None if np.all(np.abs(g - 1.0) < 0.02) else g
+
+    def _socket_score(self, grey: np.ndarray, at: tuple[float, float], i: int) -> float:
+        """Best normalised correlation of the calibrated eye picture within a few px of ``at``."""
+        t = self._eye[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        s = max(int(round(0.04 * self.wi)), 1)
+        h, w = grey.shape
+        x, y = int(round(at[0])), int(round(at[1]))
+        x0, y0, x1, y1 = x - tw - s, y - th - s, x + tw + s + 1, y + th + s + 1
+        if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
+            return 0.0
+        ncc = cv2.matchTemplate(np.asarray(grey[y0:y1, x0:x1], dtype=np.float32), t, cv2.TM_CCOEFF_NORMED)
+        return float(np.clip(ncc.max(), 0.0, 1.0))
+
+    def _slit(self, crop: np.ndarray, at: tuple[float, float], gain) -> tuple[float, float]:
+        """Centroid of what is not skin around ``at`` (a closed eye: the slit between the lids)."""
+        h, w = crop.shape[:2]
+        hx, hy = int(round(0.22 * self.wi)), int(round(0.1 * self.wi))
+        x, y = at
+        for _ in range(2):
+            xi, yi = int(round(x)), int(round(y))
+            x0, x1, y0, y1 = max(xi - hx, 0), min(xi + hx + 1, w), max(yi - hy, 0), min(yi + hy + 1, h)
+            ns = self._not_skin(crop[y0:y1, x0:x1], gain)
+            e = np.clip((ns - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO)), 0.0, 1.0)
+            tot = float(e.sum())
+            if tot < 1.0:
+                break
+            x = x0 + float((e.sum(axis=0) * np.arange(x1 - x0)).sum()) / tot
+            y = y0 + float((e.sum(axis=1) * np.arange(y1 - y0)).sum()) / tot
+        return x, y
+
+    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
+        px, py = at
+        t = self._brow_t[i]
+        n = len(t)
+        c = self.model.brow_centres[i]
+        top = int(math.floor(py - self.brow_hi[i] - c)) - 1
+        bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
+        prof = column_profile(grey, px, top, bot, 2).reshape(-1, 1)
+        if len(prof) < n + 2:
+            return self.model.brow_heights[i], 0.0
+        score = cv2.matchTemplate(prof, t, cv2.TM_CCOEFF_NORMED).ravel()
+        k = int(np.argmax(score))
+        d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
+        return float(py - (top + k + d + c)), float(score[k])
+
+    def locate_irises(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float]]:
+        """The two iris centres (crop px, sub-pixel) near the predicted eye ``centres``: the best
+        pair of the two score maps, each eye free to move by the slack against the other."""
+        maps, origins = [], []
+        for i in range(2):
+            win, o = self._window(grey, centres[i], i)
+            maps.append(self.score_map(win, i))
+            origins.append(o)
+        J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
+        jy, jx = divmod(int(np.argmax(J)), J.shape[1])
+        sx, sy = self.slack
+        out = []
+        for m, (ox, oy) in zip(maps, origins):
+            ya, xa = max(jy - sy, 0), max(jx - sx, 0)
+            sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
+            ky, kx = divmod(int(np.argmax(sub)), sub.shape[1])
+            ky, kx = ky + ya, kx + xa
+            fx = parabola_offset(m[ky, kx - 1], m[ky, kx], m[ky, kx + 1]) if 0 < kx < m.shape[1] - 1 else 0.0
+            fy = parabola_offset(m[ky - 1, kx], m[ky, kx], m[ky + 1, kx]) if 0 < ky < m.shape[0] - 1 else 0.0
+            out.append((ox + kx + fx, oy + ky + fy))
+        return out
+
+    # ------------------------------------------------------------------ main entry
+    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
+        """Both eyes in a face crop (uint8 BGR and its grey, any dtype), searched around the
+        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
+        centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
+        irises = self.locate_irises(crop_grey, centres)
+        gain = self._gain(crop_bgr, centres)
+        grey = crop_grey
+        eyes = []
+        for i in range(2):
+            iris = irises[i]
+            up, down = self.lids(crop_bgr, i, iris, gain)
+            is_open = up + down >= CLOSED_BELOW * self.model.lid_open[i]
+            pt = iris
+            if not is_open:
+                pt = self._slit(crop_bgr, iris, gain)
+                up, down = self.lids(crop_bgr, i, pt, gain)
+            score = self._socket_score(grey, pt, i)
+            brow, bscore = self._brow(grey, pt, i)
+            eyes.append(EyeObservation(
+                x=float(pt[0]), y=float(pt[1]), score=score, open=bool(is_open), upper=float(up), lower=float(down),
+                brow=brow, iris=(float(iris[0]), float(iris[1])), radius=self.radius[i], brow_score=bscore,
+            ))
+        return EyeResult((eyes[0], eyes[1]))
+
+
+def _run(e: np.ndarray) -> float:
+    """Soft length of the interior run starting at ``e[0]`` (the half of sample 0 beyond the
+    start, then whole samples until two in a row are mostly not interior)."""
+    if not len(e):
+        return 0.0
+    bad = e < 0.5
+    stop = bad[1:-1] & bad[2:] if len(e) > 2 else bad[1:]
+    k = int(np.argmax(stop)) + 1 if stop.any() else len(e)
+    return 0.5 * float(e[0]) + float(e[1:k].sum())
+
+
+# ---------------------------------------------------------------------------------------------
+# calibration help
+
+
+def refine_pupils(
+    frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Snap two clicked pupils (frame px) to the iris centres near them (sub-pixel, frame px).
+
+    Searches within about a fifth of the clicked inter-pupil distance, both eyes together,
+    with the radius measured at the clicks. Returns the clicks unchanged if nothing
+    iris-like is found (a real face is never refused).
+    """
+    grey = np.asarray(frame_grey)
+    if grey.ndim == 3:
+        grey = cv2.cvtColor(grey, cv2.COLOR_BGR2GRAY)
+    from tracker.calibration import FaceFrame
+
+    lp, rp = (float(left[0]), float(left[1])), (float(right[0]), float(right[1]))
+    for _ in range(iterations):
+        ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
+        if ipd < 8:
+            return lp, rp
+        wi = min(ipd, 80.0)
+        ff = FaceFrame.from_pupils(lp, rp, wi)
+        rect = (int(math.floor(-0.9 * wi)), int(math.floor(-0.4 * wi)), int(math.ceil(1.8 * wi)), int(math.ceil(0.8 * wi)))
+        crop = ff.crop(grey, rect).astype(np.float32)
+        o = np.array(rect[:2], dtype=np.float64)
+        centres = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
+        radius = [iris_radius(crop, tuple(c), wi) for c in centres]
+        iris_pics = [subpixel_cut(crop, c[0], c[1], int(round(1.5 * r)), max(int(round(0.8 * r)), 2)) for c, r in zip(centres, radius)]
+        model = EyeModel(
+            work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=[np.zeros((3, 3), np.float32)] * 2,
+            brow_profiles=[np.zeros(3, np.float32)] * 2, brow_centres=[1.0, 1.0], brow_heights=[0.4 * wi] * 2,
+            lid_open=[1.0, 1.0], skin_mean=np.zeros(3), skin_cov=np.eye(3), skin_bgr=np.ones(3),
+        )
+        f = EyeFinder(model, wi)
+        f.sx, f.sy = max(int(round(0.12 * wi)), 2), max(int(round(0.08 * wi)), 2)
+        found = np.array(f.locate_irises(crop, centres)) + o
+        img = ff.to_image(np.array(found))
+        nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
+        nipd = math.hypot(nr[0] - nl[0], nr[1] - nl[1])
+        if not (0.8 * ipd < nipd < 1.25 * ipd):
+            return lp, rp
+        lp, rp = nl, nr
+    return lp, rp
