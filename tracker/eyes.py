@@ -51,8 +51,6 @@ BROW_LO, BROW_HI = 0.55, 1.6
 """Brow search range, × the calibrated brow height."""
 RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
 """Plausible iris radii (× work ipd) and the one used when none is measurable."""
-NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
-"""Mahalanobis distances from the skin colour at which a pixel starts / is fully eye interior."""
 CLOSED_BELOW = 0.35
 """An eye whose lid gap is below this fraction of the calibrated one is closed."""
 
@@ -125,6 +123,77 @@ def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) 
 
 
 # ---------------------------------------------------------------------------------------------
+# colours: what is the eye's interior
+
+
+NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
+"""Mahalanobis distances from the nearest skin colour at which a pixel starts to be / is fully
+the eye's interior."""
+
+
+@dataclass
+class EyeColours:
+    """Gaussian colour components (YCrCb, grey levels) of the skin around the eyes, learned
+    at calibration: below the eyes, on the upper lids (make-up included), between the eyes.
+
+    :meth:`interior` ramps each pixel's Mahalanobis distance from the nearest component
+    from :data:`NOT_SKIN_LO` (skin) to :data:`NOT_SKIN_HI` (surely not skin): sclera, iris,
+    pupil and lashes are far from every skin colour, lids are not.
+    """
+
+    names: list[str]
+    means: np.ndarray  # (k, 3)
+    covs: np.ndarray  # (k, 3, 3)
+
+    def __post_init__(self) -> None:
+        self.means = np.asarray(self.means, dtype=np.float64).reshape(-1, 3)
+        self.covs = np.asarray(self.covs, dtype=np.float64).reshape(-1, 3, 3)
+        if not len(self.means) or not (len(self.means) == len(self.covs) == len(self.names)):
+            raise EyeModelError("eye colours: need at least one skin component with a mean and a covariance each")
+        ws, cs = [], []
+        for mu, cov in zip(self.means, self.covs):
+            L = np.linalg.cholesky(np.linalg.inv(cov))  # z = L^T (ycc - mu) is whitened
+            ws.append(L.T @ _YCC)
+            cs.append(L.T @ mu)
+        self._W = np.concatenate(ws).astype(np.float32)  # (3k, 3)
+        self._c = np.concatenate(cs).astype(np.float32)
+        self._starts = np.arange(0, 3 * len(self.means), 3)
+
+    def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
+        """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel.
+
+        ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration).
+        """
+        x = np.asarray(bgr, dtype=np.float32).reshape(-1, 3)
+        W = self._W if gain is None else self._W * np.asarray(gain, dtype=np.float32)[None, :]
+        z = x @ W.T - self._c
+        d2 = np.add.reduceat(z * z, self._starts, axis=1).min(axis=1)
+        e = (np.sqrt(d2) - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO))
+        return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
+
+    def to_dict(self) -> dict:
+        return {"names": list(self.names), "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "EyeColours":
+        return cls([str(n) for n in d["names"]], np.asarray(d["means"]), np.asarray(d["covs"]))
+
+    @classmethod
+    def fit(cls, groups: dict[str, np.ndarray]) -> "EyeColours":
+        """One component per named group of BGR skin pixels; groups of fewer than 6 are left out."""
+        names, means, covs = [], [], []
+        for name, px in groups.items():
+            px = np.asarray(px, dtype=np.float64).reshape(-1, 3)
+            if len(px) < 6:
+                continue
+            ycc = px @ _YCC.T
+            names.append(name)
+            means.append(ycc.mean(0))
+            covs.append(np.cov(ycc.T) + np.diag(_YCC_FLOOR**2))
+        return cls(names, np.array(means).reshape(-1, 3), np.array(covs).reshape(-1, 3, 3))
+
+
+# ---------------------------------------------------------------------------------------------
 # the model
 
 
@@ -137,9 +206,9 @@ class EyeModel:
     picture of the whole eye (the score); ``brow_profiles`` / ``brow_centres`` /
     ``brow_heights`` the brow cross-section through the iris, its middle line's index and
     its height above the iris; ``lid_open`` the calibrated upper + lower lid distance.
-    ``skin_mean`` / ``skin_cov`` the skin colour (YCrCb, grey levels) around the eyes,
-    ``skin_bgr`` its median BGR (to follow the light); ``skin_offsets`` where (relative to
-    each eye centre) skin was sampled.
+    ``colours`` the skin and interior colour components; ``skin_bgr`` the median BGR of the
+    skin below the eyes (to follow the light) and ``skin_offsets`` where (relative to each
+    eye centre) that skin was sampled.
     """
 
     work_ipd: float
@@ -150,8 +219,7 @@ class EyeModel:
     brow_centres: list[float]
     brow_heights: list[float]
     lid_open: list[float]
-    skin_mean: np.ndarray
-    skin_cov: np.ndarray
+    colours: EyeColours
     skin_bgr: np.ndarray
     skin_offsets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
@@ -174,8 +242,7 @@ class EyeModel:
             "brow_centres": [float(v) for v in self.brow_centres],
             "brow_heights": [float(v) for v in self.brow_heights],
             "lid_open": [float(v) for v in self.lid_open],
-            "skin_mean": np.asarray(self.skin_mean, dtype=float).round(4).tolist(),
-            "skin_cov": np.asarray(self.skin_cov, dtype=float).round(4).tolist(),
+            "colours": self.colours.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
             "skin_offsets": np.asarray(self.skin_offsets, dtype=float).round(3).tolist(),
         }
@@ -203,8 +270,7 @@ class EyeModel:
                 brow_centres=[float(v) for v in d["brow_centres"]],
                 brow_heights=[float(v) for v in d["brow_heights"]],
                 lid_open=[float(v) for v in d["lid_open"]],
-                skin_mean=np.asarray(d["skin_mean"], dtype=np.float64).reshape(3),
-                skin_cov=np.asarray(d["skin_cov"], dtype=np.float64).reshape(3, 3),
+                colours=EyeColours.from_dict(d["colours"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
                 skin_offsets=np.asarray(d.get("skin_offsets", []), dtype=np.float64).reshape(-1, 2),
             )
@@ -295,6 +361,21 @@ def _skin_pixels(crop: np.ndarray, centres: np.ndarray, offsets: np.ndarray, hal
     return np.concatenate(out) if out else np.zeros((0, 3), np.uint8)
 
 
+def _colour_groups(crop, pupils, radius, brow_heights, skin_below, wi) -> dict:
+    """BGR skin samples of the calibration crop for :class:`EyeColours`: below the eyes, the
+    upper lids (a third of the way from the iris top to the brow) and between the eyes."""
+    lid = []
+    for (px, py), r, hb in zip(pupils, radius, brow_heights):
+        xi = int(round(px))
+        ly = int(round(py - (r + 0.35 * max(hb - r, 0.0))))
+        hx = max(int(round(0.1 * wi)), 2)
+        lid.append(crop[max(ly - 1, 0) : ly + 2, max(xi - hx, 0) : xi + hx + 1].reshape(-1, 3))
+    mx, my = 0.5 * (pupils[0] + pupils[1])
+    hx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
+    bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - hx, 0) : int(round(mx)) + hx + 1].reshape(-1, 3)
+    return {"skin below": skin_below, "upper lid": np.concatenate(lid), "between the eyes": bridge}
+
+
 def learn_eyes(
     crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_crop, work_ipd: float
 ) -> EyeModel:
@@ -323,14 +404,11 @@ def learn_eyes(
         iris_pics.append(subpixel_cut(grey, p[0], p[1], int(round(1.5 * r)), max(int(round(0.8 * r)), 2)))
         eye_pics.append(subpixel_cut(grey, p[0], p[1], int(round(SOCKET_HW * wi)), int(round(SOCKET_HH * wi))))
 
-    # skin around the eyes
+    # skin below the eyes (also what the light is followed on)
     offs = _skin_offsets(wi)
     skin = _skin_pixels(crop, pupils, offs, max(int(round(0.04 * wi)), 1)).astype(np.float64)
     if len(skin) < 8:
         raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
-    ycc = skin @ _YCC.T
-    skin_mean = ycc.mean(0)
-    skin_cov = np.cov(ycc.T) + np.diag(_YCC_FLOOR**2)
     skin_bgr = np.median(skin, axis=0)
 
     # brows: cross-section through each iris, centred on the brow's middle line
@@ -350,10 +428,11 @@ def learn_eyes(
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
+    colours = EyeColours.fit(_colour_groups(crop, pupils, radius, brow_heights, skin, wi))
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
-        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin_mean=skin_mean,
-        skin_cov=skin_cov, skin_bgr=skin_bgr, skin_offsets=offs,
+        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], colours=colours,
+        skin_bgr=skin_bgr, skin_offsets=offs,
     )
     # the calibrated lid gap: measured the way the finder measures it
     f = EyeFinder(model, wi)
@@ -391,10 +470,7 @@ class EyeFinder:
         ]
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(0.3 * r))) for r in self.radius]
-        # skin: whitening of YCrCb so that |z| is the Mahalanobis distance from the skin
-        L = np.linalg.cholesky(np.linalg.inv(model.skin_cov))  # inv = L L^T
-        self._white = (L.T @ _YCC).astype(np.float64)  # z = white @ bgr - white_mean
-        self._white_mean = L.T @ model.skin_mean
+        self.colours = model.colours
         self._skin_half = max(int(round(0.04 * wi)), 1)
         self.brow_lo = [BROW_LO * h for h in model.brow_heights]
         self.brow_hi = [BROW_HI * h for h in model.brow_heights]
@@ -467,13 +543,6 @@ class EyeFinder:
         acc = cv2.GaussianBlur(acc.reshape(h, w).astype(np.float32), (0, 0), 0.3 * r)
         return acc * (1.0 / max(float(acc.max()), 1e-6))
 
-    def _not_skin(self, bgr: np.ndarray, gain: np.ndarray | None) -> np.ndarray:
-        """Mahalanobis distance of every pixel of ``bgr`` from the (light-corrected) skin colour."""
-        M = self._white if gain is None else self._white * gain[None, :]
-        M34 = np.concatenate([M, -self._white_mean[:, None]], axis=1).astype(np.float32)
-        z = cv2.transform(np.asarray(bgr, dtype=np.float32), M34)
-        return np.sqrt(np.einsum("...i,...i->...", z, z))
-
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` through eye ``i``: soft lengths
         of the eye-interior runs up and down a strip of columns through ``at``."""
@@ -482,8 +551,7 @@ class EyeFinder:
         xi = min(max(int(round(at[0])), hw), w - 1 - hw)
         yi = min(max(int(round(at[1])), 0), h - 1)
         y0, y1 = max(yi - R, 0), min(yi + R + 1, h)
-        ns = self._not_skin(crop[y0:y1, xi - hw : xi + hw + 1], gain)
-        e = np.clip((ns.mean(axis=1) - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO)), 0.0, 1.0)
+        e = self.colours.interior(crop[y0:y1, xi - hw : xi + hw + 1], gain).mean(axis=1)
         c = yi - y0
         dy = yi - at[1]
         return max(_run(e[c::-1]) - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
@@ -518,8 +586,7 @@ class EyeFinder:
         for _ in range(2):
             xi, yi = int(round(x)), int(round(y))
             x0, x1, y0, y1 = max(xi - hx, 0), min(xi + hx + 1, w), max(yi - hy, 0), min(yi + hy + 1, h)
-            ns = self._not_skin(crop[y0:y1, x0:x1], gain)
-            e = np.clip((ns - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO)), 0.0, 1.0)
+            e = self.colours.interior(crop[y0:y1, x0:x1], gain)
             tot = float(e.sum())
             if tot < 1.0:
                 break
@@ -605,6 +672,11 @@ def _run(e: np.ndarray) -> float:
 # calibration help
 
 
+_NO_COLOURS = EyeColours(["skin"], np.zeros((1, 3)), np.array([np.eye(3)]))
+"""Placeholder colours of the throw-away model :func:`refine_pupils` searches irises with
+(it never looks at lids)."""
+
+
 def refine_pupils(
     frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
 ) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -635,7 +707,7 @@ def refine_pupils(
         model = EyeModel(
             work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=[np.zeros((3, 3), np.float32)] * 2,
             brow_profiles=[np.zeros(3, np.float32)] * 2, brow_centres=[1.0, 1.0], brow_heights=[0.4 * wi] * 2,
-            lid_open=[1.0, 1.0], skin_mean=np.zeros(3), skin_cov=np.eye(3), skin_bgr=np.ones(3),
+            lid_open=[1.0, 1.0], colours=_NO_COLOURS, skin_bgr=np.ones(3),
         )
         f = EyeFinder(model, wi)
         f.sx, f.sy = max(int(round(0.12 * wi)), 2), max(int(round(0.08 * wi)), 2)
