@@ -45,6 +45,9 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move relative to the other's when both are searched together."""
 LID_RANGE = 0.3
 """How far the lid runs go up and down from the eye point."""
+LID_HW = 0.3
+LID_AT_MIDDLE = False
+MIDDLE_RANGE = 0.32
 SOCKET_HW, SOCKET_HH = 0.3, 0.17
 """Half-size of the stored eye picture used for the score."""
 BROW_LO, BROW_HI = 0.55, 1.6
@@ -131,6 +134,15 @@ NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
 the eye's interior."""
 
 
+SHADES = ()
+POOL = True
+FLOOR = (2.0, 1.0, 1.0)
+TRIM = 100.0
+LEVELS = False
+LEVEL_Q = (95.0, 10.0)
+"""Shading factors of the extra skin components: the same skin, darker (an eye socket in shadow)."""
+
+
 @dataclass
 class EyeColours:
     """Gaussian colour components (YCrCb, grey levels) of the skin around the eyes, learned
@@ -144,6 +156,8 @@ class EyeColours:
     names: list[str]
     means: np.ndarray  # (k, 3)
     covs: np.ndarray  # (k, 3, 3)
+    lo: float = NOT_SKIN_LO
+    hi: float = NOT_SKIN_HI
 
     def __post_init__(self) -> None:
         self.means = np.asarray(self.means, dtype=np.float64).reshape(-1, 3)
@@ -168,28 +182,66 @@ class EyeColours:
         W = self._W if gain is None else self._W * np.asarray(gain, dtype=np.float32)[None, :]
         z = x @ W.T - self._c
         d2 = np.add.reduceat(z * z, self._starts, axis=1).min(axis=1)
-        e = (np.sqrt(d2) - NOT_SKIN_LO) * (1.0 / (NOT_SKIN_HI - NOT_SKIN_LO))
+        e = (np.sqrt(d2) - self.lo) * (1.0 / (self.hi - self.lo))
         return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
 
+    def distance(self, bgr: np.ndarray) -> np.ndarray:
+        """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the nearest skin component."""
+        z = np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W.T - self._c
+        return np.sqrt(np.add.reduceat(z * z, self._starts, axis=1).min(axis=1))
+
+    def set_levels(self, skin: np.ndarray, interior: np.ndarray) -> None:
+        """Put the interior ramp between the skin's spread and the interior's: from the 95th
+        percentile of the skin samples' distances to the 10th of the interior's (at least
+        one unit above), within the defaults' neighbourhood."""
+        if not LEVELS:
+            return
+        ds, di = self.distance(skin), self.distance(interior)
+        lo = float(np.clip(np.percentile(ds, LEVEL_Q[0]), 1.5, 4.0)) if len(ds) else NOT_SKIN_LO
+        hi = float(np.percentile(di, LEVEL_Q[1])) if len(di) else NOT_SKIN_HI
+        self.lo, self.hi = lo, float(np.clip(hi, lo + 1.0, lo + 6.0))
+
     def to_dict(self) -> dict:
-        return {"names": list(self.names), "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist()}
+        return {"names": list(self.names), "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist(),
+                "levels": [self.lo, self.hi]}
 
     @classmethod
     def from_dict(cls, d: dict) -> "EyeColours":
-        return cls([str(n) for n in d["names"]], np.asarray(d["means"]), np.asarray(d["covs"]))
+        lo, hi = (float(v) for v in d.get("levels", (NOT_SKIN_LO, NOT_SKIN_HI)))
+        return cls([str(n) for n in d["names"]], np.asarray(d["means"]), np.asarray(d["covs"]), lo, hi)
 
     @classmethod
-    def fit(cls, groups: dict[str, np.ndarray]) -> "EyeColours":
-        """One component per named group of BGR skin pixels; groups of fewer than 6 are left out."""
+    def fit(cls, groups: dict[str, np.ndarray], interior: np.ndarray, doubtful: tuple[str, ...] = ()) -> "EyeColours":
+        """One component per named group of BGR skin pixels.
+
+        Each group is trimmed to the 75 % of its pixels nearest its median (a patch that
+        caught a lash or a shadow keeps its skin); a group of fewer than 6 pixels, or a
+        ``doubtful`` one whose component would call the ``interior`` colours (BGR, e.g. the
+        iris) skin, is left out.
+        """
+        inner = np.asarray(interior, dtype=np.float64).reshape(-1, 3) @ _YCC.T
         names, means, covs = [], [], []
+        if POOL:
+            groups = {"skin": np.concatenate([np.asarray(v).reshape(-1, 3) for v in groups.values()])}
         for name, px in groups.items():
-            px = np.asarray(px, dtype=np.float64).reshape(-1, 3)
-            if len(px) < 6:
+            ycc = np.asarray(px, dtype=np.float64).reshape(-1, 3) @ _YCC.T
+            if len(ycc) < 6:
                 continue
-            ycc = px @ _YCC.T
-            names.append(name)
-            means.append(ycc.mean(0))
-            covs.append(np.cov(ycc.T) + np.diag(_YCC_FLOOR**2))
+            d = np.abs(ycc - np.median(ycc, axis=0)) / _YCC_FLOOR
+            dist = d.max(axis=1)
+            ycc = ycc[dist <= np.percentile(dist, TRIM)]
+            mu, cov0 = ycc.mean(0), np.cov(ycc.T)
+            for shade in (1.0,) + SHADES:
+                m, cov = shade * mu, shade * shade * cov0 + np.diag(np.asarray(FLOOR) ** 2)
+                if (name in doubtful or shade != 1.0) and len(inner):
+                    z = (inner - m) @ np.linalg.inv(cov)
+                    if np.median(np.sqrt(np.einsum("ni,ni->n", z, inner - m))) < NOT_SKIN_HI + 1.0:
+                        continue
+                names.append(name if shade == 1.0 else f"{name} in shade")
+                means.append(m)
+                covs.append(cov)
+        if not names:
+            raise EyeModelError("eye model: the skin around the eyes looks like the irises")
         return cls(names, np.array(means).reshape(-1, 3), np.array(covs).reshape(-1, 3, 3))
 
 
@@ -361,19 +413,44 @@ def _skin_pixels(crop: np.ndarray, centres: np.ndarray, offsets: np.ndarray, hal
     return np.concatenate(out) if out else np.zeros((0, 3), np.uint8)
 
 
-def _colour_groups(crop, pupils, radius, brow_heights, skin_below, wi) -> dict:
-    """BGR skin samples of the calibration crop for :class:`EyeColours`: below the eyes, the
-    upper lids (a third of the way from the iris top to the brow) and between the eyes."""
-    lid = []
+BAND = dict(below=(0.15, 0.3), above=(0.14, 0.3), half=0.15)
+
+
+def _colour_groups(crop, pupils, radius, brow_heights, wi) -> tuple[dict, np.ndarray, np.ndarray]:
+    """BGR samples of the calibration crop for :class:`EyeColours`.
+
+    Skin groups: a band below each eye, a band above it (up to the brow's lower edge) and
+    the bridge between the eyes. Also the irises' middles and the sclera beside them (the
+    interior, which no skin component may claim).
+    """
+    h, w = crop.shape[:2]
+    below, above, iris, sclera = [], [], [], []
+    grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    hx = max(int(round(BAND["half"] * wi)), 2)
     for (px, py), r, hb in zip(pupils, radius, brow_heights):
-        xi = int(round(px))
-        ly = int(round(py - (r + 0.35 * max(hb - r, 0.0))))
-        hx = max(int(round(0.1 * wi)), 2)
-        lid.append(crop[max(ly - 1, 0) : ly + 2, max(xi - hx, 0) : xi + hx + 1].reshape(-1, 3))
+        xi, yi = int(round(px)), int(round(py))
+        x0, x1 = max(xi - hx, 0), min(xi + hx + 1, w)
+        b0, b1 = int(round(py + BAND["below"][0] * wi)), int(round(py + BAND["below"][1] * wi)) + 1
+        below.append(crop[max(b0, 0) : min(b1, h), x0:x1].reshape(-1, 3))
+        a1 = int(round(py - BAND["above"][0] * wi))
+        a0 = int(round(py - min(BAND["above"][1] * wi, hb - 0.08 * wi)))
+        a0 = min(a0, a1 - 2)
+        above.append(crop[max(a0, 0) : max(a1, 0), x0:x1].reshape(-1, 3))
+        k = max(int(round(0.4 * r)), 1)
+        iris.append(crop[yi - k : yi + k + 1, xi - k : xi + k + 1].reshape(-1, 3))
+        sy = max(int(round(0.2 * r)), 1)
+        sa, sb = int(round(1.4 * r)), int(round(1.4 * r + 0.08 * wi))
+        ig = float(grey[yi - k : yi + k + 1, xi - k : xi + k + 1].mean())
+        for c0, c1 in ((xi - sb, xi - sa), (xi + sa, xi + sb)):
+            c0, c1 = max(c0, 0), min(c1 + 1, w)
+            pix = crop[yi - sy : yi + sy + 1, c0:c1].reshape(-1, 3)
+            g = grey[yi - sy : yi + sy + 1, c0:c1].ravel()
+            sclera.append(pix[g > ig + 20.0])
     mx, my = 0.5 * (pupils[0] + pupils[1])
-    hx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
-    bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - hx, 0) : int(round(mx)) + hx + 1].reshape(-1, 3)
-    return {"skin below": skin_below, "upper lid": np.concatenate(lid), "between the eyes": bridge}
+    bx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
+    bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - bx, 0) : int(round(mx)) + bx + 1].reshape(-1, 3)
+    skin = {"below the eyes": np.concatenate(below), "above the eyes": np.concatenate(above), "between the eyes": bridge}
+    return skin, np.concatenate(iris), np.concatenate(sclera)
 
 
 def learn_eyes(
@@ -428,7 +505,9 @@ def learn_eyes(
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
-    colours = EyeColours.fit(_colour_groups(crop, pupils, radius, brow_heights, skin, wi))
+    groups, iris_px, sclera_px = _colour_groups(crop, pupils, radius, brow_heights, wi)
+    colours = EyeColours.fit(groups, iris_px, doubtful=("above the eyes",))
+    colours.set_levels(np.concatenate(list(groups.values())), np.concatenate([iris_px, sclera_px]))
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], colours=colours,
@@ -469,7 +548,7 @@ class EyeFinder:
             max(int(math.ceil(2.2 * r)) + 2, t.shape[1] // 2 + 1, t.shape[0] // 2 + 1) for r, t in zip(self.radius, self._iris)
         ]
         self.lid_range = int(math.ceil(LID_RANGE * wi))
-        self.lid_hw = [max(1, int(round(0.3 * r))) for r in self.radius]
+        self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self.colours = model.colours
         self._skin_half = max(int(round(0.04 * wi)), 1)
         self.brow_lo = [BROW_LO * h for h in model.brow_heights]
@@ -543,12 +622,29 @@ class EyeFinder:
         acc = cv2.GaussianBlur(acc.reshape(h, w).astype(np.float32), (0, 0), 0.3 * r)
         return acc * (1.0 / max(float(acc.max()), 1e-6))
 
-    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
-        """``(upper, lower)`` lid distances (crop px) from ``at`` through eye ``i``: soft lengths
-        of the eye-interior runs up and down a strip of columns through ``at``."""
+    def middle(self, crop: np.ndarray, at: tuple[float, float], gain: np.ndarray | None = None) -> float:
+        """x (crop px) of the middle of the visible eye on the row of ``at``: halfway between the
+        ends of the interior run left and right of it (``at[0]`` when a run reaches its limit)."""
+        h, w = crop.shape[:2]
+        H = int(round(MIDDLE_RANGE * self.wi))
+        xi, yi = int(round(at[0])), min(max(int(round(at[1])), 1), h - 2)
+        x0, x1 = max(xi - H, 0), min(xi + H + 1, w)
+        e = self.colours.interior(crop[yi - 1 : yi + 2, x0:x1], gain).mean(axis=0)
+        c = xi - x0
+        left, right = _run(e[c::-1]), _run(e[c:])
+        if left >= c - 1 or right >= x1 - xi - 2:
+            return float(at[0])
+        return float(xi + 0.5 * (right - left))
+
+    def lids(
+        self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None, column: float | None = None
+    ) -> tuple[float, float]:
+        """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: soft lengths of the
+        eye-interior runs up and down a strip of columns through ``column`` (default ``at[0]``),
+        starting on the row of ``at``."""
         h, w = crop.shape[:2]
         hw, R = self.lid_hw[i], self.lid_range
-        xi = min(max(int(round(at[0])), hw), w - 1 - hw)
+        xi = min(max(int(round(at[0] if column is None else column)), hw), w - 1 - hw)
         yi = min(max(int(round(at[1])), 0), h - 1)
         y0, y1 = max(yi - R, 0), min(yi + R + 1, h)
         e = self.colours.interior(crop[y0:y1, xi - hw : xi + hw + 1], gain).mean(axis=1)
@@ -642,12 +738,12 @@ class EyeFinder:
         eyes = []
         for i in range(2):
             iris = irises[i]
-            up, down = self.lids(crop_bgr, i, iris, gain)
+            up, down = self.lids(crop_bgr, i, iris, gain, self.middle(crop_bgr, iris, gain) if LID_AT_MIDDLE else None)
             is_open = up + down >= CLOSED_BELOW * self.model.lid_open[i]
             pt = iris
             if not is_open:
                 pt = self._slit(crop_bgr, iris, gain)
-                up, down = self.lids(crop_bgr, i, pt, gain)
+                up, down = self.lids(crop_bgr, i, pt, gain, self.middle(crop_bgr, pt, gain) if LID_AT_MIDDLE else None)
             score = self._socket_score(grey, pt, i)
             brow, bscore = self._brow(grey, pt, i)
             eyes.append(EyeObservation(
@@ -657,11 +753,17 @@ class EyeFinder:
         return EyeResult((eyes[0], eyes[1]))
 
 
+RUN_MODE = "run"
+RUN_GAIN = 2.0
 def _run(e: np.ndarray) -> float:
-    """Soft length of the interior run starting at ``e[0]`` (the half of sample 0 beyond the
-    start, then whole samples until two in a row are mostly not interior)."""
+    """Soft length of the interior run starting at ``e[0]``: each sample counts as much as it
+    and every sample before it are interior (membership doubled, so half-interior counts
+    fully); the start sample counts by half (the run starts in its middle)."""
     if not len(e):
         return 0.0
+    if RUN_MODE == "product":
+        s = np.cumprod(np.minimum(RUN_GAIN * e, 1.0))
+        return float(s.sum() - 0.5 * s[0])
     bad = e < 0.5
     stop = bad[1:-1] & bad[2:] if len(e) > 2 else bad[1:]
     k = int(np.argmax(stop)) + 1 if stop.any() else len(e)
