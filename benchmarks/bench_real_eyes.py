@@ -44,6 +44,10 @@ OUT = Path(__file__).resolve().parents[1] / "out" / "real_eyes"
 CLIPS = ("expr_d0", "expr_d3", "expr_d6", "expr_d10", "expr_d11", "expr_d18", "expr_d19", "talk_a", "talk_b")
 QUICK_CLIPS = ("expr_d0", "expr_d19")
 TARGETS = {"iris_med": 3.0, "iris_p95": 8.0, "roll": 1.5, "r_eye": 0.7, "r_brow": 0.6}
+PEER_PIXEL_CENTRE = 0.5
+"""The peer's coordinates put a pixel's centre at +0.5 (its coordinates are fractions of the
+image size, 0 at the image's left edge); ours put it at 0. Its points are shifted by this
+much before comparing (the iris x offsets of both eyes on all nine clips average +0.5 px)."""
 WRONG_PLACES = ((0.0, 0.65), (0.0, -0.45), (-0.55, 0.45), (0.55, 0.45), (1.0, 0.0), (0.0, 1.1))
 """Crop offsets (× work ipd, face frame) that put the eye windows on the nose, the brows,
 the cheeks, beside the face and on the mouth."""
@@ -81,7 +85,7 @@ def load_clip(name: str) -> RealClip:
     with open(REAL / f"{name}.points.csv") as f:
         rows = list(csv.DictReader(f))
     keys = sorted({k[:-2] for k in rows[0] if k.endswith("_x")})
-    points = {k: np.array([[float(r[k + "_x"]), float(r[k + "_y"])] for r in rows]) for k in keys}
+    points = {k: np.array([[float(r[k + "_x"]), float(r[k + "_y"])] for r in rows]) - PEER_PIXEL_CENTRE for k in keys}
     with open(REAL / f"{name}.mp.csv") as f:
         rows = list(csv.DictReader(f))
     peer = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}

@@ -47,6 +47,7 @@ LID_RANGE = 0.3
 """How far the lid runs go up and down from the eye point."""
 LID_HW = 0.3
 LID_AT_MIDDLE = False
+VISIBLE_CENTROID = False
 MIDDLE_RANGE = 0.32
 SOCKET_HW, SOCKET_HH = 0.3, 0.17
 """Half-size of the stored eye picture used for the score."""
@@ -134,12 +135,12 @@ NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
 the eye's interior."""
 
 
-SHADES = ()
 POOL = True
 FLOOR = (2.0, 1.0, 1.0)
 TRIM = 100.0
 LEVELS = False
 LEVEL_Q = (95.0, 10.0)
+DARK_MIN = 30.0
 """Shading factors of the extra skin components: the same skin, darker (an eye socket in shadow)."""
 
 
@@ -158,6 +159,8 @@ class EyeColours:
     covs: np.ndarray  # (k, 3, 3)
     lo: float = NOT_SKIN_LO
     hi: float = NOT_SKIN_HI
+    dark: float = -1.0
+    dark_ramp: float = 1.0
 
     def __post_init__(self) -> None:
         self.means = np.asarray(self.means, dtype=np.float64).reshape(-1, 3)
@@ -183,7 +186,19 @@ class EyeColours:
         z = x @ W.T - self._c
         d2 = np.add.reduceat(z * z, self._starts, axis=1).min(axis=1)
         e = (np.sqrt(d2) - self.lo) * (1.0 / (self.hi - self.lo))
+        if self.dark > 0:
+            y = x @ (_YCC[0].astype(np.float32) if gain is None else (_YCC[0] * gain).astype(np.float32))
+            e = np.maximum(e, (self.dark - y) * (1.0 / self.dark_ramp) + 0.5)
         return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
+
+    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
+        """Also count as interior what is much darker than any skin (a dark iris, the pupil,
+        lashes): half-way between the iris's brightness and the darkest skin's, when the two
+        differ by at least :data:`DARK_MIN` grey levels."""
+        yi = float(np.median(np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC[0]))
+        ys = min(float(np.percentile(np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0], 10)) for g in skin if len(g))
+        if ys - yi >= DARK_MIN:
+            self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), 0.25 * (ys - yi)
 
     def distance(self, bgr: np.ndarray) -> np.ndarray:
         """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the nearest skin component."""
@@ -203,45 +218,45 @@ class EyeColours:
 
     def to_dict(self) -> dict:
         return {"names": list(self.names), "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist(),
-                "levels": [self.lo, self.hi]}
+                "levels": [self.lo, self.hi], "dark": [self.dark, self.dark_ramp]}
 
     @classmethod
     def from_dict(cls, d: dict) -> "EyeColours":
         lo, hi = (float(v) for v in d.get("levels", (NOT_SKIN_LO, NOT_SKIN_HI)))
-        return cls([str(n) for n in d["names"]], np.asarray(d["means"]), np.asarray(d["covs"]), lo, hi)
+        dk, dr = (float(v) for v in d.get("dark", (-1.0, 1.0)))
+        return cls([str(n) for n in d["names"]], np.asarray(d["means"]), np.asarray(d["covs"]), lo, hi, dk, dr)
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], interior: np.ndarray, doubtful: tuple[str, ...] = ()) -> "EyeColours":
-        """One component per named group of BGR skin pixels.
+        """Skin components from named groups of BGR skin pixels.
 
-        Each group is trimmed to the 75 % of its pixels nearest its median (a patch that
-        caught a lash or a shadow keeps its skin); a group of fewer than 6 pixels, or a
+        Each group is trimmed to the :data:`TRIM` % of its pixels nearest its median (a patch
+        that caught a lash or a shadow keeps its skin); a group of fewer than 6 pixels, or a
         ``doubtful`` one whose component would call the ``interior`` colours (BGR, e.g. the
-        iris) skin, is left out.
+        irises) skin, is left out. With :data:`POOL` the groups left make one component.
         """
         inner = np.asarray(interior, dtype=np.float64).reshape(-1, 3) @ _YCC.T
-        names, means, covs = [], [], []
-        if POOL:
-            groups = {"skin": np.concatenate([np.asarray(v).reshape(-1, 3) for v in groups.values()])}
+        floor = np.diag(np.asarray(FLOOR, dtype=np.float64) ** 2)
+        kept: dict[str, np.ndarray] = {}
         for name, px in groups.items():
             ycc = np.asarray(px, dtype=np.float64).reshape(-1, 3) @ _YCC.T
             if len(ycc) < 6:
                 continue
-            d = np.abs(ycc - np.median(ycc, axis=0)) / _YCC_FLOOR
-            dist = d.max(axis=1)
+            dist = (np.abs(ycc - np.median(ycc, axis=0)) / _YCC_FLOOR).max(axis=1)
             ycc = ycc[dist <= np.percentile(dist, TRIM)]
-            mu, cov0 = ycc.mean(0), np.cov(ycc.T)
-            for shade in (1.0,) + SHADES:
-                m, cov = shade * mu, shade * shade * cov0 + np.diag(np.asarray(FLOOR) ** 2)
-                if (name in doubtful or shade != 1.0) and len(inner):
-                    z = (inner - m) @ np.linalg.inv(cov)
-                    if np.median(np.sqrt(np.einsum("ni,ni->n", z, inner - m))) < NOT_SKIN_HI + 1.0:
-                        continue
-                names.append(name if shade == 1.0 else f"{name} in shade")
-                means.append(m)
-                covs.append(cov)
-        if not names:
-            raise EyeModelError("eye model: the skin around the eyes looks like the irises")
+            if name in doubtful and len(inner):
+                mu, cov = ycc.mean(0), np.cov(ycc.T) + floor
+                dv = inner - mu
+                if np.median(np.sqrt(np.einsum("ni,ij,nj->n", dv, np.linalg.inv(cov), dv))) < NOT_SKIN_HI + 1.0:
+                    continue
+            kept[name] = ycc
+        if not kept:
+            raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
+        if POOL:
+            kept = {"skin": np.concatenate(list(kept.values()))}
+        names = list(kept)
+        means = [v.mean(0) for v in kept.values()]
+        covs = [np.cov(v.T) + floor for v in kept.values()]
         return cls(names, np.array(means).reshape(-1, 3), np.array(covs).reshape(-1, 3, 3))
 
 
@@ -508,6 +523,8 @@ def learn_eyes(
     groups, iris_px, sclera_px = _colour_groups(crop, pupils, radius, brow_heights, wi)
     colours = EyeColours.fit(groups, iris_px, doubtful=("above the eyes",))
     colours.set_levels(np.concatenate(list(groups.values())), np.concatenate([iris_px, sclera_px]))
+    if DARK_MIN > 0:
+        colours.set_dark(list(groups.values()), iris_px)
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], colours=colours,
@@ -741,6 +758,10 @@ class EyeFinder:
             up, down = self.lids(crop_bgr, i, iris, gain, self.middle(crop_bgr, iris, gain) if LID_AT_MIDDLE else None)
             is_open = up + down >= CLOSED_BELOW * self.model.lid_open[i]
             pt = iris
+            if is_open and VISIBLE_CENTROID:
+                off = visible_offset(self.radius[i], up, down)
+                pt = (iris[0], iris[1] + off)
+                up, down = up + off, down - off
             if not is_open:
                 pt = self._slit(crop_bgr, iris, gain)
                 up, down = self.lids(crop_bgr, i, pt, gain, self.middle(crop_bgr, pt, gain) if LID_AT_MIDDLE else None)
@@ -755,6 +776,23 @@ class EyeFinder:
 
 RUN_MODE = "run"
 RUN_GAIN = 2.0
+def visible_offset(r: float, upper: float, lower: float) -> float:
+    """Offset (down, px) from a disc's centre to the centroid of its part between ``upper``
+    above and ``lower`` below the centre (the visible iris between the lids)."""
+    t, b = -min(max(upper, 0.0), r), min(max(lower, 0.0), r)
+    if b - t < 1e-3:
+        return 0.5 * (t + b)
+
+    def area(y):  # integral of 2 sqrt(r^2 - y^2)
+        return y * math.sqrt(max(r * r - y * y, 0.0)) + r * r * math.asin(max(min(y / r, 1.0), -1.0))
+
+    def moment(y):  # integral of 2 y sqrt(r^2 - y^2)
+        return -(2.0 / 3.0) * max(r * r - y * y, 0.0) ** 1.5
+
+    a = area(b) - area(t)
+    return (moment(b) - moment(t)) / a if a > 1e-9 else 0.5 * (t + b)
+
+
 def _run(e: np.ndarray) -> float:
     """Soft length of the interior run starting at ``e[0]``: each sample counts as much as it
     and every sample before it are interior (membership doubled, so half-interior counts
