@@ -40,6 +40,11 @@ FORMAT = 1
 
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
+FINE = 3
+FINE_DARK = True
+PAD_R = 1.4
+VOTES = "ring"
+"""Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 """Half-size of the window the iris centre is searched in, around the predicted eye centre."""
 PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move relative to the other's when both are searched together."""
@@ -79,12 +84,46 @@ def _odd(v: float, lo: int = 3) -> int:
     return n if n % 2 else n + 1
 
 
+def ring_kernels(radius: float, width: float = 0.35) -> tuple[np.ndarray, np.ndarray]:
+    """Kernels ``(kx, ky)`` that sum, at each centre, the unit gradient components pointing
+    away from it on a ring of ``radius`` (±``width``×radius): filtered with the unit gradient
+    field, a dark disc's rim adds up at its centre (a soft Hough transform for one radius)."""
+    k = int(math.ceil(radius * (1.0 + width))) + 1
+    yy, xx = np.mgrid[-k : k + 1, -k : k + 1].astype(np.float64)
+    d = np.hypot(xx, yy)
+    ring = np.clip(1.0 - np.abs(d - radius) / (width * radius + 0.5), 0.0, None)
+    ring[k, k] = 0.0
+    ring /= ring.sum()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux, uy = np.where(d > 0, xx / d, 0.0), np.where(d > 0, yy / d, 0.0)
+    # filter2D correlates: out(c) = sum_d K(d) f(c + d); the gradient at c + d should point along +d
+    return (ring * ux).astype(np.float32), (ring * uy).astype(np.float32)
+
+
 def disc_kernel(radius: float) -> np.ndarray:
     """A normalised disc of ``radius`` px with anti-aliased rim (float32, odd square)."""
     k = int(math.ceil(radius + 0.5))
     yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
     w = np.clip(radius + 0.5 - np.hypot(xx, yy), 0.0, 1.0).astype(np.float32)
     return w / w.sum()
+
+
+def _even(v: float, lo: int = 2) -> int:
+    """``v`` rounded to an even integer of at least ``lo`` (pictures of side 4k+1 halve to a centred 2k+1)."""
+    return max(2 * int(round(v / 2.0)), lo)
+
+
+def _even_picture(p: np.ndarray) -> np.ndarray:
+    """``p`` (odd sides) trimmed by a pixel each side where a half-size is odd, so it halves to a
+    centred picture."""
+    h, w = p.shape[0] // 2, p.shape[1] // 2
+    return np.ascontiguousarray(p[h % 2 : p.shape[0] - h % 2, w % 2 : p.shape[1] - w % 2], dtype=np.float32)
+
+
+def iris_picture_size(r: float) -> tuple[int, int]:
+    """Half-width and half-height (even) of the iris picture for radius ``r``: the iris and the
+    white beside it."""
+    return _even(1.5 * r), _even(0.8 * r)
 
 
 def subpixel_cut(grey: np.ndarray, cx: float, cy: float, hw: int, hh: int) -> np.ndarray:
@@ -493,8 +532,8 @@ def learn_eyes(
     radius = [iris_radius(grey, tuple(p), wi) for p in pupils]
     iris_pics, eye_pics = [], []
     for p, r in zip(pupils, radius):
-        iris_pics.append(subpixel_cut(grey, p[0], p[1], int(round(1.5 * r)), max(int(round(0.8 * r)), 2)))
-        eye_pics.append(subpixel_cut(grey, p[0], p[1], int(round(SOCKET_HW * wi)), int(round(SOCKET_HH * wi))))
+        iris_pics.append(subpixel_cut(grey, p[0], p[1], *iris_picture_size(r)))
+        eye_pics.append(subpixel_cut(grey, p[0], p[1], _even(SOCKET_HW * wi), _even(SOCKET_HH * wi)))
 
     # skin below the eyes (also what the light is followed on)
     offs = _skin_offsets(wi)
@@ -554,16 +593,23 @@ class EyeFinder:
         self.wi = wi = float(work_ipd)
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
-        self.sx, self.sy = max(int(round(SEARCH_X * wi)), 2), max(int(round(SEARCH_Y * wi)), 2)
-        self.slack = (max(int(round(PAIR_SLACK_X * wi)), 1), max(int(round(PAIR_SLACK_Y * wi)), 1))
+        # the coarse search runs at half resolution (pyrDown: half px k is full px 2k), the
+        # fine one at full resolution within FINE px of the coarse peak
+        self.sx, self.sy = _even(SEARCH_X * wi), _even(SEARCH_Y * wi)
+        self.slack = (max(int(round(PAIR_SLACK_X * wi / 2)), 1), max(int(round(PAIR_SLACK_Y * wi / 2)), 1))
         self._dilate = np.ones((2 * self.slack[1] + 1, 2 * self.slack[0] + 1), np.uint8)
         self.radius = [float(r) for r in model.radius]
+        self._iris = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.iris_pictures]
+        self._iris_half = [cv2.pyrDown(t) for t in self._iris]
         self._disc = [disc_kernel(0.75 * r) for r in self.radius]
-        self._iris = [np.ascontiguousarray(p, dtype=np.float32) for p in model.iris_pictures]
-        self._eye = [np.ascontiguousarray(p, dtype=np.float32) for p in model.eye_pictures]
+        self._disc_half = [disc_kernel(0.375 * r) for r in self.radius]
+        self._ring_half = [ring_kernels(0.5 * r) for r in self.radius]
+        # pads (full px, even) around the candidate centres: the ring, the disc, the iris picture
         self.pad = [
-            max(int(math.ceil(2.2 * r)) + 2, t.shape[1] // 2 + 1, t.shape[0] // 2 + 1) for r, t in zip(self.radius, self._iris)
+            _even(max(PAD_R * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
         ]
+        self._eye = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.eye_pictures]
+        self._eye_half = [cv2.pyrDown(t) for t in self._eye]
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self.colours = model.colours
@@ -581,36 +627,96 @@ class EyeFinder:
         self.rect = (int(math.floor(-left)), int(math.floor(-top)), int(math.ceil(2 * left)), int(math.ceil(top + bottom)))
 
     # ------------------------------------------------------------------ pieces
-    def _window(self, grey: np.ndarray, centre, i: int):
-        """Search window of eye ``i`` (float32) and the crop px of its candidate (0, 0)."""
-        h, w = grey.shape
-        p = self.pad[i]
-        cx, cy = int(round(centre[0])), int(round(centre[1]))
-        x0, y0 = cx - self.sx - p, cy - self.sy - p
-        x1, y1 = cx + self.sx + p + 1, cy + self.sy + p + 1
-        if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
-            win = cv2.copyMakeBorder(
-                grey[max(y0, 0) : min(y1, h), max(x0, 0) : min(x1, w)],
-                max(-y0, 0), max(y1 - h, 0), max(-x0, 0), max(x1 - w, 0), cv2.BORDER_REPLICATE,
+    @staticmethod
+    def _cut(img: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
+        """``img[y0:y0+h, x0:x0+w]`` as float32, the border repeated where it reaches outside."""
+        H, W = img.shape[:2]
+        if x0 < 0 or y0 < 0 or x0 + w > W or y0 + h > H:
+            a, b = max(x0, 0), max(y0, 0)
+            part = img[b : min(y0 + h, H), a : min(x0 + w, W)]
+            if part.size == 0:
+                return np.zeros((h, w), np.float32)
+            part = cv2.copyMakeBorder(
+                np.ascontiguousarray(part), b - y0, max(y0 + h - H, 0), a - x0, max(x0 + w - W, 0), cv2.BORDER_REPLICATE
             )
-        else:
-            win = grey[y0:y1, x0:x1]
-        return np.asarray(win, dtype=np.float32), (x0 + p, y0 + p)
+            return part.astype(np.float32, copy=False)
+        return np.asarray(img[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
 
-    def score_map(self, win: np.ndarray, i: int) -> np.ndarray:
-        """Iris score of every candidate centre of a search window (see the module docstring)."""
-        p, r = self.pad[i], self.radius[i]
-        inner = (slice(p, win.shape[0] - p), slice(p, win.shape[1] - p))
-        sub = win[::2, ::2]
+    def coarse_map(self, half: np.ndarray, i: int) -> np.ndarray:
+        """Iris score of every candidate centre of a half-resolution search window (its inner
+        part, without the pad): darkness of a disc × (1 + radial symmetry) × (1 + correlation
+        with the iris picture)."""
+        p, r = self.pad[i] // 2, 0.5 * self.radius[i]
+        inner = (slice(p, half.shape[0] - p), slice(p, half.shape[1] - p))
+        sub = half[::2, ::2].ravel()
         k = sub.size // 2
-        level = float(np.partition(sub.ravel(), k)[k])
-        D = cv2.filter2D(win, -1, self._disc[i], borderType=cv2.BORDER_REPLICATE)[inner]
-        dark = np.maximum((level - D) * (1.0 / max(level, 8.0)), 0.0)
-        votes = self._radial_votes(win, r)[inner]
+        level = max(float(np.partition(sub, k)[k]), 8.0)
+        D = cv2.filter2D(half, -1, self._disc_half[i], borderType=cv2.BORDER_REPLICATE)[inner]
+        dark = np.maximum(level - D, 0.0) * (1.0 / level)
+        votes = self._radial_votes(half, r)[inner] if VOTES == "frst" else self._ring_votes(half, i)[inner]
+        t = self._iris_half[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        ncc = cv2.matchTemplate(half[p - th : half.shape[0] - p + th, p - tw : half.shape[1] - p + tw], t, cv2.TM_CCOEFF_NORMED)
+        return dark * (1.0 + votes) * (1.0 + np.maximum(ncc, 0.0))
+
+    def fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
+        """Sub-pixel iris centre near full-res ``(x, y)``: the best correlation with the iris
+        picture within :data:`FINE` px, refined by a parabola; also that correlation."""
         t = self._iris[i]
         th, tw = t.shape[0] // 2, t.shape[1] // 2
-        ncc = cv2.matchTemplate(win[p - th : win.shape[0] - p + th, p - tw : win.shape[1] - p + tw], t, cv2.TM_CCOEFF_NORMED)
-        return dark * (1.0 + votes) * (1.0 + np.maximum(ncc, 0.0))
+        win = self._cut(grey, x - FINE - tw, y - FINE - th, 2 * (FINE + tw) + 1, 2 * (FINE + th) + 1)
+        s = cv2.matchTemplate(win, t, cv2.TM_CCOEFF_NORMED)
+        if FINE_DARK:
+            disc = self._disc[i]
+            kh = disc.shape[0] // 2
+            w2 = self._cut(grey, x - FINE - kh, y - FINE - kh, 2 * (FINE + kh) + 1, 2 * (FINE + kh) + 1)
+            D = cv2.filter2D(w2, -1, disc)[kh:-kh, kh:-kh]
+            level = max(float(np.max(w2[kh:-kh, kh:-kh])), 8.0)
+            s = np.maximum(level - D, 0.0) * (1.0 + np.maximum(s, 0.0))
+        ky, kx = divmod(int(np.argmax(s)), s.shape[1])
+        fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < s.shape[1] - 1 else 0.0
+        fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < s.shape[0] - 1 else 0.0
+        return x - FINE + kx + fx, y - FINE + ky + fy, float(s[ky, kx])
+
+    def locate_irises(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float, float]]:
+        """The two iris centres (crop px, sub-pixel) and their iris-picture correlations near the
+        predicted eye ``centres``: the best pair of the two half-resolution score maps, each eye
+        free to move by the slack against the other, then each refined at full resolution."""
+        maps, origins = [], []
+        for i in range(2):
+            p = self.pad[i]
+            cx, cy = 2 * int(round(centres[i][0] / 2)), 2 * int(round(centres[i][1] / 2))
+            x0, y0 = cx - self.sx - p, cy - self.sy - p
+            win = self._cut(grey, x0, y0, 2 * (self.sx + p) + 1, 2 * (self.sy + p) + 1)
+            maps.append(self.coarse_map(cv2.pyrDown(win), i))
+            origins.append((x0 + p, y0 + p))
+        h = min(m.shape[0] for m in maps)
+        w = min(m.shape[1] for m in maps)
+        J = cv2.dilate(maps[0][:h, :w], self._dilate) + cv2.dilate(maps[1][:h, :w], self._dilate)
+        jy, jx = divmod(int(np.argmax(J)), J.shape[1])
+        sx, sy = self.slack
+        out = []
+        for i, (m, (ox, oy)) in enumerate(zip(maps, origins)):
+            ya, xa = max(jy - sy, 0), max(jx - sx, 0)
+            sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
+            ky, kx = divmod(int(np.argmax(sub)), sub.shape[1])
+            out.append(self.fine(grey, i, ox + 2 * (kx + xa), oy + 2 * (ky + ya)))
+        return out
+
+    def _ring_votes(self, img: np.ndarray, i: int) -> np.ndarray:
+        """How many unit gradients on the calibrated ring point away from each centre (0..1):
+        the iris rim seen as a whole, whatever its contrast."""
+        gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
+        mag = cv2.magnitude(gx, gy)
+        # gradients below the window's typical one count less (flat skin, noise)
+        k = mag.size // 2
+        t = max(float(np.partition(mag.ravel(), k)[k]), 1.0)
+        wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
+        kx, ky = self._ring_half[i]
+        v = cv2.filter2D(gx * wgt, -1, kx, borderType=cv2.BORDER_REPLICATE)
+        v += cv2.filter2D(gy * wgt, -1, ky, borderType=cv2.BORDER_REPLICATE)
+        return np.maximum(v, 0.0) * (1.0 / 3.0)
 
     @staticmethod
     def _radial_votes(win: np.ndarray, r: float) -> np.ndarray:
@@ -722,39 +828,17 @@ class EyeFinder:
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
         return float(py - (top + k + d + c)), float(score[k])
 
-    def locate_irises(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float]]:
-        """The two iris centres (crop px, sub-pixel) near the predicted eye ``centres``: the best
-        pair of the two score maps, each eye free to move by the slack against the other."""
-        maps, origins = [], []
-        for i in range(2):
-            win, o = self._window(grey, centres[i], i)
-            maps.append(self.score_map(win, i))
-            origins.append(o)
-        J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
-        jy, jx = divmod(int(np.argmax(J)), J.shape[1])
-        sx, sy = self.slack
-        out = []
-        for m, (ox, oy) in zip(maps, origins):
-            ya, xa = max(jy - sy, 0), max(jx - sx, 0)
-            sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
-            ky, kx = divmod(int(np.argmax(sub)), sub.shape[1])
-            ky, kx = ky + ya, kx + xa
-            fx = parabola_offset(m[ky, kx - 1], m[ky, kx], m[ky, kx + 1]) if 0 < kx < m.shape[1] - 1 else 0.0
-            fy = parabola_offset(m[ky - 1, kx], m[ky, kx], m[ky + 1, kx]) if 0 < ky < m.shape[0] - 1 else 0.0
-            out.append((ox + kx + fx, oy + ky + fy))
-        return out
-
     # ------------------------------------------------------------------ main entry
     def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
         """Both eyes in a face crop (uint8 BGR and its grey, any dtype), searched around the
         predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
-        irises = self.locate_irises(crop_grey, centres)
+        found = self.locate_irises(crop_grey, centres)
         gain = self._gain(crop_bgr, centres)
         grey = crop_grey
         eyes = []
         for i in range(2):
-            iris = irises[i]
+            iris = found[i][:2]
             up, down = self.lids(crop_bgr, i, iris, gain, self.middle(crop_bgr, iris, gain) if LID_AT_MIDDLE else None)
             is_open = up + down >= CLOSED_BELOW * self.model.lid_open[i]
             pt = iris
@@ -843,15 +927,15 @@ def refine_pupils(
         o = np.array(rect[:2], dtype=np.float64)
         centres = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
         radius = [iris_radius(crop, tuple(c), wi) for c in centres]
-        iris_pics = [subpixel_cut(crop, c[0], c[1], int(round(1.5 * r)), max(int(round(0.8 * r)), 2)) for c, r in zip(centres, radius)]
+        iris_pics = [subpixel_cut(crop, c[0], c[1], *iris_picture_size(r)) for c, r in zip(centres, radius)]
         model = EyeModel(
             work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=[np.zeros((3, 3), np.float32)] * 2,
             brow_profiles=[np.zeros(3, np.float32)] * 2, brow_centres=[1.0, 1.0], brow_heights=[0.4 * wi] * 2,
             lid_open=[1.0, 1.0], colours=_NO_COLOURS, skin_bgr=np.ones(3),
         )
         f = EyeFinder(model, wi)
-        f.sx, f.sy = max(int(round(0.12 * wi)), 2), max(int(round(0.08 * wi)), 2)
-        found = np.array(f.locate_irises(crop, centres)) + o
+        f.sx, f.sy = _even(0.12 * wi), _even(0.08 * wi)
+        found = np.array([q[:2] for q in f.locate_irises(crop, centres)]) + o
         img = ff.to_image(np.array(found))
         nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
         nipd = math.hypot(nr[0] - nl[0], nr[1] - nl[1])
