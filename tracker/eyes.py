@@ -41,9 +41,8 @@ FORMAT = 1
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 FINE = 3
-FINE_DARK = True
-PAD_R = 1.4
-VOTES = "ring"
+COARSE_VOTES = True
+COARSE_NCC = True
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 """Half-size of the window the iris centre is searched in, around the predicted eye centre."""
 PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
@@ -98,6 +97,15 @@ def ring_kernels(radius: float, width: float = 0.35) -> tuple[np.ndarray, np.nda
         ux, uy = np.where(d > 0, xx / d, 0.0), np.where(d > 0, yy / d, 0.0)
     # filter2D correlates: out(c) = sum_d K(d) f(c + d); the gradient at c + d should point along +d
     return (ring * ux).astype(np.float32), (ring * uy).astype(np.float32)
+
+
+def _disc_boxes(radius: float) -> tuple[tuple[int, int], ...]:
+    """Sizes ``(w, h)`` of centred boxes whose average weighs about like a disc of ``radius``
+    (a wide and a tall box and a square: box filters cost the same at any size)."""
+    a = max(int(round(radius)), 1)
+    b = max(int(round(0.5 * radius)), 0)
+    c = max(int(round(0.75 * radius)), 1)
+    return ((2 * a + 1, 2 * b + 1), (2 * b + 1, 2 * a + 1), (2 * c + 1, 2 * c + 1))
 
 
 def disc_kernel(radius: float) -> np.ndarray:
@@ -601,12 +609,16 @@ class EyeFinder:
         self.radius = [float(r) for r in model.radius]
         self._iris = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.iris_pictures]
         self._iris_half = [cv2.pyrDown(t) for t in self._iris]
-        self._disc = [disc_kernel(0.75 * r) for r in self.radius]
-        self._disc_half = [disc_kernel(0.375 * r) for r in self.radius]
-        self._ring_half = [ring_kernels(0.5 * r) for r in self.radius]
+        self._box = [max(2 * int(round(0.75 * r)) + 1, 3) for r in self.radius]
+        self._cross = [_disc_boxes(0.75 * r) for r in self.radius]
+        # both eyes are searched in one half-resolution strip, with the mean radius
+        rm = 0.5 * (self.radius[0] + self.radius[1])
+        self._cross_half = _disc_boxes(0.375 * rm)
+        kx, ky = ring_kernels(0.5 * rm)
+        self._ring2 = cv2.merge([kx, ky])
         # pads (full px, even) around the candidate centres: the ring, the disc, the iris picture
         self.pad = [
-            _even(max(PAD_R * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
+            _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
         ]
         self._eye = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.eye_pictures]
         self._eye_half = [cv2.pyrDown(t) for t in self._eye]
@@ -628,6 +640,14 @@ class EyeFinder:
 
     # ------------------------------------------------------------------ pieces
     @staticmethod
+    def _disc_mean(img: np.ndarray, boxes: tuple[tuple[int, int], ...]) -> np.ndarray:
+        """Mean of ``img`` over a disc at every pixel, as the average of a few centred boxes."""
+        out = cv2.boxFilter(img, -1, boxes[0])
+        for b in boxes[1:]:
+            out += cv2.boxFilter(img, -1, b)
+        return out * (1.0 / len(boxes))
+
+    @staticmethod
     def _cut(img: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
         """``img[y0:y0+h, x0:x0+w]`` as float32, the border repeated where it reaches outside."""
         H, W = img.shape[:2]
@@ -642,57 +662,75 @@ class EyeFinder:
             return part.astype(np.float32, copy=False)
         return np.asarray(img[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
 
-    def coarse_map(self, half: np.ndarray, i: int) -> np.ndarray:
-        """Iris score of every candidate centre of a half-resolution search window (its inner
-        part, without the pad): darkness of a disc × (1 + radial symmetry) × (1 + correlation
-        with the iris picture)."""
-        p, r = self.pad[i] // 2, 0.5 * self.radius[i]
-        inner = (slice(p, half.shape[0] - p), slice(p, half.shape[1] - p))
+    def fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
+        """Sub-pixel iris centre near full-res ``(x, y)``: darkness of a box of the iris's size ×
+        (1 + correlation with the iris picture) on the candidates within :data:`FINE` px, a
+        parabola through the best; also the correlation there."""
+        t = self._iris[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        b = self._box[i] // 2
+        m = max(th, tw, b)
+        win = self._cut(grey, x - FINE - m, y - FINE - m, 2 * (FINE + m) + 1, 2 * (FINE + m) + 1)
+        n = 2 * FINE + 1
+        ncc = cv2.matchTemplate(win[m - th : m + n + th, m - tw : m + n + tw], t, cv2.TM_CCOEFF_NORMED)
+        D = self._disc_mean(win, self._cross[i])[m : m + n, m : m + n]
+        level = max(float(np.max(win[m : m + n, m : m + n])), 8.0)
+        s = np.maximum(level - D, 0.0) * (1.0 + np.maximum(ncc, 0.0))
+        ky, kx = divmod(int(np.argmax(s)), s.shape[1])
+        fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < n - 1 else 0.0
+        fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < n - 1 else 0.0
+        return x - FINE + kx + fx, y - FINE + ky + fy, float(ncc[ky, kx])
+
+    def coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
+        """Half-resolution iris score maps of both eyes' candidate windows, and the crop px of
+        each map's (0, 0). Score: darkness of a disc against the strip's median × (1 + ring
+        votes: gradients pointing away from the centre on the calibrated ring) × (1 +
+        correlation with the eye's iris picture)."""
+        p = max(self.pad)
+        cs = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres]
+        x0 = min(c[0] for c in cs) - self.sx - p
+        y0 = min(c[1] for c in cs) - self.sy - p
+        x1 = max(c[0] for c in cs) + self.sx + p
+        y1 = max(c[1] for c in cs) + self.sy + p
+        strip = self._cut(grey, x0, y0, x1 - x0 + 2, y1 - y0 + 2)
+        half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        ph = p // 2
         sub = half[::2, ::2].ravel()
         k = sub.size // 2
         level = max(float(np.partition(sub, k)[k]), 8.0)
-        D = cv2.filter2D(half, -1, self._disc_half[i], borderType=cv2.BORDER_REPLICATE)[inner]
-        dark = np.maximum(level - D, 0.0) * (1.0 / level)
-        votes = self._radial_votes(half, r)[inner] if VOTES == "frst" else self._ring_votes(half, i)[inner]
-        t = self._iris_half[i]
-        th, tw = t.shape[0] // 2, t.shape[1] // 2
-        ncc = cv2.matchTemplate(half[p - th : half.shape[0] - p + th, p - tw : half.shape[1] - p + tw], t, cv2.TM_CCOEFF_NORMED)
-        return dark * (1.0 + votes) * (1.0 + np.maximum(ncc, 0.0))
-
-    def fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
-        """Sub-pixel iris centre near full-res ``(x, y)``: the best correlation with the iris
-        picture within :data:`FINE` px, refined by a parabola; also that correlation."""
-        t = self._iris[i]
-        th, tw = t.shape[0] // 2, t.shape[1] // 2
-        win = self._cut(grey, x - FINE - tw, y - FINE - th, 2 * (FINE + tw) + 1, 2 * (FINE + th) + 1)
-        s = cv2.matchTemplate(win, t, cv2.TM_CCOEFF_NORMED)
-        if FINE_DARK:
-            disc = self._disc[i]
-            kh = disc.shape[0] // 2
-            w2 = self._cut(grey, x - FINE - kh, y - FINE - kh, 2 * (FINE + kh) + 1, 2 * (FINE + kh) + 1)
-            D = cv2.filter2D(w2, -1, disc)[kh:-kh, kh:-kh]
-            level = max(float(np.max(w2[kh:-kh, kh:-kh])), 8.0)
-            s = np.maximum(level - D, 0.0) * (1.0 + np.maximum(s, 0.0))
-        ky, kx = divmod(int(np.argmax(s)), s.shape[1])
-        fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < s.shape[1] - 1 else 0.0
-        fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < s.shape[0] - 1 else 0.0
-        return x - FINE + kx + fx, y - FINE + ky + fy, float(s[ky, kx])
+        dark = np.maximum(level - self._disc_mean(half, self._cross_half), 0.0) * (1.0 / level)
+        # ring votes over the strip's inner part (ph from its border)
+        gx = cv2.Sobel(half, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(half, cv2.CV_32F, 0, 1, ksize=3)
+        mag = cv2.magnitude(gx, gy)
+        m = mag.size // 2
+        t = max(float(np.partition(mag.ravel(), m)[m]), 1.0)
+        wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
+        kh, kw = self._ring2.shape[0] // 2, self._ring2.shape[1] // 2
+        g2 = cv2.merge([gx * wgt, gy * wgt])[ph - kh : half.shape[0] - ph + kh, ph - kw : half.shape[1] - ph + kw]
+        votes = np.maximum(cv2.matchTemplate(g2, self._ring2, cv2.TM_CCORR), 0.0) * (1.0 / 3.0)
+        maps, origins = [], []
+        sxh, syh = self.sx // 2, self.sy // 2
+        for i, (cx, cy) in enumerate(cs):
+            # candidate (u, v) of this eye in the inner part <-> half px (ph + u, ph + v)
+            u0, v0 = (cx - x0) // 2 - sxh - ph, (cy - y0) // 2 - syh - ph
+            ws, hs = 2 * sxh + 1, 2 * syh + 1
+            tpl = self._iris_half[i]
+            th, tw = tpl.shape[0] // 2, tpl.shape[1] // 2
+            win = half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw]
+            ncc = cv2.matchTemplate(win, tpl, cv2.TM_CCOEFF_NORMED)
+            sc = dark[ph + v0 : ph + v0 + hs, ph + u0 : ph + u0 + ws] * (1.0 + votes[v0 : v0 + hs, u0 : u0 + ws])
+            maps.append(sc * (1.0 + np.maximum(ncc, 0.0)))
+            # half px k is the mean of full px 2k and 2k+1 of the strip
+            origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
+        return maps, origins
 
     def locate_irises(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float, float]]:
         """The two iris centres (crop px, sub-pixel) and their iris-picture correlations near the
         predicted eye ``centres``: the best pair of the two half-resolution score maps, each eye
         free to move by the slack against the other, then each refined at full resolution."""
-        maps, origins = [], []
-        for i in range(2):
-            p = self.pad[i]
-            cx, cy = 2 * int(round(centres[i][0] / 2)), 2 * int(round(centres[i][1] / 2))
-            x0, y0 = cx - self.sx - p, cy - self.sy - p
-            win = self._cut(grey, x0, y0, 2 * (self.sx + p) + 1, 2 * (self.sy + p) + 1)
-            maps.append(self.coarse_map(cv2.pyrDown(win), i))
-            origins.append((x0 + p, y0 + p))
-        h = min(m.shape[0] for m in maps)
-        w = min(m.shape[1] for m in maps)
-        J = cv2.dilate(maps[0][:h, :w], self._dilate) + cv2.dilate(maps[1][:h, :w], self._dilate)
+        maps, origins = self.coarse_maps(grey, centres)
+        J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
         jy, jx = divmod(int(np.argmax(J)), J.shape[1])
         sx, sy = self.slack
         out = []
@@ -700,50 +738,8 @@ class EyeFinder:
             ya, xa = max(jy - sy, 0), max(jx - sx, 0)
             sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
             ky, kx = divmod(int(np.argmax(sub)), sub.shape[1])
-            out.append(self.fine(grey, i, ox + 2 * (kx + xa), oy + 2 * (ky + ya)))
+            out.append(self.fine(grey, i, int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
         return out
-
-    def _ring_votes(self, img: np.ndarray, i: int) -> np.ndarray:
-        """How many unit gradients on the calibrated ring point away from each centre (0..1):
-        the iris rim seen as a whole, whatever its contrast."""
-        gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
-        gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
-        mag = cv2.magnitude(gx, gy)
-        # gradients below the window's typical one count less (flat skin, noise)
-        k = mag.size // 2
-        t = max(float(np.partition(mag.ravel(), k)[k]), 1.0)
-        wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
-        kx, ky = self._ring_half[i]
-        v = cv2.filter2D(gx * wgt, -1, kx, borderType=cv2.BORDER_REPLICATE)
-        v += cv2.filter2D(gy * wgt, -1, ky, borderType=cv2.BORDER_REPLICATE)
-        return np.maximum(v, 0.0) * (1.0 / 3.0)
-
-    @staticmethod
-    def _radial_votes(win: np.ndarray, r: float) -> np.ndarray:
-        """Radial symmetry at radius ``r``: strong gradients vote for the point ``r`` px against
-        their direction (a dark disc's rim all votes for its centre); blurred, max 1."""
-        gx = cv2.Sobel(win, cv2.CV_32F, 1, 0, ksize=3)
-        gy = cv2.Sobel(win, cv2.CV_32F, 0, 1, ksize=3)
-        mag = cv2.magnitude(gx, gy)
-        flat = mag.ravel()
-        k = int(0.7 * flat.size)
-        t = float(np.partition(flat, k)[k])
-        idx = np.flatnonzero(flat > t)
-        h, w = win.shape
-        if len(idx) < 3:
-            return np.zeros_like(win)
-        m = flat[idx]
-        ux, uy = gx.ravel()[idx] / m, gy.ravel()[idx] / m
-        ys, xs = np.divmod(idx, w)
-        wt = np.minimum(m, 3.0 * t)
-        acc = np.zeros(h * w, np.float64)
-        for rr in (0.85 * r, r, 1.15 * r):
-            cx = np.rint(xs - rr * ux).astype(np.intp)
-            cy = np.rint(ys - rr * uy).astype(np.intp)
-            ok = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
-            acc += np.bincount(cy[ok] * w + cx[ok], weights=wt[ok], minlength=h * w)
-        acc = cv2.GaussianBlur(acc.reshape(h, w).astype(np.float32), (0, 0), 0.3 * r)
-        return acc * (1.0 / max(float(acc.max()), 1e-6))
 
     def middle(self, crop: np.ndarray, at: tuple[float, float], gain: np.ndarray | None = None) -> float:
         """x (crop px) of the middle of the visible eye on the row of ``at``: halfway between the
