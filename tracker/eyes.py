@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from tracker.brows import brow_centre, column_profile
 from tracker.pupils import parabola_offset
@@ -41,6 +42,7 @@ FORMAT = 1
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 FINE = 3
+PRIOR = (0.2, 0.1)
 COARSE_VOTES = True
 COARSE_NCC = True
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
@@ -59,7 +61,7 @@ BROW_LO, BROW_HI = 0.55, 1.6
 """Brow search range, × the calibrated brow height."""
 RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
 """Plausible iris radii (× work ipd) and the one used when none is measurable."""
-CLOSED_BELOW = 0.35
+CLOSED_BELOW = 0.6
 """An eye whose lid gap is below this fraction of the calibrated one is closed."""
 
 # YCrCb from BGR (linear part of OpenCV's conversion; the offsets cancel in the whitening)
@@ -114,6 +116,13 @@ def disc_kernel(radius: float) -> np.ndarray:
     yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
     w = np.clip(radius + 0.5 - np.hypot(xx, yy), 0.0, 1.0).astype(np.float32)
     return w / w.sum()
+
+
+def _standardised(v: np.ndarray) -> np.ndarray:
+    """``v`` with zero mean and unit standard deviation (float32; a flat ``v`` stays flat)."""
+    v = np.asarray(v, dtype=np.float32).ravel()
+    d = v - v.mean()
+    return (d / max(float(d.std()), 1e-6)).astype(np.float32)
 
 
 def _even(v: float, lo: int = 2) -> int:
@@ -220,6 +229,7 @@ class EyeColours:
             ws.append(L.T @ _YCC)
             cs.append(L.T @ mu)
         self._W = np.concatenate(ws).astype(np.float32)  # (3k, 3)
+        self._W4 = np.concatenate([self._W, _YCC[:1].astype(np.float32)])  # and the luminance
         self._c = np.concatenate(cs).astype(np.float32)
         self._starts = np.arange(0, 3 * len(self.means), 3)
 
@@ -229,13 +239,18 @@ class EyeColours:
         ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration).
         """
         x = np.asarray(bgr, dtype=np.float32).reshape(-1, 3)
-        W = self._W if gain is None else self._W * np.asarray(gain, dtype=np.float32)[None, :]
-        z = x @ W.T - self._c
-        d2 = np.add.reduceat(z * z, self._starts, axis=1).min(axis=1)
+        W = self._W4 if gain is None else self._W4 * np.asarray(gain, dtype=np.float32)[None, :]
+        z = x @ W.T  # whitened components, then luminance
+        k = len(self.means)
+        if k == 1:
+            d = z[:, :3] - self._c
+            d2 = np.einsum("ij,ij->i", d, d)
+        else:
+            d = z[:, : 3 * k] - self._c
+            d2 = np.add.reduceat(d * d, self._starts, axis=1).min(axis=1)
         e = (np.sqrt(d2) - self.lo) * (1.0 / (self.hi - self.lo))
         if self.dark > 0:
-            y = x @ (_YCC[0].astype(np.float32) if gain is None else (_YCC[0] * gain).astype(np.float32))
-            e = np.maximum(e, (self.dark - y) * (1.0 / self.dark_ramp) + 0.5)
+            e = np.maximum(e, (self.dark - z[:, -1]) * (1.0 / self.dark_ramp) + 0.5)
         return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
 
     def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
@@ -596,14 +611,14 @@ class EyeFinder:
     whose crop holds everything :meth:`find` looks at when the eyes are where predicted.
     """
 
-    def __init__(self, model: EyeModel, work_ipd: float):
+    def __init__(self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y)):
         self.model = model
         self.wi = wi = float(work_ipd)
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         # the coarse search runs at half resolution (pyrDown: half px k is full px 2k), the
         # fine one at full resolution within FINE px of the coarse peak
-        self.sx, self.sy = _even(SEARCH_X * wi), _even(SEARCH_Y * wi)
+        self.sx, self.sy = _even(search[0] * wi), _even(search[1] * wi)
         self.slack = (max(int(round(PAIR_SLACK_X * wi / 2)), 1), max(int(round(PAIR_SLACK_Y * wi / 2)), 1))
         self._dilate = np.ones((2 * self.slack[1] + 1, 2 * self.slack[0] + 1), np.uint8)
         self.radius = [float(r) for r in model.radius]
@@ -616,6 +631,10 @@ class EyeFinder:
         self._cross_half = _disc_boxes(0.375 * rm)
         kx, ky = ring_kernels(0.5 * rm)
         self._ring2 = cv2.merge([kx, ky])
+        # a mild preference for irises near the predicted eye centres (half px grid)
+        u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (PRIOR[0] * wi))
+        v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (PRIOR[1] * wi))
+        self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
         # pads (full px, even) around the candidate centres: the ring, the disc, the iris picture
         self.pad = [
             _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
@@ -628,7 +647,8 @@ class EyeFinder:
         self._skin_half = max(int(round(0.04 * wi)), 1)
         self.brow_lo = [BROW_LO * h for h in model.brow_heights]
         self.brow_hi = [BROW_HI * h for h in model.brow_heights]
-        self._brow_t = [np.asarray(p, dtype=np.float32).reshape(-1, 1) for p in model.brow_profiles]
+        # the brow cross-sections, zero mean and unit spread (the correlation is then one product)
+        self._brow_z = [_standardised(np.asarray(p, dtype=np.float32)) for p in model.brow_profiles]
         # crop rectangle
         hw_e = max(self.sx + self.pad[i] for i in range(2))
         hh_e = max(self.sy + self.pad[i] for i in range(2))
@@ -720,7 +740,7 @@ class EyeFinder:
             win = half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw]
             ncc = cv2.matchTemplate(win, tpl, cv2.TM_CCOEFF_NORMED)
             sc = dark[ph + v0 : ph + v0 + hs, ph + u0 : ph + u0 + ws] * (1.0 + votes[v0 : v0 + hs, u0 : u0 + ws])
-            maps.append(sc * (1.0 + np.maximum(ncc, 0.0)))
+            maps.append(sc * (1.0 + np.maximum(ncc, 0.0)) * self._prior)
             # half px k is the mean of full px 2k and 2k+1 of the strip
             origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
         return maps, origins
@@ -772,11 +792,19 @@ class EyeFinder:
         return max(_run(e[c::-1]) - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
     def _gain(self, crop: np.ndarray, centres: np.ndarray) -> np.ndarray | None:
-        """Per-channel gain that brings the skin around the eyes back to its calibrated colour."""
-        px = _skin_pixels(crop, centres, self.model.skin_offsets, self._skin_half)
-        if len(px) < 8:
+        """Per-channel gain that brings the skin below the eyes back to its calibrated colour
+        (median over the sampled patches' means); None when within 2 %."""
+        h, w = crop.shape[:2]
+        b = self._skin_half
+        means = []
+        for cx, cy in centres:
+            for ox, oy in self.model.skin_offsets:
+                x, y = int(round(cx + ox)), int(round(cy + oy))
+                if b <= x < w - b and b <= y < h - b:
+                    means.append(cv2.mean(crop[y - b : y + b + 1, x - b : x + b + 1])[:3])
+        if len(means) < 3:
             return None
-        med = np.median(px, axis=0).astype(np.float64)
+        med = np.median(np.asarray(means), axis=0)
         g = np.clip(np.asarray(self.model.skin_bgr) / np.maximum(med, 1.0), 0.5, 2.0)
         return None if np.all(np.abs(g - 1.0) < 0.02) else g
 
@@ -810,16 +838,21 @@ class EyeFinder:
         return x, y
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
+        """Brow height above ``at`` (crop px) and the match there: the calibrated cross-section
+        slid along a strip of columns above ``at``, normalised correlation, parabola refined."""
         px, py = at
-        t = self._brow_t[i]
+        t = self._brow_z[i]
         n = len(t)
         c = self.model.brow_centres[i]
         top = int(math.floor(py - self.brow_hi[i] - c)) - 1
         bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
-        prof = column_profile(grey, px, top, bot, 2).reshape(-1, 1)
+        prof = column_profile(grey, px, top, bot, 2)
         if len(prof) < n + 2:
             return self.model.brow_heights[i], 0.0
-        score = cv2.matchTemplate(prof, t, cv2.TM_CCOEFF_NORMED).ravel()
+        win = sliding_window_view(prof, n)
+        mu = win.mean(axis=1)
+        sd = np.sqrt(np.maximum((win * win).mean(axis=1) - mu * mu, 1e-6))
+        score = (win @ t) * (1.0 / n) / sd
         k = int(np.argmax(score))
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
         return float(py - (top + k + d + c)), float(score[k])
@@ -929,8 +962,7 @@ def refine_pupils(
             brow_profiles=[np.zeros(3, np.float32)] * 2, brow_centres=[1.0, 1.0], brow_heights=[0.4 * wi] * 2,
             lid_open=[1.0, 1.0], colours=_NO_COLOURS, skin_bgr=np.ones(3),
         )
-        f = EyeFinder(model, wi)
-        f.sx, f.sy = _even(0.12 * wi), _even(0.08 * wi)
+        f = EyeFinder(model, wi, search=(0.12, 0.08))
         found = np.array([q[:2] for q in f.locate_irises(crop, centres)]) + o
         img = ff.to_image(np.array(found))
         nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
