@@ -42,6 +42,8 @@ FORMAT = 1
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 FINE = 3
+SNAP_LOWER = 0
+LASH_STEP = 0.05
 PRIOR = (0.2, 0.1)
 COARSE_VOTES = True
 COARSE_NCC = True
@@ -194,8 +196,8 @@ the eye's interior."""
 POOL = True
 FLOOR = (2.0, 1.0, 1.0)
 TRIM = 100.0
-LEVELS = False
-LEVEL_Q = (95.0, 10.0)
+LEVELS = True
+LEVEL_MAX = 10.0
 DARK_MIN = 30.0
 """Shading factors of the extra skin components: the same skin, darker (an eye socket in shadow)."""
 
@@ -267,16 +269,18 @@ class EyeColours:
         z = np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W.T - self._c
         return np.sqrt(np.add.reduceat(z * z, self._starts, axis=1).min(axis=1))
 
-    def set_levels(self, skin: np.ndarray, interior: np.ndarray) -> None:
-        """Put the interior ramp between the skin's spread and the interior's: from the 95th
-        percentile of the skin samples' distances to the 10th of the interior's (at least
-        one unit above), within the defaults' neighbourhood."""
+    def set_levels(self, parts: list[np.ndarray]) -> None:
+        """Centre the interior ramp half-way between the skin and the nearer of the interior's
+        ``parts`` (BGR samples: iris, sclera): a blurred lid edge crosses half-way exactly at
+        the edge, and colour that bleeds past it stays on the skin side. At least
+        :data:`NOT_SKIN_LO` + 1.5, at most :data:`LEVEL_MAX`."""
         if not LEVELS:
             return
-        ds, di = self.distance(skin), self.distance(interior)
-        lo = float(np.clip(np.percentile(ds, LEVEL_Q[0]), 1.5, 4.0)) if len(ds) else NOT_SKIN_LO
-        hi = float(np.percentile(di, LEVEL_Q[1])) if len(di) else NOT_SKIN_HI
-        self.lo, self.hi = lo, float(np.clip(hi, lo + 1.0, lo + 6.0))
+        ds = [float(np.median(self.distance(p))) for p in parts if len(p) >= 3]
+        if not ds:
+            return
+        mid = float(np.clip(0.5 * min(ds), NOT_SKIN_LO + 1.5, LEVEL_MAX))
+        self.lo, self.hi = mid - 1.5, mid + 1.5
 
     def to_dict(self) -> dict:
         return {"names": list(self.names), "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist(),
@@ -334,7 +338,9 @@ class EyeModel:
     picture of the iris and the white beside it (iris at its centre); ``eye_pictures`` grey
     picture of the whole eye (the score); ``brow_profiles`` / ``brow_centres`` /
     ``brow_heights`` the brow cross-section through the iris, its middle line's index and
-    its height above the iris; ``lid_open`` the calibrated upper + lower lid distance.
+    its height above the iris; ``lid_open`` the calibrated upper + lower lid distance;
+    ``lash`` the thickness of the upper lash line where it lies on the white or a light iris
+    (the interior run ends on its top; the lid's margin is its bottom).
     ``colours`` the skin and interior colour components; ``skin_bgr`` the median BGR of the
     skin below the eyes (to follow the light) and ``skin_offsets`` where (relative to each
     eye centre) that skin was sampled.
@@ -351,6 +357,7 @@ class EyeModel:
     colours: EyeColours
     skin_bgr: np.ndarray
     skin_offsets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    lash: list[float] = field(default_factory=lambda: [0.0, 0.0])
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images` (grey pictures, saved as 8-bit PNGs beside the calibration)."""
@@ -371,6 +378,7 @@ class EyeModel:
             "brow_centres": [float(v) for v in self.brow_centres],
             "brow_heights": [float(v) for v in self.brow_heights],
             "lid_open": [float(v) for v in self.lid_open],
+            "lash": [float(v) for v in self.lash],
             "colours": self.colours.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
             "skin_offsets": np.asarray(self.skin_offsets, dtype=float).round(3).tolist(),
@@ -399,6 +407,7 @@ class EyeModel:
                 brow_centres=[float(v) for v in d["brow_centres"]],
                 brow_heights=[float(v) for v in d["brow_heights"]],
                 lid_open=[float(v) for v in d["lid_open"]],
+                lash=[float(v) for v in d.get("lash", (0.0, 0.0))],
                 colours=EyeColours.from_dict(d["colours"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
                 skin_offsets=np.asarray(d.get("skin_offsets", []), dtype=np.float64).reshape(-1, 2),
@@ -493,15 +502,15 @@ def _skin_pixels(crop: np.ndarray, centres: np.ndarray, offsets: np.ndarray, hal
 BAND = dict(below=(0.15, 0.3), above=(0.14, 0.3), half=0.15)
 
 
-def _colour_groups(crop, pupils, radius, brow_heights, wi) -> tuple[dict, np.ndarray, np.ndarray]:
+def _colour_groups(crop, pupils, radius, brow_heights, wi) -> tuple[dict, np.ndarray, np.ndarray, np.ndarray]:
     """BGR samples of the calibration crop for :class:`EyeColours`.
 
     Skin groups: a band below each eye, a band above it (up to the brow's lower edge) and
-    the bridge between the eyes. Also the irises' middles and the sclera beside them (the
-    interior, which no skin component may claim).
+    the bridge between the eyes. Also the irises' middles (which no skin component may
+    claim), a ring of each iris around its pupil and the sclera beside them.
     """
     h, w = crop.shape[:2]
-    below, above, iris, sclera = [], [], [], []
+    below, above, iris, ring, sclera = [], [], [], [], []
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
     hx = max(int(round(BAND["half"] * wi)), 2)
     for (px, py), r, hb in zip(pupils, radius, brow_heights):
@@ -515,6 +524,10 @@ def _colour_groups(crop, pupils, radius, brow_heights, wi) -> tuple[dict, np.nda
         above.append(crop[max(a0, 0) : max(a1, 0), x0:x1].reshape(-1, 3))
         k = max(int(round(0.4 * r)), 1)
         iris.append(crop[yi - k : yi + k + 1, xi - k : xi + k + 1].reshape(-1, 3))
+        # the iris's own colour: a ring around the pupil on the middle rows
+        yy, xx = np.mgrid[yi - k : yi + k + 1, xi - int(r) : xi + int(r) + 1]
+        rr = np.hypot(xx - px, yy - py)
+        ring.append(crop[yy[(rr >= 0.55 * r) & (rr <= 0.85 * r)], xx[(rr >= 0.55 * r) & (rr <= 0.85 * r)]])
         sy = max(int(round(0.2 * r)), 1)
         sa, sb = int(round(1.4 * r)), int(round(1.4 * r + 0.08 * wi))
         ig = float(grey[yi - k : yi + k + 1, xi - k : xi + k + 1].mean())
@@ -527,7 +540,7 @@ def _colour_groups(crop, pupils, radius, brow_heights, wi) -> tuple[dict, np.nda
     bx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
     bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - bx, 0) : int(round(mx)) + bx + 1].reshape(-1, 3)
     skin = {"below the eyes": np.concatenate(below), "above the eyes": np.concatenate(above), "between the eyes": bridge}
-    return skin, np.concatenate(iris), np.concatenate(sclera)
+    return skin, np.concatenate(iris), np.concatenate(ring), np.concatenate(sclera)
 
 
 def learn_eyes(
@@ -582,9 +595,9 @@ def learn_eyes(
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
-    groups, iris_px, sclera_px = _colour_groups(crop, pupils, radius, brow_heights, wi)
+    groups, iris_px, ring_px, sclera_px = _colour_groups(crop, pupils, radius, brow_heights, wi)
     colours = EyeColours.fit(groups, iris_px, doubtful=("above the eyes",))
-    colours.set_levels(np.concatenate(list(groups.values())), np.concatenate([iris_px, sclera_px]))
+    colours.set_levels([ring_px, sclera_px])
     if DARK_MIN > 0:
         colours.set_dark(list(groups.values()), iris_px)
     model = EyeModel(
@@ -595,7 +608,9 @@ def learn_eyes(
     # the calibrated lid gap: measured the way the finder measures it
     f = EyeFinder(model, wi)
     for i, p in enumerate(pupils):
-        up, down = f.lids(crop, i, (float(p[0]), float(p[1])))
+        at = (float(p[0]), float(p[1]))
+        model.lash[i] = f.lids(crop, i, at, measure_lash=True)[0]
+        up, down = f.lids(crop, i, at)
         model.lid_open[i] = max(up + down, 0.05 * wi)
     return model
 
@@ -644,6 +659,9 @@ class EyeFinder:
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self.colours = model.colours
+        self._luma = _YCC[:1].astype(np.float32).reshape(1, 3)
+        # a step this large (grey levels) from the lash line to what is under it is a lid margin
+        self._lash_contrast = 25.0
         self._skin_half = max(int(round(0.04 * wi)), 1)
         self.brow_lo = [BROW_LO * h for h in model.brow_heights]
         self.brow_hi = [BROW_HI * h for h in model.brow_heights]
@@ -776,20 +794,61 @@ class EyeFinder:
         return float(xi + 0.5 * (right - left))
 
     def lids(
-        self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None, column: float | None = None
+        self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
+        column: float | None = None, measure_lash: bool = False,
     ) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: soft lengths of the
         eye-interior runs up and down a strip of columns through ``column`` (default ``at[0]``),
-        starting on the row of ``at``."""
+        starting on the row of ``at``; the calibrated lash line is taken off the upper one.
+        With ``measure_lash`` (calibration) it returns ``(lash line thickness, 0)`` instead."""
         h, w = crop.shape[:2]
         hw, R = self.lid_hw[i], self.lid_range
         xi = min(max(int(round(at[0] if column is None else column)), hw), w - 1 - hw)
         yi = min(max(int(round(at[1])), 0), h - 1)
         y0, y1 = max(yi - R, 0), min(yi + R + 1, h)
-        e = self.colours.interior(crop[y0:y1, xi - hw : xi + hw + 1], gain).mean(axis=1)
+        strip = crop[y0:y1, xi - hw : xi + hw + 1]
+        # classify each row's mean colour (the strip's columns average the noise away)
+        e = self.colours.interior(strip.mean(axis=1, dtype=np.float32), gain)
         c = yi - y0
         dy = yi - at[1]
-        return max(_run(e[c::-1]) - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+        up = _run(e[c::-1])
+        if measure_lash:
+            return up - self._below_lashes(strip, c, up), 0.0
+        down = _run(e[c:])
+        if SNAP_LOWER:
+            down = self._snap_edge(strip, c, down)
+        return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
+
+    def _snap_edge(self, strip: np.ndarray, c: int, down: float) -> float:
+        """The lower run's end moved to the strongest brightness step within a few px inside it
+        (colour bleeds a little past the lid in compressed video; brightness does not)."""
+        lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
+        k = int(c + math.floor(down))
+        lo, hi = max(k - SNAP_LOWER, c + 1), min(k + 1, len(lum) - 1)
+        if hi <= lo:
+            return down
+        steps = np.abs(lum[lo + 1 : hi + 1] - lum[lo:hi])
+        j = int(np.argmax(steps))
+        if steps[j] < 0.5 * self._lash_contrast:
+            return down
+        return float(lo + j + 0.5 - c)
+
+    def _below_lashes(self, strip: np.ndarray, c: int, up: float) -> float:
+        """The upper run ``up`` (from row ``c`` of ``strip`` upwards) ended on the lash line's top;
+        the lid's margin is its bottom where the line sits on the white or a light iris: the
+        strongest step from light (below) to dark (above) within :data:`LASH_STEP` × work ipd
+        under the run's end, if it is a clear one."""
+        lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
+        k = int(c - math.floor(up))
+        m = int(math.ceil(LASH_STEP * self.wi))
+        lo, hi = max(k, 1), min(k + m, c)
+        if hi <= lo:
+            return up
+        steps = lum[lo + 1 : hi + 1] - lum[lo:hi]  # brighter going down
+        j = int(np.argmax(steps))
+        if steps[j] < self._lash_contrast:
+            return up
+        return float(c - (lo + j + 0.5))
 
     def _gain(self, crop: np.ndarray, centres: np.ndarray) -> np.ndarray | None:
         """Per-channel gain that brings the skin below the eyes back to its calibrated colour
