@@ -42,6 +42,9 @@ FORMAT = 1
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 FINE = 3
+BROW_ABS = True
+BROW_DOWN, BROW_UP = 0.15, 0.3
+BROW_HW = 0.03
 SNAP_LOWER = 0
 LASH_STEP = 0.05
 PRIOR = (0.2, 0.1)
@@ -118,6 +121,11 @@ def disc_kernel(radius: float) -> np.ndarray:
     yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
     w = np.clip(radius + 0.5 - np.hypot(xx, yy), 0.0, 1.0).astype(np.float32)
     return w / w.sum()
+
+
+def brow_half_width(work_ipd: float) -> int:
+    """Half-width (px) of the strip of columns the brow's cross-section averages."""
+    return max(int(round(BROW_HW * work_ipd)), 2)
 
 
 def _standardised(v: np.ndarray) -> np.ndarray:
@@ -591,7 +599,7 @@ def learn_eyes(
             height = float(np.clip(py - b[1], 0.15 * wi, 0.9 * wi))
         cy_b = py - height
         start = int(math.floor(cy_b)) - half
-        brow_profiles.append(column_profile(grey, px, start, start + 2 * half + 1, 2))
+        brow_profiles.append(column_profile(grey, px, start, start + 2 * half + 1, brow_half_width(wi)))
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
@@ -663,9 +671,14 @@ class EyeFinder:
         # a step this large (grey levels) from the lash line to what is under it is a lid margin
         self._lash_contrast = 25.0
         self._skin_half = max(int(round(0.04 * wi)), 1)
-        self.brow_lo = [BROW_LO * h for h in model.brow_heights]
-        self.brow_hi = [BROW_HI * h for h in model.brow_heights]
+        if BROW_ABS:
+            self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
+            self.brow_hi = [h + BROW_UP * wi for h in model.brow_heights]
+        else:
+            self.brow_lo = [BROW_LO * h for h in model.brow_heights]
+            self.brow_hi = [BROW_HI * h for h in model.brow_heights]
         # the brow cross-sections, zero mean and unit spread (the correlation is then one product)
+        self._brow_hw = brow_half_width(wi)
         self._brow_z = [_standardised(np.asarray(p, dtype=np.float32)) for p in model.brow_profiles]
         # crop rectangle
         hw_e = max(self.sx + self.pad[i] for i in range(2))
@@ -905,7 +918,7 @@ class EyeFinder:
         c = self.model.brow_centres[i]
         top = int(math.floor(py - self.brow_hi[i] - c)) - 1
         bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
-        prof = column_profile(grey, px, top, bot, 2)
+        prof = column_profile(grey, px, top, bot, self._brow_hw)
         if len(prof) < n + 2:
             return self.model.brow_heights[i], 0.0
         win = sliding_window_view(prof, n)
