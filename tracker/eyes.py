@@ -42,6 +42,7 @@ FORMAT = 1
 # geometry, as fractions of the work ipd
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 FINE = 3
+SOCKET_SEARCH = (0.17, 0.05)
 BROW_ABS = True
 BROW_DOWN, BROW_UP = 0.15, 0.3
 BROW_HW = 0.03
@@ -455,6 +456,7 @@ class EyeObservation:
     iris: tuple[float, float]
     radius: float
     brow_score: float = 0.0
+    iris_match: float = 0.0
 
     def points(self) -> dict[str, tuple[float, float]]:
         """Overlay points (crop px): eye point, upper and lower lid, brow."""
@@ -664,6 +666,7 @@ class EyeFinder:
         ]
         self._eye = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.eye_pictures]
         self._eye_half = [cv2.pyrDown(t) for t in self._eye]
+        self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self.colours = model.colours
@@ -881,16 +884,16 @@ class EyeFinder:
         return None if np.all(np.abs(g - 1.0) < 0.02) else g
 
     def _socket_score(self, grey: np.ndarray, at: tuple[float, float], i: int) -> float:
-        """Best normalised correlation of the calibrated eye picture within a few px of ``at``."""
-        t = self._eye[i]
+        """Best normalised correlation (0..1) of the calibrated eye picture around ``at``, at half
+        resolution: as far sideways as a gaze moves the iris in the eye, a little up and down."""
+        t = self._eye_half[i]
         th, tw = t.shape[0] // 2, t.shape[1] // 2
-        s = max(int(round(0.04 * self.wi)), 1)
-        h, w = grey.shape
-        x, y = int(round(at[0])), int(round(at[1]))
-        x0, y0, x1, y1 = x - tw - s, y - th - s, x + tw + s + 1, y + th + s + 1
-        if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
-            return 0.0
-        ncc = cv2.matchTemplate(np.asarray(grey[y0:y1, x0:x1], dtype=np.float32), t, cv2.TM_CCOEFF_NORMED)
+        sx, sy = self._socket_search
+        x, y = 2 * int(round(at[0] / 2)), 2 * int(round(at[1] / 2))
+        w, h = 2 * (tw + sx) + 2, 2 * (th + sy) + 2
+        win = self._cut(grey, x - w // 2, y - h // 2, w, h)
+        half = cv2.resize(win, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        ncc = cv2.matchTemplate(half, t, cv2.TM_CCOEFF_NORMED)
         return float(np.clip(ncc.max(), 0.0, 1.0))
 
     def _slit(self, crop: np.ndarray, at: tuple[float, float], gain) -> tuple[float, float]:
@@ -955,6 +958,7 @@ class EyeFinder:
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=score, open=bool(is_open), upper=float(up), lower=float(down),
                 brow=brow, iris=(float(iris[0]), float(iris[1])), radius=self.radius[i], brow_score=bscore,
+                iris_match=float(found[i][2]),
             ))
         return EyeResult((eyes[0], eyes[1]))
 
