@@ -44,6 +44,8 @@ OUT = Path(__file__).resolve().parents[1] / "out" / "real_eyes"
 CLIPS = ("expr_d0", "expr_d3", "expr_d6", "expr_d10", "expr_d11", "expr_d18", "expr_d19", "talk_a", "talk_b")
 QUICK_CLIPS = ("expr_d0", "expr_d19")
 TARGETS = {"iris_med": 3.0, "iris_p95": 8.0, "roll": 1.5, "r_eye": 0.7, "r_brow": 0.6}
+ADAPT = True
+"""Whether the "after" finder adapts slowly from confident frames (as the tracker would)."""
 PEER_PIXEL_CENTRE = 0.5
 """The peer's coordinates put a pixel's centre at +0.5 (its coordinates are fractions of the
 image size, 0 at the image's left edge); ours put it at 0. Its points are shifted by this
@@ -128,7 +130,7 @@ class Before:
         c = cal.clicks
         self.pupils_cal = (c.left_pupil, c.right_pupil)
 
-    def find(self, crop: np.ndarray, grey: np.ndarray, centres: np.ndarray) -> Found:
+    def find(self, crop: np.ndarray, grey: np.ndarray, centres: np.ndarray, adapt: bool = True) -> Found:
         tr = self.tr
         grey = grey.astype(np.float32)
         res = [f.find(crop, grey, tuple(p), (tr.sx, tr.sy), previous=tuple(p)) for f, p in zip(tr.pupil_finders, centres)]
@@ -170,8 +172,10 @@ class After:
         self.finder = EyeFinder(model, self.wi)
         self.rect = self.finder.rect
 
-    def find(self, crop: np.ndarray, grey: np.ndarray, centres: np.ndarray) -> Found:
+    def find(self, crop: np.ndarray, grey: np.ndarray, centres: np.ndarray, adapt: bool = True) -> Found:
         r = self.finder.find(crop, grey, centres)
+        if adapt and ADAPT:
+            self.finder.adapt(crop, grey, r)
         e = r.eyes
         return Found(
             np.array([[q.x, q.y] for q in e]), np.array([q.upper for q in e]), np.array([q.lower for q in e]),
@@ -294,7 +298,7 @@ def run_clip(name: str, kind: str = "after", every: int = 1, sheet_every: int = 
             mid = ff.to_image(np.array([[ox * wi, oy * wi]]))[0]
             off = FaceFrame((float(mid[0]), float(mid[1])), ff.angle, ff.scale)
             c2, g2, cen2 = _crop(finder, frame, off)
-            s_off.append(float(finder.find(c2, g2, cen2).score.max()))
+            s_off.append(float(finder.find(c2, g2, cen2, adapt=False).score.min()))
 
     one(*frames0)
     for i, frame in it:
