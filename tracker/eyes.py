@@ -20,10 +20,10 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   the sclera's own colours, so a blurred edge is found where it is and colour that bleeds
   past a lid (compressed video) does not count. The calibrated lash line is taken off the
   upper run (the run ends on the lashes' top; the lid's margin is their bottom).
-* **closed eyes** — when the lid gap falls under :data:`CLOSED_BELOW` of the calibrated
-  one, the eye point moves to the middle of what is visible of the eye (the slit between
-  the lids), where a landmark tracker puts a closed eye's pupil; the lids and the brow are
-  then measured from there.
+* **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
+  the eye point moves from the iris to the middle of what is visible of the eye (the slit
+  between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
+  brow are then measured from there.
 * **brow** — the calibrated vertical cross-section of the brow slid along a strip of
   columns above the eye point (normalised correlation, parabola refined).
 * **score** — "this is this person's eye": the geometric mean of the iris picture's
@@ -66,8 +66,9 @@ LASH_STEP = 0.05
 """How far under the top of the upper run the lash line's bottom is looked for at calibration."""
 LASH_CONTRAST = 25.0
 """Grey levels from the lash line to the white under it that make a lid margin."""
-CLOSED_BELOW = 0.6
-"""An eye whose lid gap is below this fraction of the calibrated one is closed."""
+CLOSING = (0.3, 0.7)
+"""Lid gaps (fractions of the calibrated one) over which the eye point moves from the middle
+of the slit (closed) to the iris (open); the eye counts as open above the middle."""
 SLIT_HW, SLIT_HH = 0.22, 0.1
 """Half-size of the window a closed eye's slit is looked for in."""
 SOCKET_HW, SOCKET_HH = 0.3, 0.17
@@ -87,11 +88,12 @@ NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
 :meth:`SkinModel.set_levels` moves it half-way to the interior's colours."""
 LEVEL_MAX = 10.0
 """Highest centre of the interior ramp (Mahalanobis units)."""
+POOL = True
 SKIN_FLOOR = (2.0, 1.0, 1.0)
 """Spread (std, grey levels) added to the skin's Y, Cr, Cb: noise, shading."""
-DARK_MIN = 30.0
-"""Grey levels by which the iris must be darker than the darkest skin for "much darker than
-any skin" to count as interior."""
+DARK_RATIO = 0.6
+"""The iris's middle must be at most this fraction as bright as the darkest skin for "much
+darker than any skin" to count as interior."""
 BANDS = {"below": (0.15, 0.3), "above": (0.14, 0.3), "half": 0.15}
 """Skin sample bands at calibration: below and above each iris (distances from it) and
 their half-width."""
@@ -257,35 +259,49 @@ def _run(e: np.ndarray) -> float:
 
 @dataclass
 class SkinModel:
-    """The skin around the eyes as one Gaussian in YCrCb (grey levels), and what is *not* it.
+    """The skin around the eyes as a few Gaussians in YCrCb (grey levels; one per sampled
+    region, so shading between regions does not widen any of them), and what is *not* skin.
 
-    :meth:`interior` ramps each pixel's Mahalanobis distance from the skin from ``lo`` (skin)
-    to ``hi`` (surely not skin); with ``dark`` > 0 a pixel darker than ``dark`` (grey levels,
-    ramp ``dark_ramp``) is interior too (a dark iris, the pupil, lashes).
+    :meth:`interior` ramps each pixel's Mahalanobis distance from the nearest skin Gaussian
+    from ``lo`` (skin) to ``hi`` (surely not skin); with ``dark`` > 0 a pixel darker than
+    ``dark`` (grey levels, ramp ``dark_ramp``) is interior too (a dark iris, the pupil, lashes).
     """
 
-    mean: np.ndarray
-    cov: np.ndarray
+    means: np.ndarray  # (k, 3)
+    covs: np.ndarray  # (k, 3, 3)
     lo: float = NOT_SKIN_LO
     hi: float = NOT_SKIN_HI
     dark: float = -1.0
     dark_ramp: float = 1.0
 
     def __post_init__(self) -> None:
-        self.mean = np.asarray(self.mean, dtype=np.float64).reshape(3)
-        self.cov = np.asarray(self.cov, dtype=np.float64).reshape(3, 3)
-        try:
-            L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
-        except np.linalg.LinAlgError:
-            raise EyeModelError("eye model: the skin colour's covariance is not positive definite") from None
-        # rows: the whitened skin coordinates, then the luminance
-        self._W = np.concatenate([L.T @ _YCC, _YCC[:1]]).astype(np.float32)
-        self._c = (L.T @ self.mean).astype(np.float32)
+        self.means = np.asarray(self.means, dtype=np.float64).reshape(-1, 3)
+        self.covs = np.asarray(self.covs, dtype=np.float64).reshape(-1, 3, 3)
+        if not len(self.means) or len(self.means) != len(self.covs):
+            raise EyeModelError("eye model: the skin needs at least one Gaussian with a mean and a covariance")
+        ws, cs = [], []
+        for mu, cov in zip(self.means, self.covs):
+            try:
+                L = np.linalg.cholesky(np.linalg.inv(cov))  # z = L^T (ycc - mean) is whitened
+            except np.linalg.LinAlgError:
+                raise EyeModelError("eye model: a skin covariance is not positive definite") from None
+            ws.append(L.T @ _YCC)
+            cs.append(L.T @ mu)
+        # rows: the whitened coordinates of each Gaussian, then the luminance
+        self._W = np.concatenate(ws + [_YCC[:1]]).astype(np.float32)
+        self._c = np.concatenate(cs).astype(np.float32)
+        self._k = len(self.means)
+        self.sources: list[str] = []  # the sample groups the Gaussians came from (see fit)
+
+    def _distance(self, z: np.ndarray) -> np.ndarray:
+        d = z[:, : 3 * self._k] - self._c
+        if self._k == 1:
+            return np.sqrt(np.einsum("ij,ij->i", d, d))
+        return np.sqrt((d * d).reshape(len(d), self._k, 3).sum(axis=2).min(axis=1))
 
     def distance(self, bgr: np.ndarray) -> np.ndarray:
-        """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the skin."""
-        z = np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W[:3].T - self._c
-        return np.sqrt(np.einsum("ij,ij->i", z, z))
+        """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the nearest skin Gaussian."""
+        return self._distance(np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W.T)
 
     def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
         """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
@@ -293,19 +309,19 @@ class SkinModel:
         x = np.asarray(bgr, dtype=np.float32).reshape(-1, 3)
         W = self._W if gain is None else self._W * np.asarray(gain, dtype=np.float32)[None, :]
         z = x @ W.T
-        d = z[:, :3] - self._c
-        e = (np.sqrt(np.einsum("ij,ij->i", d, d)) - self.lo) * (1.0 / (self.hi - self.lo))
+        e = (self._distance(z) - self.lo) * (1.0 / (self.hi - self.lo))
         if self.dark > 0:
-            e = np.maximum(e, (self.dark - z[:, 3]) * (1.0 / self.dark_ramp) + 0.5)
+            e = np.maximum(e, (self.dark - z[:, -1]) * (1.0 / self.dark_ramp) + 0.5)
         return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
-        """The skin from named groups of BGR samples; a ``doubtful`` group whose own Gaussian would
-        call the ``iris`` pixels (BGR) skin caught lashes or the iris and is left out."""
+        """One Gaussian per named group of BGR skin samples (or one for all with :data:`POOL`);
+        a ``doubtful`` group whose Gaussian would call the ``iris`` pixels (BGR) skin caught
+        lashes or the iris and is left out."""
         floor = np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2)
         inner = np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC.T
-        kept = []
+        kept, names = [], []
         for name, px in groups.items():
             ycc = np.asarray(px, dtype=np.float64).reshape(-1, 3) @ _YCC.T
             if len(ycc) < 6:
@@ -316,10 +332,14 @@ class SkinModel:
                 if np.median(np.sqrt(np.einsum("ni,ij,nj->n", dv, ic, dv))) < NOT_SKIN_HI + 1.0:
                     continue
             kept.append(ycc)
+            names.append(name)
         if not kept:
             raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
-        ycc = np.concatenate(kept)
-        return cls(ycc.mean(0), np.cov(ycc.T) + floor)
+        if POOL:
+            kept = [np.concatenate(kept)]
+        model = cls(np.array([v.mean(0) for v in kept]), np.array([np.cov(v.T) + floor for v in kept]))
+        model.sources = names
+        return model
 
     def set_levels(self, parts: list[np.ndarray]) -> None:
         """Centre the interior ramp half-way between the skin and the nearer of the interior's
@@ -332,16 +352,16 @@ class SkinModel:
 
     def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
         """Count as interior what is much darker than any skin: half-way between the iris's
-        middle and the darkest skin (10th percentile of each group), when they differ by at
-        least :data:`DARK_MIN` grey levels."""
+        middle and the darkest skin (10th percentile of each group), when the iris is at most
+        :data:`DARK_RATIO` as bright."""
         yi = float(np.median(np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC[0]))
         ys = min(float(np.percentile(np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0], 10)) for g in skin if len(g))
-        if ys - yi >= DARK_MIN:
-            self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), 0.25 * (ys - yi)
+        if yi <= DARK_RATIO * ys:
+            self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), max(0.25 * (ys - yi), 1.0)
 
     def to_dict(self) -> dict:
         return {
-            "mean": self.mean.round(4).tolist(), "cov": self.cov.round(4).tolist(),
+            "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist(),
             "levels": [self.lo, self.hi], "dark": [self.dark, self.dark_ramp],
         }
 
@@ -351,7 +371,7 @@ class SkinModel:
         dark, ramp = (float(v) for v in d["dark"])
         if not hi > lo or not ramp > 0:
             raise EyeModelError("eye model: skin levels must rise")
-        return cls(np.asarray(d["mean"]), np.asarray(d["cov"]), lo, hi, dark, ramp)
+        return cls(np.asarray(d["means"]), np.asarray(d["covs"]), lo, hi, dark, ramp)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -593,7 +613,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     groups, middle, ring, sclera = _colour_samples(crop, pupils, radius, brow_heights, wi)
     skin = SkinModel.fit(groups, middle, doubtful=("above the eyes",))
     skin.set_levels([ring, sclera])
-    skin.set_dark(list(groups.values()), middle)
+    skin.set_dark(list(groups.values()), middle)  # darker than every skin sample, even a shadowed lid
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
@@ -776,14 +796,17 @@ class EyeFinder:
 
     def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> float:
         """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
-        white or a light iris: from the run's top to the strongest step from light (below) to
-        dark (above) within :data:`LASH_STEP` under it; 0 without a clear step."""
+        white above the iris: from the run's top to the strongest step from light (below) to
+        dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
+        step (the lashes on a dark iris cannot be told from it)."""
         strip, c = self._strip(crop, i, at)
         e = self.skin.interior(strip.mean(axis=1, dtype=np.float32))
         up = _run(e[c::-1])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
-        lo, hi = max(k, 1), min(k + int(math.ceil(LASH_STEP * self.wi)), c)
+        # the step lies above the iris (on the white) and under a thin line
+        lo = max(k, 1)
+        hi = min(k + int(math.ceil(LASH_STEP * self.wi)), c - int(math.ceil(0.9 * self.radius[i])))
         if hi <= lo:
             return 0.0
         steps = lum[lo + 1 : hi + 1] - lum[lo:hi]
@@ -874,11 +897,14 @@ class EyeFinder:
         for i in range(2):
             iris = found[i][:2]
             up, down = self.lids(crop_bgr, i, iris, gain)
-            is_open = up + down >= CLOSED_BELOW * self.model.lid_open[i]
+            lo, hi = CLOSING
+            w = min(max(((up + down) / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
             pt = iris
-            if not is_open:
-                pt = self._slit(crop_bgr, iris, gain)
+            if w < 1.0:
+                sx, sy = self._slit(crop_bgr, iris, gain)
+                pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
                 up, down = self.lids(crop_bgr, i, pt, gain)
+            is_open = w >= 0.5
             match = max(found[i][2], 0.0)
             score = math.sqrt(self._eye_match(crop_grey, pt, i) * match)
             brow, brow_match = self._brow(crop_grey, pt, i)
@@ -964,7 +990,7 @@ def refine_pupils(
         model = EyeModel(
             work_ipd=wi, radius=radius, iris_pictures=pics, eye_pictures=[blank, blank],
             brow_profiles=[np.zeros(5, np.float32)] * 2, brow_centres=[2.0, 2.0], brow_heights=[0.4 * wi] * 2,
-            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros(3), np.eye(3)), skin_bgr=np.ones(3),
+            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros((1, 3)), np.eye(3)[None]), skin_bgr=np.ones(3),
         )
         f = EyeFinder(model, wi, search=(0.12, 0.08))
         found = np.array([q[:2] for q in f.locate_irises(crop, centres)]) + o
