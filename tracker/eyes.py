@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from tracker.brows import brow_centre, column_profile
 from tracker.pupils import parabola_offset
@@ -56,6 +55,8 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move against the other's when both are searched together
 (a crop predicted a few degrees or per cent off)."""
 FINE = 3
+RING_SPARSE = True
+RING_POINTS = 12
 GAIN_SCALAR = False
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 LID_RANGE = 0.3
@@ -104,6 +105,8 @@ light is measured."""
 # adaptation
 ADAPT_RATE = 0.05
 """Weight of one confident frame in the adapted pictures."""
+ADAPT_EVERY = 4
+"""Only every this many confident frames are looked at (with that many times the rate)."""
 ADAPT_FLOOR = 0.5
 """Share of the calibration pictures that always stays in the pictures used."""
 ADAPT_MIN_SCORE = 0.6
@@ -141,17 +144,18 @@ def _even_picture(p: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(p[h % 2 : p.shape[0] - h % 2, w % 2 : p.shape[1] - w % 2], dtype=np.float32)
 
 
-def _standardised(v: np.ndarray) -> np.ndarray:
-    """``v`` with zero mean and unit spread (float32; a flat ``v`` stays flat)."""
-    d = np.asarray(v, dtype=np.float32).ravel()
-    d = d - d.mean()
-    return (d / max(float(d.std()), 1e-6)).astype(np.float32)
-
-
 def iris_picture_size(r: float) -> tuple[int, int]:
     """Half-width and half-height (even) of the iris picture for radius ``r``: the iris and the
     white beside it."""
     return _even(1.5 * r), _even(0.8 * r)
+
+
+def strip_profile(grey: np.ndarray, x: float, top: int, n: int, half_width: int) -> np.ndarray:
+    """Mean grey of rows ``top .. top+n-1`` over the columns within ``half_width`` of ``x``
+    (sub-pixel, bilinear; the border repeats outside the image), float32 ``(n,)``."""
+    g = grey if grey.dtype in (np.uint8, np.float32) else np.asarray(grey, dtype=np.float32)
+    patch = cv2.getRectSubPix(g, (2 * half_width + 1, n), (float(x), top + 0.5 * (n - 1)), patchType=cv2.CV_32F)
+    return cv2.reduce(patch, 1, cv2.REDUCE_AVG).ravel()
 
 
 def brow_half_width(work_ipd: float) -> int:
@@ -242,15 +246,18 @@ def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) 
     return float(np.clip(r, RADIUS_LO * wi, RADIUS_HI * wi))
 
 
-def _run(e: np.ndarray) -> float:
+def _run(e) -> float:
     """Soft length of the interior run starting in the middle of ``e[0]``: half of sample 0,
     then whole samples by their membership until two in a row are mostly not interior."""
-    if not len(e):
+    v = e.tolist() if isinstance(e, np.ndarray) else list(e)
+    if not v:
         return 0.0
-    bad = e < 0.5
-    stop = bad[1:-1] & bad[2:] if len(e) > 2 else bad[1:]
-    k = int(np.argmax(stop)) + 1 if stop.any() else len(e)
-    return 0.5 * float(e[0]) + float(e[1:k].sum())
+    total = 0.5 * v[0]
+    for j in range(1, len(v)):
+        if v[j] < 0.5 and (j + 1 == len(v) or v[j + 1] < 0.5):
+            break
+        total += v[j]
+    return total
 
 
 # ---------------------------------------------------------------------------------------------
@@ -291,6 +298,9 @@ class SkinModel:
         self._W = np.concatenate(ws + [_YCC[:1]]).astype(np.float32)
         self._c = np.concatenate(cs).astype(np.float32)
         self._k = len(self.means)
+        # for cv2.transform: the same rows with the offsets in a last column
+        self._M = np.concatenate([self._W, -np.concatenate([self._c, [0.0]])[:, None]], axis=1).astype(np.float32)
+        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0]], np.float32)
         self.sources: list[str] = []  # the sample groups the Gaussians came from (see fit)
 
     def _distance(self, z: np.ndarray) -> np.ndarray:
@@ -302,6 +312,21 @@ class SkinModel:
     def distance(self, bgr: np.ndarray) -> np.ndarray:
         """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the nearest skin Gaussian."""
         return self._distance(np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W.T)
+
+    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
+        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs'
+        fast path: one OpenCV transform instead of a few small numpy products)."""
+        M = self._M if gain is None else self._M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
+        z = cv2.transform(column, M)
+        if self._k == 1:
+            d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+        else:
+            w = z.reshape(-1, 3 * self._k + 1)[:, :-1]
+            d = np.sqrt((w * w).reshape(len(w), self._k, 3).sum(axis=2).min(axis=1))
+        e = (d - self.lo) * (1.0 / (self.hi - self.lo))
+        if self.dark > 0:
+            e = np.maximum(e, (self.dark - z[:, 0, -1]) * (1.0 / self.dark_ramp) + 0.5)
+        return np.clip(e, 0.0, 1.0).tolist()
 
     def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
         """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
@@ -606,7 +631,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
             height = float(np.clip(py - b[1], 0.15 * wi, 0.9 * wi))
         cy_b = py - height
         start = int(math.floor(cy_b)) - half
-        brow_profiles.append(column_profile(grey, px, start, start + 2 * half + 1, brow_half_width(wi)))
+        brow_profiles.append(strip_profile(grey, px, start, 2 * half + 1, brow_half_width(wi)))
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
@@ -661,10 +686,18 @@ class EyeFinder:
         self._set_pictures()
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
+        self._adapt_count = 0
         rm = 0.5 * (self.radius[0] + self.radius[1])
         self._boxes_half = disc_boxes(0.375 * rm)
         self._boxes = [disc_boxes(0.75 * r) for r in self.radius]
         self._ring = cv2.merge(list(ring_kernels(0.5 * rm)))
+        # the same ring as a few sample points (offset, outward direction / count / 3)
+        ang = np.arange(RING_POINTS) * (2.0 * math.pi / RING_POINTS)
+        self._ring_points = [
+            (int(round(0.5 * rm * math.cos(a))), int(round(0.5 * rm * math.sin(a))),
+             math.cos(a) / (3.0 * RING_POINTS), math.sin(a) / (3.0 * RING_POINTS))
+            for a in ang
+        ]
         self.pad = max(
             _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
         )
@@ -679,7 +712,7 @@ class EyeFinder:
         self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
         self.brow_hi = [h + BROW_UP * wi for h in model.brow_heights]
         self._brow_hw = brow_half_width(wi)
-        self._brow_z = [_standardised(p) for p in model.brow_profiles]
+        self._brow_z = [np.asarray(p, dtype=np.float32).reshape(-1, 1) for p in model.brow_profiles]
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         # the crop this needs (face coordinates)
@@ -723,9 +756,7 @@ class EyeFinder:
         m = mag.size // 2
         t = max(float(np.partition(mag.ravel(), m)[m]), 1.0)
         wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
-        kh, kw = self._ring.shape[0] // 2, self._ring.shape[1] // 2
-        g2 = cv2.merge([gx * wgt, gy * wgt])[ph - kh : half.shape[0] - ph + kh, ph - kw : half.shape[1] - ph + kw]
-        votes = np.maximum(cv2.matchTemplate(g2, self._ring, cv2.TM_CCORR), 0.0) * (1.0 / 3.0)
+        votes = self._ring_votes(gx * wgt, gy * wgt, ph)
         maps, origins = [], []
         sxh, syh = self.sx // 2, self.sy // 2
         ws, hs = 2 * sxh + 1, 2 * syh + 1
@@ -739,6 +770,20 @@ class EyeFinder:
             # half px k is the mean of the strip's full px 2k and 2k+1
             origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
         return maps, origins
+
+    def _ring_votes(self, gx: np.ndarray, gy: np.ndarray, p: int) -> np.ndarray:
+        """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
+        gradients at the ring's sample points point away from it (about 0..1)."""
+        H, W = gx.shape
+        if RING_SPARSE:
+            out = np.zeros((H - 2 * p, W - 2 * p), np.float32)
+            for dx, dy, cx, cy in self._ring_points:
+                out += cx * gx[p + dy : H - p + dy, p + dx : W - p + dx]
+                out += cy * gy[p + dy : H - p + dy, p + dx : W - p + dx]
+            return np.maximum(out, 0.0)
+        kh, kw = self._ring.shape[0] // 2, self._ring.shape[1] // 2
+        g2 = cv2.merge([gx, gy])[p - kh : H - p + kh, p - kw : W - p + kw]
+        return np.maximum(cv2.matchTemplate(g2, self._ring, cv2.TM_CCORR), 0.0) * (1.0 / 3.0)
 
     def _fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
         """Sub-pixel iris centre near full-res ``(x, y)``: disc darkness × (1 + correlation with
@@ -790,7 +835,7 @@ class EyeFinder:
         of the interior runs up and down the strip through ``at``, each row classified by its
         mean colour (the columns average the noise away), the lash line off the upper one."""
         strip, c = self._strip(crop, i, at)
-        e = self.skin.interior(strip.mean(axis=1, dtype=np.float32), gain)
+        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F), gain)
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
@@ -800,7 +845,7 @@ class EyeFinder:
         dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
         step (the lashes on a dark iris cannot be told from it)."""
         strip, c = self._strip(crop, i, at)
-        e = self.skin.interior(strip.mean(axis=1, dtype=np.float32))
+        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F))
         up = _run(e[c::-1])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
@@ -821,12 +866,12 @@ class EyeFinder:
         for _ in range(2):
             xi, yi = int(round(x)), int(round(y))
             x0, x1, y0, y1 = max(xi - hx, 0), min(xi + hx + 1, w), max(yi - hy, 0), min(yi + hy + 1, h)
-            e = self.skin.interior(crop[y0:y1, x0:x1], gain)
+            e = self.skin.interior(crop[y0:y1:2, x0:x1:2], gain)  # every other pixel is plenty
             tot = float(e.sum())
-            if tot < 1.0:
+            if tot < 0.25:
                 break
-            x = x0 + float(e.sum(axis=0) @ np.arange(x1 - x0)) / tot
-            y = y0 + float(e.sum(axis=1) @ np.arange(y1 - y0)) / tot
+            x = x0 + 2.0 * float(e.sum(axis=0) @ np.arange(e.shape[1])) / tot
+            y = y0 + 2.0 * float(e.sum(axis=1) @ np.arange(e.shape[0])) / tot
         return x, y
 
     # ------------------------------------------------------------------ brow, score, light
@@ -839,13 +884,10 @@ class EyeFinder:
         c = self.model.brow_centres[i]
         top = int(math.floor(py - self.brow_hi[i] - c)) - 1
         bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
-        prof = column_profile(grey, px, top, bot, self._brow_hw)
-        if len(prof) < n + 2:
+        if bot - top < n + 2:
             return self.model.brow_heights[i], 0.0
-        win = sliding_window_view(prof, n)
-        mu = win.mean(axis=1)
-        sd = np.sqrt(np.maximum((win * win).mean(axis=1) - mu * mu, 1e-6))
-        score = (win @ t) * (1.0 / n) / sd
+        prof = strip_profile(grey, px, top, bot - top, self._brow_hw)
+        score = cv2.matchTemplate(prof.reshape(-1, 1), t, cv2.TM_CCOEFF_NORMED).ravel()
         k = int(np.argmax(score))
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
         return float(py - (top + k + d + c)), float(score[k])
@@ -919,15 +961,20 @@ class EyeFinder:
     def adapt(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, result: EyeResult, rate: float | None = None) -> bool:
         """Follow the light and the face slowly, from a frame :meth:`find` was confident about.
 
-        When both eyes are open and score at least :data:`ADAPT_MIN_SCORE`, ``rate`` of this
-        frame (default :data:`ADAPT_RATE`) goes into the adapted iris and eye pictures and into
-        the light's gain (measured on the skin below the eyes). The pictures used keep :data:`ADAPT_FLOOR` of the
+        When both eyes are open and score at least :data:`ADAPT_MIN_SCORE`, ``rate`` per frame
+        (default :data:`ADAPT_RATE`; applied on every :data:`ADAPT_EVERY`-th such frame) goes
+        into the adapted iris and eye pictures and into the light's gain (measured on the skin
+        around the eyes). The pictures used keep :data:`ADAPT_FLOOR` of the
         calibration's and the gain stays within :data:`GAIN_LIMITS`, so drift cannot take them
         further. Returns whether the frame was used.
         """
         if not all(e.open and e.score >= ADAPT_MIN_SCORE for e in result.eyes):
             return False
-        rate = ADAPT_RATE if rate is None else float(rate)
+        self._adapt_count += 1
+        if self._adapt_count % ADAPT_EVERY:
+            return True
+        # every ADAPT_EVERY-th confident frame counts for all of them (the cost is shared)
+        rate = min((ADAPT_RATE if rate is None else float(rate)) * ADAPT_EVERY, 1.0)
         grey = np.asarray(crop_grey, dtype=np.float32)
         for i, e in enumerate(result.eyes):
             for pics, calib in ((self._adapted_iris, self._calib_iris), (self._adapted_eye, self._calib_eye)):
