@@ -666,12 +666,17 @@ class EyeFinder:
     ``rect`` is the face-frame rectangle ``(x0, y0, w, h)`` (eye centres at ``(±work_ipd/2,
     0)``) whose crop holds everything :meth:`find` looks at when the eyes are where
     predicted; a larger crop works too. ``search`` (x, y) is the half-size of the iris
-    search window, × ``work_ipd``.
+    search window and ``prior`` the spread of the preference for irises near the predicted
+    centres, both × ``work_ipd``.
     """
 
-    def __init__(self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y)):
+    def __init__(
+        self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y),
+        prior: tuple[float, float] = PRIOR,
+    ):
         self.model = model
         self.wi = wi = float(work_ipd)
+        self.dark_power = 1.0
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
@@ -701,8 +706,8 @@ class EyeFinder:
         self.pad = max(
             _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
         )
-        u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (PRIOR[0] * wi))
-        v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (PRIOR[1] * wi))
+        u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (prior[0] * wi))
+        v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
         self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
@@ -749,6 +754,8 @@ class EyeFinder:
         k = sub.size // 2
         level = max(float(np.partition(sub, k)[k]), 8.0)
         dark = np.maximum(level - disc_mean(half, self._boxes_half), 0.0) * (1.0 / level)
+        if self.dark_power != 1.0:
+            dark = dark ** self.dark_power
         # ring votes: unit gradients (weighted by strength against the median, at most 3×)
         gx = cv2.Sobel(half, cv2.CV_32F, 1, 0, ksize=3)
         gy = cv2.Sobel(half, cv2.CV_32F, 0, 1, ksize=3)
@@ -798,7 +805,10 @@ class EyeFinder:
         ncc = cv2.matchTemplate(win[m - th : m + n + th, m - tw : m + n + tw], t, cv2.TM_CCOEFF_NORMED)
         D = disc_mean(win, self._boxes[i])[m : m + n, m : m + n]
         level = max(float(np.max(win[m : m + n, m : m + n])), 8.0)
-        s = np.maximum(level - D, 0.0) * (1.0 + np.maximum(ncc, 0.0))
+        s = np.maximum(level - D, 0.0)
+        if self.dark_power != 1.0:
+            s = s ** self.dark_power
+        s = s * (1.0 + np.maximum(ncc, 0.0))
         ky, kx = divmod(int(np.argmax(s)), n)
         fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < n - 1 else 0.0
         fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < n - 1 else 0.0
@@ -1005,15 +1015,36 @@ class EyeFinder:
 # calibration help
 
 
+REFINE_PRIOR = (0.06, 0.04)
+"""How far (× the clicked ipd) :func:`refine_pupils` expects a careful click to be from the
+iris centre: its preference for irises near the clicks."""
+REFINE_DARK = 0.0
+"""Power of the disc darkness in :func:`refine_pupils`' scores: none, the drawn iris's
+correlation and the ring votes place the disc; dark lashes and make-up beside the iris
+would pull the darkest disc off it."""
+REFINE_MIN_MATCH = 0.3
+"""Correlation with a drawn iris below which :func:`refine_pupils` keeps the clicks."""
+
+
+def _drawn_iris(r: float) -> np.ndarray:
+    """A grey picture of the size of :func:`iris_picture_size`: a dark disc of radius ``r``
+    between light sides (for finding irises before anything is learned)."""
+    hw, hh = iris_picture_size(r)
+    yy, xx = np.mgrid[-hh : hh + 1, -hw : hw + 1]
+    inside = np.clip(r + 0.5 - np.hypot(xx, yy), 0.0, 1.0)
+    return (200.0 - 150.0 * inside).astype(np.float32)
+
+
 def refine_pupils(
     frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Snap two clicked pupils (frame px) to the iris centres near them (sub-pixel, frame px).
 
     Both eyes are searched together within about an eighth of the clicked inter-pupil
-    distance, with the iris radius measured at the clicks and the pictures cut there. The
-    clicks come back unchanged when the result is not a plausible pair (a real face is never
-    refused). ``frame_grey`` may also be BGR.
+    distance (twice: with a typical iris radius, then with the radius measured there), a
+    drawn iris as the picture and a preference for irises near careful clicks
+    (:data:`REFINE_PRIOR`). The clicks come back unchanged when nothing iris-like is there or the result is
+    not a plausible pair (a real face is never refused). ``frame_grey`` may also be BGR.
     """
     from tracker.calibration import FaceFrame
 
@@ -1021,7 +1052,7 @@ def refine_pupils(
     if grey.ndim == 3:
         grey = cv2.cvtColor(grey, cv2.COLOR_BGR2GRAY)
     lp, rp = (float(left[0]), float(left[1])), (float(right[0]), float(right[1]))
-    for _ in range(iterations):
+    for it in range(iterations):
         ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
         if ipd < 8:
             return lp, rp
@@ -1031,16 +1062,25 @@ def refine_pupils(
         crop = ff.crop(grey, rect).astype(np.float32)
         o = np.array(rect[:2], dtype=np.float64)
         centres = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
-        radius = [iris_radius(crop, (float(c[0]), float(c[1])), wi) for c in centres]
-        pics = [subpixel_cut(crop, c[0], c[1], *iris_picture_size(r)) for c, r in zip(centres, radius)]
+        # the radius is measured once the centre is near (off-centre it looks too small)
+        if it == 0:
+            radius = [RADIUS_DEFAULT * wi] * 2
+        else:
+            radius = [iris_radius(crop, (float(c[0]), float(c[1])), wi) for c in centres]
+        # a drawn iris (a picture cut at the clicks would pull the search back to them)
+        pics = [_drawn_iris(r) for r in radius]
         blank = np.zeros((5, 5), np.float32)
         model = EyeModel(
             work_ipd=wi, radius=radius, iris_pictures=pics, eye_pictures=[blank, blank],
             brow_profiles=[np.zeros(5, np.float32)] * 2, brow_centres=[2.0, 2.0], brow_heights=[0.4 * wi] * 2,
             lid_open=[1.0, 1.0], skin=SkinModel(np.zeros((1, 3)), np.eye(3)[None]), skin_bgr=np.ones(3),
         )
-        f = EyeFinder(model, wi, search=(0.12, 0.08))
-        found = np.array([q[:2] for q in f.locate_irises(crop, centres)]) + o
+        f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR)
+        f.dark_power = REFINE_DARK
+        found = f.locate_irises(crop, centres)
+        if min(q[2] for q in found) < REFINE_MIN_MATCH:
+            return lp, rp  # nothing there looks like an iris
+        found = np.array([q[:2] for q in found]) + o
         img = ff.to_image(found)
         nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
         if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):
