@@ -55,9 +55,8 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move against the other's when both are searched together
 (a crop predicted a few degrees or per cent off)."""
 FINE = 3
-RING_SPARSE = True
 RING_POINTS = 12
-GAIN_SCALAR = False
+"""Sample points on the ring the radial votes are gathered from."""
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 LID_RANGE = 0.3
 """How far the lid runs go up and down from the eye point."""
@@ -89,7 +88,6 @@ NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
 :meth:`SkinModel.set_levels` moves it half-way to the interior's colours."""
 LEVEL_MAX = 10.0
 """Highest centre of the interior ramp (Mahalanobis units)."""
-POOL = True
 SKIN_FLOOR = (2.0, 1.0, 1.0)
 """Spread (std, grey levels) added to the skin's Y, Cr, Cb: noise, shading."""
 DARK_RATIO = 0.6
@@ -120,8 +118,6 @@ _YCC = np.array(
     [[0.114, 0.587, 0.299], [-0.081312, -0.418688, 0.5], [0.5, -0.331264, -0.168736]], dtype=np.float64
 )
 """YCrCb from BGR (OpenCV's conversion without its offsets, which cancel here)."""
-_TRIM_SPREAD = np.array([6.0, 2.0, 2.0])
-"""Channel scale (grey levels) for trimming skin samples far from their median."""
 
 
 class EyeModelError(ValueError):
@@ -170,20 +166,6 @@ def subpixel_cut(grey: np.ndarray, cx: float, cy: float, hw: int, hh: int) -> np
         np.asarray(grey, dtype=np.float32), M, (2 * hw + 1, 2 * hh + 1),
         flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE,
     )
-
-
-def ring_kernels(radius: float, width: float = 0.35) -> tuple[np.ndarray, np.ndarray]:
-    """Kernels ``(kx, ky)`` that add up, at each centre, the unit gradients on a ring of
-    ``radius`` (± ``width`` × radius) that point away from it: correlated with the unit
-    gradient field, a dark disc's rim sums at its centre (a soft Hough vote for one radius)."""
-    k = int(math.ceil(radius * (1.0 + width))) + 1
-    yy, xx = np.mgrid[-k : k + 1, -k : k + 1].astype(np.float64)
-    d = np.hypot(xx, yy)
-    ring = np.clip(1.0 - np.abs(d - radius) / (width * radius + 0.5), 0.0, None)
-    ring[k, k] = 0.0
-    ring /= ring.sum()
-    d[k, k] = 1.0
-    return (ring * xx / d).astype(np.float32), (ring * yy / d).astype(np.float32)
 
 
 def disc_boxes(radius: float) -> tuple[tuple[int, int], ...]:
@@ -266,87 +248,66 @@ def _run(e) -> float:
 
 @dataclass
 class SkinModel:
-    """The skin around the eyes as a few Gaussians in YCrCb (grey levels; one per sampled
-    region, so shading between regions does not widen any of them), and what is *not* skin.
+    """The skin around the eyes as a Gaussian in YCrCb (grey levels), and what is *not* skin.
 
-    :meth:`interior` ramps each pixel's Mahalanobis distance from the nearest skin Gaussian
-    from ``lo`` (skin) to ``hi`` (surely not skin); with ``dark`` > 0 a pixel darker than
-    ``dark`` (grey levels, ramp ``dark_ramp``) is interior too (a dark iris, the pupil, lashes).
+    :meth:`interior` ramps each pixel's Mahalanobis distance from the skin from ``lo`` (skin)
+    to ``hi`` (surely not skin); with ``dark`` > 0 a pixel darker than ``dark`` (grey levels,
+    ramp ``dark_ramp``) is interior too (a dark iris, the pupil, lashes).
     """
 
-    means: np.ndarray  # (k, 3)
-    covs: np.ndarray  # (k, 3, 3)
+    mean: np.ndarray
+    cov: np.ndarray
     lo: float = NOT_SKIN_LO
     hi: float = NOT_SKIN_HI
     dark: float = -1.0
     dark_ramp: float = 1.0
 
     def __post_init__(self) -> None:
-        self.means = np.asarray(self.means, dtype=np.float64).reshape(-1, 3)
-        self.covs = np.asarray(self.covs, dtype=np.float64).reshape(-1, 3, 3)
-        if not len(self.means) or len(self.means) != len(self.covs):
-            raise EyeModelError("eye model: the skin needs at least one Gaussian with a mean and a covariance")
-        ws, cs = [], []
-        for mu, cov in zip(self.means, self.covs):
-            try:
-                L = np.linalg.cholesky(np.linalg.inv(cov))  # z = L^T (ycc - mean) is whitened
-            except np.linalg.LinAlgError:
-                raise EyeModelError("eye model: a skin covariance is not positive definite") from None
-            ws.append(L.T @ _YCC)
-            cs.append(L.T @ mu)
-        # rows: the whitened coordinates of each Gaussian, then the luminance
-        self._W = np.concatenate(ws + [_YCC[:1]]).astype(np.float32)
-        self._c = np.concatenate(cs).astype(np.float32)
-        self._k = len(self.means)
-        # for cv2.transform: the same rows with the offsets in a last column
-        self._M = np.concatenate([self._W, -np.concatenate([self._c, [0.0]])[:, None]], axis=1).astype(np.float32)
+        self.mean = np.asarray(self.mean, dtype=np.float64).reshape(3)
+        self.cov = np.asarray(self.cov, dtype=np.float64).reshape(3, 3)
+        try:
+            L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
+        except np.linalg.LinAlgError:
+            raise EyeModelError("eye model: the skin covariance is not positive definite") from None
+        W = np.concatenate([L.T @ _YCC, _YCC[:1]])  # rows: whitened coordinates, luminance
+        c = np.append(L.T @ self.mean, 0.0)
+        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (4, 4) for cv2.transform
         self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0]], np.float32)
-        self.sources: list[str] = []  # the sample groups the Gaussians came from (see fit)
 
-    def _distance(self, z: np.ndarray) -> np.ndarray:
-        d = z[:, : 3 * self._k] - self._c
-        if self._k == 1:
-            return np.sqrt(np.einsum("ij,ij->i", d, d))
-        return np.sqrt((d * d).reshape(len(d), self._k, 3).sum(axis=2).min(axis=1))
-
-    def distance(self, bgr: np.ndarray) -> np.ndarray:
-        """Mahalanobis distance of each pixel (``(n, 3)`` BGR) from the nearest skin Gaussian."""
-        return self._distance(np.asarray(bgr, dtype=np.float32).reshape(-1, 3) @ self._W.T)
-
-    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
-        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs'
-        fast path: one OpenCV transform instead of a few small numpy products)."""
+    def _transform(self, bgr: np.ndarray, gain: np.ndarray | None) -> np.ndarray:
+        """Whitened coordinates and luminance ``(n, 1, 4)`` of BGR pixels (``gain`` applied)."""
         M = self._M if gain is None else self._M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
-        z = cv2.transform(column, M)
-        if self._k == 1:
-            d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
-        else:
-            w = z.reshape(-1, 3 * self._k + 1)[:, :-1]
-            d = np.sqrt((w * w).reshape(len(w), self._k, 3).sum(axis=2).min(axis=1))
+        return cv2.transform(np.asarray(bgr, dtype=np.float32).reshape(-1, 1, 3), M)
+
+    def _membership(self, z: np.ndarray) -> np.ndarray:
+        d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
         e = (d - self.lo) * (1.0 / (self.hi - self.lo))
         if self.dark > 0:
-            e = np.maximum(e, (self.dark - z[:, 0, -1]) * (1.0 / self.dark_ramp) + 0.5)
-        return np.clip(e, 0.0, 1.0).tolist()
+            e = np.maximum(e, (self.dark - z[:, 0, 3]) * (1.0 / self.dark_ramp) + 0.5)
+        return np.clip(e, 0.0, 1.0)
+
+    def distance(self, bgr: np.ndarray) -> np.ndarray:
+        """Mahalanobis distance of each pixel (``(..., 3)`` BGR) from the skin, ``(n,)``."""
+        z = self._transform(bgr, None)
+        return cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
 
     def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
         """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
         ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration)."""
-        x = np.asarray(bgr, dtype=np.float32).reshape(-1, 3)
-        W = self._W if gain is None else self._W * np.asarray(gain, dtype=np.float32)[None, :]
-        z = x @ W.T
-        e = (self._distance(z) - self.lo) * (1.0 / (self.hi - self.lo))
-        if self.dark > 0:
-            e = np.maximum(e, (self.dark - z[:, -1]) * (1.0 / self.dark_ramp) + 0.5)
-        return np.clip(e, 0.0, 1.0).reshape(np.shape(bgr)[:-1])
+        return self._membership(self._transform(bgr, gain)).reshape(np.shape(bgr)[:-1])
+
+    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
+        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs)."""
+        return self._membership(self._transform(column, gain)).tolist()
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
-        """One Gaussian per named group of BGR skin samples (or one for all with :data:`POOL`);
-        a ``doubtful`` group whose Gaussian would call the ``iris`` pixels (BGR) skin caught
-        lashes or the iris and is left out."""
+        """The skin from named groups of BGR samples, pooled; a ``doubtful`` group whose own
+        Gaussian would call the ``iris`` pixels (BGR) skin caught lashes or the iris and is
+        left out."""
         floor = np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2)
         inner = np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC.T
-        kept, names = [], []
+        kept = []
         for name, px in groups.items():
             ycc = np.asarray(px, dtype=np.float64).reshape(-1, 3) @ _YCC.T
             if len(ycc) < 6:
@@ -357,14 +318,10 @@ class SkinModel:
                 if np.median(np.sqrt(np.einsum("ni,ij,nj->n", dv, ic, dv))) < NOT_SKIN_HI + 1.0:
                     continue
             kept.append(ycc)
-            names.append(name)
         if not kept:
             raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
-        if POOL:
-            kept = [np.concatenate(kept)]
-        model = cls(np.array([v.mean(0) for v in kept]), np.array([np.cov(v.T) + floor for v in kept]))
-        model.sources = names
-        return model
+        ycc = np.concatenate(kept)
+        return cls(ycc.mean(0), np.cov(ycc.T) + floor)
 
     def set_levels(self, parts: list[np.ndarray]) -> None:
         """Centre the interior ramp half-way between the skin and the nearer of the interior's
@@ -386,7 +343,7 @@ class SkinModel:
 
     def to_dict(self) -> dict:
         return {
-            "means": self.means.round(4).tolist(), "covs": self.covs.round(4).tolist(),
+            "mean": self.mean.round(4).tolist(), "cov": self.cov.round(4).tolist(),
             "levels": [self.lo, self.hi], "dark": [self.dark, self.dark_ramp],
         }
 
@@ -396,7 +353,7 @@ class SkinModel:
         dark, ramp = (float(v) for v in d["dark"])
         if not hi > lo or not ramp > 0:
             raise EyeModelError("eye model: skin levels must rise")
-        return cls(np.asarray(d["means"]), np.asarray(d["covs"]), lo, hi, dark, ramp)
+        return cls(np.asarray(d["mean"]), np.asarray(d["cov"]), lo, hi, dark, ramp)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -667,16 +624,16 @@ class EyeFinder:
     0)``) whose crop holds everything :meth:`find` looks at when the eyes are where
     predicted; a larger crop works too. ``search`` (x, y) is the half-size of the iris
     search window and ``prior`` the spread of the preference for irises near the predicted
-    centres, both × ``work_ipd``.
+    centres, both × ``work_ipd``; ``darkness`` the power of the disc-darkness term (0: off).
     """
 
     def __init__(
         self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y),
-        prior: tuple[float, float] = PRIOR,
+        prior: tuple[float, float] = PRIOR, darkness: float = 1.0,
     ):
         self.model = model
         self.wi = wi = float(work_ipd)
-        self.dark_power = 1.0
+        self.dark_power = float(darkness)
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
@@ -695,8 +652,7 @@ class EyeFinder:
         rm = 0.5 * (self.radius[0] + self.radius[1])
         self._boxes_half = disc_boxes(0.375 * rm)
         self._boxes = [disc_boxes(0.75 * r) for r in self.radius]
-        self._ring = cv2.merge(list(ring_kernels(0.5 * rm)))
-        # the same ring as a few sample points (offset, outward direction / count / 3)
+        # the ring as a few sample points: offset (half px) and outward direction / count / 3
         ang = np.arange(RING_POINTS) * (2.0 * math.pi / RING_POINTS)
         self._ring_points = [
             (int(round(0.5 * rm * math.cos(a))), int(round(0.5 * rm * math.sin(a))),
@@ -782,15 +738,11 @@ class EyeFinder:
         """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
         gradients at the ring's sample points point away from it (about 0..1)."""
         H, W = gx.shape
-        if RING_SPARSE:
-            out = np.zeros((H - 2 * p, W - 2 * p), np.float32)
-            for dx, dy, cx, cy in self._ring_points:
-                out += cx * gx[p + dy : H - p + dy, p + dx : W - p + dx]
-                out += cy * gy[p + dy : H - p + dy, p + dx : W - p + dx]
-            return np.maximum(out, 0.0)
-        kh, kw = self._ring.shape[0] // 2, self._ring.shape[1] // 2
-        g2 = cv2.merge([gx, gy])[p - kh : H - p + kh, p - kw : W - p + kw]
-        return np.maximum(cv2.matchTemplate(g2, self._ring, cv2.TM_CCORR), 0.0) * (1.0 / 3.0)
+        out = np.zeros((H - 2 * p, W - 2 * p), np.float32)
+        for dx, dy, cx, cy in self._ring_points:
+            out += cx * gx[p + dy : H - p + dy, p + dx : W - p + dx]
+            out += cy * gy[p + dy : H - p + dy, p + dx : W - p + dx]
+        return np.maximum(out, 0.0)
 
     def _fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
         """Sub-pixel iris centre near full-res ``(x, y)``: disc darkness × (1 + correlation with
@@ -993,8 +945,6 @@ class EyeFinder:
         self._set_pictures()
         centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
         g = self.measure_gain(crop_bgr, centres)
-        if g is not None and GAIN_SCALAR:
-            g = np.full(3, float(np.mean(g)))
         if g is not None:
             self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
             # shading and expressions move it by several per cent; only a change of the
@@ -1073,10 +1023,9 @@ def refine_pupils(
         model = EyeModel(
             work_ipd=wi, radius=radius, iris_pictures=pics, eye_pictures=[blank, blank],
             brow_profiles=[np.zeros(5, np.float32)] * 2, brow_centres=[2.0, 2.0], brow_heights=[0.4 * wi] * 2,
-            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros((1, 3)), np.eye(3)[None]), skin_bgr=np.ones(3),
+            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros(3), np.eye(3)), skin_bgr=np.ones(3),
         )
-        f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR)
-        f.dark_power = REFINE_DARK
+        f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR, darkness=REFINE_DARK)
         found = f.locate_irises(crop, centres)
         if min(q[2] for q in found) < REFINE_MIN_MATCH:
             return lp, rp  # nothing there looks like an iris
