@@ -895,6 +895,8 @@ class EyeFinder:
         """Both eyes in a face crop (uint8 BGR and its grey, uint8 or float32) around the
         predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
+        if not np.all(np.isfinite(centres)):
+            raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
         found = self.locate_irises(crop_grey, centres)
         gain = self._gain
         eyes = []
