@@ -284,7 +284,8 @@ class SkinModel:
         e = (d - self.lo) * (1.0 / (self.hi - self.lo))
         if self.dark > 0:
             e = np.maximum(e, (self.dark - z[:, 0, 3]) * (1.0 / self.dark_ramp) + 0.5)
-        return np.clip(e, 0.0, 1.0)
+        np.maximum(e, 0.0, out=e)
+        return np.minimum(e, 1.0, out=e)
 
     def distance(self, bgr: np.ndarray) -> np.ndarray:
         """Mahalanobis distance of each pixel (``(..., 3)`` BGR) from the skin, ``(n,)``."""
@@ -761,7 +762,7 @@ class EyeFinder:
         if self.dark_power != 1.0:
             s = s ** self.dark_power
         s = s * (1.0 + np.maximum(ncc, 0.0))
-        ky, kx = divmod(int(np.argmax(s)), n)
+        _, _, _, (kx, ky) = cv2.minMaxLoc(s)
         fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < n - 1 else 0.0
         fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < n - 1 else 0.0
         return x - FINE + kx + fx, y - FINE + ky + fy, float(ncc[ky, kx])
@@ -772,13 +773,13 @@ class EyeFinder:
         to move by the slack against the other, each then refined at full resolution."""
         maps, origins = self._coarse_maps(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
         J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
-        jy, jx = divmod(int(np.argmax(J)), J.shape[1])
+        _, _, _, (jx, jy) = cv2.minMaxLoc(J)
         sx, sy = self.slack
         out = []
         for i, (m, (ox, oy)) in enumerate(zip(maps, origins)):
             ya, xa = max(jy - sy, 0), max(jx - sx, 0)
             sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
-            ky, kx = divmod(int(np.argmax(sub)), sub.shape[1])
+            _, _, _, (kx, ky) = cv2.minMaxLoc(sub)
             out.append(self._fine(grey, i, int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
         return out
 
@@ -850,7 +851,7 @@ class EyeFinder:
             return self.model.brow_heights[i], 0.0
         prof = strip_profile(grey, px, top, bot - top, self._brow_hw)
         score = cv2.matchTemplate(prof.reshape(-1, 1), t, cv2.TM_CCOEFF_NORMED).ravel()
-        k = int(np.argmax(score))
+        _, _, _, (_, k) = cv2.minMaxLoc(score.reshape(-1, 1))
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
         return float(py - (top + k + d + c)), float(score[k])
 
@@ -863,7 +864,8 @@ class EyeFinder:
         x, y = 2 * int(round(at[0] / 2)), 2 * int(round(at[1] / 2))
         w, h = 2 * (tw + sx) + 2, 2 * (th + sy) + 2
         half = cv2.resize(cut(grey, x - w // 2, y - h // 2, w, h), (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-        return float(np.clip(cv2.matchTemplate(half, t, cv2.TM_CCOEFF_NORMED).max(), 0.0, 1.0))
+        _, best, _, _ = cv2.minMaxLoc(cv2.matchTemplate(half, t, cv2.TM_CCOEFF_NORMED))
+        return min(max(best, 0.0), 1.0)
 
     def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
         """Median BGR of what looks like skin around both eyes (a sparse grid over the brows,
