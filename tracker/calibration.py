@@ -32,6 +32,8 @@ from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
+from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils
+from tracker.eyes import calibration_crop as eye_calibration_crop
 from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
@@ -41,7 +43,7 @@ CLASSIFIERS = ("pupil", "lip", "eye")
 """Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
-SNAP_REACH = 0.05
+SNAP_REACH = 0.12
 """Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
 
 
@@ -164,6 +166,9 @@ class Calibration:
     that tells this face from anything else; None in files from before it existed."""
     face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
     """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
+    eye_model: EyeModel | None = None
+    """This performer's eyes for :class:`tracker.eyes.EyeFinder`; None in older files, which
+    track with the eye-picture, lid-walk and brow finders of ``pupils``, ``lids`` and ``brows``."""
     mouth_model: MouthModel | None = None
     """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
     which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
@@ -200,6 +205,8 @@ class Calibration:
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
             "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
             "mouth_model": self.mouth_model.to_dict() if self.mouth_model is not None else None,
+            "eye_model": self.eye_model.to_dict() if self.eye_model is not None else None,
+            "eye_model_pictures": {k: f"{stem}.{k}.png" for k in EyeModel.IMAGE_NAMES} if self.eye_model is not None else None,
             "face_box_eyes_flat": [float(v) for p in self.face_box_eyes for v in p] if self.face_box_eyes is not None else None,
         }
 
@@ -227,6 +234,12 @@ class Calibration:
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the face picture")
             d["face_patch"] = gen.put(d["face_patch"], buf.tobytes())
+        if self.eye_model is not None:
+            for k, img in self.eye_model.images().items():
+                ok, buf = cv2.imencode(".png", img)
+                if not ok:
+                    raise CalibrationError(f"{path}: could not encode the eye model's {k} picture")
+                d["eye_model_pictures"][k] = gen.put(d["eye_model_pictures"][k], buf.tobytes())
         gen.commit((json.dumps(d, indent=1) + "\n").encode("utf-8"))
 
     @classmethod
@@ -284,6 +297,7 @@ class Calibration:
             face_patch=face_patch,
             face_box_eyes=None if box_eyes is None else ((box_eyes[0], box_eyes[1]), (box_eyes[2], box_eyes[3])),
             mouth_model=_mouth_model(path, d.get("mouth_model")),
+            eye_model=_eye_model(path, d.get("eye_model"), d.get("eye_model_pictures")),
         )
         return cal
 
@@ -390,13 +404,15 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         raise CalibrationError(str(e)) from None
     grey_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     ipd0 = clicks.ipd()
-    lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
-    rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    # the iris centres near the clicks (the clicks stay when nothing iris-like is there)
+    lp, rp = refine_pupils(grey_full, clicks.left_pupil, clicks.right_pupil)
     # a careful click is trusted over a snap that wandered (onto lashes, a lid crease, make-up)
     if math.dist(lp, clicks.left_pupil) > SNAP_REACH * ipd0:
         lp = clicks.left_pupil
     if math.dist(rp, clicks.right_pupil) > SNAP_REACH * ipd0:
         rp = clicks.right_pupil
+    _, rl = _refine_pupil(grey_full, lp, ipd0)
+    _, rr = _refine_pupil(grey_full, rp, ipd0)
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
     work_ipd = min(ipd, WORK_IPD_MAX)
     ff = FaceFrame.from_pupils(lp, rp, work_ipd)
@@ -480,6 +496,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         if hi_m - lo_m > 40:
             white_threshold = 0.5 * (lo_m + hi_m)
 
+    # --- the eyes: irises, lids, brows, the whole eye's picture (:mod:`tracker.eyes`)
+    erect = eye_calibration_crop(wi)
+    ecrop = ff.crop(frame_bgr, erect)
+    egrey = cv2.cvtColor(ecrop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    eo = np.array(erect[:2], dtype=np.float64)
+    try:
+        learned = learn_eyes(ecrop, egrey, np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - eo, brows_f - eo, wi)
+        # the pictures are kept as 8-bit PNGs: round now, so a loaded calibration tracks like this one
+        eye_model = EyeModel.from_dict(learned.to_dict(), learned.images())
+    except EyeModelError as e:
+        raise CalibrationError(f"calibration: {e}") from None
+
     # --- the mouth: this performer's lips, gap and inside (never refuses a face; says which cue it uses)
     mrect = mouth_rect(mouth_f, wi)
     mcrop = ff.crop(frame_bgr, mrect)
@@ -553,6 +581,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         white_threshold=white_threshold,
         iris_level=iris_level,
         mouth_model=mouth_model,
+        eye_model=eye_model,
     )
     # the face as a whole, to tell it from anything else and to find it again
     from tracker.face_finder import face_patch, learn_eyes_in_box
@@ -597,6 +626,8 @@ def files_named_by(path: Path) -> list[str]:
     if isinstance(spec, dict):
         names.append(spec.get("image"))
     names.append(d.get("face_patch"))
+    if isinstance(d.get("eye_model_pictures"), dict):
+        names.extend(d["eye_model_pictures"].values())
     return [n for n in names if isinstance(n, str) and _plain_name(n)]
 
 
@@ -686,6 +717,20 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+def _eye_model(path: Path, d, names) -> EyeModel | None:
+    if d is None:
+        return None
+    if not isinstance(names, dict):
+        raise CalibrationError(f"{path}: eye_model_pictures must name the eye model's pictures")
+    pics = {k: _load_picture(path, names.get(k), f"eye model {k} picture") for k in EyeModel.IMAGE_NAMES}
+    try:
+        return EyeModel.from_dict(d, pics)
+    except EyeModelError as e:
+        raise CalibrationError(f"{path}: {e}") from None
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        raise CalibrationError(f"{path}: malformed eye model ({type(e).__name__}: {e})") from None
 
 
 def _mouth_model(path: Path, d) -> MouthModel | None:
