@@ -173,6 +173,17 @@ class Calibration:
     """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
     which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
 
+    @property
+    def classifiers(self) -> dict[str, object]:
+        """The colour classes the tracker tells apart, each with ``mask(bgr) -> bool array``
+        (for showing what calibration learned): the eye's inside, the lips and the mouth's
+        inside for a calibration with eye and mouth models, else the first tracker's pupil,
+        lip and eye colours."""
+        if self.eye_model is None or self.mouth_model is None:
+            return {"pupil": self.pupil, "lip": self.lip, "eye": self.eye}
+        return {"eye": _EyeInsideMask(self.eye_model), "lip": _LipMask(self.mouth_model),
+                "mouth inside": _MouthInsideMask(self.mouth_model)}
+
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
         return {
@@ -717,6 +728,43 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+class _EyeInsideMask:
+    """What the eye finder counts as the inside of an eye (white, iris, lashes): not this skin."""
+
+    def __init__(self, model: EyeModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        return self.model.skin.interior(np.asarray(bgr)) >= 0.5
+
+
+class _LipMask:
+    """Pixels either lip's colour axis puts nearer the lip than the skin beside it."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        f = np.asarray(bgr, dtype=np.float32)
+        out = np.zeros(f.shape[:2], bool)
+        for a in (self.model.axis_up, self.model.axis_down):
+            v = cv2.transform(f, np.asarray(a[:3], dtype=np.float32).reshape(1, 3)) + np.float32(a[3])
+            out |= v.reshape(f.shape[:2]) >= 0.5
+        return out
+
+
+class _MouthInsideMask:
+    """The dark gap, inside and teeth as the mouth model sees them."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        from tracker.colour_model import lut_index
+
+        return self.model.inside_table.take(lut_index(np.ascontiguousarray(bgr))).astype(bool)
 
 
 def _eye_model(path: Path, d, names) -> EyeModel | None:
