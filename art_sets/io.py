@@ -1,7 +1,8 @@
 """Reading and writing art-set folders (``artset.json`` + PNGs).
 
-The manifest format is described in DESIGN.md ("Art sets"). Images are RGBA with straight
-alpha, loaded with Pillow. Every image's header is checked (size, pixel count) before any
+The manifest format is described for artists in ``art_sets/FORMAT.md``. Images are RGBA with
+straight alpha, loaded with Pillow. Format 1 is read exactly as it always was (a ``body`` key
+there is just an extra key); format 2 adds layered drawings and the body. Every image's header is checked (size, pixel count) before any
 pixels are decoded, so a decompression bomb is refused without being loaded. Image paths are
 relative to the folder and may never leave it (no absolute paths, no ``..``, no symlink out).
 
@@ -22,7 +23,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from art_sets.model import FORMAT_VERSION, PART_NAMES, ArtSet, Drawing, Part
+from art_sets.model import (FORMAT_VERSION, MAX_BODY_ROLL, PART_NAMES, READ_FORMATS, ArtSet, Body, Drawing, Layer,
+                            Part, flatten)
 
 MANIFEST = "artset.json"
 MAX_SIDE = 4096  # pixels; larger images are refused before decoding
@@ -31,6 +33,7 @@ MIN_DRAWINGS = 3  # a part needs a triangle of drawings for the barycentric morp
 MIN_LINE_LENGTH = 1.0  # px; shorter control lines make the Beier-Neely field singular
 MAX_MANIFEST_BYTES = 8 * 1024 * 1024
 _KNOWN_KEYS = {"format", "name", "author", "canvas", "pivot", "heads", "parts"}
+_KNOWN_KEYS_2 = _KNOWN_KEYS | {"body"}
 
 
 class ArtSetError(Exception):
@@ -62,6 +65,7 @@ class _Scan:
         self.problems: list[Problem] = []
         self.manifest_file = str(folder / MANIFEST)
         self.alpha_seen: dict[str, bool] = {}
+        self.format = 1
 
     def add(self, file: str, message: str) -> None:
         self.problems.append(Problem(file, message))
@@ -146,9 +150,11 @@ class _Scan:
         if missing:
             self.add(self.manifest_file, f"missing key(s): {', '.join(missing)}")
             return None
-        if data["format"] != FORMAT_VERSION or isinstance(data["format"], bool):
-            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads format {FORMAT_VERSION})")
+        if data["format"] not in READ_FORMATS or isinstance(data["format"], bool) or not isinstance(data["format"], int):
+            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads formats "
+                                         f"{', '.join(map(str, READ_FORMATS))})")
             return None
+        self.format = int(data["format"])
         name = data["name"]
         if not isinstance(name, str) or not name.strip():
             self.add(self.manifest_file, "name must be a non-empty string")
@@ -171,9 +177,38 @@ class _Scan:
         parts = self.read_parts(data["parts"], canvas)
         if parts is None:
             return None
-        extra = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
+        known = _KNOWN_KEYS_2 if self.format >= 2 else _KNOWN_KEYS
+        body = self.read_body(data["body"], canvas) if self.format >= 2 and "body" in data else None
+        extra = {k: v for k, v in data.items() if k not in known}
         return ArtSet(name=name, canvas=canvas, pivot=pivot, heads=heads, parts=parts, author=author,
-                      head_files=head_files, path=self.folder, extra=extra)
+                      head_files=head_files, path=self.folder, extra=extra, body=body)
+
+    def read_body(self, raw, canvas) -> Body | None:
+        """The optional ``body``: ``{"image": PATH, "follow": 0..1, "roll": 0..1, "pivot": [x, y]}``."""
+        if not isinstance(raw, dict) or "image" not in raw:
+            self.add(self.manifest_file, "body must be an object with 'image' (and optionally 'follow', 'roll', 'pivot')")
+            return None
+        bad = False
+        vals = {}
+        for key, default, hi in (("follow", Body.follow, 1.0), ("roll", Body.roll, MAX_BODY_ROLL)):
+            v = raw.get(key, default)
+            if not _is_num(v) or not 0 <= v <= hi:
+                self.add(self.manifest_file, f"body.{key} must be a number from 0 to {hi:g}, got {v!r}")
+                bad = True
+            vals[key] = float(v) if _is_num(v) else default
+        pivot = None
+        if raw.get("pivot") is not None:
+            pivot = _num_pair(raw["pivot"])
+            if pivot is None:
+                self.add(self.manifest_file, f"body.pivot must be [x, y] numbers, got {raw['pivot']!r}")
+                bad = True
+        img = self.image(raw["image"], "body")
+        if img is None or bad:
+            return None
+        if (img.shape[1], img.shape[0]) != canvas:
+            self.add(str(self.folder / raw["image"]), f"body is {img.shape[1]}x{img.shape[0]}, the canvas is {canvas[0]}x{canvas[1]}")
+            return None
+        return Body(image=img, file=raw["image"], follow=vals["follow"], roll=vals["roll"], pivot=pivot)
 
     def read_heads(self, raw, canvas) -> tuple[list[np.ndarray], list[str]]:
         heads, files = [], []
@@ -232,8 +267,17 @@ class _Scan:
         count_ref: tuple[int, str] | None = None
         for i, d in enumerate(raw_d):
             dw = f"{where}.drawings[{i}]"
+            if self.format >= 2 and isinstance(d, dict) and "layers" in d:
+                if "image" in d:
+                    self.add(self.manifest_file, f"{dw}: has both 'image' and 'layers'; a drawing is one or the other")
+                    continue
+                drawing = self.read_layered(pname, dw, d, box, seen)
+                if drawing is not None:
+                    drawings.append(drawing)
+                continue
             if not isinstance(d, dict) or not {"name", "image", "lines"} <= set(d):
-                self.add(self.manifest_file, f"{dw}: needs 'name', 'image' and 'lines'")
+                need = "'name', 'lines' and 'image' (or 'layers')" if self.format >= 2 else "'name', 'image' and 'lines'"
+                self.add(self.manifest_file, f"{dw}: needs {need}")
                 continue
             dname = d["name"]
             if not isinstance(dname, str) or not dname:
@@ -258,18 +302,122 @@ class _Scan:
                     count_ref = (len(lines), dname)
                 elif len(lines) != count_ref[0]:
                     self.add(self.manifest_file, f"{where}: drawing {dname!r} has {len(lines)} control lines, {count_ref[1]!r} has {count_ref[0]}")
-                if len(lines):
-                    xs, ys = lines[:, [0, 2]], lines[:, [1, 3]]
-                    bad = np.nonzero((xs < 0).any(1) | (xs > w).any(1) | (ys < 0).any(1) | (ys > h).any(1))[0]
-                    if len(bad):
-                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, bad))} lie outside its {w}x{h} image")
-                    short = np.nonzero(np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) < MIN_LINE_LENGTH)[0]
-                    if len(short):
-                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, short))} are shorter than {MIN_LINE_LENGTH:g} px")
+                self.check_lines(where, f"drawing {dname!r}", lines, w, h)
             drawings.append(Drawing(name=dname, image=img, lines=lines, file=d["image"]))
-        if self.strict and count_ref is not None and count_ref[0] == 0:
+        if any(d.layers for d in drawings):
+            self.check_layer_structure(where, drawings)
+        elif self.strict and count_ref is not None and count_ref[0] == 0:
             self.add(self.manifest_file, f"{where}: drawings have no control lines; a morph needs at least one")
         return Part(name=pname, box=box, drawings=drawings)
+
+    def check_lines(self, where: str, what: str, lines: np.ndarray, w: int, h: int) -> None:
+        """Lines inside the ``w``×``h`` image and at least ``MIN_LINE_LENGTH`` long."""
+        if not len(lines):
+            return
+        xs, ys = lines[:, [0, 2]], lines[:, [1, 3]]
+        bad = np.nonzero((xs < 0).any(1) | (xs > w).any(1) | (ys < 0).any(1) | (ys > h).any(1))[0]
+        if len(bad):
+            self.add(self.manifest_file, f"{where}: {what} line(s) {', '.join(map(str, bad))} lie outside its {w}x{h} image")
+        short = np.nonzero(np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) < MIN_LINE_LENGTH)[0]
+        if len(short):
+            self.add(self.manifest_file, f"{where}: {what} line(s) {', '.join(map(str, short))} are shorter than {MIN_LINE_LENGTH:g} px")
+
+    def read_layered(self, pname: str, dw: str, d: dict, box, seen: set[str]) -> Drawing | None:
+        """A format-2 drawing made of layers (bottom first), each ``{"name", "image"[, "lines"]}``."""
+        where = f"parts.{pname}"
+        if not {"name", "lines"} <= set(d):
+            self.add(self.manifest_file, f"{dw}: needs 'name', 'lines' and 'layers'")
+            return None
+        dname = d["name"]
+        if not isinstance(dname, str) or not dname:
+            self.add(self.manifest_file, f"{dw}: name must be a non-empty string")
+            return None
+        if dname in seen:
+            self.add(self.manifest_file, f"{where}: two drawings are called {dname!r}")
+        seen.add(dname)
+        lines = _lines(d["lines"])
+        if lines is None:
+            self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] finite numbers")
+            return None
+        raw_l = d["layers"]
+        if not isinstance(raw_l, list) or not raw_l:
+            self.add(self.manifest_file, f"{dw} ({dname}): layers must be a non-empty list")
+            return None
+        layers: list[Layer] = []
+        names: set[str] = set()
+        ok = True
+        for k, ly in enumerate(raw_l):
+            lw = f"{dw} ({dname}).layers[{k}]"
+            if not isinstance(ly, dict) or not {"name", "image"} <= set(ly):
+                self.add(self.manifest_file, f"{lw}: needs 'name' and 'image' (and optionally 'lines')")
+                ok = False
+                continue
+            lname = ly["name"]
+            if not isinstance(lname, str) or not lname.strip():
+                self.add(self.manifest_file, f"{lw}: name must be a non-empty string")
+                ok = False
+                continue
+            if lname in names:
+                self.add(self.manifest_file, f"{dw} ({dname}): two layers are called {lname!r}")
+            names.add(lname)
+            own = None
+            if ly.get("lines") is not None:
+                own = _lines(ly["lines"])
+                if own is None:
+                    self.add(self.manifest_file, f"{lw} ({lname}): lines must be a list of [x0, y0, x1, y1] finite numbers")
+                    ok = False
+                    continue
+            img = self.image(ly["image"], f"{lw} ({lname})")
+            if img is None:
+                ok = False
+                continue
+            h, w = img.shape[:2]
+            if (w, h) != (box[2], box[3]):
+                self.add(str(self.folder / ly["image"]),
+                         f"{pname} drawing {dname!r} layer {lname!r} is {w}x{h}, the {pname} box is {box[2]}x{box[3]}")
+                ok = False
+                continue
+            if self.strict and own is not None:
+                self.check_lines(where, f"drawing {dname!r} layer {lname!r}", own, w, h)
+            layers.append(Layer(name=lname, image=img, lines=own, file=ly["image"]))
+        if not ok:
+            return None
+        if self.strict:
+            self.check_lines(where, f"drawing {dname!r}", lines, box[2], box[3])
+        return Drawing.from_layers(dname, layers, lines)
+
+    def check_layer_structure(self, where: str, drawings: list[Drawing]) -> None:
+        """Every drawing of a layered part has the same layers, in the same order, each with its
+        own lines everywhere (the same number) or nowhere; every layer has lines to move with."""
+        ref = next(d for d in drawings if d.layers)
+        names = [ly.name for ly in ref.layers]
+        for d in drawings:
+            if not d.layers:
+                self.add(self.manifest_file, f"{where}: drawing {d.name!r} is a single picture but {ref.name!r} has layers "
+                                             f"({', '.join(names)}); give every drawing of a part the same layers")
+                return
+            if [ly.name for ly in d.layers] != names:
+                self.add(self.manifest_file, f"{where}: drawing {d.name!r} has layers {[ly.name for ly in d.layers]}, "
+                                             f"{ref.name!r} has {names}; every drawing needs the same layers in the same order")
+                return
+        if not self.strict:
+            return
+        for k, lname in enumerate(names):
+            counts = {d.name: len(d.layer_lines(k)) for d in drawings}
+            owns = {d.name: d.layers[k].lines is not None for d in drawings}
+            if len(set(owns.values())) > 1:
+                have = [n for n, o in owns.items() if o]
+                self.add(self.manifest_file, f"{where}: layer {lname!r} has its own control lines in {', '.join(map(repr, have))} "
+                                             f"but not in every drawing; give it lines everywhere or nowhere")
+                continue
+            if len(set(counts.values())) > 1:
+                n0, c0 = next(iter(counts.items()))
+                odd = next(n for n, c in counts.items() if c != c0)
+                whose = f"layer {lname!r}" if owns[n0] else "the drawing"
+                self.add(self.manifest_file, f"{where}: {whose} control lines: {odd!r} has {counts[odd]}, {n0!r} has {c0}")
+                continue
+            if next(iter(counts.values())) == 0:
+                self.add(self.manifest_file, f"{where}: layer {lname!r} has no control lines to move with; a morph needs at least one")
 
 
 def scan(path: str | os.PathLike, strict_geometry: bool = True) -> tuple[ArtSet | None, list[Problem]]:
@@ -335,26 +483,63 @@ def write_png(path: str | os.PathLike, img: np.ndarray) -> None:
     _atomic_write_bytes(Path(path), _png_bytes(img))
 
 
+def _lines_json(lines) -> list:
+    return [[float(v) for v in row] for row in np.asarray(lines, dtype=np.float64).reshape(-1, 4)]
+
+
+def _drawing_json(pname: str, d: Drawing) -> dict:
+    if not d.layers:
+        return {"name": d.name, "image": _drawing_file(pname, d), "lines": _lines_json(d.lines)}
+    layers = []
+    for ly in d.layers:
+        entry = {"name": ly.name, "image": _layer_file(pname, d, ly)}
+        if ly.lines is not None:
+            entry["lines"] = _lines_json(ly.lines)
+        layers.append(entry)
+    return {"name": d.name, "lines": _lines_json(d.lines), "layers": layers}
+
+
 def manifest_dict(art: ArtSet) -> dict:
-    """The JSON manifest for ``art`` (image paths as in ``head_files`` / ``Drawing.file``)."""
+    """The JSON manifest for ``art`` (image paths as in ``head_files`` / ``Drawing.file`` /
+    ``Layer.file`` / ``Body.file``). Format 1 unless the set has layers or a body."""
     head_files = _head_files(art)
+    v2 = art.layered or art.body is not None
     parts = {}
     for pname in PART_NAMES:
         p = art.parts[pname]
-        parts[pname] = {
-            "box": [int(v) for v in p.box],
-            "drawings": [{"name": d.name, "image": _drawing_file(pname, d),
-                          "lines": [[float(v) for v in row] for row in np.asarray(d.lines, dtype=np.float64).reshape(-1, 4)]}
-                         for d in p.drawings],
-        }
-    out = {"format": FORMAT_VERSION, "name": art.name, "author": art.author,
+        parts[pname] = {"box": [int(v) for v in p.box], "drawings": [_drawing_json(pname, d) for d in p.drawings]}
+    out = {"format": FORMAT_VERSION if v2 else 1, "name": art.name, "author": art.author,
            "canvas": [int(art.canvas[0]), int(art.canvas[1])],
            "pivot": [float(art.pivot[0]), float(art.pivot[1])],
-           "heads": head_files, "parts": parts}
+           "heads": head_files}
+    if art.body is not None:
+        b = art.body
+        out["body"] = {"image": b.file or "body.png", "follow": float(b.follow), "roll": float(b.roll)}
+        if b.pivot is not None:
+            out["body"]["pivot"] = [float(b.pivot[0]), float(b.pivot[1])]
+    out["parts"] = parts
+    known = _KNOWN_KEYS_2 if v2 else _KNOWN_KEYS
     for k, v in art.extra.items():
-        if k not in _KNOWN_KEYS:
+        if k not in known:
             out[k] = v
     return out
+
+
+def image_files(art: ArtSet, manifest: dict | None = None) -> list[tuple[str, np.ndarray]]:
+    """Every image ``art`` writes, as ``(path in the folder, RGBA array)``, in manifest order
+    (heads, drawings or their layers, body). A layer that is the same in several drawings may
+    name one file, which then appears more than once."""
+    manifest = manifest if manifest is not None else manifest_dict(art)
+    items = list(zip(manifest["heads"], art.heads))
+    for pname in PART_NAMES:
+        for dj, d in zip(manifest["parts"][pname]["drawings"], art.parts[pname].drawings):
+            if d.layers:
+                items += [(lj["image"], ly.image) for lj, ly in zip(dj["layers"], d.layers)]
+            else:
+                items.append((dj["image"], d.image))
+    if art.body is not None:
+        items.append((manifest["body"]["image"], art.body.image))
+    return items
 
 
 def _head_files(art: ArtSet) -> list[str]:
@@ -367,6 +552,10 @@ def _drawing_file(pname: str, d: Drawing) -> str:
     return d.file or f"{pname}/{d.name}.png"
 
 
+def _layer_file(pname: str, d: Drawing, ly: Layer) -> str:
+    return ly.file or f"{pname}/{d.name}/{ly.name}.png"
+
+
 def save_artset(art: ArtSet, path: str | os.PathLike) -> Path:
     """Write ``art`` to the folder ``path``: PNGs first, then ``artset.json``, each atomically.
 
@@ -377,13 +566,14 @@ def save_artset(art: ArtSet, path: str | os.PathLike) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     checker = _Scan(folder)
     manifest = manifest_dict(art)
-    items = [(f, img) for f, img in zip(manifest["heads"], art.heads)]
-    for pname in PART_NAMES:
-        items += [(_drawing_file(pname, d), d.image) for d in art.parts[pname].drawings]
-    for rel, img in items:
+    items: dict[str, np.ndarray] = {}
+    for rel, img in image_files(art, manifest):
         if checker.safe_path(rel, rel) is None:
             raise ArtSetError(str(checker.problems[-1]))
-    for rel, img in items:
+        if rel in items and not (items[rel] is img or np.array_equal(items[rel], img)):
+            raise ArtSetError(f"{folder / rel}: two different images would be written to this file")
+        items[rel] = img
+    for rel, img in items.items():
         write_png(folder / rel, img)
     text = json.dumps(manifest, indent=1, ensure_ascii=False)
     _atomic_write_bytes(folder / MANIFEST, (text + "\n").encode("utf-8"))

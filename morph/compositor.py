@@ -11,6 +11,12 @@ stays zero. That is about the content's area instead of the moved bounding box. 
 equals the same pixels of a full-canvas warp except where OpenCV's fixed-point sampling grid,
 anchored at the sub-rectangle's origin, rounds a sample to the neighbouring 1/32 px: at hard edges
 a few levels, mostly none.
+
+An optional *body* (neck, shoulders, collar: a canvas-sized image) is drawn under the moved
+head. It follows the head's translation only by a fraction and rolls by a fraction of the head's
+roll (about its own pivot), so a tilt turns the head on a body that stays; where the body meets
+the canvas edge it is continued by its mirror image there, so moving it never opens a gap (and
+stripes or paper texture do not smear into streaks, as repeating the edge pixels would).
 """
 
 from __future__ import annotations
@@ -24,6 +30,17 @@ import numpy as np
 from morph.beier_neely import premultiply
 
 Box = tuple[int, int, int, int]
+
+
+def over_u8(top: np.ndarray, under: np.ndarray, out: np.ndarray, inv: np.ndarray | None = None) -> np.ndarray:
+    """Premultiplied ``top`` over ``under`` (uint8, same shape) into ``out``: ``top + under·(1 − α_top)``.
+
+    ``inv`` is an optional scratch of the same shape. Colour stays <= alpha (both terms do)."""
+    a = np.ascontiguousarray(top[:, :, 3])
+    inv = cv2.merge((a, a, a, a), dst=inv)
+    cv2.bitwise_not(inv, dst=inv)  # 255 − α
+    inv = cv2.multiply(under, inv, dst=inv, scale=1.0 / 255.0)
+    return cv2.add(top, inv, dst=out)
 
 
 def _rect_intersection(a: Box, b: Box) -> Box | None:
@@ -52,6 +69,11 @@ class Compositor:
 
     ``band_rows`` is the height of the output bands the warp is cut into (32 measured fastest
     on 512×512 canvases: fewer warp calls against fewer wasted pixels).
+
+    ``body`` (straight RGBA of the canvas size, or None) is drawn under the head, moved by
+    ``body_follow`` × the head's translation and rolled by ``body_roll`` × its roll about
+    ``body_pivot`` (default ``pivot``). With a body the heads hold only the head, so
+    ``keep_in_frame`` keeps all of it (not just what lies above the pivot) on the canvas.
     """
 
     def __init__(
@@ -66,6 +88,10 @@ class Compositor:
         keep_in_frame: bool = False,
         margin: float | None = None,
         band_rows: int = 32,
+        body: np.ndarray | None = None,
+        body_follow: float = 0.0,
+        body_roll: float = 0.0,
+        body_pivot: tuple[float, float] | None = None,
     ):
         self.w, self.h = int(canvas[0]), int(canvas[1])
         self.pivot = (float(pivot[0]), float(pivot[1]))
@@ -99,7 +125,8 @@ class Compositor:
         self._set_bands(band_rows)
         self.keep_in_frame = bool(keep_in_frame)
         self.margin = 0.0 if margin is None else float(margin)
-        self._head_hull = self._content_hull(above_pivot=True)
+        self._set_body(body, body_follow, body_roll, body_pivot)
+        self._head_hull = self._content_hull(above_pivot=self.body is None)
         self._head_hull_xy = (self._head_hull[:, 0].copy(), self._head_hull[:, 1].copy())
         # One flat canvas: outside the boxes it equals the current head, so a frame rewrites
         # only the boxes, and the whole canvas when the shimmer changes the head. (One buffer
@@ -108,6 +135,27 @@ class Compositor:
         self._flat = self.heads[0].copy()
         self._flat_head = 0
         self._overlaps = self._any_overlap()
+
+    def _set_body(self, body, follow: float, roll: float, pivot) -> None:
+        """Premultiply the body; find its content box and which canvas edges it runs off."""
+        self.body = None
+        self.body_follow, self.body_roll = float(follow), float(roll)
+        self.body_pivot = self.pivot if pivot is None else (float(pivot[0]), float(pivot[1]))
+        if body is None:
+            return
+        body = np.asarray(body)
+        if body.shape != (self.h, self.w, 4) or body.dtype != np.uint8:
+            raise ValueError(f"body is {body.dtype} {body.shape}; expected uint8 {(self.h, self.w, 4)}")
+        self.body = np.ascontiguousarray(premultiply(body))
+        pts = cv2.findNonZero((self.body[:, :, 3] > 0).astype(np.uint8))
+        if pts is None:
+            self.body = None
+            return
+        x, y, bw, bh = cv2.boundingRect(pts)
+        self._body_box = (x, y, x + bw, y + bh)
+        self._body_edges = (x == 0, y == 0, x + bw == self.w, y + bh == self.h)  # left, top, right, bottom
+        self._body_buf = np.empty((self.h, self.w, 4), np.uint8)
+        self._body_inv = np.empty((self.h, self.w, 4), np.uint8)
 
     def _content_hull(self, above_pivot: bool = False) -> np.ndarray:
         """Convex hull ``(k, 2)`` of every pixel that can be non-transparent (heads ∪ boxes).
@@ -196,6 +244,22 @@ class Compositor:
     def matrix(self, pose: Sequence[float]) -> np.ndarray:
         """The 2×3 affine map canvas → output for ``pose`` (after ``gain`` and, if on, the
         keep-in-frame limit)."""
+        a, b, tx, ty, dx, dy, _ = self._pose_terms(pose)
+        return np.array([[a, b, tx + dx], [-b, a, ty + dy]])
+
+    def body_matrix(self, pose: Sequence[float]) -> np.ndarray:
+        """The 2×3 affine map of the body for ``pose``: ``body_follow`` × the head's (limited)
+        translation, ``body_roll`` × its roll about ``body_pivot``."""
+        *_, dx, dy, roll = self._pose_terms(pose)
+        rad = roll * self.body_roll * (math.pi / 180)
+        a, b = math.cos(rad), math.sin(rad)
+        cx, cy = self.body_pivot
+        tx, ty = (1 - a) * cx - b * cy, b * cx + (1 - a) * cy
+        return np.array([[a, b, tx + self.body_follow * dx], [-b, a, ty + self.body_follow * dy]])
+
+    def _pose_terms(self, pose: Sequence[float]) -> tuple[float, float, float, float, float, float, float]:
+        """``(cos, sin, tx, ty, dx, dy, roll)``: the rotation about the pivot and the translation
+        after ``gain`` and the keep-in-frame limit."""
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if not all(math.isfinite(v) for v in (dx, dy, roll)):
             raise ValueError(f"pose must be three finite numbers (dx, dy, roll_deg), got {tuple(pose)}")
@@ -210,7 +274,7 @@ class Compositor:
             py = hx * -b + hy * a
             dx = _soft_clamp(dx, -self.margin - (px.min() + tx), self.w + self.margin - (px.max() + tx))
             dy = _soft_clamp(dy, -self.margin - (py.min() + ty), self.h + self.margin - (py.max() + ty))
-        return np.array([[a, b, tx + dx], [-b, a, ty + dy]])
+        return a, b, tx, ty, dx, dy, roll
 
     def flat(self, parts: Mapping[str, np.ndarray], frame_no: int = 0) -> np.ndarray:
         """The untransformed character: parts under the head (an internal buffer, reused)."""
@@ -282,8 +346,33 @@ class Compositor:
         m = self.matrix(pose)
         (a, b, tx), (c, d, ty) = m.tolist()
         if a == 1.0 and b == 0.0 and c == 0.0 and d == 1.0 and tx.is_integer() and ty.is_integer():
-            return self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
-        return self._warp_content(flat, m)
+            out = self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
+        else:
+            out = self._warp_content(flat, m)
+        if self.body is not None:
+            self._under_body(out, self.body_matrix(pose))
+        return out
+
+    def _under_body(self, out: np.ndarray, m: np.ndarray) -> None:
+        """Lay the body moved by ``m`` under the head frame ``out`` (in place), only in the
+        rectangle the moved body covers (to the canvas edge on the sides where it runs off)."""
+        x0, y0, x1, y1 = self._body_box
+        corners = np.array([[x0 - 0.5, y0 - 0.5, 1], [x1 - 0.5, y0 - 0.5, 1], [x0 - 0.5, y1 - 0.5, 1], [x1 - 0.5, y1 - 0.5, 1]])
+        moved = corners @ m.T
+        left, top, right, bottom = self._body_edges
+        rx0 = 0 if left else max(0, math.floor(moved[:, 0].min() - _REACH))
+        ry0 = 0 if top else max(0, math.floor(moved[:, 1].min() - _REACH))
+        rx1 = self.w if right else min(self.w, math.ceil(moved[:, 0].max() + _REACH) + 1)
+        ry1 = self.h if bottom else min(self.h, math.ceil(moved[:, 1].max() + _REACH) + 1)
+        if rx1 <= rx0 or ry1 <= ry0:
+            return
+        local = m.copy()
+        local[0, 2] -= rx0
+        local[1, 2] -= ry0
+        region = self._body_buf[ry0:ry1, rx0:rx1]
+        cv2.warpAffine(self.body, local, (rx1 - rx0, ry1 - ry0), region, cv2.INTER_LINEAR, cv2.BORDER_REFLECT_101)
+        head = out[ry0:ry1, rx0:rx1]
+        over_u8(head, region, head, self._body_inv[ry0:ry1, rx0:rx1])
 
     def _shift(self, flat: np.ndarray, dx: int, dy: int) -> np.ndarray:
         """``flat`` moved by whole pixels (transparent where nothing moves in), a new array."""

@@ -59,20 +59,29 @@ class MeshGrid:
         # ... and of the y pass: output rows [y0, y1) from vertex rows [j0, j0 + band], (y1−y0, band+1).
         self._row_bands = self._bands_of(self.h, band_cells)
 
-    def _bands_of(self, n_pixels: int, band_cells: int) -> list[tuple[int, int, int, np.ndarray]]:
+    def _bands_of(self, n_pixels: int, band_cells: int, lo: int = 0, hi: int | None = None
+                  ) -> list[tuple[int, int, int, np.ndarray]]:
         """``(p0, p1, j0, weights (p1−p0, band+1))``: pixels ``[p0, p1)`` of a side of
-        ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells)."""
+        ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells).
+
+        With ``lo``/``hi`` only pixels ``[lo, hi)`` are covered and ``p0, p1`` count from ``lo``."""
+        hi = n_pixels if hi is None else hi
         band = max(1, min(int(band_cells), self.cells))
         full = interpolation_matrix(n_pixels, self.cells)
         cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
+        inside = (np.arange(n_pixels) >= lo) & (np.arange(n_pixels) < hi)
         out = []
         for c0 in range(0, self.cells, band):
             c1 = min(c0 + band, self.cells)  # cells [c0, c1) use vertices c0..c1
-            ps = np.nonzero((cell >= c0) & (cell < c1))[0]
+            ps = np.nonzero((cell >= c0) & (cell < c1) & inside)[0]
             if len(ps):
                 p0, p1 = int(ps[0]), int(ps[-1]) + 1
-                out.append((p0, p1, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
+                out.append((p0 - lo, p1 - lo, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
         return out
+
+    def window(self, x0: int, y0: int, x1: int, y1: int, band_cells: int = 6) -> "MeshWindow":
+        """An upsampler of this grid's meshes that computes only pixels ``[x0, x1) × [y0, y1)``."""
+        return MeshWindow(self, (x0, y0, x1, y1), band_cells)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -121,6 +130,26 @@ class MeshGrid:
             np.matmul(wts, cols[:, j0:j0 + wts.shape[1], :], out=dense[:, y0:y1, :])
         dense = dense.reshape(k, 2, self.h, self.w)
         return dense[:, 0], dense[:, 1]
+
+
+class MeshWindow:
+    """The dense maps of a rectangle of a :class:`MeshGrid`'s image (same values as the full maps
+    there, up to float rounding): for a layer whose content can only land in that rectangle."""
+
+    def __init__(self, grid: MeshGrid, rect: tuple[int, int, int, int], band_cells: int = 6):
+        x0, y0, x1, y1 = (int(v) for v in rect)
+        if not (0 <= x0 < x1 <= grid.w and 0 <= y0 < y1 <= grid.h):
+            raise ValueError(f"window {rect} is not inside the {grid.w}x{grid.h} grid")
+        self.grid, self.rect = grid, (x0, y0, x1, y1)
+        self.cells = grid.cells
+        self.w, self.h = x1 - x0, y1 - y0
+        self._col_bands = [(a, b, j0, np.ascontiguousarray(wts.T))
+                           for a, b, j0, wts in grid._bands_of(grid.w, band_cells, x0, x1)]
+        self._row_bands = grid._bands_of(grid.h, band_cells, y0, y1)
+        self._cols: np.ndarray | None = None
+        self._dense: np.ndarray | None = None
+
+    upsample_planes = MeshGrid.upsample_planes
 
 
 def mesh_map(
