@@ -85,13 +85,11 @@ def write_side_copy(art: ArtSet, folder: Path, written: dict) -> None:
 
     from PIL import Image
 
-    from art_sets.io import manifest_dict
+    from art_sets.io import image_files, manifest_dict
 
     folder.mkdir(parents=True, exist_ok=True)
     manifest = manifest_dict(art)
-    items = list(zip(manifest["heads"], art.heads))
-    for pname, p in art.parts.items():
-        items += [(d["image"], dr.image) for d, dr in zip(manifest["parts"][pname]["drawings"], p.drawings)]
+    items = image_files(art, manifest)  # heads, drawings or their layers, body
 
     def atomic(target: Path, write) -> None:
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -103,12 +103,11 @@ class Blue(Character):
         s.hatch(lower, 80, 2.4, 1.0, LIGHT, rng, opacity=0.5, grain=0.7)
 
     def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
+        sc = g.scale
         self.pen(s, g.inner_up, 3.4, rng, taper=(0.08, 0.08))
-        k = float(np.clip(p.smile, -0.4, 0.45))
-        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases, curling with the smile
-            self.pen(s, bez(end + (sgn * 0.02 * sc, 0.1 * sc - 0.1 * k * sc), end + (sgn * 0.13 * sc, 0),
-                            end + (sgn * 0.07 * sc, -0.05 * sc - 0.28 * k * sc)), 1.6, rng, passes=1)
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases (the same shape in every mouth, so they line up)
+            self.pen(s, bez(end + (sgn * 0.02 * sc, 0.1 * sc), end + (sgn * 0.13 * sc, 0),
+                            end + (sgn * 0.07 * sc, -0.1 * sc)), 1.6, rng, passes=1)
 
     # --- body ----------------------------------------------------------------------------------
     def draw_body(self, s: Surface, rng) -> None:

@@ -34,7 +34,7 @@ import numpy as np
 from art_sets.authoring.ink import Placement, Surface, Textures, ellipse, point_at
 from art_sets.model import ArtSet, Body, Drawing, Layer, Part
 
-LID_U = tuple(np.linspace(0.0, 1.0, 9))  # arc-length fractions of the lid chords' ends
+LID_U = (0.0, 0.25, 0.5, 0.75, 1.0)  # arc-length fractions of the lid chords' ends
 BROW_U = (0.05, 0.35, 0.65, 0.95)
 BAND_U = (0.0, 0.25, 0.5, 0.75, 1.0)
 LID_BAND = 0.14  # eye half-widths from a lid to the line that holds its stroke
@@ -360,8 +360,12 @@ class Character:
     def mouth(self, pose: MouthPose) -> MouthGeom:
         return mouth_geom(self.mouth_center, self.mouth_scale, pose)
 
-    def _surface(self, box, tex, background=None) -> Surface:
-        return Surface(box[:2], box[2:], tex, background=background, place=self.place)
+    def _surface(self, box, tex, background=None, wobble_ref: float | None = None) -> Surface:
+        return Surface(box[:2], box[2:], tex, background=background, place=self.place, wobble_ref=wobble_ref)
+
+    def _part_surface(self, box, tex, background=None) -> Surface:
+        """A surface for one layer of a part drawing: strokes wobble by their share of their length."""
+        return self._surface(box, tex, background, wobble_ref=box[2] / self.scale / 2)
 
     def _to_box(self, lines, box) -> np.ndarray:
         """Design-space lines in pixels of the part drawing at canvas ``box``."""
@@ -375,7 +379,7 @@ class Character:
     def build_eyes(self, tex) -> Part:
         box = self.place.box(self.eyes_box)
         geoms = {name: self.eye_geoms(pose) for name, pose in self.eyes.items()}
-        s = self._surface(box, tex, self.skin)
+        s = self._part_surface(box, tex, self.skin)
         rest = next(iter(geoms.values()))
         rng = self._rng(1, 0)
         for e in range(2):
@@ -386,7 +390,7 @@ class Character:
         drawings = []
         for dname, pose in self.eyes.items():
             gs = geoms[dname]
-            low = self._surface(box, tex)
+            low = self._part_surface(box, tex)
             rng = self._rng(1, 1)
             for g in gs:
                 m = 0.12 * g.hw
@@ -394,7 +398,7 @@ class Character:
                                                   g.inner + (g.sgn * m, deepest - g.inner[1] + 0.5 * g.hw), g.inner + (g.sgn * m, 0)]])
                 low.fill(patch, self.skin)
                 self.draw_lower_lid(low, g, pose, rng)
-            up = self._surface(box, tex, self.skin)
+            up = self._part_surface(box, tex, self.skin)
             bottom = self.eyes_box[1] + self.eyes_box[3] + 10
             for g in gs:
                 up.punch(up.mask(np.concatenate([g.upper, [(g.outer[0], bottom), (g.inner[0], bottom)]])))
@@ -413,7 +417,7 @@ class Character:
     def build_mouth(self, tex) -> Part:
         box = self.place.box(self.mouth_box)
         rest = self.mouth(MouthPose())
-        s = self._surface(box, tex, self.mouth_dark)
+        s = self._part_surface(box, tex, self.mouth_dark)
         self.draw_inside(s, rest, self._rng(2, 0))
         inside = Layer("inside", s.to_rgba(), self._to_box([[rest.left[0], rest.left[1], rest.right[0], rest.right[1]]], box),
                        "mouth/inside.png")
@@ -422,13 +426,13 @@ class Character:
         drawings = []
         for dname, pose in self.mouths.items():
             g = self.mouth(pose)
-            low = self._surface(box, tex)
+            low = self._part_surface(box, tex)
             # the lower skin runs out to the sides of the box, under the upper layer's skin: the
             # corners move a lot between mouths, and the two layers follow them a little differently
             x0, x1 = self.mouth_box[0] - 10, self.mouth_box[0] + self.mouth_box[2] + 10
             low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, bottom), (x0, bottom), (x0, g.left[1])]]), skin)
             self.draw_lower_lip(low, g, self._rng(2, 1))
-            up = self._surface(box, tex, skin)
+            up = self._part_surface(box, tex, skin)
             up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], bottom), (g.left[0], bottom)]])))
             self.draw_upper_lip(up, g, self._rng(2, 2))
             layers = [inside,
@@ -436,7 +440,7 @@ class Character:
                             f"mouth/{dname}/lower-lip.png"),
                       Layer("upper-lip", up.to_rgba(), None, f"mouth/{dname}/upper-lip.png")]
             if self.tusks > 0:
-                ts = self._surface(box, tex)
+                ts = self._part_surface(box, tex)
                 self.draw_tusks(ts, g, self._rng(2, 3))
                 held = np.concatenate([chords(g.inner_dn, LIP_INNER_U), chords(g.inner_dn - (0, self.tusks * g.scale), BAND_U)])
                 layers.append(Layer("tusks", ts.to_rgba(), self._to_box(held, box), f"mouth/{dname}/tusks.png"))

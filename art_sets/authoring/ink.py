@@ -100,8 +100,13 @@ class Surface:
     """A supersampled RGBA painting surface covering ``size`` canvas pixels at ``origin``."""
 
     def __init__(self, origin: tuple[int, int], size: tuple[int, int], textures: Textures,
-                 background: Color | None = None, place: Placement = Placement()):
-        """``origin`` and ``size`` in canvas pixels; drawing calls in design coordinates (``place``)."""
+                 background: Color | None = None, place: Placement = Placement(), wobble_ref: float | None = None):
+        """``origin`` and ``size`` in canvas pixels; drawing calls in design coordinates (``place``).
+
+        ``wobble_ref`` (design px): when set, every stroke's wobble has ``wobble_ref / wobble_len``
+        waves whatever its length, so the same stroke drawn longer or shorter in another drawing
+        of a part wobbles alike and lines up under the morph."""
+        self.wobble_ref = wobble_ref
         self.ox, self.oy = origin
         self.w, self.h = size
         self.tex = textures
@@ -215,8 +220,9 @@ class Surface:
         n = np.stack([-t[:, 1], t[:, 0]], 1)
         if wobble > 0:
             off = np.zeros(len(p))
+            base = wobble_len if self.wobble_ref is None else L * wobble_len / self.wobble_ref
             for k in range(3):
-                wl = wobble_len * (0.55 + 0.9 * rng.random()) / (1 + k)
+                wl = base * (0.55 + 0.9 * rng.random()) / (1 + k)
                 off += wobble / (1 + k) ** 2 * np.sin(2 * np.pi * s / wl + rng.uniform(0, 2 * np.pi))
             p = p + n * off[:, None]
         u = s / L

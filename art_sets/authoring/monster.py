@@ -30,7 +30,7 @@ MONSTER_MOUTHS = {
     "neutral": MouthPose(hw=1.0, smile=0.04, tu=0.12, tl=0.16),
     "smile": MouthPose(hw=1.12, smile=0.34, tu=0.12, tl=0.16),
     "ah": MouthPose(hw=0.86, smile=0.0, open=0.9, up_ratio=0.3),
-    "oo": MouthPose(hw=0.46, open=0.5, round=1.0, tu=0.2, tl=0.22, up_ratio=0.42),
+    "oo": MouthPose(hw=0.5, open=0.5, round=1.0, tu=0.14, tl=0.18, up_ratio=0.42),
     "grin": MouthPose(hw=1.2, smile=0.32, open=0.62, up_ratio=0.45),
     "frown": MouthPose(hw=0.98, smile=-0.26, tu=0.12, tl=0.16),
     "ee": MouthPose(hw=1.12, smile=0.06, open=0.34, up_ratio=0.5),

@@ -87,12 +87,11 @@ class Straight(Character):
         self.pen(s, sub_curve(g.outer_dn, 0.36, 0.64), 1.8, rng, taper=(0.5, 0.5))
 
     def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
+        sc = g.scale
         self.pen(s, g.inner_up, 2.6, rng, taper=(0.1, 0.1), tip=0.4)
-        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner accents, curling with the smile
-            k = float(np.clip(p.smile, -0.4, 0.45))
-            tick = bez(end + (sgn * 0.05 * sc, 0.1 * sc - 0.1 * k * sc), end + (sgn * 0.13 * sc, -0.02 * sc),
-                       end + (sgn * 0.1 * sc, -0.05 * sc - 0.25 * k * sc))
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner accents (the same shape in every mouth, so they line up)
+            tick = bez(end + (sgn * 0.05 * sc, 0.1 * sc), end + (sgn * 0.13 * sc, -0.02 * sc),
+                       end + (sgn * 0.1 * sc, -0.1 * sc))
             self.pen(s, tick, 1.6, rng, taper=(0.4, 0.6))
 
     # --- body ---------------------------------------------------------------------------------

@@ -99,12 +99,11 @@ class Wavy(Character):
                   WASH, rng, opacity=0.5)
 
     def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
+        sc = g.scale
         self.pen(s, g.inner_up, 3.2, rng, taper=(0.1, 0.1))
-        k = float(np.clip(p.smile, -0.4, 0.45))
-        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases, curling with the smile
-            tick = bez(end + (sgn * 0.02 * sc, 0.1 * sc - 0.1 * k * sc), end + (sgn * 0.14 * sc, 0),
-                       end + (sgn * 0.08 * sc, -0.05 * sc - 0.3 * k * sc))
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases (the same shape in every mouth, so they line up)
+            tick = bez(end + (sgn * 0.02 * sc, 0.1 * sc), end + (sgn * 0.14 * sc, 0),
+                       end + (sgn * 0.08 * sc, -0.1 * sc))
             self.pen(s, tick, 2.2, rng, passes=1, taper=(0.4, 0.5))
 
     # --- body ----------------------------------------------------------------------------------
