@@ -72,7 +72,7 @@ class Compositor:
 
     ``body`` (straight RGBA of the canvas size, or None) is drawn under the head, moved by
     ``body_follow`` × the head's translation and rolled by ``body_roll`` × its roll about
-    ``body_pivot`` (default ``pivot``). With a body the heads hold only the head, so
+    ``body_pivot`` (default ``pivot``); a body that does not roll moves by whole pixels. With a body the heads hold only the head, so
     ``keep_in_frame`` keeps all of it (not just what lies above the pivot) on the canvas.
     """
 
@@ -156,6 +156,11 @@ class Compositor:
         self._body_edges = (x == 0, y == 0, x + bw == self.w, y + bh == self.h)  # left, top, right, bottom
         self._body_buf = np.empty((self.h, self.w, 4), np.uint8)
         self._body_inv = np.empty((self.h, self.w, 4), np.uint8)
+        # A body that does not roll moves by whole pixels: a slice of the body mirrored out to
+        # _BODY_PAD on every side (what the bilinear warp's mirrored border would give), no warp.
+        self._body_pad = None
+        if self.body_roll == 0.0:
+            self._body_pad = np.pad(self.body, ((_BODY_PAD, _BODY_PAD), (_BODY_PAD, _BODY_PAD), (0, 0)), mode="reflect")
 
     def _content_hull(self, above_pivot: bool = False) -> np.ndarray:
         """Convex hull ``(k, 2)`` of every pixel that can be non-transparent (heads ∪ boxes).
@@ -345,6 +350,7 @@ class Compositor:
             raise ValueError(f"pose must be (dx, dy, roll_deg), got {tuple(pose)}")
         m = self.matrix(pose)
         (a, b, tx), (c, d, ty) = m.tolist()
+        self._head_bands = None  # where the head can be in this frame: the whole canvas unless warped in bands
         if a == 1.0 and b == 0.0 and c == 0.0 and d == 1.0 and tx.is_integer() and ty.is_integer():
             out = self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
         else:
@@ -355,7 +361,21 @@ class Compositor:
 
     def _under_body(self, out: np.ndarray, m: np.ndarray) -> None:
         """Lay the body moved by ``m`` under the head frame ``out`` (in place), only in the
-        rectangle the moved body covers (to the canvas edge on the sides where it runs off)."""
+        rectangle the moved body covers (to the canvas edge on the sides where it runs off).
+
+        A body that does not roll is moved by the nearest whole pixels (a slice, no resampling)."""
+        if self._body_pad is not None:
+            sx = min(max(int(round(m[0, 2])), -_BODY_PAD), _BODY_PAD)
+            sy = min(max(int(round(m[1, 2])), -_BODY_PAD), _BODY_PAD)
+            x0, y0, x1, y1 = self._body_box
+            left, top, right, bottom = self._body_edges
+            rx0, ry0 = (0 if left else max(0, x0 + sx)), (0 if top else max(0, y0 + sy))
+            rx1, ry1 = (self.w if right else min(self.w, x1 + sx)), (self.h if bottom else min(self.h, y1 + sy))
+            if rx1 <= rx0 or ry1 <= ry0:
+                return
+            p = _BODY_PAD
+            self._lay_under(out, self._body_pad[ry0 - sy + p:ry1 - sy + p, rx0 - sx + p:rx1 - sx + p], (rx0, ry0, rx1, ry1))
+            return
         x0, y0, x1, y1 = self._body_box
         corners = np.array([[x0 - 0.5, y0 - 0.5, 1], [x1 - 0.5, y0 - 0.5, 1], [x0 - 0.5, y1 - 0.5, 1], [x1 - 0.5, y1 - 0.5, 1]])
         moved = corners @ m.T
@@ -371,8 +391,7 @@ class Compositor:
         local[1, 2] -= ry0
         region = self._body_buf[ry0:ry1, rx0:rx1]
         cv2.warpAffine(self.body, local, (rx1 - rx0, ry1 - ry0), region, cv2.INTER_LINEAR, cv2.BORDER_REFLECT_101)
-        head = out[ry0:ry1, rx0:rx1]
-        over_u8(head, region, head, self._body_inv[ry0:ry1, rx0:rx1])
+        self._lay_under(out, region, (rx0, ry0, rx1, ry1))
 
     def _shift(self, flat: np.ndarray, dx: int, dy: int) -> np.ndarray:
         """``flat`` moved by whole pixels (transparent where nothing moves in), a new array."""
@@ -428,11 +447,42 @@ class Compositor:
         local = m.copy()
         tx, ty = m[0, 2], m[1, 2]
         warp, linear, zero_border = cv2.warpAffine, cv2.INTER_LINEAR, cv2.BORDER_CONSTANT
-        for y0, y1, x0, x1 in self._bands(m):
+        self._head_bands = bands = self._bands(m)
+        for y0, y1, x0, x1 in bands:
             local[0, 2] = tx - x0
             local[1, 2] = ty - y0
             warp(flat, local, (x1 - x0, y1 - y0), out[y0:y1, x0:x1], linear, zero_border)
         return out
+
+    def _lay_under(self, out: np.ndarray, body: np.ndarray, rect: tuple[int, int, int, int]) -> None:
+        """``out[rect]`` = the head frame over ``body`` (a view of ``rect``'s size): "over" where
+        the head's warp bands put something, a plain copy of the body where they left zeros."""
+        rx0, ry0, rx1, ry1 = rect
+        bands = self._head_bands
+        if bands is None:
+            head = out[ry0:ry1, rx0:rx1]
+            over_u8(head, body, head, self._body_inv[ry0:ry1, rx0:rx1])
+            return
+        y = ry0
+        for y0, y1, x0, x1 in bands + [(self.h, self.h, 0, 0)]:
+            if y1 <= ry0 or y0 >= ry1 and y >= ry1:
+                continue
+            if y0 > y:  # rows no band reaches
+                top = min(y0, ry1)
+                out[y:top, rx0:rx1] = body[y - ry0:top - ry0]
+                y = top
+            a, z = max(y0, ry0), min(y1, ry1)
+            if z <= a:
+                continue
+            cx0, cx1 = max(x0, rx0), min(x1, rx1)
+            if cx1 > cx0:
+                head = out[a:z, cx0:cx1]
+                over_u8(head, body[a - ry0:z - ry0, cx0 - rx0:cx1 - rx0], head, self._body_inv[a:z, cx0:cx1])
+                out[a:z, rx0:cx0] = body[a - ry0:z - ry0, :max(cx0 - rx0, 0)]
+                out[a:z, cx1:rx1] = body[a - ry0:z - ry0, cx1 - rx0:]
+            else:
+                out[a:z, rx0:rx1] = body[a - ry0:z - ry0]
+            y = z
 
 
 # Output pixels farther than this (px) from every moved content pixel centre stay transparent:
@@ -440,6 +490,9 @@ class Compositor:
 _REACH = 1.5
 # Every 4th contour pixel: a quarter of the per-frame points for about 3 px more reach.
 _OUTLINE_STEP = 4
+# Pixels of mirrored body kept on every side for a body that moves by whole pixels: more than it
+# follows a head kept in frame (0.3 × a canvas's width is 154 px on a 512 canvas).
+_BODY_PAD = 192
 
 
 def _soft_clamp(x: float, lo: float, hi: float) -> float:

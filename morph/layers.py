@@ -7,10 +7,10 @@ layers are then laid over each other with "over", so an opaque lid hides what li
 
 Loading precomputes, per distinct set of control lines, one :class:`PartMorpher` (its α tables):
 layers that share the drawing's lines share one set of tables and, per frame, one set of meshes
-and dense maps. A layer that is the same picture with the same lines in every drawing (an eyeball
-that never changes) is kept as it is and never warped. Each moving layer is only warped inside
-the rectangle its content can reach (its content's bounding box widened by the largest
-displacement the tables can give there), so a small layer costs little.
+and meshes. A layer that is the same picture with the same lines in every drawing (an eyeball
+that never changes) is kept as it is and never warped. Each frame, a moving layer is only warped
+inside the rectangle its content can reach under that frame's meshes (the mesh cells whose corners
+sample its content), so a small layer, such as a lower lid, costs little.
 
 Everything is premultiplied RGBA uint8 (see ``morph``).
 """
@@ -39,9 +39,8 @@ class _Layer:
     name: str
     group: int  # index into LayeredMorpher.groups, or -1 for a static layer
     pm: list[np.ndarray]  # premultiplied image per drawing (one shared array when static)
-    rect: tuple[int, int, int, int]  # (x0, y0, x1, y1) the layer's content can reach, in part pixels
-    window: object | None = None  # MeshWindow for ``rect`` when it is smaller than the part, else None
-    scratch: list | None = None  # per-frame buffers of the rectangle's size: 3 warped images + 1 pair sum
+    boxes: np.ndarray | None = None  # (n, 4) float x0, y0, x1, y1 of each drawing's content, widened for bilinear reads
+    full: bool = True  # every drawing's content spans the part: no rectangle to find per frame
 
 
 class LayeredMorpher:
@@ -91,7 +90,7 @@ class LayeredMorpher:
                 pm = premultiply(images[0])
                 pm.flags.writeable = False
                 h, w = shape[:2]
-                self.layers.append(_Layer(name, -1, [pm] * self.n, (0, 0, w, h), None))
+                self.layers.append(_Layer(name, -1, [pm] * self.n))
                 continue
             key = b"".join(l.tobytes() + bytes(str(l.shape), "ascii") for l in lines)
             if key not in keys:
@@ -108,52 +107,54 @@ class LayeredMorpher:
                     pm.flags.writeable = False
                     pms.append(pm)
             g = keys[key]
-            self.layers.append(_Layer(name, g, pms, (0, 0, shape[1], shape[0]), None))
+            self.layers.append(_Layer(name, g, pms))
         h, w = self.layers[0].pm[0].shape[:2]
         self.size = (int(w), int(h))
         self.exact_three_way = bool(exact_three_way)
         self.detail_sigma = float(detail_sigma)
         self.grid = self.groups[0].grid if self.groups else MeshGrid(self.size, cells)
-        if not self.exact_three_way:
-            self._limit_windows()
+        self._spans = self.grid.cell_spans()
         for ly in self.layers:
-            x0, y0, x1, y1 = ly.rect
-            ly.scratch = [np.empty((y1 - y0, x1 - x0, 4), np.uint8) for _ in range(4)]
+            if ly.group >= 0:
+                self._content_boxes(ly)
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
             s.flags.writeable = False
-        self._layer_out = [np.zeros((h, w, 4), np.uint8) for _ in self.layers]
+        self._scratch = np.empty(5 * h * w * 4, np.uint8)  # 3 warped images, a pair sum, the blend: of the rectangle's size
         self._inv = np.empty((h, w, 4), np.uint8)
 
     # --- load time -------------------------------------------------------------------------
-    def _limit_windows(self) -> None:
-        """Shrink each moving layer's rectangle to where its content can land.
-
-        A frame's mesh of drawing A is ``V + Σ_B D_AB(w_B)`` over at most two other drawings, and
-        the dense map interpolates mesh vertices, so an output pixel moves at most twice the largest
-        table displacement of the vertices around it (``reach``). An output pixel can only be
-        non-transparent if its source, that far away, touches content of some drawing.
-        """
+    def _content_boxes(self, ly: _Layer) -> None:
+        """Each drawing's bounding box of non-transparent pixels, one pixel wider (bilinear reads)."""
         w, h = self.size
-        for ly in self.layers:
-            if ly.group < 0:
-                continue
-            m = self.groups[ly.group]
-            tab = m.tables  # (n, n, steps, v, v, 2)
-            vmax = np.sqrt((tab.astype(np.float64) ** 2).sum(-1)).max(axis=(0, 1, 2))  # per vertex (v, v)
-            reach = 2.0 * _dense_max(vmax, m.grid) + _REACH_MARGIN
-            content = np.zeros((h, w), np.uint8)
-            for pm in ly.pm:
-                content |= (pm[:, :, 3] > 0).astype(np.uint8)
-            if not content.any():
-                ly.rect = (0, 0, 1, 1)
-            else:
-                dist = cv2.distanceTransform(1 - content, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-                ys, xs = np.nonzero(dist <= reach)
-                ly.rect = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
-            if ly.rect != (0, 0, w, h):
-                ly.window = m.grid.window(*ly.rect)
+        boxes = np.full((self.n, 4), (np.inf, np.inf, -np.inf, -np.inf))
+        for i, pm in enumerate(ly.pm):
+            ys, xs = np.nonzero(pm[:, :, 3])
+            if len(xs):
+                boxes[i] = (xs.min() - 1.0, ys.min() - 1.0, xs.max() + 1.0, ys.max() + 1.0)
+        ly.boxes = boxes
+        ly.full = bool(np.all(boxes[:, :2] <= -1.0) and np.all(boxes[:, 2] >= w) and np.all(boxes[:, 3] >= h))
+
+    def _frame_rect(self, ly: _Layer, planes: np.ndarray, act) -> tuple[int, int, int, int] | None:
+        """The pixels ``(x0, y0, x1, y1)`` of the part where ``ly`` can be non-transparent this
+        frame, or None: the mesh cells some of whose corners, for some active drawing, sample
+        inside that drawing's content box (a pixel's source is a convex mix of its cell's corners)."""
+        w, h = self.size
+        if ly.full:
+            return 0, 0, w, h
+        pl = planes[: len(act)]
+        c00, c10, c01, c11 = pl[:, :, :-1, :-1], pl[:, :, 1:, :-1], pl[:, :, :-1, 1:], pl[:, :, 1:, 1:]
+        lo = np.minimum(np.minimum(c00, c10), np.minimum(c01, c11))  # (k, 2, cells, cells): x plane, y plane
+        hi = np.maximum(np.maximum(c00, c10), np.maximum(c01, c11))
+        b = ly.boxes[[ia for ia, _ in act]].astype(np.float32)[:, :, None, None]  # (k, 4, 1, 1)
+        hit = ((hi[:, 0] >= b[:, 0]) & (lo[:, 0] <= b[:, 2]) & (hi[:, 1] >= b[:, 1]) & (lo[:, 1] <= b[:, 3])).any(axis=0)
+        rows = np.nonzero(hit.any(axis=1))[0]
+        if not len(rows):
+            return None
+        cols = np.nonzero(hit.any(axis=0))[0]
+        xs, ys = self._spans
+        return int(xs[cols[0], 0]), int(ys[rows[0], 0]), int(xs[cols[-1], 1]), int(ys[rows[-1], 1])
 
     @staticmethod
     def _stack(images: Sequence[np.ndarray]) -> np.ndarray:
@@ -185,12 +186,17 @@ class LayeredMorpher:
                 return self.pm[act[0][0]].copy()
             np.copyto(out, self.pm[act[0][0]])
             return out
-        maps: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        if out is None:
+            out = np.empty_like(self.pm[0])
         planes_of: dict[int, np.ndarray] = {}
-        results = []
+        wts = [wa for _, wa in act]
+        w, h = self.size
         for k, ly in enumerate(self.layers):
             if ly.group < 0:
-                results.append(ly.pm[0])
+                if k == 0:
+                    np.copyto(out, ly.pm[0])
+                else:
+                    over_u8(ly.pm[0], out, out, self._inv)
                 continue
             m = self.groups[ly.group]
             if ly.group not in planes_of:
@@ -198,32 +204,34 @@ class LayeredMorpher:
                 if jitter is not None:
                     planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
                 planes_of[ly.group] = planes
-            key = (ly.group, id(ly.window))
-            if key not in maps:
-                up = ly.window if ly.window is not None else m.grid
-                maps[key] = up.upsample_planes(planes_of[ly.group], reuse=True)
-            mx, my = maps[key]
-            x0, y0, x1, y1 = ly.rect
-            dst = self._layer_out[k]
-            region = dst[y0:y1, x0:x1]
+            rect = self._frame_rect(ly, planes_of[ly.group], act)
+            if k == 0 and rect != (0, 0, w, h):
+                out[...] = 0
+            if rect is None:
+                continue
+            x0, y0, x1, y1 = rect
+            if rect == (0, 0, w, h):
+                mx, my = m.grid.upsample_planes(planes_of[ly.group], reuse=True)
+            else:
+                mx, my = m.grid.upsample_rect(planes_of[ly.group], rect)
+            n_px = (y1 - y0) * (x1 - x0) * 4
+            bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(y1 - y0, x1 - x0, 4) for j in range(5)]
             warped = [
-                cv2.remap(ly.pm[ia], mx[j], my[j], dst=ly.scratch[j],
-                          interpolation=cv2.INTER_LINEAR, borderMode=m.border, borderValue=(0, 0, 0, 0))
+                cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
+                          borderMode=m.border, borderValue=(0, 0, 0, 0))
                 for j, (ia, _) in enumerate(act)
             ]
-            wts = [wa for _, wa in act]
             if detail and len(act) > 1:
-                region[...] = detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
+                blended = detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
             elif len(act) == 3:
-                _blend3_u8(warped, wts, out=region, scratch=ly.scratch[3])
+                blended = _blend3_u8(warped, wts, out=bufs[4], scratch=bufs[3])
             else:
-                blend_u8(warped, wts, out=region)
-            results.append(dst)
-        if out is None:
-            out = np.empty_like(self.pm[0])
-        np.copyto(out, results[0])
-        for img in results[1:]:
-            over_u8(img, out, out, self._inv)
+                blended = blend_u8(warped, wts, out=bufs[4])
+            region = out[y0:y1, x0:x1]
+            if k == 0:
+                region[...] = blended
+            else:
+                over_u8(blended, region, region, self._inv[y0:y1, x0:x1])
         return out
 
 
@@ -234,13 +242,3 @@ class _Plain:
         self.n = n
 
     active = PartMorpher.active
-
-
-def _dense_max(vertex_values: np.ndarray, grid) -> np.ndarray:
-    """Per pixel ``(h, w)``: the largest of the (up to four) vertex values around it."""
-    v = vertex_values.astype(np.float32)
-    cells = grid.cells
-    xs = np.minimum(np.floor(np.arange(grid.w) * cells / (grid.w - 1)).astype(int), cells - 1)
-    ys = np.minimum(np.floor(np.arange(grid.h) * cells / (grid.h - 1)).astype(int), cells - 1)
-    q = np.maximum(np.maximum(v[:-1, :-1], v[1:, :-1]), np.maximum(v[:-1, 1:], v[1:, 1:]))  # per cell
-    return q[ys][:, xs]

@@ -65,7 +65,7 @@ class MeshGrid:
         ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells).
 
         With ``lo``/``hi`` only pixels ``[lo, hi)`` are covered and ``p0, p1`` count from ``lo``."""
-        hi = n_pixels if hi is None else hi
+        hi = n_pixels if hi is None else hi  # (lo, hi): a sub-range, e.g. for a window of the image
         band = max(1, min(int(band_cells), self.cells))
         full = interpolation_matrix(n_pixels, self.cells)
         cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
@@ -78,10 +78,6 @@ class MeshGrid:
                 p0, p1 = int(ps[0]), int(ps[-1]) + 1
                 out.append((p0 - lo, p1 - lo, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
         return out
-
-    def window(self, x0: int, y0: int, x1: int, y1: int, band_cells: int = 6) -> "MeshWindow":
-        """An upsampler of this grid's meshes that computes only pixels ``[x0, x1) × [y0, y1)``."""
-        return MeshWindow(self, (x0, y0, x1, y1), band_cells)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -131,25 +127,47 @@ class MeshGrid:
         dense = dense.reshape(k, 2, self.h, self.w)
         return dense[:, 0], dense[:, 1]
 
+    def cell_spans(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per mesh cell, the pixel columns ``[x0, x1)`` (first array, ``(cells, 2)``) and rows
+        ``[y0, y1)`` (second) whose values interpolate that cell's four vertices."""
+        out = []
+        for n_pixels in (self.w, self.h):
+            cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
+            spans = np.zeros((self.cells, 2), np.int64)
+            for c in range(self.cells):
+                ps = np.nonzero(cell == c)[0]
+                spans[c] = (ps[0], ps[-1] + 1) if len(ps) else (0, 0)
+            out.append(spans)
+        return out[0], out[1]
 
-class MeshWindow:
-    """The dense maps of a rectangle of a :class:`MeshGrid`'s image (same values as the full maps
-    there, up to float rounding): for a layer whose content can only land in that rectangle."""
+    def upsample_rect(self, planes: np.ndarray, rect: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`upsample_planes`, for the pixels ``[x0, x1) × [y0, y1)`` only: maps
+        ``(k, y1−y0, x1−x0)`` (the same values as the full maps there, up to float rounding).
 
-    def __init__(self, grid: MeshGrid, rect: tuple[int, int, int, int], band_cells: int = 6):
+        Only the vertex rows and columns around the rectangle are used. The result lives in
+        buffers of this grid that the next call overwrites.
+        """
         x0, y0, x1, y1 = (int(v) for v in rect)
-        if not (0 <= x0 < x1 <= grid.w and 0 <= y0 < y1 <= grid.h):
-            raise ValueError(f"window {rect} is not inside the {grid.w}x{grid.h} grid")
-        self.grid, self.rect = grid, (x0, y0, x1, y1)
-        self.cells = grid.cells
-        self.w, self.h = x1 - x0, y1 - y0
-        self._col_bands = [(a, b, j0, np.ascontiguousarray(wts.T))
-                           for a, b, j0, wts in grid._bands_of(grid.w, band_cells, x0, x1)]
-        self._row_bands = grid._bands_of(grid.h, band_cells, y0, y1)
-        self._cols: np.ndarray | None = None
-        self._dense: np.ndarray | None = None
-
-    upsample_planes = MeshGrid.upsample_planes
+        k, n = planes.shape[0], self.cells + 1
+        rows = [(max(p0, y0), min(p1, y1), j0, wts[max(p0, y0) - p0:min(p1, y1) - p0])
+                for p0, p1, j0, wts in self._row_bands if p0 < y1 and p1 > y0]
+        cols = [(max(p0, x0), min(p1, x1), j0, wts[:, max(p0, x0) - p0:min(p1, x1) - p0])
+                for p0, p1, j0, wts in self._col_bands if p0 < x1 and p1 > x0]
+        v0 = rows[0][2]
+        v1 = rows[-1][2] + rows[-1][3].shape[1]
+        comps = np.ascontiguousarray(planes, dtype=np.float32).reshape(k * 2, n, n)[:, v0:v1]
+        rw, rh = x1 - x0, y1 - y0
+        size_c, size_d = 2 * k * (v1 - v0) * rw, 2 * k * rh * rw
+        if getattr(self, "_flat", None) is None or self._flat.size < size_c + size_d:
+            self._flat = np.empty(2 * 3 * (n * self.w + self.h * self.w), np.float32)
+        col = self._flat[:size_c].reshape(2 * k, v1 - v0, rw)
+        dense = self._flat[size_c:size_c + size_d].reshape(2 * k, rh, rw)
+        for q0, q1, j0, wts in cols:
+            np.matmul(comps[:, :, j0:j0 + wts.shape[0]], wts, out=col[:, :, q0 - x0:q1 - x0])
+        for q0, q1, j0, wts in rows:
+            np.matmul(wts, col[:, j0 - v0:j0 - v0 + wts.shape[1], :], out=dense[:, q0 - y0:q1 - y0, :])
+        dense = dense.reshape(k, 2, rh, rw)
+        return dense[:, 0], dense[:, 1]
 
 
 def mesh_map(

@@ -288,7 +288,7 @@ class Character:
     grain: float = 0.0
     feather: float = 3.5
     body_follow: float = 0.3
-    body_roll: float = 0.1
+    body_roll: float = 0.0  # a body that does not roll moves by whole pixels: no warp (see morph.compositor)
     eyes: dict = field(default_factory=lambda: dict(DEFAULT_EYES))
     mouths: dict = field(default_factory=lambda: dict(DEFAULT_MOUTHS))
     eye_kw: dict = field(default_factory=dict)
@@ -394,8 +394,8 @@ class Character:
             rng = self._rng(1, 1)
             for g in gs:
                 m = 0.12 * g.hw
-                patch = np.concatenate([g.lower, [g.outer + (-g.sgn * m, 0), g.outer + (-g.sgn * m, deepest - g.outer[1] + 0.5 * g.hw),
-                                                  g.inner + (g.sgn * m, deepest - g.inner[1] + 0.5 * g.hw), g.inner + (g.sgn * m, 0)]])
+                patch = np.concatenate([g.lower, [g.outer + (-g.sgn * m, 0), g.outer + (-g.sgn * m, deepest - g.outer[1] + 0.3 * g.hw),
+                                                  g.inner + (g.sgn * m, deepest - g.inner[1] + 0.3 * g.hw), g.inner + (g.sgn * m, 0)]])
                 low.fill(patch, self.skin)
                 self.draw_lower_lid(low, g, pose, rng)
             up = self._part_surface(box, tex, self.skin)
@@ -422,18 +422,22 @@ class Character:
         inside = Layer("inside", s.to_rgba(), self._to_box([[rest.left[0], rest.left[1], rest.right[0], rest.right[1]]], box),
                        "mouth/inside.png")
         skin = self.mouth_skin or self.skin
-        bottom = self.mouth_box[1] + self.mouth_box[3] + 10
+        geoms = {name: self.mouth(pose) for name, pose in self.mouths.items()}
+        deepest = max(float(g.outer_dn[:, 1].max()) for g in geoms.values())
         drawings = []
         for dname, pose in self.mouths.items():
-            g = self.mouth(pose)
+            g = geoms[dname]
+            sc = g.scale
             low = self._part_surface(box, tex)
-            # the lower skin runs out to the sides of the box, under the upper layer's skin: the
-            # corners move a lot between mouths, and the two layers follow them a little differently
-            x0, x1 = self.mouth_box[0] - 10, self.mouth_box[0] + self.mouth_box[2] + 10
-            low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, bottom), (x0, bottom), (x0, g.left[1])]]), skin)
+            # the lower skin reaches well past the slot cut in the upper layer (under that layer's
+            # skin): the corners move a lot between mouths, and the two layers follow them a little
+            # differently, which must never open a gap onto the dark inside
+            x0, x1, y1 = g.left[0] - 0.4 * sc, g.right[0] + 0.4 * sc, deepest + 0.4 * sc
+            low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, y1), (x0, y1), (x0, g.left[1])]]), skin)
             self.draw_lower_lip(low, g, self._rng(2, 1))
             up = self._part_surface(box, tex, skin)
-            up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], bottom), (g.left[0], bottom)]])))
+            slot_y = float(g.outer_dn[:, 1].max()) + 0.12 * sc
+            up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], slot_y), (g.left[0], slot_y)]])))
             self.draw_upper_lip(up, g, self._rng(2, 2))
             layers = [inside,
                       Layer("lower-lip", low.to_rgba(), self._to_box(g.lower_lines(self.lip_band, self.teeth_top), box),
