@@ -423,21 +423,21 @@ class Character:
                        "mouth/inside.png")
         skin = self.mouth_skin or self.skin
         geoms = {name: self.mouth(pose) for name, pose in self.mouths.items()}
-        deepest = max(float(g.outer_dn[:, 1].max()) for g in geoms.values())
+        bottom = self.mouth_box[1] + self.mouth_box[3] + 10
         drawings = []
         for dname, pose in self.mouths.items():
             g = geoms[dname]
             sc = g.scale
             low = self._part_surface(box, tex)
-            # the lower skin reaches well past the slot cut in the upper layer (under that layer's
-            # skin): the corners move a lot between mouths, and the two layers follow them a little
-            # differently, which must never open a gap onto the dark inside
-            x0, x1, y1 = g.left[0] - 0.4 * sc, g.right[0] + 0.4 * sc, deepest + 0.4 * sc
-            low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, y1), (x0, y1), (x0, g.left[1])]]), skin)
+            # the lower skin reaches well past the sides of the slot cut in the upper layer (under that
+            # layer's skin): the corners move a lot between mouths, and the two layers follow them a
+            # little differently, which must never open a gap onto the dark inside. Both run to the
+            # bottom of the box, where nothing moves.
+            x0, x1 = g.left[0] - 0.4 * sc, g.right[0] + 0.4 * sc
+            low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, bottom), (x0, bottom), (x0, g.left[1])]]), skin)
             self.draw_lower_lip(low, g, self._rng(2, 1))
             up = self._part_surface(box, tex, skin)
-            slot_y = float(g.outer_dn[:, 1].max()) + 0.12 * sc
-            up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], slot_y), (g.left[0], slot_y)]])))
+            up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], bottom), (g.left[0], bottom)]])))
             self.draw_upper_lip(up, g, self._rng(2, 2))
             layers = [inside,
                       Layer("lower-lip", low.to_rgba(), self._to_box(g.lower_lines(self.lip_band, self.teeth_top), box),

@@ -204,5 +204,5 @@ def character() -> Monster:
                    description="A green horned creature with fangs: thick brush ink, flat cel shading (the paper's 'Monster').",
                    seed=44, skin=SKIN, mouth_skin=MUZZLE, eye_hw=38.0, eye_centers=((194.0, 216.0), (318.0, 216.0)),
                    eyes_box=(100, 146, 312, 132), mouth_box=(136, 304, 240, 126), mouth_center=(256.0, 350.0),
-                   mouth_scale=66.0, paper_amount=0.012, eye_kw={"brow_gap": 0.8, "brow_len": 1.05, "brow_clear": 0.55},
-                   mouth_dark=MOUTH, lid_band=0.3, teeth_hw=1.15, tusks=0.34, scale=0.72, lift=80.0, pivot=(256.0, 400.0))
+                   mouth_scale=66.0, paper_amount=0.012, eye_kw={"brow_gap": 0.8, "brow_len": 1.05, "brow_clear": 0.45},
+                   mouth_dark=MOUTH, lid_band=0.27, teeth_hw=1.15, tusks=0.34, scale=0.72, lift=80.0, pivot=(256.0, 400.0))
