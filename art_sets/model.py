@@ -143,6 +143,14 @@ class ArtSet:
         """True when some drawing has layers."""
         return any(d.layers for p in self.parts.values() for d in p.drawings)
 
+    def single_pictures(self) -> "ArtSet":
+        """A format-1 copy: every drawing its flattened picture with the drawing's lines, no body
+        (what a renderer without layers would see; the images are shared, not copied)."""
+        parts = {name: Part(name, p.box, [Drawing(d.name, d.image, d.lines, d.file if not d.layers else f"{name}/{d.name}.png")
+                                          for d in p.drawings]) for name, p in self.parts.items()}
+        return ArtSet(self.name, self.canvas, self.pivot, list(self.heads), parts, self.author, list(self.head_files),
+                      None, dict(self.extra), None)
+
     @property
     def eyes(self) -> Part:
         return self.parts["eyes"]

@@ -62,11 +62,7 @@ def first_bundled() -> Path:
 
 def format1_copy(src: Path, dst: Path) -> Path:
     """The art set at ``src`` saved as a format-1 set: every drawing flattened to one picture, no body."""
-    art = load_artset(src)
-    for pname, part in art.parts.items():
-        part.drawings = [Drawing(d.name, d.image, d.lines, f"{pname}/{d.name}.png") for d in part.drawings]
-    art.body = None
-    return save_artset(art, dst)
+    return save_artset(load_artset(src).single_pictures(), dst)
 
 
 @pytest.fixture
