@@ -35,8 +35,11 @@ Box = tuple[int, int, int, int]
 def over_u8(top: np.ndarray, under: np.ndarray, out: np.ndarray, inv: np.ndarray | None = None) -> np.ndarray:
     """Premultiplied ``top`` over ``under`` (uint8, same shape) into ``out``: ``top + under·(1 − α_top)``.
 
-    ``inv`` is an optional scratch of the same shape. Colour stays <= alpha (both terms do)."""
+    ``inv`` is an optional C-contiguous scratch of the same shape (OpenCV writes a strided view ten
+    times slower). Colour stays <= alpha (both terms do)."""
     a = np.ascontiguousarray(top[:, :, 3])
+    if inv is not None and not inv.flags.c_contiguous:
+        inv = None
     inv = cv2.merge((a, a, a, a), dst=inv)
     cv2.bitwise_not(inv, dst=inv)  # 255 − α
     inv = cv2.multiply(under, inv, dst=inv, scale=1.0 / 255.0)
@@ -155,7 +158,7 @@ class Compositor:
         self._body_box = (x, y, x + bw, y + bh)
         self._body_edges = (x == 0, y == 0, x + bw == self.w, y + bh == self.h)  # left, top, right, bottom
         self._body_buf = np.empty((self.h, self.w, 4), np.uint8)
-        self._body_inv = np.empty((self.h, self.w, 4), np.uint8)
+        self._body_inv = np.empty(self.h * self.w * 4, np.uint8)  # scratch for over_u8, reshaped to each rectangle
         # A body that does not roll moves by whole pixels: a slice of the body mirrored out to
         # _BODY_PAD on every side (what the bilinear warp's mirrored border would give), no warp.
         self._body_pad = None
@@ -454,6 +457,9 @@ class Compositor:
             warp(flat, local, (x1 - x0, y1 - y0), out[y0:y1, x0:x1], linear, zero_border)
         return out
 
+    def _inv_scratch(self, shape) -> np.ndarray:
+        return self._body_inv[: shape[0] * shape[1] * 4].reshape(shape[0], shape[1], 4)
+
     def _lay_under(self, out: np.ndarray, body: np.ndarray, rect: tuple[int, int, int, int]) -> None:
         """``out[rect]`` = the head frame over ``body`` (a view of ``rect``'s size): "over" where
         the head's warp bands put something, a plain copy of the body where they left zeros."""
@@ -461,7 +467,7 @@ class Compositor:
         bands = self._head_bands
         if bands is None:
             head = out[ry0:ry1, rx0:rx1]
-            over_u8(head, body, head, self._body_inv[ry0:ry1, rx0:rx1])
+            over_u8(head, body, head, self._inv_scratch(head.shape))
             return
         y = ry0
         for y0, y1, x0, x1 in bands + [(self.h, self.h, 0, 0)]:
@@ -477,7 +483,7 @@ class Compositor:
             cx0, cx1 = max(x0, rx0), min(x1, rx1)
             if cx1 > cx0:
                 head = out[a:z, cx0:cx1]
-                over_u8(head, body[a - ry0:z - ry0, cx0 - rx0:cx1 - rx0], head, self._body_inv[a:z, cx0:cx1])
+                over_u8(head, body[a - ry0:z - ry0, cx0 - rx0:cx1 - rx0], head, self._inv_scratch(head.shape))
                 out[a:z, rx0:cx0] = body[a - ry0:z - ry0, :max(cx0 - rx0, 0)]
                 out[a:z, cx1:rx1] = body[a - ry0:z - ry0, cx1 - rx0:]
             else:

@@ -122,7 +122,7 @@ class LayeredMorpher:
         for s in self.pm:
             s.flags.writeable = False
         self._scratch = np.empty(5 * h * w * 4, np.uint8)  # 3 warped images, a pair sum, the blend: of the rectangle's size
-        self._inv = np.empty((h, w, 4), np.uint8)
+        self._inv = np.empty((h, w, 4), np.uint8)  # scratch for over_u8 (its prefix, reshaped, for a rectangle)
 
     # --- load time -------------------------------------------------------------------------
     def _content_boxes(self, ly: _Layer) -> None:
@@ -231,7 +231,7 @@ class LayeredMorpher:
             if k == 0:
                 region[...] = blended
             else:
-                over_u8(blended, region, region, self._inv[y0:y1, x0:x1])
+                over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
         return out
 
 

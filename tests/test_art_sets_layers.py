@@ -197,3 +197,19 @@ def test_app_sheet_draws_the_rendered_blends(tmp_path):
     r = subprocess.run([sys.executable, "-m", "app", "sheet", str(tmp_path / "nope"), "--out", str(out)],
                        capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert r.returncode == 2 and r.stderr.startswith("inkface: ") and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_editing_fits_every_layer_and_refuses_to_flatten_one(tmp_path):
+    from art_sets import editing as ed
+
+    art = layered_tiny()
+    d = art.eyes.drawings[0]
+    nd = ed.fit_drawing(d, (40, 20))
+    assert nd.size == (40, 20) and all(ly.image.shape == (20, 40, 4) for ly in nd.layers)
+    np.testing.assert_allclose(nd.layers[0].lines, d.layers[0].lines * [40 / 48, 20 / 16, 40 / 48, 20 / 16])
+    assert nd.layers[1].lines is None
+    with pytest.raises(ed.EditError, match="drawn in layers"):
+        ed.replace_drawing_image(art, "eyes", 0, d.image)
+    ed.set_box(art, "eyes", (8, 10, 40, 20))
+    back = load_artset(save_artset(art, tmp_path / "fitted"))  # loads: every layer has the new box's size
+    assert all(ly.image.shape == (20, 40, 4) for d in back.eyes.drawings for ly in d.layers)
