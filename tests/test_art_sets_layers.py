@@ -213,3 +213,24 @@ def test_editing_fits_every_layer_and_refuses_to_flatten_one(tmp_path):
     ed.set_box(art, "eyes", (8, 10, 40, 20))
     back = load_artset(save_artset(art, tmp_path / "fitted"))  # loads: every layer has the new box's size
     assert all(ly.image.shape == (20, 40, 4) for d in back.eyes.drawings for ly in d.layers)
+
+
+def test_limits_on_layers_and_on_line_work(tmp_path):
+    from art_sets.io import MAX_LAYER_LINES, MAX_LAYERS, MAX_LINE_WORK
+
+    folder = save_artset(layered_tiny(), tmp_path / "lay")
+
+    def many_layers(d):
+        ly = _first(d)["layers"]
+        ly += [dict(ly[1], name=f"extra{k}") for k in range(MAX_LAYERS)]
+    edit_manifest(folder, many_layers)
+    assert "the layers limit" in messages(folder)
+
+    art = layered_tiny()
+    big = tiny_artset(n_eyes=9)
+    w, h = art.eyes.size
+    rows = np.array([[1.0, 1.0 + (k % 12), w - 2.0, 2.0 + (k % 12)] for k in range(MAX_LAYER_LINES)])
+    art.eyes.drawings = [Drawing.from_layers(d.name, [Layer("only", d.image)], rows) for d in big.eyes.drawings]
+    assert 9 * 8 * MAX_LAYER_LINES > MAX_LINE_WORK
+    folder = save_artset(art, tmp_path / "work")
+    assert "the line-work limit" in messages(folder)
