@@ -427,13 +427,11 @@ class Character:
         drawings = []
         for dname, pose in self.mouths.items():
             g = geoms[dname]
-            sc = g.scale
             low = self._part_surface(box, tex)
-            # the lower skin reaches well past the sides of the slot cut in the upper layer (under that
-            # layer's skin): the corners move a lot between mouths, and the two layers follow them a
-            # little differently, which must never open a gap onto the dark inside. Both run to the
-            # bottom of the box, where nothing moves.
-            x0, x1 = g.left[0] - 0.4 * sc, g.right[0] + 0.4 * sc
+            # the lower skin runs out to the sides and the bottom of the box, under the upper layer's
+            # skin: the corners move a lot between mouths, the two layers follow them a little
+            # differently, and that must never open a gap onto the dark inside
+            x0, x1 = self.mouth_box[0] - 10, self.mouth_box[0] + self.mouth_box[2] + 10
             low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, bottom), (x0, bottom), (x0, g.left[1])]]), skin)
             self.draw_lower_lip(low, g, self._rng(2, 1))
             up = self._part_surface(box, tex, skin)
