@@ -461,34 +461,27 @@ class Compositor:
         return self._body_inv[: shape[0] * shape[1] * 4].reshape(shape[0], shape[1], 4)
 
     def _lay_under(self, out: np.ndarray, body: np.ndarray, rect: tuple[int, int, int, int]) -> None:
-        """``out[rect]`` = the head frame over ``body`` (a view of ``rect``'s size): "over" where
-        the head's warp bands put something, a plain copy of the body where they left zeros."""
+        """``out[rect]`` = the head frame over ``body`` (a view of ``rect``'s size): "over" in the one
+        rectangle that holds every warp band of the head meeting ``rect``, a plain copy of the body
+        around it (where the head's warp left zeros)."""
         rx0, ry0, rx1, ry1 = rect
-        bands = self._head_bands
-        if bands is None:
-            head = out[ry0:ry1, rx0:rx1]
-            over_u8(head, body, head, self._inv_scratch(head.shape))
+        hit = [(y0, y1, x0, x1) for y0, y1, x0, x1 in (self._head_bands or [])
+               if y1 > ry0 and y0 < ry1 and x1 > rx0 and x0 < rx1]
+        if self._head_bands is None:
+            hx0, hy0, hx1, hy1 = rect
+        elif not hit:
+            out[ry0:ry1, rx0:rx1] = body
             return
-        y = ry0
-        for y0, y1, x0, x1 in bands + [(self.h, self.h, 0, 0)]:
-            if y1 <= ry0 or y0 >= ry1 and y >= ry1:
-                continue
-            if y0 > y:  # rows no band reaches
-                top = min(y0, ry1)
-                out[y:top, rx0:rx1] = body[y - ry0:top - ry0]
-                y = top
-            a, z = max(y0, ry0), min(y1, ry1)
-            if z <= a:
-                continue
-            cx0, cx1 = max(x0, rx0), min(x1, rx1)
-            if cx1 > cx0:
-                head = out[a:z, cx0:cx1]
-                over_u8(head, body[a - ry0:z - ry0, cx0 - rx0:cx1 - rx0], head, self._inv_scratch(head.shape))
-                out[a:z, rx0:cx0] = body[a - ry0:z - ry0, :max(cx0 - rx0, 0)]
-                out[a:z, cx1:rx1] = body[a - ry0:z - ry0, cx1 - rx0:]
-            else:
-                out[a:z, rx0:rx1] = body[a - ry0:z - ry0]
-            y = z
+        else:
+            hy0, hy1 = max(ry0, hit[0][0]), min(ry1, hit[-1][1])
+            hx0, hx1 = max(rx0, min(h[2] for h in hit)), min(rx1, max(h[3] for h in hit))
+        b = lambda y0, y1, x0, x1: body[y0 - ry0:y1 - ry0, x0 - rx0:x1 - rx0]
+        out[ry0:hy0, rx0:rx1] = b(ry0, hy0, rx0, rx1)
+        out[hy1:ry1, rx0:rx1] = b(hy1, ry1, rx0, rx1)
+        out[hy0:hy1, rx0:hx0] = b(hy0, hy1, rx0, hx0)
+        out[hy0:hy1, hx1:rx1] = b(hy0, hy1, hx1, rx1)
+        head = out[hy0:hy1, hx0:hx1]
+        over_u8(head, b(hy0, hy1, hx0, hx1), head, self._inv_scratch(head.shape))
 
 
 # Output pixels farther than this (px) from every moved content pixel centre stay transparent:

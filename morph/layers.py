@@ -143,12 +143,16 @@ class LayeredMorpher:
         w, h = self.size
         if ly.full:
             return 0, 0, w, h
-        pl = planes[: len(act)]
-        c00, c10, c01, c11 = pl[:, :, :-1, :-1], pl[:, :, 1:, :-1], pl[:, :, :-1, 1:], pl[:, :, 1:, 1:]
-        lo = np.minimum(np.minimum(c00, c10), np.minimum(c01, c11))  # (k, 2, cells, cells): x plane, y plane
-        hi = np.maximum(np.maximum(c00, c10), np.maximum(c01, c11))
-        b = ly.boxes[[ia for ia, _ in act]].astype(np.float32)[:, :, None, None]  # (k, 4, 1, 1)
-        hit = ((hi[:, 0] >= b[:, 0]) & (lo[:, 0] <= b[:, 2]) & (hi[:, 1] >= b[:, 1]) & (lo[:, 1] <= b[:, 3])).any(axis=0)
+        k = len(act)
+        b = ly.boxes[[ia for ia, _ in act]]
+        # a cell can sample a box if one of its corners lies beyond each of the box's sides
+        inside = np.empty((4, k) + planes.shape[2:], bool)
+        np.greater_equal(planes[:k, 0], b[:, 0, None, None], out=inside[0])
+        np.less_equal(planes[:k, 0], b[:, 2, None, None], out=inside[1])
+        np.greater_equal(planes[:k, 1], b[:, 1, None, None], out=inside[2])
+        np.less_equal(planes[:k, 1], b[:, 3, None, None], out=inside[3])
+        corner = inside[..., :-1, :-1] | inside[..., 1:, :-1] | inside[..., :-1, 1:] | inside[..., 1:, 1:]  # (4, k, c, c)
+        hit = corner.all(axis=0).any(axis=0)
         rows = np.nonzero(hit.any(axis=1))[0]
         if not len(rows):
             return None
