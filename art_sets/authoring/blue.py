@@ -99,8 +99,9 @@ class Blue(Character):
             s.stroke([point_at(edge0, u), point_at(edge, u)], 0.9, BLUE, rng=rng, grain=0.6, opacity=0.5, taper=(0, 0.5))
         self.pen(s, g.inner_dn, 2.8, rng, taper=(0.08, 0.08))
         self.pen(s, sub_curve(g.outer_dn, 0.32, 0.68), 1.5, rng, passes=1, opacity=0.7)
-        lower = np.concatenate([sub_curve(g.outer_dn, 0.3, 0.7), sub_curve(g.outer_dn, 0.3, 0.7)[::-1] - (0, 0.12 * sc)])
-        s.hatch(lower, 80, 2.4, 1.0, LIGHT, rng, opacity=0.5, grain=0.7)
+        for u in np.linspace(0.3, 0.7, 14):  # hatched lower lip: strokes placed along the lip, so they line up under the morph
+            p = point_at(g.outer_dn, u)
+            s.stroke([p + (0.02 * sc, -0.12 * sc), p + (-0.01 * sc, 0.0)], 1.0, LIGHT, rng=rng, opacity=0.5, grain=0.7, taper=(0, 0))
 
     def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
         sc = g.scale
