@@ -222,6 +222,7 @@ class Recorder:
         self._next_t: float | None = None
         self._last_t: float | None = None
         self.dropped = 0
+        self.accepted = 0  # frames queued for the writer (``frames`` of them are written so far)
         self.error: str = ""
         self._thread = threading.Thread(target=self._run, name="inkface-recorder", daemon=True)
         self._thread.start()
@@ -250,6 +251,7 @@ class Recorder:
             return
         try:
             self._q.put_nowait((img, copies))
+            self.accepted += copies
         except queue.Full:
             self.dropped += copies
 
@@ -258,6 +260,7 @@ class Recorder:
         if params is not None:
             self.params.append(params)
         self._q.put((rgba_pm, 1))
+        self.accepted += 1
 
     def _run(self) -> None:
         while True:

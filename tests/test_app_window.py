@@ -89,8 +89,11 @@ def test_window_opens_and_frames_flow(qtbot, window):
     # the picture arrives scaled to the view (the engine scales, the window only copies)
     box = window.video_view.image_rect()
     assert abs(fr.video.width() - box.width()) <= 2 or fr.video.width() == 640
-    full = window.pipeline.full_frame()
-    assert full is not None and full.shape == (480, 640, 3)
+    got = []
+    window.pipeline.snapshot.connect(got.append)
+    window.pipeline.request_snapshot()  # returns at once; the frame comes back through the hook
+    qtbot.waitUntil(lambda: len(got) == 1, timeout=WAIT)
+    assert got[0] is not None and got[0].shape == (480, 640, 3)
     assert fr.character.width() > 0 and fr.params is not None
     assert set(fr.timings_ms) and all(v >= 0 for v in fr.timings_ms.values())
     window._refresh_status()
@@ -133,7 +136,9 @@ def test_recording_writes_video_and_track(qtbot, window, tmp_path):
     out = tmp_path / "rec" / "take.mp4"
     assert window.start_recording(str(out))
     _wait_frames(qtbot, window, 8)
-    res = window.stop_recording()
+    with qtbot.waitSignal(window.recordingSaved, timeout=WAIT) as saved:
+        window.stop_recording()  # returns at once; the files are closed in the engine
+    res = saved.args[0]
     assert res is not None and res.frames >= 4
     assert out.is_file() and out.stat().st_size > 1000
     from tracker.params import read_csv
