@@ -250,11 +250,15 @@ class Spool:
 
 
 def write_frames(path: Path, frames) -> Path:
-    """A fake camera's frames as one ``.npy`` array (N, H, W, 3) uint8."""
-    arr = np.stack([np.asarray(f, dtype=np.uint8) for f in frames])
+    """A fake camera's frames as one ``.npy`` array (N, H, W, 3) uint8, frame by frame."""
+    frames = list(frames)
+    first = np.asarray(frames[0], dtype=np.uint8)
     tmp = path.with_name(path.name + ".part")
-    with open(tmp, "wb") as fh:
-        np.save(fh, arr, allow_pickle=False)
+    out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.uint8, shape=(len(frames), *first.shape))
+    for i, f in enumerate(frames):
+        out[i] = f
+    out.flush()
+    del out
     os.replace(tmp, path)
     return path
 

@@ -895,7 +895,11 @@ class EngineLoop:
 
         def finish():
             try:
-                self._post("recorded", (rid, rec.finish()))
+                res = rec.finish()
+                n = frames_in_file(res.output)
+                if n is not None:
+                    res.frames = n  # what a player finds in the file (a GIF merges repeated frames)
+                self._post("recorded", (rid, res))
             except Exception as e:
                 self._post("recordFailed", (rid, _one_line(e)))
 
@@ -1020,6 +1024,30 @@ class EngineLoop:
             th.join(60.0)
         self.capture.join(3.0)  # let it leave OpenCV before the process exits
         self.pictures.close()
+
+
+def frames_in_file(path: str | Path) -> int | None:
+    """How many frames a recording holds as a reader sees it (MP4/AVI from the container, GIF
+    frames, PNGs in a folder); None when it cannot be told."""
+    p = Path(path)
+    try:
+        if p.is_dir():
+            return len(list(p.glob("*.png")))
+        if p.suffix.lower() == ".gif":
+            from PIL import Image
+
+            with Image.open(p) as im:
+                return int(getattr(im, "n_frames", 1))
+        import cv2
+
+        cap = cv2.VideoCapture(str(p))
+        try:
+            n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+        finally:
+            cap.release()
+        return n if n > 0 else None
+    except (OSError, ValueError):
+        return None
 
 
 def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
@@ -1262,8 +1290,8 @@ class Pipeline:
         if frames is None:
             raise TypeError(f"cannot send a {type(fake).__name__} to the engine (only a FakeCamera)")
         held = self._refs.get("fake")
-        if held is not None and held[0] is fake:
-            return held[1]
+        if held is not None and (held[0] is fake or _same_frames(held[0].frames, frames)):
+            return held[1][:2] + (float(getattr(fake, "fps", 30.0)), bool(getattr(fake, "loop", False)))
         from app.channel import Spool, write_frames
 
         if self._spool is None:
@@ -1499,6 +1527,11 @@ def _same(a, b) -> bool:
     if isinstance(a, (str, tuple)) or isinstance(b, (str, tuple)):
         return a == b
     return a is b
+
+
+def _same_frames(a, b) -> bool:
+    """The same frame arrays in the same order (a new fake camera over the same frames)."""
+    return len(a) == len(b) and all(x is y for x, y in zip(a, b))
 
 
 def _can_tune(puppet) -> bool:

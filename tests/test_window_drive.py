@@ -1,0 +1,74 @@
+"""The scripted drive: the real performance window, hammered at full rate, never freezes.
+
+One drive (50 calibrations, 50 training sessions, 20 source switches — the fake camera, a
+video file, the bundled performance and a camera that does not exist — characters, rates,
+pause, recordings stopped while playing) runs in ``make test``; the 10-minute soak runs with
+``-m slow``. A heartbeat on the GUI event loop measures the longest freeze; a watchdog dumps
+every thread's stack and fails the test on a hang (see ``benchmarks/soak_window.py``).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("pytestqt")
+
+from app.settings import Settings  # noqa: E402
+from app.workers import SourceSpec  # noqa: E402
+from benchmarks.soak_window import Heartbeat, Watchdog, WindowDrive, drive_performer  # noqa: E402
+
+WAIT = 120_000
+
+
+@pytest.fixture(autouse=True)
+def _isolated(tmp_path, monkeypatch):
+    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
+    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
+    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+
+
+def test_scripted_drive_never_freezes_the_window(qtbot, tmp_path):
+    from tracker.sources import FakeCamera
+
+    from app.main_window import MainWindow
+
+    performer = drive_performer()
+    w = MainWindow(settings=Settings(), source=SourceSpec("camera"),
+                   fake_source=FakeCamera(performer["frames"], fps=30, loop=True), calibration=performer["calibration"])
+    qtbot.addWidget(w)
+    w.resize(1360, 820)
+    w.show()
+    beat = Heartbeat()
+    dog = Watchdog(beat, lambda: w.pipeline.engine_pid, hang_s=10.0)
+    beat.start()
+    dog.start()
+    try:
+        qtbot.waitUntil(lambda: (w.last is not None and w.last.character is not None) or dog.hung, timeout=WAIT)
+        drive = WindowDrive(w, performer, tmp_path / "drive", heartbeat=beat)
+        beat.reset()
+        drive.start()
+        qtbot.waitUntil(lambda: drive.settled or dog.hung, timeout=300_000)
+        rep = drive.finish()
+        assert not dog.hung, "the window hung (every thread's stack is printed above)"
+        # frames keep coming from whatever source the script ended on
+        n = w.frames_shown
+        qtbot.waitUntil(lambda: w.frames_shown >= n + 5 or dog.hung, timeout=WAIT)
+    finally:
+        dog.stop()
+        beat.stop()
+    assert not dog.hung, "the window hung (every thread's stack is printed above)"
+    print(rep)
+    assert rep.failures == []
+    assert (rep.calibrations, rep.sessions, rep.sources) == (50, 50, 20)
+    assert rep.characters >= 2 and rep.pauses >= 2
+    assert rep.worst_gap_s < 1.0, f"the event loop was silent for {rep.worst_gap_s:.2f} s during {rep.worst_at}"
+    # every request showed in the engine's frames within the frames already on their way
+    assert 0 < rep.max_frames_to_reach <= 3
+    # each stopped recording says how many frames its file has
+    assert len(rep.recordings) == 2
+    for path, reported, in_file in rep.recordings:
+        assert reported == in_file > 0, path
+    # the camera that does not exist fell back to the bundled performance, and said so
+    assert w.source_spec.kind in ("camera", "video", "performance")
+    w.close()
