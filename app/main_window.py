@@ -147,6 +147,7 @@ class MainWindow(QMainWindow):
         pl.recordFailed.connect(self._on_record_failed)
         pl.recalibrated.connect(self._on_recalibrated)
         pl.recalibrateFailed.connect(lambda m: self.statusBar().showMessage(f"Could not recalibrate: {m}", 8000))
+        self.destroyed.connect(lambda *_a, p=pl: p.stop())  # deleted without a close (tests): the engine goes too
         self.video_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(video=box))
         self.char_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(char=box))
         self._sync_source_controls(spec)

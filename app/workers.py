@@ -475,6 +475,68 @@ class RateMeter:
         return (len(self._times) - 1) / span if now - self._times[-1] < 0.5 else len(self._times) / self.window_s
 
 
+class Worker(threading.Thread):
+    """(Engine process) one long-lived thread for slow jobs (building a puppet, closing a
+    recording), so the engine loop never runs them and a burst of requests does not become a
+    crowd of threads. A job submitted with a ``key`` replaces a waiting job of that key (latest
+    wins); others wait their turn. After each job freed memory is handed back to the system."""
+
+    def __init__(self, name: str):
+        super().__init__(name=name, daemon=True)
+        self._cond = threading.Condition()
+        self._jobs: deque = deque()
+        self._halt = False
+        self.start()
+
+    def submit(self, fn: Callable[[], None], key: Any = None) -> None:
+        with self._cond:
+            if key is not None:
+                self._jobs = deque(j for j in self._jobs if j[0] != key)
+            self._jobs.append((key, fn))
+            self._cond.notify()
+
+    def run(self) -> None:
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: self._jobs or self._halt)
+                if not self._jobs:
+                    return
+                _, fn = self._jobs.popleft()
+            try:
+                fn()
+            finally:
+                trim_memory()
+
+    def stop(self, wait_s: float = 0.0) -> None:
+        """No new jobs; those queued still run (``wait_s``: how long to wait for them)."""
+        with self._cond:
+            self._halt = True
+            self._cond.notify()
+        if wait_s:
+            self.join(wait_s)
+
+
+_LIBC: Any = None
+
+
+def trim_memory() -> None:
+    """Return freed heap memory to the system (glibc's ``malloc_trim``; a no-op elsewhere).
+
+    Building a puppet or closing a recording frees hundreds of MB in blocks that glibc would
+    otherwise keep, so a long session's footprint would creep up after every rebuild."""
+    global _LIBC
+    if _LIBC is None:
+        try:
+            import ctypes
+
+            _LIBC = ctypes.CDLL("libc.so.6")
+            _LIBC.malloc_trim.argtypes = [ctypes.c_size_t]
+        except (OSError, AttributeError):
+            _LIBC = False
+    if _LIBC:
+        _LIBC.malloc_trim(0)
+
+
 class Capture(threading.Thread):
     """(Engine process) reads a frame source into its own :class:`LatestSlot`.
 
@@ -579,7 +641,7 @@ class Capture(threading.Thread):
 
 class Engine:
     """(Engine process) steps the puppet on the newest captured frame and keeps the latest
-    result for the window; builds puppets on a loader thread so frames keep flowing.
+    result for the window; builds puppets on a :class:`Worker` so frames keep flowing.
 
     The spec's ``calibration`` and ``session`` are references (see :func:`resolve_calibration`
     and :func:`resolve_session`): what they name is loaded off the engine loop."""
@@ -598,7 +660,7 @@ class Engine:
         self.building = False
         self._gen = 0
         self._built = None
-        self._build_lock = threading.Lock()
+        self._loader = Worker("inkface-puppet-loader")
         self._last_rgba: np.ndarray | None = None
         self.rate = RateMeter()  # frames tracked per second
         self.out_rate = RateMeter()  # new character pictures per second
@@ -632,6 +694,8 @@ class Engine:
                     except Exception:
                         pass
                     self.post("puppetReady", bspec.art)
+            del built, puppet
+            trim_memory()  # the puppet replaced (or the build not used) is freed now
         if spec is None:
             return
         old = self.spec
@@ -656,7 +720,7 @@ class Engine:
         if rebuild:
             self._gen += 1
             self.building = True
-            threading.Thread(target=self._build, args=(self._gen, spec), name="inkface-puppet-loader", daemon=True).start()
+            self._loader.submit(lambda g=self._gen, sp=spec: self._build(g, sp), key="build")
             return
         if session_changed:
             try:
@@ -674,19 +738,18 @@ class Engine:
         """Load the art set, resolve the calibration and session, build the puppet (loader thread)."""
         puppet = cal = None
         err = ""
+        if gen != self._gen:  # superseded while it waited
+            return
         try:
-            with self._build_lock:  # one build at a time; a superseded one is skipped
-                if gen != self._gen:
-                    return
-                art = self._cache.get(spec.art)
-                if art is None:
-                    art = load_artset(spec.art)
-                    self._cache[spec.art] = art
-                cal = self._resolve_calibration(spec.calibration)
-                session = resolve_session(spec.session)
-                if gen != self._gen:
-                    return
-                puppet = make_puppet(art, replace(spec, calibration=cal, session=session))
+            art = self._cache.get(spec.art)
+            if art is None:
+                art = load_artset(spec.art)
+                self._cache[spec.art] = art
+            cal = self._resolve_calibration(spec.calibration)
+            session = resolve_session(spec.session)
+            if gen != self._gen:
+                return
+            puppet = make_puppet(art, replace(spec, calibration=cal, session=session))
         except Exception as e:
             err = _one_line(e) or type(e).__name__
         finally:
@@ -826,12 +889,16 @@ class EngineLoop:
         self._char_box = None
         self.latest: DisplayFrame | None = None
         self.last_shown: DisplayFrame | None = None  # newest processed frame (for snapshots, recalibration)
+        self.last_ok: DisplayFrame | None = None  # newest frame with face, eyes and mouth tracked
         self.dropped_display = 0
         self._last_sent_rgba = None
         self.snapshot_wanted = False
         self.requests_seen = 0
         self.recorders: dict[int, Any] = {}  # id -> Recorder, while recording
-        self.finishing: dict[int, tuple] = {}  # id -> (Recorder, thread), while its files are closed
+        self.finishing: dict[int, Any] = {}  # id -> Recorder, until its files are closed
+        self._saved: deque = deque()  # ids whose files are closed (appended by the saver)
+        self.saver = Worker("inkface-record-saver")  # closes stopped recordings in turn
+        self.jobs = Worker("inkface-engine-jobs")  # recalibrations
         self._progress_at = 0.0
         self.quit = False
 
@@ -868,7 +935,7 @@ class EngineLoop:
             self.capture.set_paused(self.paused)
             self.engine.inbox = self.capture.slot
             self.dropped_display = 0
-            self.latest = None
+            self.latest = self.last_ok = None
         elif cmd == "puppet":
             self.engine.request(arg)
         elif cmd == "record":
@@ -902,14 +969,18 @@ class EngineLoop:
                 self._post("recorded", (rid, res))
             except Exception as e:
                 self._post("recordFailed", (rid, _one_line(e)))
+            finally:
+                self._saved.append(rid)
 
-        th = threading.Thread(target=finish, name="inkface-record-finish", daemon=True)
-        self.finishing[rid] = (rec, th)
-        th.start()
+        self.finishing[rid] = rec
+        self.saver.submit(finish)
 
     def _recalibrate(self, save_to: str) -> None:
         """Calibrate again on the newest frame (for when the light changed), on a thread."""
         fr = self.last_shown
+        ok = self.last_ok  # a blink at the key press: the newest fully tracked frame, if recent
+        if fr is not None and ok is not None and ok is not fr and fr.status != "ok" and fr.time - ok.time < 1.0:
+            fr = ok
         if fr is None or fr.frame_bgr is None:
             self._post("recalibrateFailed", ("no frame to calibrate on yet",))
             return
@@ -924,7 +995,7 @@ class EngineLoop:
             except Exception as e:
                 self._post("recalibrateFailed", (_one_line(e),))
 
-        threading.Thread(target=work, name="inkface-recalibrate", daemon=True).start()
+        self.jobs.submit(work, key="recalibrate")
 
     # frames -------------------------------------------------------------------------------
     def publish(self, fr: DisplayFrame, kind: str = "frame") -> None:
@@ -959,13 +1030,12 @@ class EngineLoop:
 
     def _report_progress(self) -> None:
         now = time.monotonic()
-        done = [rid for rid, (_, th) in self.finishing.items() if not th.is_alive()]
-        for rid in done:
-            del self.finishing[rid]
+        while self._saved:
+            self.finishing.pop(self._saved.popleft(), None)
         if now - self._progress_at < 0.1:
             return
         self._progress_at = now
-        for rid, (rec, _) in self.finishing.items():
+        for rid, rec in self.finishing.items():
             total = max(1, int(getattr(rec, "accepted", 0) or rec.frames))
             self.chan.send(("event", "recordProgress", (rid, min(rec.frames, total), total)), key=("progress", rid))
         for rid, rec in self.recorders.items():
@@ -986,6 +1056,8 @@ class EngineLoop:
                 fr = self.engine.step(timeout=0.005)
                 if fr is not None:
                     self.last_shown = fr
+                    if fr.status == "ok":
+                        self.last_ok = fr
                     for rec in self.recorders.values():
                         rec.add(fr)
                     if self.latest is not None:
@@ -1020,8 +1092,9 @@ class EngineLoop:
             except Exception:
                 pass
         self.recorders.clear()
-        for _, th in self.finishing.values():
-            th.join(60.0)
+        self.saver.stop(wait_s=60.0)  # the recordings already stopped are closed too
+        self.jobs.stop()
+        self.engine._loader.stop()
         self.capture.join(3.0)  # let it leave OpenCV before the process exits
         self.pictures.close()
 
@@ -1162,7 +1235,7 @@ class Pipeline:
         self._notifier = None
         self._reader = None
         self._spool = None
-        self._refs: dict[str, tuple[Any, Any]] = {}  # kind -> (object, reference sent for it)
+        self._refs: dict[str, Any] = {}  # "calibration"/"session": {id: (object, reference)}; "fake": (camera, reference)
         self._files: dict[int, tuple[Any, str]] = {}  # id(object) -> (object, file it is saved in)
         self._targets: dict = {}
         self._inbox: deque = deque()
@@ -1247,15 +1320,19 @@ class Pipeline:
         """``obj`` (a calibration) is saved in ``path``: send the path instead of writing a copy."""
         self._files[id(obj)] = (obj, str(path))
 
-    def _ref(self, kind: str, obj: Any) -> Any:
+    def _ref(self, kind: str, obj: Any, fresh: bool = False) -> Any:
         """What crosses to the engine for a calibration or session: small values as they are,
-        objects as a file reference ``("file", path, n)`` (written to the spool once per object)."""
+        objects as a file reference ``("file", path, n)``. A session saved in its folder is read
+        from there; anything else is written to the spool. Calibrations do not change once made,
+        so each is written once; a session handed over again (``fresh``) is read again."""
         if obj is None or isinstance(obj, (str, tuple)):
             return obj
-        held = self._refs.get(kind)
-        if held is not None and held[0] is obj:
+        cache = self._refs.setdefault(kind, {})
+        held = cache.get(id(obj))
+        if held is not None and held[0] is obj and not (fresh and kind == "session"):
             return held[1]
         noted = self._files.pop(id(obj), None)
+        folder = getattr(obj, "path", None) if kind == "session" else None
         if self._spool is None:
             from app.channel import Spool
 
@@ -1263,24 +1340,28 @@ class Pipeline:
         try:
             if noted is not None and noted[0] is obj:
                 path = noted[1]
+            elif folder is not None and (Path(folder) / "session.json").is_file():
+                path = str(folder)  # the training window saved it there before handing it over
             elif kind == "calibration":
                 path = str(self._spool.path("calibration", ".json"))
                 obj.save(path)
             else:
-                folder = self._spool.path("session")
-                folder.mkdir(parents=True, exist_ok=True)
-                (folder / "session.json").write_text(json.dumps(obj.to_dict()) + "\n")
-                path = str(folder)
+                spooled = self._spool.path("session")
+                spooled.mkdir(parents=True, exist_ok=True)
+                (spooled / "session.json").write_text(json.dumps(obj.to_dict()) + "\n")
+                path = str(spooled)
         except Exception as e:  # a full disk, an odd object: say so, keep what the engine has
             self.error.emit(f"could not hand the {kind} to the engine: {_one_line(e)}")
             return held[1] if held is not None else None
         ref = ("file", path, self.requests_sent + 1)
-        self._refs[kind] = (obj, ref)
+        cache[id(obj)] = (obj, ref)
+        while len(cache) > 4:
+            cache.pop(next(iter(cache)))
         return ref
 
-    def _wire(self, spec: PuppetSpec) -> PuppetSpec:
+    def _wire(self, spec: PuppetSpec, changed: tuple = ()) -> PuppetSpec:
         return replace(spec, calibration=self._ref("calibration", spec.calibration),
-                       session=self._ref("session", spec.session))
+                       session=self._ref("session", spec.session, fresh="session" in changed))
 
     def _fake_ref(self, fake) -> tuple | None:
         """A fake camera as ``("fake", frames.npy, fps, loop)`` (its frames go by file)."""
@@ -1305,7 +1386,7 @@ class Pipeline:
     def request(self, **changes) -> int:
         """Change the puppet; the engine applies it before its next frame."""
         self.spec = replace(self.spec, **changes)
-        return self._send("puppet", self._wire(self.spec), key="puppet")
+        return self._send("puppet", self._wire(self.spec, tuple(changes)), key="puppet")
 
     def set_source(self, spec: SourceSpec, fake_source=None) -> int:
         self.source_spec = spec

@@ -21,6 +21,7 @@ under ``-m slow``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import faulthandler
 import os
 import signal
@@ -75,22 +76,55 @@ class Watchdog(threading.Thread):
     """Dumps every thread's stack when the heartbeat is silent for ``hang_s``, then kills the
     engine process (which frees a GUI thread blocked on it) so the test can fail instead of hang."""
 
-    def __init__(self, heartbeat: Heartbeat, engine_pid=lambda: None, hang_s: float = 10.0, out=None):
+    def __init__(self, heartbeat: Heartbeat, engine_pid=lambda: None, hang_s: float = 10.0, out=None,
+                 stall_s: float = 0.5):
         super().__init__(name="inkface-watchdog", daemon=True)
         self.heartbeat = heartbeat
         self.engine_pid = engine_pid
         self.hang_s = hang_s
+        self.stall_s = stall_s
         self.out = out or sys.stderr
         self.hung = False
+        self._held = False
+        self.stalls: list[tuple[str, str]] = []  # (what the drive was doing, the GUI thread's stack) per stall
+        self._main = threading.main_thread().ident
         self._halt = threading.Event()
 
     def stop(self) -> None:
         self._halt.set()
 
+    @contextlib.contextmanager
+    def hold(self):
+        """Not watching while the test itself blocks the event loop (setting up a drive)."""
+        self._held = True
+        try:
+            yield
+        finally:
+            self.heartbeat.reset()
+            self._held = False
+
+    def _sample_stall(self, last_seen: float) -> float:
+        """The GUI thread's Python stack once per silence longer than ``stall_s`` (a poor man's
+        profiler for the freezes that are shorter than a hang)."""
+        import traceback
+
+        beat = self.heartbeat.last
+        if beat == last_seen or time.monotonic() - beat < self.stall_s:
+            return last_seen
+        frame = sys._current_frames().get(self._main)
+        if frame is not None:
+            self.stalls.append((self.heartbeat.doing, "".join(traceback.format_stack(frame)[-8:])))
+        return beat
+
     def run(self) -> None:
-        while not self._halt.wait(0.25):
+        sampled = 0.0
+        while not self._halt.wait(0.1):
+            if self._held:
+                sampled = self.heartbeat.last
+                continue
             silent = time.monotonic() - self.heartbeat.last
             if silent < self.hang_s:
+                sampled = self._sample_stall(sampled)
                 continue
             self.hung = True
             print(f"\n=== watchdog: the GUI event loop has been silent for {silent:.1f} s "
@@ -182,7 +216,8 @@ class WindowDrive:
     returns at once; what comes back is checked as it arrives."""
 
     def __init__(self, window, performer: dict, workdir: Path, calibrations: int = 50, sessions: int = 50,
-                 sources: int = 20, spacing_ms: int = 150, heartbeat: Heartbeat | None = None):
+                 sources: int = 20, spacing_ms: int = 150, heartbeat: Heartbeat | None = None,
+                 cache: dict | None = None, takes: tuple[str, str] = ("take.mp4", "take.gif")):
         from PySide6.QtCore import QTimer
 
         self.w = window
@@ -190,10 +225,11 @@ class WindowDrive:
         self.workdir = Path(workdir)
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.heartbeat = heartbeat
+        self.takes = takes
         self.report = DriveReport()
         self.video = self._make_video()
         self.arts = window.strip.paths()[:3]
-        self._sessions: dict[str, list] = {}
+        self._sessions: dict[str, list] = (cache if cache is not None else {}).setdefault("sessions", {})
         for art in self.arts:  # made now, not on the clock: the drive's own work is not the window's
             self._sessions_for(art)
         self._saved_cal = self._save_calibration()
@@ -201,6 +237,7 @@ class WindowDrive:
         self._i = 0
         self._recording: str | None = None
         self._takes = 0
+        self._saved: list = []  # RecordResults, read back after the drive
         self._busy = 0  # calibration windows still being clicked through
         self._pending: list[tuple[int, int]] = []  # (request seq, frames received when sent)
         self._t0 = 0.0
@@ -236,10 +273,13 @@ class WindowDrive:
 
             from app.workers import load_artset
 
-            s = default_session(load_artset(art))
+            # as the training window hands them over: saved in the performer's folder first
             folder = self.workdir / "sessions" / Path(art).name
-            s.save(folder)
-            self._sessions[art] = [s, TrainingSession.load(folder, autosave=False)]
+            s = default_session(load_artset(art))
+            s.save(folder / "a")
+            again = TrainingSession.load(folder / "a", autosave=False)
+            again.save(folder / "b")
+            self._sessions[art] = [s, again]
         return self._sessions[art]
 
     def _plan(self, calibrations: int, sessions: int, sources: int) -> list[tuple[str, object]]:
@@ -249,8 +289,8 @@ class WindowDrive:
             "calibrate": [("calibrate", i) for i in range(calibrations)],
             "session": [("session", i) for i in range(sessions)],
             "source": [("source", kinds[i % len(kinds)]) for i in range(sources)],
-            "other": [("character", 1), ("rate", 10), ("pause", True), ("pause", False), ("record", "take.mp4"),
-                      ("recalibrate", None), ("rate", 15), ("character", -1), ("stop", None), ("record", "take.gif"),
+            "other": [("character", 1), ("rate", 10), ("pause", True), ("pause", False), ("record", self.takes[0]),
+                      ("recalibrate", None), ("rate", 15), ("character", -1), ("stop", None), ("record", self.takes[1]),
                       ("rate", 30), ("pause", True), ("recalibrate", None), ("pause", False), ("stop", None)],
         }
         total = sum(len(v) for v in tracks.values())
@@ -298,6 +338,8 @@ class WindowDrive:
         if self._i >= len(self.plan):
             if self._recording is not None:
                 self._do("stop", None)
+            if self.heartbeat is not None:
+                self.heartbeat.doing = "waiting for the recordings to be saved"
             self._timer.stop()
             self.report.seconds = time.monotonic() - self._t0
             return
@@ -391,15 +433,20 @@ class WindowDrive:
             dlg.close()
 
     def _on_saved(self, result) -> None:
-        try:
-            in_file = count_video_frames(result.output)
-        except Exception as e:
-            in_file = -1
-            self.report.failures.append(f"reading back {result.output}: {e}")
-        self.report.recordings.append((str(result.output), int(result.frames), in_file))
-        for p in [result.output, result.track, *getattr(result, "extra", [])]:  # keep the disk from filling up
-            if p is not None and Path(p).is_file():
-                Path(p).unlink()
+        self._saved.append(result)  # read back in finish(): decoding a GIF here would freeze the window
+
+    def _read_back(self) -> None:
+        for result in self._saved:
+            try:
+                in_file = count_video_frames(result.output)
+            except Exception as e:
+                in_file = -1
+                self.report.failures.append(f"reading back {result.output}: {e}")
+            self.report.recordings.append((str(result.output), int(result.frames), in_file))
+            for p in [result.output, result.track, *getattr(result, "extra", [])]:  # keep the disk from filling up
+                if p is not None and Path(p).is_file():
+                    Path(p).unlink()
+        self._saved = []
 
     def finish(self) -> DriveReport:
         self._timer.stop()
@@ -407,8 +454,10 @@ class WindowDrive:
         r.frames_shown = self.w.frames_shown
         if self.heartbeat is not None:
             r.worst_gap_s, r.worst_at = self.heartbeat.worst_gap_s, self.heartbeat.worst_at
-        for sig, slot in ((self.w.pipeline.frameReady, self._on_frame),):
-            sig.disconnect(slot)
+        self._read_back()
+        self.w.pipeline.frameReady.disconnect(self._on_frame)
+        self.w.recordingSaved.disconnect(self._on_saved)
+        self.w.calibrationOpened.disconnect(self._on_calibration_window)
         return r
 
 
@@ -432,7 +481,8 @@ def drive_performer(seed: int = 5) -> dict:
 # the soak
 
 
-def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | None = None) -> dict:
+def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | None = None,
+         takes: tuple[str, str] = ("take.mp4", "take.gif")) -> dict:
     """Repeat the drive for ``minutes``; print and return the worst gap and memory growth."""
     import app.qt_env  # noqa: F401  (offscreen without a display)
 
@@ -476,10 +526,14 @@ def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | N
     worst = 0.0
     worst_at = ""
     reports = []
+    cache: dict = {}
     print(f"soak: {minutes:g} min of scripted drives (50 calibrations, 50 sessions, 20 sources, characters, pause, "
           f"recordings each), one action every {spacing_ms} ms", file=out, flush=True)
     while time.monotonic() < end and not dog.hung:
-        d = WindowDrive(w, performer, tmp / f"drive-{drives % 2}", spacing_ms=spacing_ms, heartbeat=beat)
+        with dog.hold():  # the drive's own setup is not the window's
+            d = WindowDrive(w, performer, tmp / f"drive-{drives % 2}", spacing_ms=spacing_ms, heartbeat=beat,
+                            cache=cache, takes=takes)
+        dog.stalls.clear()
         d.start()
         pump(lambda: d.settled, 600)
         rep = d.finish()
@@ -493,6 +547,9 @@ def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | N
         if rep.worst_gap_s > worst:
             worst, worst_at = rep.worst_gap_s, rep.worst_at
         beat.reset()
+        for doing, stack in dog.stalls:
+            print(f"    stall while {doing}:\n{stack}", file=out, flush=True)
+        dog.stalls.clear()
         print(f"  drive {drives:3d} at {t / 60:5.1f} min: {rep.actions} actions in {rep.seconds:5.1f} s, "
               f"worst gap {rep.worst_gap_s * 1000:6.0f} ms, requests reached the engine within "
               f"{rep.max_frames_to_reach} frames, RSS window {mem[0] / 2**20:6.1f} MB + engine "
@@ -501,16 +558,27 @@ def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | N
     dog.stop()
     beat.stop()
     final = samples[-1][1] + samples[-1][2] if samples else 0
-    growth = (final - baseline) / baseline * 100.0 if baseline else 0.0
+    # warmed up: every character, source, rate and recording format has been used and the
+    # buffers are at their working size (the first quarter of the run, at least two drives)
+    warm_t = max(samples[min(1, len(samples) - 1)][0], samples[-1][0] / 4) if samples else 0
+    warm = next((a + b for t, a, b in samples if t >= warm_t), final)
+    growth = (final - warm) / warm * 100.0 if warm else 0.0
+    growth_first = (final - baseline) / baseline * 100.0 if baseline else 0.0
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     result = {"minutes": (time.monotonic() - t_start) / 60.0, "drives": drives, "worst_gap_s": worst,
-              "worst_at": worst_at, "rss_start_mb": (baseline or 0) / 2**20, "rss_end_mb": final / 2**20,
-              "growth_pct": growth, "hung": dog.hung, "frames_shown": w.frames_shown,
-              "failures": [f for r in reports for f in r.failures],
+              "worst_at": worst_at, "rss_first_mb": (baseline or 0) / 2**20, "rss_warm_mb": warm / 2**20,
+              "warm_min": warm_t / 60.0, "rss_end_mb": final / 2**20, "growth_pct": growth,
+              "growth_from_first_pct": growth_first, "hung": dog.hung, "frames_shown": w.frames_shown,
+              "load": load, "failures": [f for r in reports for f in r.failures],
               "mismatched_recordings": [x for r in reports for x in r.recordings if x[1] != x[2]]}
-    print(f"soak result: {result['minutes']:.1f} min, {drives} drives, {w.frames_shown} frames shown; "
-          f"event loop worst gap {worst * 1000:.0f} ms (during: {worst_at}); "
-          f"RSS window+engine {result['rss_start_mb']:.1f} MB after the first drive -> {result['rss_end_mb']:.1f} MB "
-          f"at the end ({growth:+.1f} %)" + ("; HUNG" if dog.hung else ""), file=out, flush=True)
+    print(f"soak result: {result['minutes']:.1f} min, {drives} drives, {w.frames_shown} frames shown, "
+          f"{sum(len(r.recordings) for r in reports)} recordings ({len(result['mismatched_recordings'])} whose "
+          f"reported count differs from the file), {len(result['failures'])} failures; "
+          f"event loop worst gap {worst * 1000:.0f} ms (during: {worst_at}); RSS window+engine "
+          f"{result['rss_first_mb']:.1f} MB after the first drive, {result['rss_warm_mb']:.1f} MB warmed up "
+          f"(at {result['warm_min']:.1f} min), {result['rss_end_mb']:.1f} MB at the end: growth {growth:+.1f} % "
+          f"after warm-up ({growth_first:+.1f} % from the first drive); load average {load:.1f} on "
+          f"{os.cpu_count()} cores" + ("; HUNG" if dog.hung else ""), file=out, flush=True)
     w.close()
     qapp.processEvents()
     return result
@@ -520,8 +588,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.soak_window", description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=10.0, help="how long to keep driving (default 10)")
     ap.add_argument("--spacing-ms", type=int, default=150, help="time between two scripted actions")
+    ap.add_argument("--takes", default="take.mp4,take.gif", help="the two recordings of each drive (by extension)")
     args = ap.parse_args(argv)
-    res = soak(args.minutes, spacing_ms=args.spacing_ms)
+    res = soak(args.minutes, spacing_ms=args.spacing_ms, takes=tuple(args.takes.split(",")[:2]))
     ok = not res["hung"] and res["worst_gap_s"] < 1.0 and res["growth_pct"] < 5.0 and not res["mismatched_recordings"]
     return 0 if ok else 1
 
