@@ -582,6 +582,7 @@ class Capture(threading.Thread):
         if self._halt.is_set():
             return
         try:
+            self._given_source = _rebuild(self._given_source)  # a test's fake camera, read from its file
             src = self._given_source if self._given_source is not None else open_source(self.spec)
         except Exception as e:  # SourceError, missing core, bad file: one line for the user
             self.post("sourceFailed", _one_line(e))
@@ -870,7 +871,7 @@ class EngineLoop:
     steps the puppet on the newest captured frame, and publishes the newest result if the
     window has taken the previous one — otherwise that result waits and is replaced by the
     next (counted as dropped). Nothing here waits on the window: sends are non-blocking and
-    pictures go into shared memory. A finished recording is closed on its own thread.
+    pictures go into shared memory. A stopped recording is closed on the saver thread.
     """
 
     def __init__(self, chan, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake=None):
@@ -906,7 +907,7 @@ class EngineLoop:
         self._events.append((name, args))
 
     def _start_capture(self, spec: SourceSpec, fake, source_id: int, previous: Capture | None = None) -> Capture:
-        c = Capture(spec, self.realtime, _rebuild(fake), self._post, source_id, previous)
+        c = Capture(spec, self.realtime, fake, self._post, source_id, previous)
         c.start()
         return c
 
