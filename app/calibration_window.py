@@ -182,20 +182,23 @@ class ClickView(QWidget):
             p.drawText(lr, Qt.AlignmentFlag.AlignCenter, label)
 
 
+MASK_PLACEHOLDER = "Place all five points to see what the tracker learned"
+
+
 class MaskView(QWidget):
-    """One learned colour mask over the dimmed frame, with a caption."""
+    """One learned colour mask over the dimmed frame, with a caption; without a mask, a note
+    saying why (points still to place, or what the tracker could not learn)."""
 
     def __init__(self, caption: str, parent=None):
         super().__init__(parent)
         self.caption = caption
         self.image: QImage | None = None
-        self.note = "Place all five points to see what the tracker learned"
+        self.note = MASK_PLACEHOLDER
         self.setMinimumSize(200, 150)
 
-    def set_image(self, img: QImage | None, note: str = "") -> None:
+    def set_image(self, img: QImage | None, note: str = MASK_PLACEHOLDER) -> None:
         self.image = img
-        if note:
-            self.note = note
+        self.note = note
         self.update()
 
     def paintEvent(self, _ev) -> None:
@@ -306,11 +309,15 @@ class CalibrationWindow(QDialog):
         self.error = ""
         self.saved_to: Path | None = None
 
+        self._auto_note = ""  # why Auto placed nothing, kept while the user places the points
+        self._auto_found = False  # the points on screen are Auto's (its caution is shown with the masks)
         self.view = ClickView(self.frame)
         self.view.changed.connect(self._on_changed)
         self.prompt = QLabel("")
         self.prompt.setObjectName("prompt")
         self.prompt.setWordWrap(True)
+        self.prompt.setAlignment(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter)
+        self.prompt.setToolTip("The mouse wheel zooms the frame about the cursor; drag a placed point to move it")
 
         self.auto_btn = QPushButton("Auto")
         self.auto_btn.setToolTip("Find the face, eyes and mouth automatically; then drag any point to adjust")
@@ -324,6 +331,8 @@ class CalibrationWindow(QDialog):
         self.name_edit.setMaximumWidth(200)
         self.accept_btn = QPushButton("Accept and save")
         self.accept_btn.setObjectName("primary")
+        # the shared style sheet colours the primary button the same when it is disabled
+        self.accept_btn.setStyleSheet("QPushButton:disabled { background: #2f3136; border-color: #3c3f45; color: #6b6f76; }")
         self.accept_btn.clicked.connect(self.accept_calibration)
         cancel = QPushButton("Cancel")
         cancel.clicked.connect(self.reject)
@@ -374,7 +383,18 @@ class CalibrationWindow(QDialog):
         rw.setMinimumWidth(340)
         h.addWidget(rw, 2)
         self.resize(1180, 640)
+        self._fix_prompt_height()
         self._on_changed()
+
+    def _fix_prompt_height(self) -> None:
+        """Give the prompt room for two lines whatever it says, so the frame under it never
+        moves while clicking (a prompt that wrapped to one line or two shifted it by a line)."""
+        self.prompt.ensurePolished()
+        text = self.prompt.text()
+        self.prompt.setText("Ag\nAg")
+        h = self.prompt.sizeHint().height()
+        self.prompt.setText(text)
+        self.prompt.setFixedHeight(h)
 
     # ---------------------------------------------------------------------------- points
     def set_points(self, points: dict[str, tuple[float, float]]) -> None:
@@ -397,22 +417,41 @@ class CalibrationWindow(QDialog):
             self._on_changed()
 
     def reset(self) -> None:
+        """Remove every point and everything said about them."""
+        self._auto_note = ""
+        self._auto_found = False
+        self.error = ""
         self.set_points({})
 
     def auto(self) -> bool:
-        """Find the five points with ``tracker.auto_init.auto_clicks``."""
+        """Find the five points with ``tracker.auto_init.auto_clicks``; True when it placed them.
+
+        What it finds is checked against a face's constellation
+        (``training.constellation``): when the points are not shaped like a face, none are
+        placed (points the user already placed stay) and the window says why."""
         try:
             from tracker.auto_init import auto_clicks
         except ImportError:
-            self.info.setText("Automatic start is not available in this build: please click the points.")
+            self._auto_note = "Automatic start is not available in this build: please click the points."
+            self._on_changed()
             return False
         try:
-            c = auto_clicks(self.frame)
+            c = auto_clicks(self.frame, self.frame_index)
         except Exception as e:
-            self.info.setText(f"Auto found no face: {_one_line(e)}. Please click the points.")
+            self._auto_note = f"Auto found no face: {_one_line(e)}. Please click the five points yourself."
+            self._on_changed()
             return False
+        from training.constellation import constellation_problems
+
+        problems = constellation_problems(c.points(), self.frame)
+        if problems:
+            self._auto_note = ("Auto's guess does not look like a face: " + "; ".join(problems)
+                               + ". It placed no points — please click the five yourself, in the order "
+                               "the prompt above asks.")
+            self._on_changed()
+            return False
+        self._auto_note, self._auto_found = "", True
         self.set_points(c.points())
-        self.info.setText("Found automatically — drag any point that is off, then accept.")
         return True
 
     def clicks(self):
@@ -426,16 +465,28 @@ class CalibrationWindow(QDialog):
         nxt = self.view.next_point()
         n = len(self.view.points)
         if nxt is not None:
-            self.prompt.setText(f"{n + 1} of 5 — {PROMPTS[nxt]}  (mouse wheel zooms)")
+            self.prompt.setText(f"{n + 1} of 5 — {PROMPTS[nxt]}")
             self.calibration = None
+            self.error = ""
             self.accept_btn.setEnabled(False)
             for mv in self.mask_views:
                 mv.set_image(None)
+            self._auto_found = False
+            self.info.setText(self._auto_note or "Click the points in the order the prompt asks, or press Auto.")
             return
-        self.prompt.setText("All five points placed — drag to adjust, check the masks, then accept")
+        self.prompt.setText("All five points placed — drag any that is off, check the masks, then accept")
+        self._auto_note = ""  # the points are there now: why Auto placed none no longer matters
         self._calibrate()
 
+    def _shape_warning(self) -> str:
+        """A warning when the placed points are not shaped like a face ("" when they are)."""
+        from training.constellation import constellation_problems
+
+        problems = constellation_problems(self.view.points, self.frame)
+        return ("These points do not look like a face: " + "; ".join(problems) + ". ") if problems else ""
+
     def _calibrate(self) -> None:
+        warn = self._shape_warning()
         try:
             from tracker.calibration import calibrate
 
@@ -444,8 +495,11 @@ class CalibrationWindow(QDialog):
         except Exception as e:
             self.calibration = None
             self.error = _one_line(e)
-            self.info.setText(f"Calibration failed: {self.error}")
+            self.info.setText(f"{warn}The tracker could not learn from these points: {self.error}. "
+                              "Drag the points that are off.")
             self.accept_btn.setEnabled(False)
+            for mv in self.mask_views:
+                mv.set_image(None, "Nothing learned from these points — see the note below")
             return
         self.accept_btn.setEnabled(True)
         masks = learned_masks(self.calibration, self.frame)
@@ -462,8 +516,11 @@ class CalibrationWindow(QDialog):
             else:
                 mv.set_image(None, "this tracker exposes no colour classifiers")
         ipd = getattr(self.calibration, "ipd", None)
+        note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, brow middles, "
+                "mouth centre) and drag any that is off, then accept. ") if self._auto_found else ""
         self.info.setText(
-            (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
+            warn + note
+            + (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
             + "Inside the boxes the tracker searches, coloured pixels are what each colour classifier "
             "accepts: the pupils, the lips and the eye whites should light up, little else."
         )

@@ -43,4 +43,7 @@ def run(argv: list[str]) -> int:
     if mod is None:
         print(f"inkface: '{args.command}' is not available in this build", file=sys.stderr)
         return 2
+    from app.data_dir import setup
+
+    setup()  # one data folder, decided before anything asks for a path (and old folders moved in)
     return int(mod.run(args) or 0)

@@ -13,36 +13,25 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+DEFAULT_OUT = "out/demo.mp4"
+"""The demo's own file: ``make demo`` replaces it each time (an ``--out`` the user names is not)."""
 
 
 def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--art", metavar="NAME|DIR", help="the character (default: the first bundled one)")
-    parser.add_argument("--out", default="out/demo.mp4", metavar="FILE",
-                        help="where the headless render goes (default: out/demo.mp4)")
+    parser.add_argument("--out", metavar="FILE",
+                        help="where the headless render goes (default: out/demo.mp4, replaced each time)")
+    parser.add_argument("--force", action="store_true", help="replace --out if it exists")
     parser.add_argument("--seconds", type=float, default=10.0, help="length of the headless render (default 10)")
     parser.add_argument("--fps", type=int, choices=(10, 15, 30), default=30, help="output rate")
     parser.add_argument("--headless", action="store_true", help="render to --out even when a display is present")
 
 
-def side_by_side(frame_bgr: np.ndarray, rgba_pm: np.ndarray, background=(250, 248, 243)) -> np.ndarray:
-    """The performer's frame scaled to the character's height, then the character: one BGR image."""
-    import cv2
-
-    from app.record import over_rgb
-
-    ch = rgba_pm.shape[0]
-    h, w = frame_bgr.shape[:2]
-    left = cv2.resize(frame_bgr, (max(1, round(w * ch / h)), ch), interpolation=cv2.INTER_AREA)
-    right = over_rgb(rgba_pm, background)[..., ::-1]
-    gap = np.full((ch, 8, 3), 30, np.uint8)
-    return np.ascontiguousarray(np.concatenate([left, gap, right], axis=1))
-
-
-def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path:
-    """Render the bundled performance through the character to ``out`` (MP4 side by side)."""
-    import cv2
-
+def render_headless(out: str, art: str | None, seconds: float, fps: int, force: bool = True) -> Path:
+    """Render the bundled performance through the character to ``out`` (side by side, any format
+    :class:`app.record.FrameWriter` writes); an existing ``out`` is replaced only with ``force``."""
+    from app.record import PAPER_WHITE, FrameWriter, check_render_output, over_rgb
+    from app.render_cmd import side_by_side
     from app.workers import (
         PuppetSpec,
         SourceSpec,
@@ -57,18 +46,16 @@ def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path
     art = art or default_art_path()
     if not art:
         raise RuntimeError("no bundled character is installed")
+    out_p = Path(out)
+    check_render_output(out_p, [art], overwrite=force)
     seconds = max(1.0, seconds)
     perf = bundled_performance(seconds=seconds, seed=0)
     cal = performance_calibration(perf)
     puppet = make_puppet(load_artset(art), PuppetSpec(art=art, fps=fps, calibration=cal))
-    out_p = Path(out)
-    out_p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out_p.with_name(f".{out_p.stem}.part{out_p.suffix or '.mp4'}")
-    writer = None
+    writer = FrameWriter(out_p, fps)
     n = len(perf)
     t0 = time.perf_counter()
     last = None
-    written = 0
     step = max(1, round(30 / fps))
     src = open_source(SourceSpec("performance", seconds=seconds))  # played once, then cached as video
     try:
@@ -79,31 +66,26 @@ def render_headless(out: str, art: str | None, seconds: float, fps: int) -> Path
                 last = pf.rgba_pm
             if last is None or i % step:
                 continue
-            img = side_by_side(frame, last)
-            if writer is None:
-                writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*"mp4v"), fps, (img.shape[1], img.shape[0]))
-                if not writer.isOpened():
-                    raise RuntimeError(f"{out_p}: the video encoder could not be opened")
-            writer.write(img)
-            written += 1
+            writer.write_rgb(side_by_side(frame, over_rgb(last, PAPER_WHITE)))
             if sys.stderr.isatty():
                 print(f"\rrendering {i + 1}/{n} frames", end="", file=sys.stderr)
+        if writer.frames == 0:
+            raise RuntimeError("the puppet produced no frames")
+    except BaseException:
+        writer.abort()
+        raise
     finally:
         src.close()
-        if writer is not None:
-            writer.release()
-    if writer is None:
-        raise RuntimeError("the puppet produced no frames")
-    tmp.replace(out_p)
+    writer.close()
     if sys.stderr.isatty():
         print(file=sys.stderr)
     dt = time.perf_counter() - t0
-    print(f"wrote {out_p} ({written} frames at {fps} fps, {n / dt:.0f} frames/s rendered)")
+    print(f"wrote {out_p} ({writer.frames} frames at {fps} fps, {n / dt:.0f} frames/s rendered)")
     return out_p
 
 
 def run(args) -> int:
-    from app.qt_env import has_display, prepare
+    from app.qt_env import display_problem, prepare
 
     prepare()
     art = None
@@ -115,11 +97,12 @@ def run(args) -> int:
     except Exception as e:
         print(f"inkface: {e}", file=sys.stderr)
         return 2
-    if args.headless or not has_display():
-        if not args.headless:
-            print("inkface: no display found — rendering the demo to a file instead", file=sys.stderr)
+    problem = "" if args.headless else display_problem()
+    if args.headless or problem:
+        if problem:
+            print(f"inkface: {problem} — rendering the demo to a file instead", file=sys.stderr)
         try:
-            render_headless(args.out, art, args.seconds, args.fps)
+            render_headless(args.out or DEFAULT_OUT, art, args.seconds, args.fps, force=args.force or not args.out)
         except Exception as e:
             msg = str(e).strip().splitlines()
             print(f"inkface: {msg[0] if msg else type(e).__name__}", file=sys.stderr)

@@ -42,9 +42,10 @@ def run(args: argparse.Namespace) -> int:
         if not (path / "artset.json").is_file() and path.name != "artset.json":
             print(f"inkface: {path}: no artset.json in this folder", file=sys.stderr)
             return 2
-    if not args.screenshot and not qt_env.has_display():
-        print("inkface: the editor needs a screen (no display found); "
-              "use --screenshot PNG to render it without one", file=sys.stderr)
+    problem = "" if args.screenshot else qt_env.display_problem()
+    if problem:
+        print(f"inkface: the editor needs a screen: {problem} "
+              f"(use --screenshot PNG to render it without one)", file=sys.stderr)
         return 2
     from PySide6.QtWidgets import QApplication
 

@@ -18,6 +18,12 @@ address of the hello it accepted; others are *foreign* until that sender has bee
 input), detects loss, duplicates and reordering from sequence numbers (a late frame is counted
 and dropped: a newer pose is already shown), holds the last pose for ``hold_s`` when packets
 stop and then eases to the neutral face over ``ease_s``, and measures bandwidth.
+
+Sequence numbers are taken only in a window around the expected one (:data:`SEQ_AHEAD` ahead,
+:data:`SEQ_BEHIND` behind): a packet outside it is counted as an *anomaly* and ignored, so one
+stray datagram cannot move the stream's position. A sender that really jumped (it restarted
+and its hello was lost, or the link was down for a while) is followed again after
+:data:`RESYNC_AFTER` packets that agree with each other; a new hello re-synchronises at once.
 Bandwidth figures count UDP payload bytes; IPv4 + UDP headers add 28 bytes per datagram.
 
 Use from a window or a loop (no threads needed; ``poll`` never blocks longer than asked)::
@@ -74,6 +80,17 @@ _HELLO = struct.Struct("<2sBBIHHfHH10s")
 HELLO_SIZE = _HELLO.size
 UDP_IP_OVERHEAD = 28
 """Bytes of IPv4 + UDP header around every datagram (not counted in the bandwidth figures)."""
+SEQ_AHEAD = 10
+"""A frame up to this many sequence numbers ahead of the last one is taken at once (the ones
+skipped count as lost); farther ahead needs :data:`RESYNC_AFTER` agreeing packets."""
+SEQ_BEHIND = 256
+"""A frame up to this far behind is a late (reordered) or duplicate frame; farther is an anomaly."""
+RESYNC_AFTER = 3
+"""Consecutive packets outside the window, each following the one before (within
+:data:`SEQ_AHEAD`), that move the stream to them: a stray packet costs nothing, a real jump
+costs ``RESYNC_AFTER - 1`` frames."""
+_RATE_TICKS = 10  # rate window resolution: sums per 1/10 s
+_RUNS_KEPT = 64  # runs of agreeing anomalies followed at once (stray packets between do not break one)
 
 
 class NetError(ValueError):
@@ -285,7 +302,8 @@ class Sender:
 @dataclass
 class ReceiveStats:
     """Counters of everything the receiver saw (all datagrams are counted exactly once in
-    ``frames``, ``hellos``, ``malformed``, ``foreign``, ``duplicates``, ``late`` or ``waiting``)."""
+    ``frames``, ``hellos``, ``malformed``, ``foreign``, ``duplicates``, ``late``, ``waiting``
+    or ``anomalies``)."""
 
     datagrams: int = 0
     frames: int = 0  # frames decoded and delivered
@@ -296,6 +314,8 @@ class ReceiveStats:
     late: int = 0  # arrived after a newer frame (reordered), dropped
     waiting: int = 0  # valid but not decodable yet: no hello, or waiting for a key frame
     lost: int = 0  # sequence numbers never seen (a late arrival takes one back)
+    anomalies: int = 0  # sequence number far outside the expected window: ignored
+    resyncs: int = 0  # times the stream was followed to a new position after agreeing anomalies
     sessions: int = 0
     bytes: int = 0
     payload_bytes: int = 0  # frame payloads of delivered frames
@@ -323,7 +343,8 @@ class ReceiveStats:
     def summary(self) -> str:
         return (
             f"{self.frames} frames, {self.lost} lost, {self.late} late, {self.duplicates} duplicate, "
-            f"{self.waiting} waiting, {self.malformed} malformed, {self.foreign} foreign; "
+            f"{self.waiting} waiting, {self.malformed} malformed, {self.foreign} foreign, "
+            f"{self.anomalies} out of sequence ({self.resyncs} resyncs); "
             f"{self.bits_per_frame:.1f} payload bits/frame, {self.bits_per_second:.0f} bit/s now, "
             f"{self.mean_bits_per_second:.0f} bit/s mean (UDP payloads)"
         )
@@ -357,9 +378,10 @@ class Receiver:
         self.sender: object = None
         self._decoder = StreamDecoder()
         self._last_seq: int | None = None
-        self._missing: deque[int] = deque(maxlen=256)
+        self._missing: deque[int] = deque(maxlen=SEQ_BEHIND)
+        self._runs: dict[int, int] = {}  # last seq of a run of agreeing anomalies -> its length
         self._last_from_sender = -math.inf
-        self._window: deque[tuple[float, int, int]] = deque()
+        self._window: deque[list] = deque()  # [tick start s, datagram bytes, payload bytes]
         self.last_frame: FaceParams | None = None
         self.last_arrival = -math.inf
         self._gap_anchor = -math.inf
@@ -421,7 +443,7 @@ class Receiver:
         frame = self.codec.decode(codes, frame=p.seq, time=p.timestamp_ms / 1000.0, status=p.status)
         st.frames += 1
         st.payload_bytes += len(p.payload)
-        self._window[-1] = (now, len(data), len(p.payload))
+        self._window[-1][2] += len(p.payload)
         self.last_frame = frame
         self.last_arrival = now
         return frame
@@ -440,6 +462,7 @@ class Receiver:
             self._decoder.reset()
             self._last_seq = None
             self._missing.clear()
+            self._runs.clear()
         self.sender = addr
         self.hello = hello
         try:
@@ -452,34 +475,64 @@ class Receiver:
         )
 
     def _sequence(self, seq: int) -> bool:
-        """Book-keep ``seq``; False when the frame is a duplicate or late (and is dropped)."""
+        """Book-keep ``seq``; False when the frame is a duplicate, late or out of sequence (and is
+        dropped)."""
         st = self.stats
         last = self._last_seq
         if last is None:
             self._last_seq = seq
             return True
-        d = (seq - last) & 0xFFFFFFFF
+        d = ((seq - last + 0x80000000) & 0xFFFFFFFF) - 0x80000000  # signed distance, wrapping
+        if 0 < d <= SEQ_AHEAD:
+            st.lost += d - 1
+            for s in range(1, d):
+                self._missing.append((last + s) & 0xFFFFFFFF)
+            self._last_seq = seq
+            self._runs.clear()
+            return True
         if d == 0:
             st.duplicates += 1
             return False
-        if d < 0x80000000:
-            if d <= 4096:
-                st.lost += d - 1
-                for s in range(max(1, d - 255), d):
-                    self._missing.append((last + s) & 0xFFFFFFFF)
-            self._last_seq = seq
-            return True
-        if seq in self._missing:
-            self._missing.remove(seq)
-            st.lost -= 1
-            st.late += 1
-        else:
-            st.duplicates += 1
-        return False
+        if -SEQ_BEHIND <= d < 0:
+            if seq in self._missing:
+                self._missing.remove(seq)
+                st.lost -= 1
+                st.late += 1
+            else:
+                st.duplicates += 1
+            return False
+        runs = self._runs
+        n = 1
+        for k in range(1, SEQ_AHEAD + 1):  # does it follow one of the recent anomalies?
+            prev = (seq - k) & 0xFFFFFFFF
+            if prev in runs:
+                n = runs.pop(prev) + 1
+                break
+        if n < RESYNC_AFTER:
+            runs[seq] = n
+            if len(runs) > _RUNS_KEPT:
+                del runs[next(iter(runs))]
+            st.anomalies += 1
+            return False
+        # the sender really is there now: follow it (frames between were lost if it went ahead)
+        st.resyncs += 1
+        if 0 < d <= 0xFFFF:
+            st.lost += max(0, d - n)
+        self._missing.clear()
+        runs.clear()
+        self._last_seq = seq
+        return True
 
     def _account(self, now: float, nbytes: int, payload: int) -> None:
+        """Add a datagram to the rate window: per-tenth-of-a-second sums, so a flood of datagrams
+        costs no more memory than a trickle."""
         w = self._window
-        w.append((now, nbytes, payload))
+        tick = math.floor(now * _RATE_TICKS) / _RATE_TICKS
+        if w and w[-1][0] == tick:
+            w[-1][1] += nbytes
+            w[-1][2] += payload
+        else:
+            w.append([tick, nbytes, payload])
         while w and w[0][0] < now - self.window_s:
             w.popleft()
 

@@ -15,12 +15,14 @@ receive
     every received frame with the character (``training.puppet``) into ``--out`` (MP4 / GIF /
     PNGs); while packets are late or have stopped it keeps the sender's frame rate, drawing the
     held pose and then the ease to neutral. Without them it only counts. The received track can
-    be kept (``--csv``, ``--record OUT.ifs``, ``--fap``). It stops after ``--frames`` frames,
+    be kept (``--csv``, ``--record OUT.ifs``, ``--fap``); every output is written as the frames
+    arrive, and nothing is kept in memory per frame, so a session can run for hours. It stops after ``--frames`` frames,
     after ``--timeout`` seconds without packets once the stream started, or on Ctrl-C, and
     prints the link statistics (loss, reordering, drops, bits per frame, bit rate).
 
 Received frames are numbered by the packets' sequence numbers, timed by their timestamps.
-Expected errors print one line, ``inkface: <message>``, and exit with code 2.
+Existing output files are replaced only with ``--force``; inputs never. Expected errors print
+one line, ``inkface: <message>``, and exit with code 2.
 """
 
 from __future__ import annotations
@@ -35,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from app.net import Sender, UdpReceiver, check_port, parse_address
-from tracker.params import LOST, OK, FaceParams, params_array, write_csv
+from tracker.outputs import check_outputs
+from tracker.params import LOST, OK, FaceParams, params_array, track_rate
 
 _MOUTH_PER_IPD = 0.8  # typical adult proportion, used only when a CSV track comes without its ipd
 
@@ -65,6 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         parser.add_argument("--simulate-loss", type=float, default=0.0, metavar="P",
                             help="drop this fraction of frame packets at random (to try a lossy link)")
         parser.add_argument("--quiet", action="store_true", help="no progress line")
+        parser.add_argument("--force", action="store_true", help="replace --record's file if it exists")
     else:
         parser.add_argument("--port", required=True, metavar="PORT", help="UDP port to listen on")
         parser.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
@@ -82,6 +86,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         parser.add_argument("--record", metavar="OUT.ifs", help="write the received track as a packet-stream file")
         parser.add_argument("--fap", metavar="OUT.fap", help="write the received track as MPEG-4 FAPs")
         parser.add_argument("--quiet", action="store_true", help="no progress line")
+        parser.add_argument("--force", action="store_true", help="replace existing output files")
 
 
 def run(args) -> int:
@@ -145,13 +150,6 @@ def _covering_size(rows: list[FaceParams]) -> tuple[int, int]:
     return max(int(mx) + 1, 640), max(int(my) + 1, 480)
 
 
-def _rate(rows: list[FaceParams]) -> float:
-    t = np.array([r.time for r in rows], dtype=np.float64)
-    dt = np.diff(t[np.isfinite(t)])
-    dt = dt[dt > 0]
-    return float(1.0 / np.median(dt)) if len(dt) else 30.0
-
-
 def _load_track(args) -> _Track:
     from tracker.stream_codec import read_track
 
@@ -161,7 +159,7 @@ def _load_track(args) -> _Track:
     if not rows:
         raise _Fail(f"{path}: the track has no frames")
     size = tf.frame_size or _frame_size(args.frame_size) or _covering_size(rows)
-    fps = tf.fps or _rate(rows)
+    fps = tf.fps or track_rate(rows)
     neutral = tf.neutral
     if neutral is None:  # a CSV: the median of the tracked frames stands in for the neutral face
         vals = params_array(r for r in rows if r.status != LOST)
@@ -186,7 +184,7 @@ def _load_track(args) -> _Track:
 def _tracked_frames(args):
     """Yield ``(frame_size, ipd, neutral, fps)`` once, then FaceParams for every tracked frame."""
     try:
-        from tracker.calibration import calibrate
+        from tracker.calibration import CalibrationError, calibrate
         from tracker.face_tracker import FaceTracker
     except ImportError as e:
         raise _Fail(f"the tracker is not available in this build ({e}); replay a track with --params") from None
@@ -221,7 +219,12 @@ def _tracked_frames(args):
                 from tracker.auto_init import auto_clicks
 
                 clicks = auto_clicks(fr.image)
-            cal = calibrate(fr.image, clicks)
+            try:
+                cal = calibrate(fr.image, clicks)
+            except CalibrationError as e:
+                from app.render_cmd import calibration_message
+
+                raise _Fail(f"{args.video or 'camera'}: {calibration_message(e)} (frame {fr.index})") from None
             break
         if cal is None:
             raise _Fail(f"{args.video or 'camera'}: no frame {first} to calibrate on")
@@ -246,6 +249,7 @@ def _send(args) -> int:
     if args.ipd is not None and not (math.isfinite(args.ipd) and args.ipd > 0):
         raise _Fail(f"--ipd must be a positive number of pixels, got {args.ipd}")
     _frame_size(args.frame_size)  # check it before reading anything
+    check_outputs(files=[args.record], inputs=[args.params, args.video, args.init], force=args.force)
     if args.params:
         tr = _load_track(args)
         frames = iter(tr.rows)
@@ -256,11 +260,16 @@ def _send(args) -> int:
         size, ipd, neutral, fps = next(frames)
         paced = bool(args.video)  # a camera paces itself
     fps = args.fps or fps or 30.0
-    sent: list[FaceParams] = []
     t0 = time.monotonic()
     last_note = t0
     with Sender((host, port), size, ipd, fps=fps, compress=args.compress, key_interval=args.key_interval,
                 neutral=neutral, simulate_loss=args.simulate_loss) as tx:  # fmt: skip
+        record = None
+        if args.record:
+            from tracker.stream_codec import TrackStreamWriter
+
+            record = TrackStreamWriter(args.record, size, tx.hello.ipd, fps=fps, compressed=args.compress,
+                                       key_interval=args.key_interval, neutral=neutral)  # fmt: skip
         try:
             for i, p in enumerate(frames):
                 if args.frames is not None and i >= args.frames:
@@ -270,8 +279,8 @@ def _send(args) -> int:
                     if delay > 0:
                         time.sleep(delay)
                 tx.send(p)
-                if args.record:
-                    sent.append(p)
+                if record is not None:
+                    record.write(p)
                 now = time.monotonic()
                 if not args.quiet and sys.stderr.isatty() and now - last_note > 0.5:
                     last_note = now
@@ -279,17 +288,18 @@ def _send(args) -> int:
                           file=sys.stderr)  # fmt: skip
         except KeyboardInterrupt:  # Ctrl-C ends a live send; what was sent is still recorded
             pass
+        except BaseException:
+            if record is not None:
+                record.abort()
+            raise
         finally:
             if hasattr(frames, "close"):
                 frames.close()
+        if record is not None:
+            record.close()
         if not args.quiet and sys.stderr.isatty():
             print(file=sys.stderr)
         st = tx.stats
-    if args.record:
-        from tracker.stream_codec import write_track_stream
-
-        write_track_stream(args.record, sent, size, tx.hello.ipd, fps=fps, compressed=args.compress,
-                           key_interval=args.key_interval, neutral=neutral)  # fmt: skip
     dt = max(time.monotonic() - t0, 1e-9)
     print(
         f"sent {st.frames} frames to {host}:{port} in {dt:.1f} s: {st.payload_bits_per_frame:.1f} payload bits/frame "
@@ -313,16 +323,8 @@ class _Drawing:
         except ImportError as e:
             raise _Fail(f"drawing needs the live puppet (training.puppet), not available in this build ({e})") from None
         from art_sets.io import load_artset
-        from art_sets.library import find_artset, list_bundled
 
-        if args.art:
-            art_dir = find_artset(args.art)
-        else:
-            bundled = list_bundled()
-            if not bundled:
-                raise _Fail("no bundled character is installed; pass --art DIR")
-            art_dir = bundled[0][1]
-        artset = load_artset(Path(art_dir))
+        artset = load_artset(Path(_art_dir(args)))
         session = None
         if args.training:
             from training.session import TrainingSession
@@ -333,7 +335,6 @@ class _Drawing:
         self.out = args.out
         self.fps = args.fps
         self.writer = None
-        self.frames = 0
         self._hello = None
 
     def draw(self, rx: UdpReceiver, frame: FaceParams) -> None:
@@ -355,13 +356,115 @@ class _Drawing:
 
                 self.writer = FrameWriter(self.out, fps=self.fps)
             self.writer.write(pf.rgba_pm)
-            self.frames += 1
 
-    def close(self) -> str:
+    def close(self, ok: bool = True) -> str:
         if self.writer is None:
-            return "no frames drawn" if self.out else ""
+            return "no frames drawn" if self.out and ok else ""
+        if not ok:
+            self.writer.abort()
+            return ""
         path = self.writer.close()
-        return f"wrote {path} ({self.frames} frames)"
+        return f"wrote {path} ({self.writer.frames} frames)"
+
+
+def _art_dir(args) -> str:
+    from art_sets.library import find_artset, list_bundled
+
+    if args.art:
+        return str(find_artset(args.art))
+    bundled = list_bundled()
+    if not bundled:
+        raise _Fail("no bundled character is installed; pass --art DIR")
+    return str(bundled[0][1])
+
+
+class _TrackFiles:
+    """The received track as files (``--csv``, ``--record``, ``--fap``), each written as the
+    frames arrive, so nothing is kept per frame however long the stream runs. The packet and
+    FAP files start with the first frame (they need the sender's hello); the FAP file is
+    relative to the hello's neutral face, or a generic one when the sender sent none."""
+
+    def __init__(self, args) -> None:
+        from tracker.params import TrackCsvWriter
+
+        self.record_path, self.fap_path = args.record, args.fap
+        self.csv = TrackCsvWriter(args.csv) if args.csv else None
+        self.record = self.fap = None
+        self.frames = 0
+
+    def add(self, rx: UdpReceiver, f: FaceParams) -> None:
+        self.frames += 1
+        h = rx.hello
+        if self.csv is not None:
+            self.csv.write(f)
+        if self.record_path and self.record is None and h is not None:
+            from tracker.stream_codec import TrackStreamWriter
+
+            self.record = TrackStreamWriter(self.record_path, h.frame_size, h.ipd, fps=h.fps, compressed=h.compressed,
+                                            key_interval=h.key_interval, neutral=rx.neutral)  # fmt: skip
+        if self.record is not None:
+            self.record.write(f)
+        if self.fap_path and self.fap is None and h is not None:
+            from tracker.fap import FapWriter, generic_neutral
+
+            neutral = rx.neutral if rx.neutral is not None else generic_neutral(h.frame_size, h.ipd)
+            self.fap = FapWriter(self.fap_path, neutral, h.ipd, fps=h.fps)
+        if self.fap is not None:
+            self.fap.write(f)
+
+    def _writers(self):
+        return [w for w in (self.csv, self.record, self.fap) if w is not None]
+
+    def close(self) -> None:
+        for w in self._writers():
+            w.close()
+
+    def abort(self) -> None:
+        for w in self._writers():
+            w.abort()
+
+
+def _session(args, rx, drawing: _Drawing | None, files: _TrackFiles, where: str) -> str:
+    """Receive until ``--frames``, ``--timeout`` or Ctrl-C, passing each frame to the files and
+    the drawing; nothing is kept per frame. Returns the drawing's closing note."""
+    received = 0
+    start = time.monotonic()
+    last_note = start
+    ok = False
+    try:
+        try:
+            while True:
+                new = rx.poll(0.02 if drawing is not None else 0.1)
+                for f in new:
+                    received += 1
+                    files.add(rx, f)
+                    if drawing is not None:
+                        drawing.draw(rx, f)
+                    if args.frames and received >= args.frames:
+                        break
+                if drawing is not None and not new:  # late or stopped: hold, then ease to neutral
+                    for pose in rx.gap_poses():
+                        drawing.draw(rx, pose)
+                now = time.monotonic()
+                if args.frames and received >= args.frames:
+                    break
+                if received and args.timeout and now - rx.last_arrival > args.timeout:
+                    break
+                if not received and args.wait and now - start > args.wait:
+                    raise _Fail(f"nothing received on {where} within {args.wait:g} s")
+                if not args.quiet and sys.stderr.isatty() and now - last_note > 1.0:
+                    last_note = now
+                    print(f"\r{rx.stats.summary()}   ", end="", file=sys.stderr)
+        except KeyboardInterrupt:  # Ctrl-C ends the session; what arrived is kept
+            pass
+        ok = True
+    finally:
+        note = drawing.close(ok) if drawing is not None else ""
+        if ok:
+            files.close()
+        else:
+            files.abort()
+    return note
 
 
 def _receive(args) -> int:
@@ -370,65 +473,27 @@ def _receive(args) -> int:
         raise _Fail(f"--frames must be at least 1, got {args.frames}")
     if args.out and not args.frames and not args.timeout:
         raise _Fail("--out needs --frames N or a --timeout to know when the recording ends")
-    if args.art:
-        from art_sets.library import find_artset
+    art = _art_dir(args) if (args.art or args.out or args.training) else None  # a wrong name fails first
+    out_files, out_folders = [], []
+    if args.out:
+        from app.record import RecordError, recording_files
 
-        find_artset(args.art)  # a wrong name fails before anything listens
-    got: list[FaceParams] = []
+        try:
+            out_files, out_folders = recording_files(args.out, track=False)
+        except RecordError as e:
+            raise _Fail(str(e)) from None
+    check_outputs(files=[args.csv, args.record, args.fap, *out_files], folders=out_folders,
+                  inputs=[art, args.training], force=args.force)  # fmt: skip
     with UdpReceiver(port, bind=args.bind) as rx:
         bound = rx.address
         if not args.quiet:
             print(f"listening on {bound[0]}:{bound[1]}", file=sys.stderr, flush=True)
         # packets arriving while the character loads wait in the socket's buffer
-        drawing = _Drawing(args) if (args.out or args.art or args.training) else None
-        start = time.monotonic()
-        last_note = start
-        try:
-            while True:
-                new = rx.poll(0.02 if drawing is not None else 0.1)
-                for f in new:
-                    got.append(f)
-                    if drawing is not None:
-                        drawing.draw(rx, f)
-                    if args.frames and len(got) >= args.frames:
-                        break
-                if drawing is not None and not new:  # late or stopped: hold, then ease to neutral
-                    for pose in rx.gap_poses():
-                        drawing.draw(rx, pose)
-                now = time.monotonic()
-                if args.frames and len(got) >= args.frames:
-                    break
-                if got and args.timeout and now - rx.last_arrival > args.timeout:
-                    break
-                if not got and args.wait and now - start > args.wait:
-                    raise _Fail(f"nothing received on {bound[0]}:{bound[1]} within {args.wait:g} s")
-                if not args.quiet and sys.stderr.isatty() and now - last_note > 1.0:
-                    last_note = now
-                    print(f"\r{rx.stats.summary()}   ", end="", file=sys.stderr)
-        except KeyboardInterrupt:
-            pass
-        finally:
-            note = drawing.close() if drawing is not None else ""
+        drawing = _Drawing(args) if art is not None else None
+        note = _session(args, rx, drawing, _TrackFiles(args), f"{bound[0]}:{bound[1]}")
         stats = rx.stats
-        hello = rx.hello
-        neutral = rx.neutral
     if not args.quiet and sys.stderr.isatty():
         print(file=sys.stderr)
-    if args.csv:
-        write_csv(args.csv, got)
-    if args.record and hello is not None:
-        from tracker.stream_codec import write_track_stream
-
-        write_track_stream(args.record, got, hello.frame_size, hello.ipd, fps=hello.fps, compressed=hello.compressed,
-                           key_interval=hello.key_interval, neutral=neutral)  # fmt: skip
-    if args.fap and hello is not None:
-        from tracker.fap import write_fap
-
-        ref = neutral
-        if ref is None and got:
-            ref = FaceParams.from_values(np.nanmedian(params_array(got), axis=0))
-        if ref is not None:
-            write_fap(args.fap, got, ref, hello.ipd, fps=hello.fps)
     if note:
         print(note)
     print(f"received {stats.summary()}")

@@ -2,29 +2,30 @@
 
     python -m app render --video IN --art NAME --out OUT.mp4 [--init CLICKS.json]
         [--training SESSION] [--fps 10|15|30] [--side-by-side] [--params TRACK.csv|.ifs|.fap]
+        [--force]
 
-The output kind follows ``--out``: ``.mp4`` / ``.avi`` (mp4v / MJPG, character over a paper
-background), ``.gif`` (Pillow) or a folder (no suffix, or an existing directory) of numbered PNGs
-with alpha. Without ``--init`` the clicks file ``<video stem>.clicks.json`` beside the video is
-used if present, else the face is found automatically. ``--params`` takes the ten values from a
-track file instead of tracking: CSV, ``.ifs`` packet stream or ``.fap`` (``tracker.stream_codec.
-read_track``; the video, if given, still provides the calibration and the left half of
-``--side-by-side``; without a video the file's own ipd, neutral face and rate are used when it
-records them). Prints a progress line; errors are one line, exit code 2.
+The output kind follows ``--out``: ``.mp4`` / ``.avi`` / ``.mkv`` (mp4v / MJPG / lossless FFV1,
+character over a paper background), ``.gif`` (streamed palette GIF over paper) or a folder (no
+suffix, or an existing directory) of numbered PNGs with alpha. An existing output is replaced
+only with ``--force`` (a PNG folder must otherwise be new or empty; with ``--force`` the frames
+of an earlier render in it are replaced and any it had beyond this one removed); an output that
+is one of the inputs is always refused. Without ``--init`` the clicks file
+``<video stem>.clicks.json`` beside the video is used if present, else the face is found
+automatically. ``--params`` takes the ten values from a track file instead of tracking: CSV,
+``.ifs`` packet stream or ``.fap`` (``tracker.stream_codec.read_track``; the video, if given,
+still provides the calibration and the left half of ``--side-by-side``; without a video the
+file's own ipd, neutral face and rate are used when it records them). Prints a progress line;
+errors are one line, exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-
-from tracker import atomic_file
 
 PAPER = (250, 248, 243)  # RGB behind the character where the output has no alpha
 
@@ -48,102 +49,18 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
     parser.add_argument("--gain", type=float, default=1.0, help="head motion gain (0 = still head)")
     parser.add_argument("--overlay", action="store_true", help="draw the tracker's findings on the performer's frame")
     parser.add_argument("--max-frames", type=int, default=0, metavar="N", help="stop after N input frames")
+    parser.add_argument("--force", action="store_true",
+                        help="replace an existing output (or the frames in a PNG folder); inputs are never replaced")
 
 
 # ---------------------------------------------------------------------------------- output
 def _kind(out: Path) -> str:
-    suf = out.suffix.lower()
-    if suf in (".mp4", ".m4v", ".mov"):
-        return "mp4"
-    if suf in (".avi", ".mkv"):
-        return "avi"
-    if suf == ".gif":
-        return "gif"
-    if suf == "" or out.is_dir():
-        return "png"
-    raise RenderError(f"{out}: unknown output type {suf!r} (use .mp4, .avi, .gif or a folder)")
+    from app.record import RecordError, format_of
 
-
-def _over(rgba_pm: np.ndarray, rgb=PAPER) -> np.ndarray:
-    """Premultiplied RGBA over a flat colour -> RGB uint8."""
-    a = rgba_pm[..., 3:4].astype(np.uint16)
-    out = rgba_pm[..., :3].astype(np.uint16) + (np.asarray(rgb, np.uint16) * (255 - a) + 127) // 255
-    return np.minimum(out, 255).astype(np.uint8)
-
-
-def _straight(rgba_pm: np.ndarray) -> np.ndarray:
-    a = rgba_pm[..., 3:4].astype(np.uint32)
-    rgb = np.where(a > 0, (rgba_pm[..., :3].astype(np.uint32) * 255 + a // 2) // np.maximum(a, 1), 0)
-    return np.concatenate([np.minimum(rgb, 255).astype(np.uint8), rgba_pm[..., 3:4]], axis=2)
-
-
-def _publish(tmp, target: Path) -> None:
-    """Move a finished temp file into place with ordinary permissions (mkstemp makes them 0600)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, target)
-
-
-class _Writer:
-    """Collects RGB (or, for PNG folders, straight RGBA) frames and writes them atomically."""
-
-    def __init__(self, out: Path, fps: int):
-        self.out = out
-        self.fps = fps
-        self.kind = _kind(out)
-        self.count = 0
-        self._vw = None
-        self._gif: list = []
-        self._tmp: Path | None = None
-        if self.kind == "png":
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-            except OSError as e:
-                raise RenderError(f"{out}: cannot create folder ({e.strerror or e})") from None
-        elif not out.parent.exists():
-            raise RenderError(f"{out}: folder {out.parent} does not exist")
-
-    def write(self, image: np.ndarray) -> None:
-        """``image``: RGB uint8, or RGBA straight uint8 (PNG folders keep the alpha)."""
-        if self.kind == "png":
-            from PIL import Image
-
-            mode = "RGBA" if image.shape[2] == 4 else "RGB"
-            target = self.out / f"frame_{self.count:05d}.png"
-            with atomic_file.replacing(target) as tmp:
-                Image.fromarray(image, mode).save(tmp, format="PNG")
-        elif self.kind == "gif":
-            from PIL import Image
-
-            self._gif.append(Image.fromarray(np.ascontiguousarray(image[..., :3]), "RGB").quantize(colors=255, dither=Image.Dither.NONE))
-        else:
-            import cv2
-
-            bgr = np.ascontiguousarray(image[..., 2::-1])
-            if self._vw is None:
-                fourcc = "mp4v" if self.kind == "mp4" else ("FFV1" if self.out.suffix.lower() == ".mkv" else "MJPG")
-                fd, tmp = tempfile.mkstemp(prefix=f".{self.out.stem}.", suffix=self.out.suffix, dir=self.out.parent)
-                os.close(fd)
-                self._tmp = Path(tmp)
-                self._vw = cv2.VideoWriter(str(self._tmp), cv2.VideoWriter_fourcc(*fourcc), float(self.fps), (bgr.shape[1], bgr.shape[0]))
-                if not self._vw.isOpened():
-                    self._tmp.unlink(missing_ok=True)
-                    raise RenderError(f"{self.out}: the {fourcc} video encoder could not be opened")
-            self._vw.write(bgr)
-        self.count += 1
-
-    def close(self, ok: bool = True) -> None:
-        if self.kind == "gif" and ok and self._gif:
-            with atomic_file.replacing(self.out) as tmp:
-                self._gif[0].save(tmp, format="GIF", save_all=True, append_images=self._gif[1:],
-                                  duration=round(1000 / self.fps), loop=0, disposal=1)
-        if self._vw is not None:
-            self._vw.release()
-            if ok:
-                _publish(self._tmp, self.out)
-            else:
-                self._tmp.unlink(missing_ok=True)
+    try:
+        return format_of(out)
+    except RecordError as e:
+        raise RenderError(str(e)) from None
 
 
 # ----------------------------------------------------------------------------------- inputs
@@ -197,7 +114,7 @@ class _Video:
 def _calibration(video: _Video, init: str | None, need: bool):
     """Calibration from the clicks (given, beside the video, or automatic); None if not ``need``ed
     and none is available."""
-    from tracker.calibration import calibrate
+    from tracker.calibration import CalibrationError, calibrate
     from tracker.clicks import Clicks
 
     clicks_path = Path(init) if init else video.path.with_name(video.path.stem + ".clicks.json")
@@ -208,7 +125,12 @@ def _calibration(video: _Video, init: str | None, need: bool):
         frame = video.frame(clicks.frame)
         if frame is None:
             raise RenderError(f"{clicks_path}: frame {clicks.frame} is not in {video.path}")
-        return calibrate(frame, clicks)
+        h, w = frame.shape[:2]
+        clicks.check_inside((w, h), where=str(clicks_path))
+        try:
+            return calibrate(frame, clicks)
+        except CalibrationError as e:
+            raise RenderError(f"{video.path}: {calibration_message(e)} (clicks {clicks_path}, frame {clicks.frame})") from None
     frame = video.frame(0)
     if frame is None:
         raise RenderError(f"{video.path}: the video has no frames")
@@ -226,7 +148,9 @@ def _calibration(video: _Video, init: str | None, need: bool):
         return None
 
 
-def _side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np.ndarray:
+def side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np.ndarray:
+    """The performer's frame (BGR, scaled to the character's height; grey when None), a dark
+    gap, then the character (RGB): one RGB picture."""
     import cv2
 
     ch = character_rgb.shape[0]
@@ -239,6 +163,12 @@ def _side_by_side(frame_bgr: np.ndarray | None, character_rgb: np.ndarray) -> np
     return np.ascontiguousarray(np.concatenate([left, gap, character_rgb], axis=1))
 
 
+def calibration_message(e: BaseException) -> str:
+    """A calibration error's one line without its generic ``calibration:`` lead."""
+    msg = _one_line(e)
+    return msg[len("calibration: "):] if msg.startswith("calibration: ") else msg
+
+
 def _one_line(e: BaseException) -> str:
     lines = str(e).strip().splitlines()
     return lines[0] if lines else type(e).__name__
@@ -248,6 +178,7 @@ def _one_line(e: BaseException) -> str:
 def render(args, progress=True) -> int:
     """Do the render; returns the number of frames written. Raises RenderError and the core's
     one-line errors for bad input."""
+    from app.record import FrameWriter, check_render_output, over_rgb
     from art_sets.io import load_artset
     from art_sets.library import find_artset
     from training.puppet import Puppet
@@ -255,8 +186,11 @@ def render(args, progress=True) -> int:
     if not args.video and not args.params:
         raise RenderError("give --video IN (and/or --params TRACK.csv)")
     out = Path(args.out)
-    _kind(out)
-    artset = load_artset(find_artset(args.art))
+    kind = _kind(out)
+    art_dir = find_artset(args.art)
+    clicks = args.init or (str(Path(args.video).with_name(Path(args.video).stem + ".clicks.json")) if args.video else None)
+    check_render_output(out, [args.video, args.params, clicks, args.training, art_dir], overwrite=args.force)
+    artset = load_artset(art_dir)
     session = None
     if args.training:
         from training.session import TrainingSession
@@ -265,6 +199,7 @@ def render(args, progress=True) -> int:
 
     rows = track = None
     if args.params:
+        from tracker.params import track_rate
         from tracker.stream_codec import read_track
 
         if not Path(args.params).is_file():
@@ -279,10 +214,7 @@ def render(args, progress=True) -> int:
         in_fps = video.fps if video is not None else 30.0
         features = None
         if track is not None and video is None:
-            if track.fps:
-                in_fps = float(track.fps)
-            elif len(rows) > 1 and rows[1].time > rows[0].time:
-                in_fps = 1.0 / (rows[1].time - rows[0].time)
+            in_fps = float(track.fps) if track.fps else track_rate(rows)
         if cal is None and track is not None and track.ipd and track.neutral is not None:
             from training.features import FeatureSpace
 
@@ -293,8 +225,8 @@ def render(args, progress=True) -> int:
         total = len(rows) if rows is not None else video.count
         if args.max_frames > 0:
             total = min(total, args.max_frames) if total > 0 else args.max_frames
-        writer = _Writer(out, args.fps)
-        ok = False
+        # no alpha in videos, and a GIF of the character reads best on paper
+        writer = FrameWriter(out, args.fps, background=None if kind == "png" else PAPER)
         t0 = time.perf_counter()
         try:
             if video is not None:
@@ -318,24 +250,23 @@ def render(args, progress=True) -> int:
                         left = frame
                         if left is not None and args.overlay and pf.overlay is not None and hasattr(pf.overlay, "draw"):
                             left = pf.overlay.draw(left.copy())
-                        writer.write(_side_by_side(left, _over(pf.rgba_pm)))
-                    elif writer.kind == "png":
-                        writer.write(_straight(pf.rgba_pm))
+                        writer.write_rgb(side_by_side(left, over_rgb(pf.rgba_pm, PAPER)))
                     else:
-                        writer.write(_over(pf.rgba_pm))
+                        writer.write(pf.rgba_pm)
                 if progress and (i % 10 == 0 or i == total):
                     dt = time.perf_counter() - t0
                     of = f"/{total}" if total > 0 else ""
-                    print(f"\rrender: frame {i}{of}, {writer.count} written, {i / max(dt, 1e-9):.0f} frames/s", end="", file=sys.stderr, flush=True)
-            ok = writer.count > 0
-            if not ok:
+                    print(f"\rrender: frame {i}{of}, {writer.frames} written, {i / max(dt, 1e-9):.0f} frames/s", end="", file=sys.stderr, flush=True)
+            if writer.frames == 0:
                 raise RenderError("no frames were rendered (is the input empty?)")
-        finally:
-            writer.close(ok)
+        except BaseException:
+            writer.abort()
+            raise
+        writer.close()
         if progress:
             print(file=sys.stderr)
-        print(f"wrote {out} ({writer.count} frames at {args.fps} fps)")
-        return writer.count
+        print(f"wrote {out} ({writer.frames} frames at {args.fps} fps)")
+        return writer.frames
     finally:
         if video is not None:
             video.close()
@@ -349,7 +280,11 @@ def run(args) -> int:
     from tracker.stream_codec import StreamError
     from training.session import SessionError
 
-    expected = [RenderError, ArtSetError, ClicksError, TrackFormatError, SessionError, StreamError, FapError]
+    from app.record import RecordError
+    from tracker.outputs import OutputError
+
+    expected = [RenderError, ArtSetError, ClicksError, TrackFormatError, SessionError, StreamError, FapError,
+                RecordError, OutputError]
     try:
         from tracker.calibration import CalibrationError
 
@@ -360,6 +295,10 @@ def run(args) -> int:
         render(args)
     except tuple(expected) as e:
         print(f"inkface: {_one_line(e)}", file=sys.stderr)
+        return 2
+    except OSError as e:  # e.g. a name the file system refuses; say which
+        name = f"{str(e.filename)[:80]}: " if getattr(e, "filename", None) else ""
+        print(f"inkface: {name}{e.strerror or _one_line(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("\ninkface: interrupted", file=sys.stderr)

@@ -3,8 +3,8 @@
 Values live under organisation "Inkface", application "Inkface" in the platform's usual
 place. ``INKFACE_SETTINGS`` (a path to an .ini file) overrides that, which tests use to
 keep their settings out of the user's. ``user_data_dir()`` is where performers'
-calibrations, training sessions, recorded clips and user characters are kept
-(``INKFACE_DATA`` overrides it).
+calibrations, training sessions, recorded clips and user characters are kept: the one data
+folder of :mod:`app.data_dir` (``INKFACE_DATA`` overrides it).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import os
 import re
 from pathlib import Path
 
-from PySide6.QtCore import QByteArray, QSettings, QStandardPaths
+from PySide6.QtCore import QByteArray, QSettings
 
 ORG = "Inkface"
 APP = "Inkface"
@@ -106,14 +106,9 @@ class Settings:
 
 def user_data_dir() -> Path:
     """Folder for calibrations, sessions, clips and user characters (created on demand)."""
-    env = os.environ.get("INKFACE_DATA")
-    if env:
-        base = Path(env)
-    else:
-        loc = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppDataLocation)
-        base = Path(loc) if loc else Path.home() / ".local" / "share" / "inkface"
-        if base.name.lower() != "inkface":
-            base = base / "inkface"
+    from app.data_dir import data_dir
+
+    base = data_dir()
     base.mkdir(parents=True, exist_ok=True)
     return base
 

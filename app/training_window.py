@@ -21,13 +21,14 @@ from typing import Any
 
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, QTimer, Signal
-from PySide6.QtGui import QBrush, QColor, QFont, QImage, QPainter, QPainterPath, QPen, QPolygonF
+from PySide6.QtGui import QBrush, QColor, QFont, QImage, QKeySequence, QPainter, QPainterPath, QPen, QPolygonF
 from PySide6.QtWidgets import (
     QFileDialog,
     QGridLayout,
     QHBoxLayout,
     QLabel,
     QMainWindow,
+    QMessageBox,
     QPushButton,
     QScrollArea,
     QSlider,
@@ -174,6 +175,23 @@ def rgb_qimage(rgb: np.ndarray) -> QImage:
     return array_to_qimage(np.ascontiguousarray(rgb[..., :3].astype(np.uint8)), QImage.Format.Format_RGB888)
 
 
+SYNTHETIC = "synthetic:"  # Pair.source of the automatic pairs: the synthetic performer's face
+
+
+def source_label(source: str) -> str:
+    """A card's short label for a pair whose frame is not from the clip ("synthetic · smile")."""
+    if source.startswith(SYNTHETIC):
+        return f"synthetic · {source[len(SYNTHETIC):].replace('_', ' ')}"
+    return source
+
+
+def source_text(source: str) -> str:
+    """The same in words, for tooltips and the status line."""
+    if source.startswith(SYNTHETIC):
+        return f"the synthetic performer making the “{source[len(SYNTHETIC):].replace('_', ' ')}” face"
+    return source
+
+
 class DrawingCard(QWidget):
     """One drawing: its picture, name, the frame paired with it, and a button to pair."""
 
@@ -186,16 +204,33 @@ class DrawingCard(QWidget):
         self.drawing = drawing_qimage(rgba)
         self.thumb: QImage | None = None
         self.frame_no: int | None = None
-        self.auto = False  # paired by the automatic default training (not a frame of this clip)
+        self.source = ""  # set when the pair's frame is not from this clip ("synthetic:smile")
         self.active = False
         self.setFixedSize(QSize(268, 134))
         self.btn = QPushButton("Use this frame", self)
         self.btn.setGeometry(128, 98, 132, 28)
         self.btn.clicked.connect(lambda: self.pairRequested.emit(self.part, self.name))
 
-    def set_pair(self, thumb: QImage | None, frame_no: int | None, auto: bool = False) -> None:
-        self.thumb, self.frame_no, self.auto = thumb, frame_no, auto
+    def set_pair(self, thumb: QImage | None, frame_no: int | None, source: str = "", clip: str = "") -> None:
+        """Show the paired frame: ``frame_no`` of ``clip``, or the frame ``source`` names."""
+        self.thumb, self.frame_no, self.source = thumb, frame_no, source
+        if frame_no is None:
+            self.setToolTip("")
+        elif source:
+            self.setToolTip(f"Paired automatically: {source_text(source)} (not a frame of this clip)")
+        else:
+            self.setToolTip(f"Paired with frame {frame_no} of {clip or 'the clip'}")
         self.update()
+
+    def pair_label(self) -> str:
+        """The short label under the frame: where the paired frame came from ("" if unpaired)."""
+        if self.frame_no is None:
+            return ""
+        return source_label(self.source) if self.source else f"frame {self.frame_no}"
+
+    @property
+    def auto(self) -> bool:
+        return bool(self.source)
 
     def mousePressEvent(self, _ev) -> None:
         self.selected.emit(self.part, self.name)
@@ -219,7 +254,7 @@ class DrawingCard(QWidget):
         p.fillRect(pic, QColor(250, 248, 243))
         p.drawImage(fit_rect(self.drawing.width(), self.drawing.height(), pic), self.drawing)
         p.restore()
-        fr = QRectF(128, 8, 132, 84)
+        fr = QRectF(self.FRAME_RECT)
         if self.thumb is not None:
             path = QPainterPath()
             path.addRoundedRect(fr, 6, 6)
@@ -238,14 +273,29 @@ class DrawingCard(QWidget):
         f = QFont(p.font())
         f.setBold(True)
         p.setFont(f)
-        p.drawText(QRectF(10, 100, 112, 24), Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, self.name)
+        name = p.fontMetrics().elidedText(self.name, Qt.TextElideMode.ElideRight, int(self.NAME_RECT.width()))
+        p.drawText(self.NAME_RECT, Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, name)
         if self.frame_no is not None:
             f.setBold(False)
             f.setPointSizeF(8)
             p.setFont(f)
-            p.setPen(QColor("#9ece6a"))
-            p.drawText(QRectF(10, 100, 112, 24), Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter,
-                       "auto" if self.auto else f"frame {self.frame_no}")
+            label, pill = self.label_layout(p.fontMetrics())
+            p.setPen(Qt.PenStyle.NoPen)
+            p.setBrush(QColor(20, 21, 24, 215))
+            p.drawRoundedRect(pill, 5, 5)
+            p.setPen(QColor("#e0af68") if self.source else QColor("#9ece6a"))
+            p.drawText(pill, Qt.AlignmentFlag.AlignCenter, label)
+
+    NAME_RECT = QRectF(10, 100, 112, 24)  # the drawing's name, under its picture
+    FRAME_RECT = QRectF(128, 8, 132, 84)  # the paired frame's thumbnail
+
+    def label_layout(self, fm) -> tuple[str, QRectF]:
+        """Where the paired frame came from, fitted in a pill on the thumbnail's lower edge (so it
+        never runs into the drawing's name)."""
+        fr = self.FRAME_RECT
+        label = fm.elidedText(self.pair_label(), Qt.TextElideMode.ElideRight, int(fr.width()) - 18)
+        w = min(fm.horizontalAdvance(label) + 10, fr.width() - 8)
+        return label, QRectF(fr.left() + 4, fr.bottom() - 19, w, 16)
 
 
 # ------------------------------------------------------------------------------------------
@@ -459,11 +509,15 @@ class TrainingWindow(QMainWindow):
         self.recordingChanged = Hook()  # True while recording: the live input must be camera-size
         self._record_until = 0.0
         self._diag_worst: dict[str, int] = {}
-        self._auto: set[int] = set()  # ids of pairs made by "Pair automatically"
         self._live_feats: np.ndarray | None = None
+        self._undo: list[tuple[str, dict]] = []  # (what was done, the session's state before it)
+        self._redo: list[tuple[str, dict]] = []
+        # a hook the tests replace to answer without a modal dialog: ("replace" | "keep" | "cancel")
+        self.ask_replace_pairs = self._ask_replace_pairs_dialog
         self.session = self._open_session()
 
         self._build_ui()
+        self._update_undo_buttons()
         self.set_frame(0)
         self.refresh()
         self.resize(1320, 900)
@@ -578,8 +632,15 @@ class TrainingWindow(QMainWindow):
         self.suggest_btn.clicked.connect(self.go_to_suggestion)
         self.suggest_btn.setEnabled(False)
         self.default_btn = QPushButton("Pair automatically")
-        self.default_btn.setToolTip("Start from the automatic default pairing (bundled performance)")
+        self.default_btn.setToolTip("Pair each drawing with the synthetic performer making the face of its name "
+                                    "(asks before replacing pairs you picked; Undo takes it back)")
         self.default_btn.clicked.connect(self.pair_defaults)
+        self.undo_btn = QPushButton("Undo")
+        self.undo_btn.setShortcut(QKeySequence(QKeySequence.StandardKey.Undo))
+        self.undo_btn.clicked.connect(self.undo)
+        self.redo_btn = QPushButton("Redo")
+        self.redo_btn.setShortcut(QKeySequence(QKeySequence.StandardKey.Redo))
+        self.redo_btn.clicked.connect(self.redo)
         self.use_btn = QPushButton("Use this training")
         self.use_btn.setObjectName("primary")
         self.use_btn.clicked.connect(self.use_training)
@@ -593,6 +654,10 @@ class TrainingWindow(QMainWindow):
         dv.addWidget(dsc, 1)
         dv.addWidget(self.suggest_btn)
         dv.addWidget(self.default_btn)
+        ur = QHBoxLayout()
+        ur.addWidget(self.undo_btn, 1)
+        ur.addWidget(self.redo_btn, 1)
+        dv.addLayout(ur)
         dv.addWidget(self.use_btn)
         dw = QWidget()
         dw.setLayout(dv)
@@ -720,6 +785,7 @@ class TrainingWindow(QMainWindow):
         if vals is None:
             self.status.setText(f"Frame {i} has no tracked values yet (tracking still running, or the face was lost).")
             return False
+        before = self._state()
         for k in reversed(range(len(self.session.pairs))):
             pr = self.session.pairs[k]
             if pr.part == part and pr.drawing == drawing and pr.blend is None:
@@ -727,33 +793,137 @@ class TrainingWindow(QMainWindow):
         try:
             self.session.add_pair(part, drawing, vals, frame=i, image=self.clip.frame(i), bgr=True)
         except Exception as e:
+            self._restore(before)
             self.status.setText(f"Could not save the pair: {_one_line(e)}")
             return False
+        self._did(f"pair {part}/{drawing} with frame {i}", before)
         self.status.setText(f"{part}/{drawing} ← frame {i}  (saved to {self.session.path})")
         self.refresh()
         return True
 
-    def pair_defaults(self) -> None:
-        """Replace the pairs with the automatic default training, where available."""
+    def hand_picked(self) -> list:
+        """The pairs the user made (frames of a clip), as opposed to automatic ones."""
+        return [p for p in self.session.pairs if not p.source]
+
+    def pair_defaults(self) -> bool:
+        """Pair each drawing with the synthetic performer making the face of its name.
+
+        Pairs the user picked are only replaced when they say so ("replace"); "keep" pairs only
+        the drawings they left unpaired. Either way one Undo takes it back. True if it paired."""
         try:
-            from training.defaults import default_session
+            from training.defaults import default_session, expression_for
         except ImportError:
             self.status.setText("Automatic pairing is not available in this build.")
-            return
+            return False
+        mine = self.hand_picked()
+        choice = "replace"
+        if mine:
+            choice = self.ask_replace_pairs(len(mine))
+            if choice not in ("replace", "keep"):
+                self.status.setText("Automatic pairing cancelled; your pairs are unchanged.")
+                return False
         try:
             d = default_session(self.artset, thumbnails=True, reference=self.session.reference_track is None)
         except Exception as e:
             self.status.setText(f"Automatic pairing failed: {_one_line(e)}")
-            return
-        self.session.pairs = list(d.pairs)
-        self._auto = {id(p) for p in d.pairs}
+            return False
+        for pr in d.pairs:
+            expr = expression_for(pr.part, pr.drawing) if pr.drawing else None
+            pr.source = f"{SYNTHETIC}{expr or pr.drawing}"
+        before = self._state()
+        if choice == "keep":
+            taken = {(p.part, p.drawing) for p in mine}
+            taken |= {(p.part, n) for p in mine if p.blend for n in p.blend}
+            new = [p for p in d.pairs if (p.part, p.drawing) not in taken]
+            self.session.pairs = mine + new
+        else:
+            new = list(d.pairs)
+            self.session.pairs = new
         if self.session.features is None and d.features is not None:
             self.session.features = d.features
         if self.session.reference_track is None and d.reference_track is not None:
             self.session.reference_track = d.reference_track
-        self.session._changed()
-        self.status.setText(f"Paired automatically: {len(d.pairs)} pairs")
+            self.session.reference_clip = d.reference_clip
+        try:
+            self.session._changed()
+        except Exception as e:
+            self._restore(before)
+            self.status.setText(f"Automatic pairing not saved: {_one_line(e)}")
+            return False
+        self._did("automatic pairing", before)
+        kept = f", kept your {len(mine)}" if choice == "keep" and mine else (
+            f", replacing your {len(mine)}" if mine else "")
+        self.status.setText(f"Paired automatically: {len(new)} pairs{kept}. Undo (Ctrl+Z) takes it back.")
         self.refresh()
+        return True
+
+    def _ask_replace_pairs_dialog(self, n_mine: int) -> str:
+        box = QMessageBox(self)
+        box.setWindowTitle("Pair automatically")
+        box.setIcon(QMessageBox.Icon.Question)
+        box.setText(f"You picked {n_mine} pair{'s' if n_mine != 1 else ''} yourself.")
+        box.setInformativeText("Automatic pairing uses the synthetic performer's faces, not your clip. "
+                               "Replace your pairs too, or only pair the drawings you have not paired?\n"
+                               "Either way, Undo takes it back.")
+        keep = box.addButton("Keep mine, pair the rest", QMessageBox.ButtonRole.AcceptRole)
+        replace = box.addButton("Replace mine", QMessageBox.ButtonRole.DestructiveRole)
+        box.addButton(QMessageBox.StandardButton.Cancel)
+        box.setDefaultButton(keep)
+        box.exec()
+        return "keep" if box.clickedButton() is keep else "replace" if box.clickedButton() is replace else "cancel"
+
+    # --------------------------------------------------------------------------------- undo
+    def _state(self) -> dict:
+        """What an undo step restores: the pairs (the list; pairs themselves never change) and
+        what automatic pairing may fill in."""
+        s = self.session
+        return {"pairs": list(s.pairs), "features": s.features, "reference_clip": s.reference_clip,
+                "reference_track": s.reference_track}
+
+    def _restore(self, state: dict) -> None:
+        s = self.session
+        s.pairs = list(state["pairs"])
+        s.features = state["features"]
+        s.reference_clip = state["reference_clip"]
+        s.reference_track = state["reference_track"]
+        for p in s.pairs:  # thumbnails a save removed are written again from memory
+            if p.thumb_file and p.thumbnail is not None and (s.path is None or not (s.path / p.thumb_file).is_file()):
+                p.thumb_file = ""
+
+    def _did(self, what: str, before: dict) -> None:
+        self._undo.append((what, before))
+        del self._undo[:-50]
+        self._redo.clear()
+        self._update_undo_buttons()
+
+    def _step(self, src: list, dst: list, verb: str) -> bool:
+        if not src:
+            return False
+        what, state = src.pop()
+        dst.append((what, self._state()))
+        self._restore(state)
+        try:
+            self.session._changed()
+        except Exception as e:
+            self.status.setText(f"{verb} {what}, but could not save: {_one_line(e)}")
+        else:
+            self.status.setText(f"{verb} {what}.")
+        self._update_undo_buttons()
+        self.refresh()
+        return True
+
+    def undo(self) -> bool:
+        """Take back the last pairing (automatic or by hand); True if there was one."""
+        return self._step(self._undo, self._redo, "Undid")
+
+    def redo(self) -> bool:
+        return self._step(self._redo, self._undo, "Redid")
+
+    def _update_undo_buttons(self) -> None:
+        self.undo_btn.setEnabled(bool(self._undo))
+        self.redo_btn.setEnabled(bool(self._redo))
+        self.undo_btn.setToolTip(f"Undo {self._undo[-1][0]} (Ctrl+Z)" if self._undo else "Nothing to undo")
+        self.redo_btn.setToolTip(f"Redo {self._redo[-1][0]} (Ctrl+Shift+Z)" if self._redo else "Nothing to redo")
 
     def use_training(self) -> None:
         try:
@@ -779,7 +949,8 @@ class TrainingWindow(QMainWindow):
         for (part, name), card in self.cards.items():
             pr = by.get((part, name))
             card.set_pair(rgb_qimage(pr.thumbnail) if pr is not None and pr.thumbnail is not None else None,
-                          pr.frame if pr is not None else None, pr is not None and id(pr) in self._auto)
+                          pr.frame if pr is not None else None, pr.source if pr is not None else "",
+                          getattr(self.clip, "name", ""))
         part = self.part()
         names = self.artset.parts[part].names()
         self.space_title.setText(f"Expression space — {part} (PCA plane of the training points, Delaunay triangles)")
@@ -825,6 +996,10 @@ class TrainingWindow(QMainWindow):
                          "a drawing with one pair shows what would stand in for it, and how far off that is):")
             for r in loo:
                 pred = ", ".join(f"{n} {w:.2f}" for n, w in r.predicted[:3])
+                if r.recon_error is None:  # the part's only pair: nothing else to predict it
+                    lines.append(f"<span style='color:#6b6f76'>■</span> {r.name}: the only pair so far — "
+                                 "pair another drawing to see how the others stand in for it")
+                    continue
                 if r.alone:  # its own weight is 0 by construction: show what stands in for it
                     lines.append(f"<span style='color:#6b6f76'>■</span> {r.name}: without it → {pred} "
                                  f"<span style='color:#9aa0aa'>(error {r.recon_error:.3f})</span>")
@@ -833,7 +1008,9 @@ class TrainingWindow(QMainWindow):
                 lines.append(f"<span style='color:{col}'>■</span> {r.name}: {1 - r.weight_error:.2f} "
                              f"<span style='color:#9aa0aa'>(from {pred}; error {r.recon_error:.3f})</span>")
         cov = rep.get("coverage")
-        if cov is not None:
+        if cov is not None and not cov.hull:
+            lines.append(f"<br><b>Coverage</b>: {cov.suggestion[len(part) + 2:]}.")
+        elif cov is not None:
             lines.append(f"<br><b>Coverage</b>: {cov.outside_share:.0%} of the clip's {cov.frames} frames fall "
                          f"outside the drawings (max {cov.max_outside:.3f}).")
             if cov.worst_frame >= 0:

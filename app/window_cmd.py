@@ -111,13 +111,14 @@ def run(args) -> int:
             print(f"inkface: {e}", file=sys.stderr)
             return 2
         calibration = ("clicks", os.path.abspath(args.init), os.path.abspath(args.video))
-    qapp = make_app()
-    from app.qt_env import has_display
+    from app.qt_env import display_problem
 
-    if not has_display():
-        print("inkface: no display to open a window on (set DISPLAY, or try `python -m app demo` "
-              "which renders to out/demo.mp4 without one)", file=sys.stderr)
+    problem = display_problem()  # asked before Qt loads: a display that is not there aborts Qt
+    if problem:
+        print(f"inkface: cannot open a window: {problem} (try `python -m app demo`, which renders "
+              f"to out/demo.mp4 without one)", file=sys.stderr)
         return 2
+    qapp = make_app()
     quit_on_ctrl_c(qapp)
     win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None),
                       calibration)

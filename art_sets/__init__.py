@@ -17,8 +17,10 @@ Rules the validator enforces (``python -m art_sets check DIR``): every drawing o
 box's size and the same number of control lines, each inside the image and longer than 1 px;
 at least 3 drawings per part (a triangle for the barycentric morph); heads have the canvas's size
 and soft alpha holes; no part box edge shows (the head is opaque on each box's border); image
-paths are relative and stay inside the folder; PNGs are at most 4096×4096 (checked from the header,
-before decoding). Conventions: RGBA with straight alpha; boxes ``(x, y, w, h)`` in canvas pixels;
+paths are relative and stay inside the folder. Limits (``art_sets.io``), so that any set that passes
+loads in seconds and a few hundred MB: canvas and heads at most 1024×1024, a part's box (its
+drawings) at most 512×512 pixels, 8 heads, 16 drawings a part, 12 control lines a drawing; image
+sizes are checked from the PNG header, before decoding. Conventions: RGBA with straight alpha; boxes ``(x, y, w, h)`` in canvas pixels;
 lines in pixels of their own drawing, line *i* the same feature in every drawing of a part.
 
 Public API: :mod:`art_sets.model` (ArtSet, Part, Drawing), :func:`art_sets.io.load_artset`,

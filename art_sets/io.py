@@ -11,25 +11,44 @@ relative to the folder and may never leave it (no absolute paths, no ``..``, no 
 
 from __future__ import annotations
 
+import io as _io
 import json
 import math
 import os
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from PIL import Image
 
+from art_sets import atomic_file, safe_json
 from art_sets.model import FORMAT_VERSION, PART_NAMES, ArtSet, Drawing, Part
 
 MANIFEST = "artset.json"
-MAX_SIDE = 4096  # pixels; larger images are refused before decoding
-MAX_PIXELS = 4096 * 4096
 MIN_DRAWINGS = 3  # a part needs a triangle of drawings for the barycentric morph
 MIN_LINE_LENGTH = 1.0  # px; shorter control lines make the Beier-Neely field singular
 MAX_MANIFEST_BYTES = 8 * 1024 * 1024
+
+# Limits that keep loading a character a matter of seconds and a few hundred MB. Building a
+# part's morph tables costs time and memory in proportion to drawings² × lines (16 drawings of
+# 12 lines: about 2–3 s for both parts on one core); images cost their pixels several times over.
+MAX_SIDE = 1024
+"""Largest canvas (and head image) side, px."""
+MAX_PIXELS = MAX_SIDE * MAX_SIDE
+"""Largest head image, px; images are refused from their header, before decoding."""
+MAX_DRAWING_PIXELS = 512 * 512
+"""Largest part box, and so the largest eye or mouth drawing, px."""
+MAX_HEADS = 8
+MAX_DRAWINGS = 16
+"""Drawings per part."""
+MAX_LINES = 12
+"""Control lines per drawing."""
+MAX_PATH_CHARS = 1024
+"""Longest image path in a manifest (and 255 characters for one name in it)."""
+MAX_TEXT = 4096
+"""Longest name, author or drawing name."""
 _KNOWN_KEYS = {"format", "name", "author", "canvas", "pivot", "heads", "parts"}
 
 
@@ -62,6 +81,7 @@ class _Scan:
         self.problems: list[Problem] = []
         self.manifest_file = str(folder / MANIFEST)
         self.alpha_seen: dict[str, bool] = {}
+        self.swept: set[Path] = set()
 
     def add(self, file: str, message: str) -> None:
         self.problems.append(Problem(file, message))
@@ -72,28 +92,46 @@ class _Scan:
         if not isinstance(rel, str) or not rel.strip():
             self.add(self.manifest_file, f"{where}: image path must be a non-empty string")
             return None
+        shown = safe_json.show(rel)
+        if len(rel) > MAX_PATH_CHARS or any(len(part) > 255 for part in rel.split("/")):
+            self.add(self.manifest_file, f"{where}: image path {shown} is too long (at most {MAX_PATH_CHARS} characters, 255 per name)")
+            return None
+        if "\x00" in rel:
+            self.add(self.manifest_file, f"{where}: image path {shown} contains a NUL character")
+            return None
         if "\\" in rel or os.path.isabs(rel) or rel.startswith(("/", "~")) or ":" in rel.split("/")[0]:
-            self.add(self.manifest_file, f"{where}: image path {rel!r} is absolute; it must be relative to the art-set folder")
+            self.add(self.manifest_file, f"{where}: image path {shown} is absolute; it must be relative to the art-set folder")
             return None
         if ".." in Path(rel).parts:
-            self.add(self.manifest_file, f"{where}: image path {rel!r} leaves the art-set folder")
+            self.add(self.manifest_file, f"{where}: image path {shown} leaves the art-set folder")
             return None
         full = self.folder / rel
         try:
             full.resolve().relative_to(self.folder.resolve())
         except ValueError:
-            self.add(self.manifest_file, f"{where}: image path {rel!r} leaves the art-set folder (symlink)")
+            self.add(self.manifest_file, f"{where}: image path {shown} leaves the art-set folder (symlink)")
+            return None
+        except (OSError, RuntimeError) as e:  # a symlink loop, a name the file system refuses
+            self.add(self.manifest_file, f"{where}: image path {shown} cannot be followed ({_reason(e)})")
             return None
         return full
 
-    def image(self, rel, where: str) -> np.ndarray | None:
+    def image(self, rel, where: str, max_pixels: int = MAX_PIXELS) -> np.ndarray | None:
         full = self.safe_path(rel, where)
         if full is None:
             return None
         name = str(full)
-        if not full.is_file():
+        try:
+            is_file = full.is_file()
+        except OSError as e:
+            self.add(name, f"image cannot be opened ({_reason(e)}; named by {where})")
+            return None
+        if not is_file:
             self.add(name, f"missing image (named by {where})")
             return None
+        if full.parent not in self.swept:
+            self.swept.add(full.parent)
+            atomic_file.sweep_temp(full.parent)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", Image.DecompressionBombWarning)
@@ -102,8 +140,9 @@ class _Scan:
                     if im.format != "PNG":
                         self.add(name, f"not a PNG image ({im.format or 'unknown format'})")
                         return None
-                    if w > MAX_SIDE or h > MAX_SIDE or w * h > MAX_PIXELS:
-                        self.add(name, f"image is {w}x{h}, larger than the {MAX_SIDE}x{MAX_SIDE} limit; refused without decoding")
+                    if w > MAX_SIDE or h > MAX_SIDE or w * h > max_pixels:
+                        limit = f"{MAX_SIDE}x{MAX_SIDE}" if max_pixels >= MAX_PIXELS else f"{max_pixels:,}-pixel"
+                        self.add(name, f"image is {w}x{h}, larger than the {limit} limit; refused without decoding")
                         return None
                     if w < 1 or h < 1:
                         self.add(name, f"image has no pixels ({w}x{h})")
@@ -128,16 +167,12 @@ class _Scan:
         if not mf.is_file():
             self.add(self.manifest_file, "missing manifest (artset.json)")
             return None
+        self.swept.add(self.folder)
+        atomic_file.sweep_temp(self.folder)
         try:
-            if mf.stat().st_size > MAX_MANIFEST_BYTES:
-                self.add(self.manifest_file, "manifest is larger than 8 MB; refused")
-                return None
-            data = json.loads(mf.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError) as e:
-            self.add(self.manifest_file, f"unreadable manifest ({_one_line(e)})")
-            return None
-        except json.JSONDecodeError as e:
-            self.add(self.manifest_file, f"bad JSON at line {e.lineno} column {e.colno}: {e.msg}")
+            data = safe_json.read(mf, "manifest", max_bytes=MAX_MANIFEST_BYTES, error=ArtSetError)
+        except ArtSetError as e:
+            self.add(self.manifest_file, str(e).removeprefix(f"{mf}: "))
             return None
         if not isinstance(data, dict):
             self.add(self.manifest_file, "manifest must be a JSON object")
@@ -150,21 +185,21 @@ class _Scan:
             self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads format {FORMAT_VERSION})")
             return None
         name = data["name"]
-        if not isinstance(name, str) or not name.strip():
-            self.add(self.manifest_file, "name must be a non-empty string")
-            name = str(name)
+        if not isinstance(name, str) or not name.strip() or len(name) > MAX_TEXT:
+            self.add(self.manifest_file, f"name must be a non-empty string of at most {MAX_TEXT} characters")
+            name = safe_json.show(name)
         author = data.get("author", "")
-        if not isinstance(author, str):
-            self.add(self.manifest_file, "author must be a string")
-            author = str(author)
+        if not isinstance(author, str) or len(author) > MAX_TEXT:
+            self.add(self.manifest_file, f"author must be a string of at most {MAX_TEXT} characters")
+            author = safe_json.show(author)
         canvas = _int_pair(data["canvas"])
         if canvas is None or min(canvas) < 1 or max(canvas) > MAX_SIDE:
-            self.add(self.manifest_file, f"canvas must be [width, height] in 1..{MAX_SIDE}, got {data['canvas']!r}")
+            self.add(self.manifest_file, f"canvas must be [width, height] in 1..{MAX_SIDE} (the canvas size limit), got {safe_json.show(data['canvas'])}")
             return None
         pivot_raw = data.get("pivot", [canvas[0] / 2, canvas[1] / 2])
         pivot = _num_pair(pivot_raw)
-        if pivot is None:
-            self.add(self.manifest_file, f"pivot must be [x, y] numbers, got {pivot_raw!r}")
+        if pivot is None or not all(-c <= v <= 2 * c for v, c in zip(pivot, canvas)):
+            self.add(self.manifest_file, f"pivot must be [x, y] numbers at most one canvas width or height outside the canvas, got {safe_json.show(pivot_raw)}")
             pivot = (canvas[0] / 2, canvas[1] / 2)
 
         heads, head_files = self.read_heads(data["heads"], canvas)
@@ -179,6 +214,9 @@ class _Scan:
         heads, files = [], []
         if not isinstance(raw, list) or not raw:
             self.add(self.manifest_file, "heads must be a non-empty list of image paths")
+            return heads, files
+        if len(raw) > MAX_HEADS:
+            self.add(self.manifest_file, f"{len(raw)} heads; at most {MAX_HEADS} are allowed (the heads limit)")
             return heads, files
         for i, rel in enumerate(raw):
             img = self.image(rel, f"heads[{i}]")
@@ -221,9 +259,15 @@ class _Scan:
             return None
         if box[0] < 0 or box[1] < 0 or box[0] + box[2] > canvas[0] or box[1] + box[3] > canvas[1]:
             self.add(self.manifest_file, f"{where}.box {list(box)} does not fit inside the {canvas[0]}x{canvas[1]} canvas")
+        if box[2] * box[3] > MAX_DRAWING_PIXELS:
+            self.add(self.manifest_file, f"{where}.box is {box[2]}x{box[3]}, more than the {MAX_DRAWING_PIXELS:,}-pixel limit for a part")
+            return None
         raw_d = raw["drawings"]
         if not isinstance(raw_d, list):
             self.add(self.manifest_file, f"{where}.drawings must be a list")
+            return None
+        if len(raw_d) > MAX_DRAWINGS:
+            self.add(self.manifest_file, f"{where}: {len(raw_d)} drawings; at most {MAX_DRAWINGS} are allowed (the drawings-per-part limit)")
             return None
         if len(raw_d) < MIN_DRAWINGS:
             self.add(self.manifest_file, f"{where}: {len(raw_d)} drawing(s); at least {MIN_DRAWINGS} are needed to make a triangle")
@@ -236,17 +280,20 @@ class _Scan:
                 self.add(self.manifest_file, f"{dw}: needs 'name', 'image' and 'lines'")
                 continue
             dname = d["name"]
-            if not isinstance(dname, str) or not dname:
-                self.add(self.manifest_file, f"{dw}: name must be a non-empty string")
+            if not isinstance(dname, str) or not dname or len(dname) > MAX_TEXT:
+                self.add(self.manifest_file, f"{dw}: name must be a non-empty string of at most {MAX_TEXT} characters")
                 continue
             if dname in seen:
                 self.add(self.manifest_file, f"{where}: two drawings are called {dname!r}")
             seen.add(dname)
+            if isinstance(d["lines"], list) and len(d["lines"]) > MAX_LINES:
+                self.add(self.manifest_file, f"{dw} ({dname}): {len(d['lines'])} control lines; at most {MAX_LINES} are allowed (the lines-per-drawing limit)")
+                continue
             lines = _lines(d["lines"])
             if lines is None:
-                self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] finite numbers")
+                self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] numbers of at most {MAX_COORD:g}")
                 continue
-            img = self.image(d["image"], f"{dw} ({dname})")
+            img = self.image(d["image"], f"{dw} ({dname})", MAX_DRAWING_PIXELS)
             if img is None:
                 continue
             file = str(self.folder / d["image"])
@@ -295,44 +342,19 @@ def load_artset(path: str | os.PathLike, strict: bool = True) -> ArtSet:
 
 
 # --- writing -----------------------------------------------------------------------------
-def _atomic_write_bytes(target: Path, data: bytes) -> None:
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual permissions
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _png_bytes(img: np.ndarray) -> bytes:
-    import io as _io
-
+def _png_bytes(img: np.ndarray, fast: bool = False) -> bytes:
     arr = np.asarray(img)
     if arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] != 4:
         raise ArtSetError(f"image must be uint8 (h, w, 4) RGBA, got {arr.dtype} {arr.shape}")
     buf = _io.BytesIO()
-    Image.fromarray(arr, "RGBA").save(buf, format="PNG", optimize=True)
+    opts = {"compress_level": 1} if fast else {"optimize": True}
+    Image.fromarray(arr, "RGBA").save(buf, format="PNG", **opts)
     return buf.getvalue()
 
 
 def write_png(path: str | os.PathLike, img: np.ndarray) -> None:
     """Write an RGBA uint8 image as PNG atomically."""
-    _atomic_write_bytes(Path(path), _png_bytes(img))
+    atomic_file.write_bytes(Path(path), _png_bytes(img))
 
 
 def manifest_dict(art: ArtSet) -> dict:
@@ -367,26 +389,93 @@ def _drawing_file(pname: str, d: Drawing) -> str:
     return d.file or f"{pname}/{d.name}.png"
 
 
-def save_artset(art: ArtSet, path: str | os.PathLike) -> Path:
-    """Write ``art`` to the folder ``path``: PNGs first, then ``artset.json``, each atomically.
+def _image_slots(art: ArtSet) -> list[tuple[str, np.ndarray, Callable[[str], None]]]:
+    """Every image ``art`` saves: its path in the manifest, its pixels, and how to rename it."""
+    files = _head_files(art)
+    art.head_files = files
+
+    def head(i: int) -> Callable[[str], None]:
+        return lambda name: art.head_files.__setitem__(i, name)
+
+    def drawing(d: Drawing) -> Callable[[str], None]:
+        return lambda name: setattr(d, "file", name)
+
+    slots = [(files[i], img, head(i)) for i, img in enumerate(art.heads)]
+    for pname in PART_NAMES:
+        slots += [(_drawing_file(pname, d), d.image, drawing(d)) for d in art.parts[pname].drawings]
+    return slots
+
+
+def _files_named_by(folder: Path) -> list[str]:
+    """Every image path the manifest in ``folder`` names now (none without a readable manifest)."""
+    try:
+        data = safe_json.read(folder / MANIFEST, "manifest", max_bytes=MAX_MANIFEST_BYTES, error=ArtSetError)
+    except ArtSetError:
+        return []
+    return _png_paths(data, folder)
+
+
+def _png_paths(manifest, folder: Path) -> list[str]:
+    """Each string in ``manifest`` that is a safe relative ``.png`` path, whatever key holds it
+    (so files named by keys this version does not know are never taken for garbage)."""
+    found, stack = [], [manifest]
+    while stack:
+        v = stack.pop()
+        if isinstance(v, dict):
+            stack.extend(v.values())
+        elif isinstance(v, list):
+            stack.extend(v)
+        elif isinstance(v, str) and v.lower().endswith(".png") and atomic_file.inside(folder, v) is not None:
+            found.append(v)
+    return found
+
+
+def save_artset(art: ArtSet, path: str | os.PathLike, *, fast: bool = False, cache: dict | None = None) -> Path:
+    """Write ``art`` to the folder ``path`` (PNGs and ``artset.json``) so that a crash at any
+    moment leaves the folder's previous set or this one complete, never a mix.
 
     Image paths come from ``head_files`` / ``Drawing.file`` (defaults ``head-N.png`` and
-    ``<part>/<name>.png``) and must stay inside the folder. Returns the folder.
+    ``<part>/<name>.png``) and must stay inside the folder. Unchanged PNGs are kept; a PNG whose
+    pixels changed is written under a name the folder's current manifest does not use
+    (``mouth/ah.png`` <-> ``mouth/ah.v2.png``), the manifest last, and then the files only the
+    old manifest named are removed (an :class:`~art_sets.atomic_file.Generation`). ``art``'s
+    ``head_files`` and ``Drawing.file`` are set to the names written.
+
+    ``fast`` uses light PNG compression (autosave). ``cache`` (a dict the caller keeps between
+    saves into one folder) skips encoding images that are the very array last saved there: it
+    maps manifest path -> (file name, array). Returns the folder.
     """
     folder = _folder_of(path)
-    folder.mkdir(parents=True, exist_ok=True)
+    slots = _image_slots(art)
     checker = _Scan(folder)
-    manifest = manifest_dict(art)
-    items = [(f, img) for f, img in zip(manifest["heads"], art.heads)]
-    for pname in PART_NAMES:
-        items += [(_drawing_file(pname, d), d.image) for d in art.parts[pname].drawings]
-    for rel, img in items:
+    for rel, _, _ in slots:
         if checker.safe_path(rel, rel) is None:
             raise ArtSetError(str(checker.problems[-1]))
-    for rel, img in items:
-        write_png(folder / rel, img)
-    text = json.dumps(manifest, indent=1, ensure_ascii=False)
-    _atomic_write_bytes(folder / MANIFEST, (text + "\n").encode("utf-8"))
+    gen = atomic_file.Generation(folder, MANIFEST, _files_named_by(folder))
+    for rel, img, rename in slots:
+        hit = cache.get(rel) if cache is not None else None
+        name = None
+        if hit is not None and hit[1] is img:
+            try:
+                name = gen.keep(hit[0])
+            except KeyError:
+                name = None
+        if name is None:
+            name = gen.put(rel, _png_bytes(img, fast))
+        if cache is not None:
+            cache[rel] = (name, img)
+        rename(name)
+    manifest = manifest_dict(art)
+    for rel in _png_paths(manifest, folder):  # e.g. a picture an unknown key names: still in use
+        if rel in gen.current and rel not in gen.names:
+            try:
+                gen.keep(rel)
+            except KeyError:
+                pass
+    gen.commit((json.dumps(manifest, indent=1, ensure_ascii=False) + "\n").encode("utf-8"))
+    if cache is not None:
+        for rel in [r for r, (name, _) in cache.items() if name not in gen.names]:
+            del cache[rel]
     return folder
 
 
@@ -395,8 +484,16 @@ def _one_line(e: BaseException) -> str:
     return " ".join(str(e).split()) or type(e).__name__
 
 
+MAX_COORD = 1e6
+"""Largest coordinate (px) a manifest may hold anywhere."""
+
+
+def _reason(e: BaseException) -> str:
+    return (e.strerror if isinstance(e, OSError) and e.strerror else _one_line(e)) or type(e).__name__
+
+
 def _is_num(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and abs(v) <= MAX_COORD
 
 
 def _int_pair(v) -> tuple[int, int] | None:

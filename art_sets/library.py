@@ -1,13 +1,18 @@
 """Finding art sets: the bundled characters and the user's own folders, plus thumbnails.
 
-User art sets live in ``$INKFACE_ART_DIR`` when set, else ``$XDG_DATA_HOME/inkface/art_sets``
-(default ``~/.local/share/inkface/art_sets``): one sub-folder per set, each with artset.json.
+User art sets live in one sub-folder each (with its artset.json) of :func:`user_dir`:
+``$INKFACE_ART_DIR`` when set — the program sets it at start-up, to ``characters`` in its data
+folder, so every part of it agrees — else ``characters`` in ``$INKFACE_DATA``, else in the
+platform's data folder for Inkface (``~/.local/share/Inkface`` or ``$XDG_DATA_HOME/Inkface`` on
+Linux, ``~/Library/Application Support/Inkface`` on macOS, ``%APPDATA%\\Inkface`` on Windows:
+where Qt's ``AppDataLocation`` puts it, worked out here without Qt).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,13 +27,23 @@ def bundled_dir() -> Path:
     return Path(__file__).resolve().parent / "bundled"
 
 
+def default_data_dir() -> Path:
+    """The platform's application-data folder for Inkface, as Qt's ``AppDataLocation`` names it."""
+    home = Path(os.path.expanduser("~"))
+    if sys.platform == "win32":
+        return Path(os.environ.get("APPDATA") or home / "AppData" / "Roaming") / "Inkface"
+    if sys.platform == "darwin":
+        return home / "Library" / "Application Support" / "Inkface"
+    return Path(os.environ.get("XDG_DATA_HOME") or home / ".local" / "share") / "Inkface"
+
+
 def user_dir() -> Path:
     """The folder where the user's own art sets are looked for (may not exist)."""
     env = os.environ.get("INKFACE_ART_DIR")
     if env:
         return Path(env).expanduser()
-    base = os.environ.get("XDG_DATA_HOME") or os.path.join(os.path.expanduser("~"), ".local", "share")
-    return Path(base) / "inkface" / "art_sets"
+    data = os.environ.get("INKFACE_DATA")
+    return (Path(data).expanduser() if data else default_data_dir()) / "characters"
 
 
 def _manifest_name(folder: Path) -> str | None:

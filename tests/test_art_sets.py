@@ -237,7 +237,7 @@ def test_real_decompression_bomb_refused(tmp_path):
 def test_bad_json(bundled_copy):
     (bundled_copy / "artset.json").write_text('{"format": 1, "name": ')
     msg = messages(bundled_copy)
-    assert "bad JSON" in msg and "artset.json" in msg
+    assert "not valid JSON" in msg and "artset.json" in msg
 
 
 def test_missing_keys(bundled_copy):

@@ -241,21 +241,21 @@ def test_resave_never_overwrites_files_the_old_manifest_uses(tmp_path, monkeypat
     # change a drawing's pixels and the box size, then crash after the first PNG is written
     ed.set_box(saved, "mouth", (50, 150, 90, 45))
     ed.replace_drawing_image(saved, "mouth", 0, part_image((90, 45), "mouth", 3))
-    import art_sets.io as io
+    from art_sets import atomic_file
 
-    real = io.write_png
+    real = atomic_file.write_bytes
     calls = []
 
-    def flaky(path, img):
+    def flaky(path, data):
         calls.append(path)
-        if len(calls) == 3:
+        if len(calls) == 2:
             raise OSError("disk full")
-        real(path, img)
+        real(path, data)
 
-    monkeypatch.setattr(io, "write_png", flaky)
+    monkeypatch.setattr(atomic_file, "write_bytes", flaky)
     with pytest.raises(OSError):
         ed.save_safely(saved, folder)
-    monkeypatch.setattr(io, "write_png", real)
+    monkeypatch.setattr(atomic_file, "write_bytes", real)
     assert (folder / "artset.json").read_text() == old_json
     assert validate(folder) == []
     assert ed.same_artset(load_artset(folder), load_artset(folder))

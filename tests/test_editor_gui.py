@@ -72,6 +72,11 @@ def make_window(qtbot, tmp_path, monkeypatch):
     monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
     from app.editor.window import EditorWindow
 
+    from PySide6.QtWidgets import QApplication
+
+    qapp = QApplication.instance()
+    look = qapp.style().name(), qapp.styleSheet(), qapp.palette()
+
     def make():
         win = EditorWindow(autosave_delay_ms=30)
         win.confirm_close = lambda: "discard"
@@ -82,7 +87,10 @@ def make_window(qtbot, tmp_path, monkeypatch):
         qtbot.waitExposed(win)
         return win
 
-    return make
+    yield make
+    qapp.setStyleSheet(look[1])  # the editor gives the application its dark theme: not to later tests
+    qapp.setPalette(look[2])
+    qapp.setStyle(look[0])
 
 
 def _drag(qtbot, widget, pts_image, buttons=Qt.LeftButton):
@@ -102,6 +110,16 @@ def _lines_everywhere(doc, part):
     for di in range(1, len(doc.artset.parts[part].drawings)):
         for i, ln in zip(first, base):
             doc.move_line(part, di, i, np.add(ln, [0, di, 0, di]))
+
+
+def _finished(win, name, images, holes=5):
+    """``win`` with a new character from ``images``: lines in every drawing, holes cut (valid)."""
+    heads, eyes, mouths = images
+    win.new_character(name, heads, eyes, mouths)
+    _lines_everywhere(win.doc, "eyes")
+    _lines_everywhere(win.doc, "mouth")
+    win.doc.make_holes(holes)
+    return win
 
 
 # ----------------------------------------------------------------------------- tests
@@ -236,12 +254,7 @@ def test_crash_mid_save_leaves_previous_set_intact(make_window, images, tmp_path
 
 
 def test_autosave_appears_and_is_offered_back(make_window, images, tmp_path, qtbot):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Auto", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(6)
+    win = _finished(make_window(), "Auto", images, holes=6)
     folder = tmp_path / "auto"
     win.doc.save(folder)
     side = folder / ".artset.autosave" / "artset.json"
@@ -471,16 +484,11 @@ def test_unsaved_new_character_is_autosaved_and_recovered(make_window, images, q
 
 
 def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monkeypatch):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Busy", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
-    from PySide6.QtWidgets import QFileDialog
-
-    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(tmp_path / "busy"))
+    win = _finished(make_window(), "Busy", images)
+    asked = []
+    win.ask_save_folder = lambda start, suggested: asked.append((start, suggested)) or tmp_path / "busy"
     assert win.save()  # no folder yet: asks for one (Save as)
+    assert asked == [(tmp_path / "user_art", "busy")]  # starts in the user's characters, suggests a name
     assert validate(tmp_path / "busy") == [] and not win.doc.dirty
     assert "busy" in win.windowTitle() and not win.isWindowModified()
     from app.settings import Settings
@@ -490,10 +498,11 @@ def test_window_save_runs_behind_busy_dialog(make_window, images, tmp_path, monk
     # where the performance window's character strip finds it
     from art_sets.library import list_user
 
-    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(tmp_path / "user_art"))
+    win.ask_save_folder = lambda start, suggested: tmp_path / "user_art"
     assert win.save_as()
-    assert win.doc.path == tmp_path / "user_art" / "busy"
-    assert [n for n, _ in list_user()] == ["Busy"]
+    assert win.doc.path == tmp_path / "user_art" / "busy-copy"
+    # saved again elsewhere: the copy must not share the name of the one in tmp_path / "busy"
+    assert [n for n, _ in list_user()] == ["Busy (copy)"]
 
 
 def test_drop_image_files_on_a_part_list(make_window, images, tmp_path, qtbot):
@@ -531,12 +540,7 @@ def test_open_editor_with_parent_is_its_own_window(qtbot, tmp_path, monkeypatch)
 
 
 def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Live", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Live", images)
     pv = win.preview
     pv.tabs.setCurrentIndex(2)
     pv.live_button.setChecked(True)
@@ -553,12 +557,7 @@ def test_live_mode_runs_or_says_why_not(make_window, images, qtbot):
     assert pv.live is None and not pv.live_button.isChecked()
 
 def test_opening_a_set_with_wrong_sizes_offers_to_fit(make_window, images, tmp_path):
-    heads, eyes, mouths = images
-    win = make_window()
-    win.new_character("Odd", heads, eyes, mouths)
-    _lines_everywhere(win.doc, "eyes")
-    _lines_everywhere(win.doc, "mouth")
-    win.doc.make_holes(5)
+    win = _finished(make_window(), "Odd", images)
     folder = tmp_path / "odd"
     win.doc.save(folder)
     # an artist replaces a drawing and a head with bigger scans outside the editor
@@ -698,3 +697,186 @@ def test_edits_of_a_bundled_character_never_touch_its_folder(make_window, tmp_pa
     qtbot.waitUntil(side.exists, timeout=15000)
     win.doc.wait_autosave()
     assert sorted(p.relative_to(folder) for p in folder.rglob("*")) == before
+
+
+# ----------------------------------------------------------------------------- issue 14: save-as, names, theme, strip
+
+
+def _answer_modal(qtbot, act, timeout_ms=20_000):
+    """Run ``act(widget)`` on the next modal dialog as soon as it is up (from the event loop)."""
+    from PySide6.QtCore import QTimer
+    from PySide6.QtWidgets import QApplication
+
+    seen = []
+
+    def poll():
+        w = QApplication.activeModalWidget()
+        if w is None or w in seen:
+            QTimer.singleShot(20, poll)
+            return
+        seen.append(w)
+        act(w)
+
+    QTimer.singleShot(0, poll)
+    return seen
+
+
+def _type_folder_and_press_enter(name):
+    def act(dlg):
+        from PySide6.QtWidgets import QLineEdit, QMessageBox
+
+        assert not isinstance(dlg, QMessageBox), dlg.text()
+        edit = dlg.findChild(QLineEdit, "fileNameEdit")
+        edit.selectAll()
+        QTest.keyClicks(edit, name)  # typing replaces the suggested name
+        act.ok_enabled = dlg._ok.isEnabled()
+        QTest.keyClick(edit, Qt.Key_Return)
+    act.ok_enabled = None
+    return act
+
+
+def test_save_as_into_a_new_folder_by_typing_its_name(make_window, images, tmp_path, qtbot):
+    from PySide6.QtWidgets import QApplication, QMessageBox
+
+    win = _finished(make_window(), "Typed", images)
+    act = _type_folder_and_press_enter("brand-new")
+    seen = _answer_modal(qtbot, act)
+    assert win.save_as()  # the real dialog: typed a folder that does not exist yet, pressed Enter
+    assert seen and not any(isinstance(w, QMessageBox) for w in seen)  # no "Directory not found"
+    assert act.ok_enabled is True  # the Save button was usable for the new name too
+    target = tmp_path / "user_art" / "brand-new"
+    assert win.doc.path == target and validate(target) == []
+    assert QApplication.activeModalWidget() is None
+
+
+def test_the_save_dialog_takes_existing_and_new_folders(qtbot, tmp_path):
+    from PySide6.QtWidgets import QDialog
+
+    from app.editor.window import SaveFolderDialog
+
+    (tmp_path / "empty").mkdir()
+    for name, want in (("empty", tmp_path / "empty"), ("fresh", tmp_path / "fresh"),
+                       ("deeper/still", tmp_path / "deeper" / "still")):
+        dlg = SaveFolderDialog(None, tmp_path, "")
+        qtbot.addWidget(dlg)
+        dlg.open()
+        act = _type_folder_and_press_enter(name)
+        act(dlg)
+        assert dlg.result() == QDialog.Accepted and dlg.chosen == want, name
+        assert act.ok_enabled
+    assert not (tmp_path / "fresh").exists()  # nothing is made until the character is saved
+    # the suggested name is filled in: pressing Save at once takes it
+    dlg = SaveFolderDialog(None, tmp_path, "noodle-copy")
+    qtbot.addWidget(dlg)
+    dlg.open()
+    dlg.accept()
+    assert dlg.chosen == tmp_path / "noodle-copy"
+
+
+def test_unique_copy_names():
+    from hypothesis import given
+    from hypothesis import strategies as st
+
+    from app.editor.window import unique_copy_name
+
+    assert unique_copy_name("Noodle", ["Ivy", "Bleu"]) == "Noodle"
+    assert unique_copy_name("Noodle", ["Ivy", "noodle"]) == "Noodle (copy)"
+    assert unique_copy_name("Noodle", ["Noodle", "Noodle (copy)"]) == "Noodle (copy 2)"
+    assert unique_copy_name("Noodle (copy)", ["Noodle", "Noodle (copy)"]) == "Noodle (copy 2)"
+    assert unique_copy_name("Noodle (copy 2)", ["Noodle (copy 2)", "Noodle (copy)"]) == "Noodle (copy 3)"
+
+    @given(st.text(min_size=1, max_size=12).filter(str.strip), st.lists(st.text(max_size=16), max_size=8))
+    def check(name, taken):
+        got = unique_copy_name(name, taken + [name])
+        assert got.lower() not in {t.strip().lower() for t in taken + [name]}
+
+    check()
+
+
+def test_a_copy_of_a_bundled_character_gets_a_unique_name(make_window, tmp_path):
+    from art_sets.io import ArtSetError
+    from art_sets.library import find_artset, list_all, list_bundled
+
+    bundled = list_bundled()
+    if not bundled:
+        pytest.skip("no bundled characters yet")
+    name, folder = bundled[1] if len(bundled) > 1 else bundled[0]
+    win = make_window()
+    assert win.open_path(folder)
+    asked = []
+    win.ask_save_folder = lambda start, suggested: asked.append(suggested) or tmp_path / "user_art" / suggested
+    assert win.save()  # a bundled character is saved as a copy
+    assert asked == [ed.slug(f"{name} (copy)")]
+    assert load_artset(win.doc.path).name == f"{name} (copy)"
+    assert win.name_edit.text() == f"{name} (copy)"
+    assert "another character is already called" in win.statusBar().currentMessage()
+    assert win.open_path(folder)
+    assert win.save()
+    assert load_artset(win.doc.path).name == f"{name} (copy 2)"
+    names = [n for n, _ in list_all()]
+    assert len(names) == len(set(names)), names  # the character strip never shows a name twice
+    with pytest.raises(ArtSetError) as err:
+        find_artset("nobody")
+    assert str(err.value).count(f"{name},") + str(err.value).count(f"{name})") == 1
+    # saving a character in its own folder keeps its name
+    win.doc.set_info(author="me")
+    assert win.save() and load_artset(win.doc.path).name == f"{name} (copy 2)"
+
+
+def test_the_editor_uses_the_main_windows_dark_theme(make_window, images, qtbot):
+    from PySide6.QtWidgets import QApplication
+
+    from app import views
+
+    heads, eyes, mouths = images
+    win = make_window()
+    win.new_character("Dark", heads, eyes, mouths)
+    qapp = QApplication.instance()
+    assert qapp.styleSheet() == views.STYLE_SHEET
+    assert win.palette().color(win.backgroundRole()).name() == "#1e1f22"
+    img = win.grab().toImage()
+    grey = [img.pixelColor(x, y).lightness() for x in range(0, img.width(), 17) for y in range(0, img.height(), 17)]
+    assert np.median(grey) < 70  # the window looks dark, not just its palette
+    assert win.minimumSizeHint().width() <= 1366  # the theme's padding still fits a common laptop screen
+    assert win.problems.item(0).foreground().color() in (views.OK_GREEN, views.BAD, views.WARN, views.ACCENT)
+
+
+def test_strip_captions_never_overlap(make_window, images, tmp_path, qtbot):
+    """Eight drawings with long names, lines still to place, in a narrow strip."""
+    heads, eyes, mouths = images
+    src = tmp_path / "long"
+    src.mkdir()
+    many = [_mouth(src / f"a-rather-long-drawing-name-{k}.png", k % 3) for k in range(8)]
+    win = make_window()
+    win.new_character("Strip", heads, eyes, many)
+    win.doc.select(part="mouth", drawing=0)
+    win.doc.add_line("mouth", 0, [5, 5, 40, 20])  # now missing in the seven others
+    for width in (1100, 560, 300):
+        win.strip.resize(width, 120)
+        for line in (-1, 0):
+            win.doc.select(line=line)
+            caps = win.strip.captions()
+            assert len(caps) == 8
+            fm = win.strip.fontMetrics()
+            for (text, box), (_, nxt) in zip(caps, caps[1:]):
+                assert box.right() <= nxt.left()  # neighbouring cells do not overlap
+            for text, box in caps:
+                assert fm.horizontalAdvance(text) <= box.width() + 0.5, (width, text)
+            missing = [t for t, _ in caps[1:]]
+            assert len({"to place" in t for t in missing}) == 1  # every caption says it the same way
+            if width >= 1100:
+                assert all(("to place" in t) or ("·" in t) for t in missing), missing
+    win.strip.resize(1100, 120)
+    win.strip.repaint()
+
+
+def test_empty_canvases_read_right(make_window, images, tmp_path):
+    heads, _eyes_, mouths = images
+    win = make_window()
+    text = win.line_canvas.empty_text()
+    assert text.startswith("No character open.") and "No a " not in text
+    win.new_character("No eyes", heads, [], mouths)
+    win.doc.select(part="eyes")
+    assert win.line_canvas.empty_text().startswith("No eye drawings yet.")
+    assert "Add ▸ Eye drawings" in win.line_canvas.empty_text()
+    win.line_canvas.repaint()

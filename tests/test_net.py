@@ -244,7 +244,27 @@ def test_fuzzed_datagrams_never_raise_and_are_all_counted(datagrams, senders):
         rx.update_rates()
     s = rx.stats
     assert s.datagrams == len(datagrams)
-    assert s.frames + s.hellos + s.malformed + s.foreign + s.duplicates + s.late + s.waiting == s.datagrams
+    assert s.frames + s.hellos + s.malformed + s.foreign + s.duplicates + s.late + s.waiting + s.anomalies == s.datagrams
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(st.binary(max_size=80), _mutations(_ALL)))
+def test_packet_parsers_give_their_own_error_or_a_valid_object(data):
+    from tracker.params import PACKET_SIZE, Packet, PacketError, decode_packet
+    from tracker.stream_codec import StreamError, StreamPacket, decode_stream_packet
+
+    for parse, error, kind in ((decode_packet, PacketError, Packet), (decode_stream_packet, StreamError, StreamPacket),
+                               (Hello.decode, PacketError, Hello)):  # fmt: skip
+        try:
+            got = parse(data)
+        except error as e:
+            assert str(e) and "\n" not in str(e)
+            continue
+        assert isinstance(got, kind)
+        if kind is Hello:
+            assert got.frame_size[0] > 0 and got.ipd > 0 and np.isfinite(got.ipd) and got.fps > 0
+        elif kind is Packet:
+            assert len(data) == PACKET_SIZE and len(got.payload) == 10
 
 
 @settings(max_examples=100, deadline=None)
@@ -265,7 +285,7 @@ def test_any_arrival_order_decodes_only_exact_frames(order, drop, dup, compress)
             seen.add(f.frame)
     s = rx.stats
     assert s.frames == len(seen)
-    assert s.frames + s.duplicates + s.late + s.waiting == s.datagrams - 1
+    assert s.frames + s.duplicates + s.late + s.waiting + s.anomalies == s.datagrams - 1
 
 
 def test_hello_round_trip_and_size():

@@ -4,6 +4,8 @@
   synthetic performer clip, its exact ten parameters per frame and ``CLIP.clicks.json``.
 * ``track VIDEO (--init CLICKS.json | --auto) --csv OUT.csv`` tracks a video (``tracker.track_cli``).
 
+Neither replaces an existing file unless given ``--force``, nor ever writes over its inputs.
+
 Expected problems print one line ``inkface: <message>`` to stderr and exit with code 2.
 """
 
@@ -69,16 +71,19 @@ def _add_synth(sub) -> None:
     p.add_argument("--away-mode", choices=("vanish", "slide"), default="vanish",
                    help="how the face goes: vanish, or slide out of the frame and back (default vanish)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.add_argument("--force", action="store_true", help="replace the clip, truth or clicks file if they exist")
     p.set_defaults(run=_run_synth)
 
 
 def _run_synth(args) -> int:
+    from tracker.outputs import check_outputs
     from tracker.synthetic import STYLES, Performance
 
     out = Path(args.out)
     truth = Path(args.truth) if args.truth else out.with_name(out.stem + ".truth.csv")
     if args.seconds > 3600:
         raise _Fail(f"--seconds {args.seconds:g}: at most 3600")
+    check_outputs(files=[out, truth, out.with_name(out.stem + ".clicks.json")], force=args.force)
     still = dict(roll_amplitude=0.0, drift=0.0, scale_amplitude=0.0) if args.still else {}
     if args.roll is not None and not args.still:
         still["roll_amplitude"] = args.roll
@@ -159,18 +164,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from tracker.outputs import OutputError
+    from tracker.params import TrackFormatError
     from tracker.sources import SourceError
     from tracker.synthetic import SynthError
-    from tracker.params import TrackFormatError
 
     args = build_parser().parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (_Fail, SourceError, SynthError, TrackFormatError) as e:
+    except (_Fail, SourceError, SynthError, TrackFormatError, OutputError) as e:
         print(f"inkface: {e}", file=sys.stderr)
         return 2
     except OSError as e:
-        name = f"{e.filename}: " if getattr(e, "filename", None) else ""
+        name = f"{str(e.filename)[:80]}: " if getattr(e, "filename", None) else ""
         print(f"inkface: {name}{e.strerror or e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

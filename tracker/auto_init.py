@@ -1,16 +1,17 @@
-"""Automatic start: find the face, eyes and mouth with OpenCV's bundled Haar cascades.
+"""Automatic start: the five clicks a careful person would make, found by machine.
 
-The result is the same five clicks a person would give (:class:`~tracker.clicks.Clicks`),
-so calibration does not care where they came from. Steps:
+The result is a :class:`~tracker.clicks.Clicks`, so calibration does not care where it came
+from. Steps, each using only what every face has:
 
-1. faces from the frontal-face cascades (several variants, on the plain and on a
-   contrast-equalised grey image); each candidate face is checked by the eye cascade in
-   its upper half;
-2. pupils: the darkest pupil-sized disc inside each eye box (or where the face box puts the
-   eyes when the eye cascade misses one), snapped as in calibration;
-3. brows: the darkest band above each pupil;
-4. mouth: the smile cascade in the lower third of the face, then the reddest blob there
-   (lips are redder than the skin around them, whatever the skin's colour).
+1. the face: OpenCV's bundled frontal-face cascade (:func:`tracker.face_finder.detect_faces`);
+   the largest face wins;
+2. pupils: the detector's box says roughly where the eyes are (about 5 % of the inter-pupil
+   distance off on real faces); near there, each iris is the dark disc with the brighter
+   white of the eye on both sides (:func:`iris_centre`);
+3. brows: the darkest band on the column above each pupil;
+4. mouth: the darkest line across the lower face, a little more than one inter-pupil
+   distance below the eyes — the gap between closed lips or the inside of an open mouth
+   (the nostrils sit higher, the chin's shadow lower).
 
 The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 (``cv2.data.haarcascades``); nothing is downloaded.
@@ -18,209 +19,133 @@ The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 
 from __future__ import annotations
 
-import functools
 import math
-from pathlib import Path
 
 import cv2
 import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import Clicks
+from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
+
+IRIS_RADIUS = 0.09
+"""Iris radius as a fraction of the inter-pupil distance (about 5.8 mm of 63 mm)."""
+BROW_RANGE = (0.2, 0.75)
+"""Where brows are looked for above the pupils, in inter-pupil distances."""
+MOUTH_RANGE = (0.9, 1.6)
+"""Where the mouth's dark line is looked for below the eye line, in inter-pupil distances."""
 
 
 class AutoInitError(RuntimeError):
     """The detectors found no usable face (one-line message)."""
 
 
-@functools.lru_cache(maxsize=None)
-def _cascade(name: str) -> cv2.CascadeClassifier:
-    base = getattr(getattr(cv2, "data", None), "haarcascades", None)
-    if not base:
-        raise AutoInitError("this OpenCV build ships no Haar cascades (use --init CLICKS.json instead)")
-    path = Path(base) / name
-    c = cv2.CascadeClassifier(str(path))
-    if c.empty():
-        raise AutoInitError(f"cannot load the cascade {path} (use --init CLICKS.json instead)")
-    return c
+def iris_centre(grey: np.ndarray, prior: tuple[float, float], ipd: float, reach: tuple[float, float] = (0.15, 0.1)) -> tuple[tuple[float, float], float]:
+    """The iris nearest ``prior`` (frame px) and its contrast (grey levels).
 
-
-def _faces(grey: np.ndarray) -> list[tuple[int, int, int, int]]:
+    Score of a place: the mean of two small boxes left and right of an iris-sized disc there
+    (the white of the eye) minus the mean of the disc — high on an iris, low on brows, lashes
+    and shadows, which are dark but have no white beside them. ``reach`` is the search
+    half-width across and along the face, in inter-pupil distances.
+    """
+    r = max(IRIS_RADIUS * ipd, 2.0)
+    rx, ry = max(reach[0] * ipd, 1.0), max(reach[1] * ipd, 1.0)
+    pad = int(math.ceil(max(rx, ry) + 2.2 * r)) + 2
     h, w = grey.shape
-    min_side = max(24, int(0.08 * min(w, h)))
-    eq = cv2.equalizeHist(grey)
-    out: list[tuple[int, int, int, int]] = []
-    for name in ("haarcascade_frontalface_alt2.xml", "haarcascade_frontalface_default.xml", "haarcascade_frontalface_alt.xml"):
-        for img in (grey, eq):
-            for r in _cascade(name).detectMultiScale(img, 1.1, 3, minSize=(min_side, min_side)):
-                out.append(tuple(int(v) for v in r))
-    # merge near-duplicates
-    merged: list[tuple[int, int, int, int]] = []
-    for r in sorted(out, key=lambda r: -r[2] * r[3]):
-        cx, cy = r[0] + r[2] / 2, r[1] + r[3] / 2
-        if not any(abs(cx - (m[0] + m[2] / 2)) < 0.3 * m[2] and abs(cy - (m[1] + m[3] / 2)) < 0.3 * m[3] for m in merged):
-            merged.append(r)
-    return merged
-
-
-def _dark_disc(grey: np.ndarray, box: tuple[int, int, int, int], radius: float) -> tuple[float, float, float]:
-    """Centre of the pupil-like spot in ``box`` (frame px): a dark disc of ``radius`` px with a
-    lighter ring around it (so an eyebrow, dark but long, loses to a pupil in its white)."""
-    x, y, w, h = box
-    H, W = grey.shape
-    pad = int(math.ceil(2.5 * radius)) + 1
-    x0, y0, x1, y1 = max(x - pad, 0), max(y - pad, 0), min(x + w + pad, W), min(y + h + pad, H)
+    xi, yi = int(round(prior[0])), int(round(prior[1]))
+    x0, x1 = max(xi - pad, 0), min(xi + pad + 1, w)
+    y0, y1 = max(yi - pad, 0), min(yi + pad + 1, h)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return (float(prior[0]), float(prior[1])), 0.0
     win = grey[y0:y1, x0:x1].astype(np.float32)
-    k = max(int(round(2 * radius)) | 1, 3)
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)).astype(np.float32)
-    kr = max(int(round(4.4 * radius)) | 1, k + 2)
-    ring = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kr, kr)).astype(np.float32)
-    o = (kr - k) // 2
-    ring[o : o + k, o : o + k] -= disc
-    ring = np.clip(ring, 0, None)
-    dmean = cv2.filter2D(win, -1, disc / disc.sum(), borderType=cv2.BORDER_REPLICATE)
-    rmean = cv2.filter2D(win, -1, ring / ring.sum(), borderType=cv2.BORDER_REPLICATE)
-    score = rmean - dmean
-    # only centres inside the box itself
-    inner = np.full_like(score, -np.inf)
-    bx0, by0 = max(x, 0) - x0, max(y, 0) - y0
-    inner[by0 : by0 + h, bx0 : bx0 + w] = score[by0 : by0 + h, bx0 : bx0 + w]
-    j, i = np.unravel_index(int(np.argmax(inner)), inner.shape)
-    return float(x0 + i), float(y0 + j), float(dmean[j, i])
-
-
-def _eyes(grey: np.ndarray, face: tuple[int, int, int, int]) -> tuple[list[tuple[float, float]], int]:
-    """Two pupils (image-left first) for a face box and how many the eye cascade confirmed."""
-    x, y, w, h = face
-    upper = grey[y : y + int(0.6 * h), x : x + w]
-    found = _cascade("haarcascade_eye.xml").detectMultiScale(upper, 1.1, 3, minSize=(max(8, w // 10), max(8, w // 10)))
-    boxes = {"l": None, "r": None}
-    for ex, ey, ew, eh in sorted(found, key=lambda r: -r[2] * r[3]):
-        cx = ex + ew / 2
-        side = "l" if cx < w / 2 else "r"
-        if boxes[side] is None and 0.1 * h < ey + eh / 2 < 0.6 * h:
-            boxes[side] = (x + ex, y + ey, ew, eh)
-    confirmed = sum(b is not None for b in boxes.values())
-    radius = max(0.02 * w, 1.5)
-    pupils = []
-    for side, fx in (("l", 0.3), ("r", 0.7)):
-        b = boxes[side]
-        if b is None:  # where a frontal face box usually has its eyes
-            b = (int(x + (fx - 0.13) * w), int(y + 0.25 * h), int(0.26 * w), int(0.22 * h))
-        else:  # the cascade's box includes the brow; the pupil sits in its lower two thirds
-            b = (b[0] + b[2] // 6, b[1] + b[3] // 4, b[2] * 2 // 3, b[3] * 2 // 3)
-        px, py, _ = _dark_disc(grey, b, radius)
-        pupils.append((px, py))
-    return pupils, confirmed
-
-
-def _ring_contrast(grey: np.ndarray, p: tuple[float, float], r: float) -> float:
-    """Median grey of the ring 2r..4r around ``p`` minus the mean inside radius r."""
-    H, W = grey.shape
-    R = int(math.ceil(4 * r)) + 1
-    x0, x1 = max(int(p[0]) - R, 0), min(int(p[0]) + R + 1, W)
-    y0, y1 = max(int(p[1]) - R, 0), min(int(p[1]) + R + 1, H)
-    win = grey[y0:y1, x0:x1].astype(np.float32)
+    kd = int(round(1.6 * r)) | 1
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kd, kd)).astype(np.float32)
+    disc /= disc.sum()
+    bw = max(int(round(0.5 * r)), 1)
+    bh = max(int(round(0.8 * r)), 1) | 1
+    off = int(round(1.35 * r))
+    side = np.zeros((bh, 2 * off + bw), np.float32)
+    side[:, :bw] = 1.0
+    side[:, -bw:] = 1.0
+    side /= side.sum()
+    score = cv2.filter2D(win, -1, side, borderType=cv2.BORDER_REPLICATE) - cv2.filter2D(win, -1, disc, borderType=cv2.BORDER_REPLICATE)
     yy, xx = np.mgrid[y0:y1, x0:x1]
-    d = np.hypot(xx - p[0], yy - p[1])
-    inner, ring = win[d <= r], win[(d >= 2 * r) & (d <= 4 * r)]
-    if not len(inner) or not len(ring):
-        return 0.0
-    return float(np.median(ring) - inner.mean())
+    inside = ((xx - prior[0]) / rx) ** 2 + ((yy - prior[1]) / ry) ** 2 <= 1.0
+    masked = np.where(inside, score, -np.inf)
+    j, i = np.unravel_index(int(np.argmax(masked)), masked.shape)
+    return (float(x0 + i), float(y0 + j)), float(score[j, i])
+
+
+def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.ndarray, n: int, half: int) -> np.ndarray:
+    """Mean grey of ``n`` samples (1 px apart) from ``origin`` along ``along``, each averaged over
+    ``±half`` px along ``across``."""
+    ts = np.arange(n, dtype=np.float32).reshape(-1, 1)
+    offs = np.arange(-half, half + 1, dtype=np.float32).reshape(1, -1)
+    mx = (origin[0] + ts * along[0] + offs * across[0]).astype(np.float32)
+    my = (origin[1] + ts * along[1] + offs * across[1]).astype(np.float32)
+    return cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).mean(axis=1)
 
 
 def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray) -> tuple[float, float]:
-    """The darkest band's middle above a pupil (searching 0.2–0.75 ipd along ``up``)."""
-    # sample the upright profile (rows above the pupil in an upright frame)
-    n = int(round(0.8 * ipd))
-    ts = np.arange(n, dtype=np.float32)
-    xs = (pupil[0] + ts * up[0]).astype(np.float32).reshape(-1, 1)
-    ys = (pupil[1] + ts * up[1]).astype(np.float32).reshape(-1, 1)
-    offs = np.arange(-2, 3, dtype=np.float32).reshape(1, -1)
-    side = np.array([-up[1], up[0]], dtype=np.float32)
-    mx = xs + offs * side[0]
-    my = ys + offs * side[1]
-    prof = cv2.remap(grey.astype(np.float32), mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).mean(axis=1)
-    lo, hi = int(0.2 * ipd), int(0.75 * ipd)
+    """The middle of the darkest band above a pupil, along ``up``."""
+    n = int(round(BROW_RANGE[1] * ipd)) + 2
+    side = np.array([-up[1], up[0]])
+    prof = _strip(grey, np.asarray(pupil, dtype=np.float64), up, side, n, max(int(0.12 * ipd), 1))
+    lo, hi = int(BROW_RANGE[0] * ipd), int(BROW_RANGE[1] * ipd)
     seg = prof[lo:hi]
     if len(seg) < 3:
         raise AutoInitError("the face is too small to find its eyebrows")
-    # the profile runs upwards from the pupil: index = distance above it
-    d = brow_centre(prof, lo + int(np.argmin(seg)), max(int(0.08 * ipd), 2))
+    # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
+    d = min(max(brow_centre(prof, lo + int(np.argmin(seg)), max(int(0.05 * ipd), 2)), lo), hi)
     return (float(pupil[0] + d * up[0]), float(pupil[1] + d * up[1]))
 
 
-def _mouth(frame: np.ndarray, pupils: list[tuple[float, float]], face: tuple[int, int, int, int]) -> tuple[float, float]:
-    """Mouth centre: smile cascade (if it fires) to narrow the area, then the reddest blob."""
-    (lx, ly), (rx, ry) = pupils
-    ipd = math.hypot(rx - lx, ry - ly)
-    ux, uy = (rx - lx) / ipd, (ry - ly) / ipd
-    dx, dy = -uy, ux  # face down
-    mid = ((lx + rx) / 2, (ly + ry) / 2)
-    guess = (mid[0] + 1.0 * ipd * dx, mid[1] + 1.0 * ipd * dy)
-    H, W = frame.shape[:2]
-    x, y, w, h = face
-    lower = cv2.cvtColor(frame[y + h // 2 : y + h, x : x + w], cv2.COLOR_BGR2GRAY)
-    smiles = _cascade("haarcascade_smile.xml").detectMultiScale(lower, 1.1, 8, minSize=(max(8, w // 6), max(6, h // 12)))
-    if len(smiles):
-        sx, sy, sw, sh = max(smiles, key=lambda r: r[2] * r[3])
-        c = (x + sx + sw / 2, y + h // 2 + sy + sh / 2)
-        if math.hypot(c[0] - guess[0], c[1] - guess[1]) < 0.5 * ipd:
-            guess = c
-    # redness (YCrCb Cr relative to the surroundings) in a box around the guess
-    hw, hh = int(0.55 * ipd), int(0.35 * ipd)
-    x0, x1 = max(int(guess[0]) - hw, 0), min(int(guess[0]) + hw + 1, W)
-    y0, y1 = max(int(guess[1]) - hh, 0), min(int(guess[1]) + hh + 1, H)
-    if x1 - x0 < 4 or y1 - y0 < 4:
-        raise AutoInitError("the mouth lies outside the frame")
-    cr = cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2YCrCb)[..., 1].astype(np.float32)
-    cr = cv2.GaussianBlur(cr, (3, 3), 0)
-    base = float(np.median(cr))
-    top = float(np.percentile(cr, 99))
-    if top - base < 4:
-        return guess
-    mask = (cr > base + 0.5 * (top - base)).astype(np.uint8)
-    n, lab, stats, cents = cv2.connectedComponentsWithStats(mask, connectivity=4)
-    if n <= 1:
-        return guess
-    j = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    return (float(x0 + cents[j][0]), float(y0 + cents[j][1]))
+def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> tuple[float, float]:
+    """The mouth's centre: the darkest line across the face in :data:`MOUTH_RANGE` below the eyes."""
+    ipd = math.dist(left, right)
+    u = (right - left) / ipd
+    down = np.array([-u[1], u[0]])
+    mid = 0.5 * (left + right)
+    start = mid + MOUTH_RANGE[0] * ipd * down
+    n = int(round((MOUTH_RANGE[1] - MOUTH_RANGE[0]) * ipd))
+    if n < 3:
+        raise AutoInitError("the face is too small to find its mouth")
+    prof = _strip(grey, start, down, u, n, max(int(0.2 * ipd), 1))
+    prof = cv2.GaussianBlur(prof.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
+    k = int(np.argmin(prof))
+    return (float(start[0] + k * down[0]), float(start[1] + k * down[1]))
+
+
+def _face_cascade_check() -> None:
+    if face_cascade() is None:
+        raise AutoInitError("this OpenCV build ships no Haar cascades (use --init CLICKS.json instead)")
 
 
 def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
-    """The five clicks for the most plausible face in ``frame_bgr``; raises :class:`AutoInitError`."""
+    """The five clicks for the largest face in ``frame_bgr``; raises :class:`AutoInitError`."""
     if not (isinstance(frame_bgr, np.ndarray) and frame_bgr.ndim == 3 and frame_bgr.shape[2] == 3):
         raise AutoInitError("auto init needs a BGR (H, W, 3) frame")
-    grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
-    faces = _faces(grey)
+    _face_cascade_check()
+    faces = detect_faces(frame_bgr, None)
     if not faces:
-        raise AutoInitError("no face found by the bundled face detectors (use --init CLICKS.json instead)")
-    best = None
-    for face in faces[:6]:
-        pupils, confirmed = _eyes(grey, face)
-        (lx, ly), (rx, ry) = pupils
-        ipd = math.hypot(rx - lx, ry - ly)
-        if not (0.2 * face[2] < ipd < 0.7 * face[2]) or abs(ry - ly) > 0.5 * ipd:
-            continue
-        # a real pupil is a dark disc with lighter eye and skin around it
-        contrast = min(_ring_contrast(grey, p, max(0.045 * ipd, 1.5)) for p in pupils)
-        if contrast < 15:
-            continue
-        key = (confirmed + min(contrast / 40.0, 2.0), face[2] * face[3])
-        if best is None or key > best[0]:
-            best = (key, face, pupils)
-    if best is None:
-        raise AutoInitError("a face was detected but no pair of eyes in it (use --init CLICKS.json instead)")
-    _, face, pupils = best
-    (lx, ly), (rx, ry) = pupils
-    ipd = math.hypot(rx - lx, ry - ly)
-    up = np.array([(ry - ly) / ipd, -(rx - lx) / ipd])
-    brows = [_brow(grey, p, ipd, up) for p in pupils]
-    mouth = _mouth(frame_bgr, pupils, face)
+        raise AutoInitError("no face found by the bundled face detector (use --init CLICKS.json instead)")
+    grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    face = faces[0]
+    prior = eyes_in_box(face)
+    ipd0 = math.dist(prior[0], prior[1])
+    (lp, cl), (rp, cr) = iris_centre(grey, tuple(prior[0]), ipd0), iris_centre(grey, tuple(prior[1]), ipd0)
+    left, right = np.array(lp), np.array(rp)
+    ipd = math.dist(lp, rp)
+    if min(cl, cr) <= 0 or not (0.75 * ipd0 < ipd < 1.3 * ipd0) or abs(right[1] - left[1]) > 0.25 * ipd:
+        left, right = prior[0], prior[1]  # no clear irises (shut, dark or glinting eyes): the box's guess
+        ipd = ipd0
+    up = np.array([(right[1] - left[1]) / ipd, -(right[0] - left[0]) / ipd])
+    brows = [_brow(grey, tuple(p), ipd, up) for p in (left, right)]
+    mouth = _mouth(grey, left, right)
     d = {
         "frame": int(frame_index),
-        "left_pupil": list(pupils[0]),
-        "right_pupil": list(pupils[1]),
+        "left_pupil": [float(left[0]), float(left[1])],
+        "right_pupil": [float(right[0]), float(right[1])],
         "left_brow": list(brows[0]),
         "right_brow": list(brows[1]),
         "mouth": list(mouth),

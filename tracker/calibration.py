@@ -28,7 +28,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tracker import atomic_file
+from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
@@ -40,6 +40,8 @@ CLASSIFIERS = ("pupil", "lip", "eye")
 """Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
+SNAP_REACH = 0.05
+"""Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
 
 
 class CalibrationError(ValueError):
@@ -156,6 +158,11 @@ class Calibration:
     iris_level: float | None = None
     eye_ref: tuple[float, float, float] | None = None
     mouth_ref: tuple[float, float, float] | None = None
+    face_patch: np.ndarray | None = None
+    """The upright grey face picture (brows, eyes, nose; :func:`tracker.face_finder.face_patch`)
+    that tells this face from anything else; None in files from before it existed."""
+    face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
+    """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -187,102 +194,91 @@ class Calibration:
             "iris_level": self.iris_level,
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
+            "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
+            "face_box_eyes_flat": [float(v) for p in self.face_box_eyes for v in p] if self.face_box_eyes is not None else None,
         }
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write ``path`` (JSON) and, beside it, ``<stem>.eye_l.png`` / ``<stem>.eye_r.png`` and
-        ``<stem>.colour_tables.png``, each atomically (the JSON last)."""
+        """Write ``path`` (JSON) and, beside it, the two eye pictures and the colour tables as
+        PNGs (``<stem>.eye_l.png`` …), as one :class:`~tracker.atomic_file.Generation`: a crash
+        at any moment leaves the previous calibration or this one, never a mix."""
         path = Path(path)
         d = self.to_dict(path.stem)
+        gen = atomic_file.Generation(path.parent, path.name, files_named_by(path))
+        names = []
         for name, t in zip(d["eye_templates"], self.eye_templates):
             ok, buf = cv2.imencode(".png", np.clip(np.rint(t), 0, 255).astype(np.uint8))
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the eye picture")
-            atomic_file.write_bytes(path.parent / name, buf.tobytes())
+            names.append(gen.put(name, buf.tobytes()))
+        d["eye_templates"] = names
         tiles = np.concatenate([table_to_tile(getattr(self, c).table) for c in CLASSIFIERS])
         ok, buf = cv2.imencode(".png", tiles, [cv2.IMWRITE_PNG_COMPRESSION, 1])
         if not ok:
             raise CalibrationError(f"{path}: could not encode the colour tables")
-        atomic_file.write_bytes(path.parent / d["colour_tables"]["image"], buf.tobytes())
-        atomic_file.write_text(path, json.dumps(d, indent=1) + "\n")
-
-    @staticmethod
-    def _load_tables(path: Path, d: dict) -> dict[str, np.ndarray]:
-        """The baked colour tables named by a format-2 file (empty for format 1)."""
-        spec = d.get("colour_tables")
-        if d["format"] < 2 or spec is None:
-            return {}
-        name = spec["image"]
-        if not isinstance(name, str) or Path(name).name != name:
-            raise CalibrationError(f"{path}: colour table image {name!r} must sit beside the calibration")
-        order = list(spec["order"])
-        p = path.parent / name
-        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-        th, tw = TILE_SHAPE
-        if img is None or img.dtype != np.uint8 or img.shape != (th * len(order), tw):
-            raise CalibrationError(f"{p}: missing or unreadable colour tables (need {tw}×{th * len(order)} 8-bit grey)")
-        return {c: tile_to_table(img[i * th : (i + 1) * th]) for i, c in enumerate(order)}
+        d["colour_tables"]["image"] = gen.put(d["colour_tables"]["image"], buf.tobytes())
+        if self.face_patch is not None:
+            ok, buf = cv2.imencode(".png", np.clip(np.rint(self.face_patch), 0, 255).astype(np.uint8))
+            if not ok:
+                raise CalibrationError(f"{path}: could not encode the face picture")
+            d["face_patch"] = gen.put(d["face_patch"], buf.tobytes())
+        gen.commit((json.dumps(d, indent=1) + "\n").encode("utf-8"))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "Calibration":
         """Read a calibration written by :meth:`save`; :class:`CalibrationError` names the file."""
         path = Path(path)
-        try:
-            d = json.loads(path.read_text())
-        except OSError as e:
-            raise CalibrationError(f"{path}: cannot read calibration ({e.strerror or e})") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise CalibrationError(f"{path}: not valid JSON ({e})") from None
-        if not isinstance(d, dict) or d.get("format") not in READABLE_FORMATS:
+        atomic_file.sweep_temp(path.parent)
+        d = safe_json.read(path, "calibration", max_bytes=MAX_FILE_BYTES, allow_nan=True, error=CalibrationError)
+        r = _Fields(path, d)
+        fmt = d.get("format") if isinstance(d, dict) else None
+        if isinstance(fmt, bool) or fmt not in READABLE_FORMATS:
             raise CalibrationError(
                 f"{path}: not an Inkface calibration of format {' or '.join(map(str, READABLE_FORMATS))}"
             )
+        tables = _load_tables(path, d, r)
+        temps = [_load_picture(path, name) for name in r.names("eye_templates", 2)]
+        face_patch = None
+        if d.get("face_patch") is not None:
+            face_patch = _load_picture(path, d["face_patch"], "face picture")
+        box_eyes = r.optional_numbers("face_box_eyes_flat", 4)
         try:
-            tables = cls._load_tables(path, d)
-            temps = []
-            for name in d["eye_templates"]:
-                p = path.parent / name
-                if Path(name).name != name:
-                    raise CalibrationError(f"{path}: eye picture {name!r} must sit beside the calibration")
-                img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-                if img is None:
-                    raise CalibrationError(f"{p}: missing or unreadable eye picture")
-                temps.append(img.astype(np.float32))
-            neutral_d = dict(d["neutral"])
-            cal = cls(
-                frame_size=(int(d["frame_size"][0]), int(d["frame_size"][1])),
-                ipd=float(d["ipd"]),
-                roll_deg=float(d["roll_deg"]),
-                work_ipd=float(d["work_ipd"]),
-                clicks=Clicks.from_dict(d["clicks"], where=str(path)),
-                eye_templates=temps,
-                brow_profiles=[np.asarray(p, dtype=np.float32) for p in d["brow_profiles"]],
-                brow_centres=[float(v) for v in d["brow_centres"]],
-                brow_heights=[float(v) for v in d["brow_heights"]],
-                lid_up=[float(v) for v in d["lid_up"]],
-                lid_down=[float(v) for v in d["lid_down"]],
-                mouth_offset=(float(d["mouth_offset"][0]), float(d["mouth_offset"][1])),
-                mouth_width=float(d["mouth_width"]),
-                mouth_height=float(d["mouth_height"]),
-                mouth_area=float(d["mouth_area"]),
-                pupil_radius=float(d["pupil_radius"]),
-                pupil_threshold=float(d["pupil_threshold"]),
-                pupil=ColourClassifier.from_dict(d["classifiers"]["pupil"], tables.get("pupil")),
-                lip=ColourClassifier.from_dict(d["classifiers"]["lip"], tables.get("lip")),
-                eye=ColourClassifier.from_dict(d["classifiers"]["eye"], tables.get("eye")),
-                lip_axis=np.asarray(d["lip_axis"], dtype=np.float64).reshape(3),
-                neutral=FaceParams(**neutral_d),
-                white_threshold=float(d["white_threshold"]) if d.get("white_threshold") is not None else None,
-                iris_level=float(d["iris_level"]) if d.get("iris_level") is not None else None,
-                eye_ref=tuple(float(v) for v in d["eye_ref"]) if d.get("eye_ref") is not None else None,
-                mouth_ref=tuple(float(v) for v in d["mouth_ref"]) if d.get("mouth_ref") is not None else None,
-            )
-        except CalibrationError:
-            raise
+            clicks = Clicks.from_dict(r.get("clicks", dict), where=f"{path}: clicks")
         except ClicksError as e:
             raise CalibrationError(str(e)) from None
-        except (KeyError, TypeError, ValueError, IndexError) as e:
-            raise CalibrationError(f"{path}: malformed calibration ({type(e).__name__}: {e})") from None
+        classifiers = r.get("classifiers", dict)
+        models = {c: _classifier(path, classifiers.get(c), c, tables.get(c)) for c in CLASSIFIERS}
+        neutral = r.get("neutral", dict)
+        cal = cls(
+            frame_size=tuple(int(v) for v in r.numbers("frame_size", 2, 1, 100_000, whole=True)),
+            ipd=r.number("ipd", 0.5, 1e5),
+            roll_deg=r.number("roll_deg", -360.0, 360.0),
+            work_ipd=r.number("work_ipd", 0.5, 1e5),
+            clicks=clicks,
+            eye_templates=temps,
+            brow_profiles=[np.asarray(p, dtype=np.float32) for p in r.profiles("brow_profiles")],
+            brow_centres=list(r.numbers("brow_centres", 2)),
+            brow_heights=list(r.numbers("brow_heights", 2)),
+            lid_up=list(r.numbers("lid_up", 2, nan_ok=True)),
+            lid_down=list(r.numbers("lid_down", 2, nan_ok=True)),
+            mouth_offset=r.numbers("mouth_offset", 2),
+            mouth_width=r.number("mouth_width", 0.0),
+            mouth_height=r.number("mouth_height", 0.0),
+            mouth_area=r.number("mouth_area", 0.0),
+            pupil_radius=r.number("pupil_radius", 0.0),
+            pupil_threshold=r.number("pupil_threshold"),
+            pupil=models["pupil"],
+            lip=models["lip"],
+            eye=models["eye"],
+            lip_axis=np.asarray(r.numbers("lip_axis", 3), dtype=np.float64),
+            neutral=_face_params(path, neutral),
+            white_threshold=r.optional_number("white_threshold"),
+            iris_level=r.optional_number("iris_level"),
+            eye_ref=r.optional_numbers("eye_ref", 3),
+            mouth_ref=r.optional_numbers("mouth_ref", 3),
+            face_patch=face_patch,
+            face_box_eyes=None if box_eyes is None else ((box_eyes[0], box_eyes[1]), (box_eyes[2], box_eyes[3])),
+        )
         return cal
 
 
@@ -391,9 +387,12 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     ipd0 = clicks.ipd()
     lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
     rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    # a careful click is trusted over a snap that wandered (onto lashes, a lid crease, make-up)
+    if math.dist(lp, clicks.left_pupil) > SNAP_REACH * ipd0:
+        lp = clicks.left_pupil
+    if math.dist(rp, clicks.right_pupil) > SNAP_REACH * ipd0:
+        rp = clicks.right_pupil
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
-    if not (0.7 * ipd0 < ipd < 1.3 * ipd0):
-        lp, rp, ipd = clicks.left_pupil, clicks.right_pupil, ipd0
     work_ipd = min(ipd, WORK_IPD_MAX)
     ff = FaceFrame.from_pupils(lp, rp, work_ipd)
     k = ff.scale
@@ -402,10 +401,17 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     # one generous crop of the whole face in the face frame
     mouth_f = ff.to_face(np.array([clicks.mouth]))[0]
     brows_f = ff.to_face(np.array([clicks.left_brow, clicks.right_brow]))
-    if not (mouth_f[1] > 0.2 * wi):
-        raise CalibrationError(f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the pupils")
-    if not all(b[1] < -0.05 * wi for b in brows_f):
+    # generous bounds on a face's proportions (real faces: mouth 1.0–1.4 ipd below the eyes,
+    # brows 0.2–0.55 above): clicks outside them are not on one face
+    if not (0.55 * wi < mouth_f[1] < 2.2 * wi and abs(mouth_f[0]) < 0.5 * wi):
+        raise CalibrationError(
+            f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the middle of the eyes, "
+            "about one eye distance down"
+        )
+    if not all(-1.0 * wi < b[1] < -0.05 * wi for b in brows_f):
         raise CalibrationError("clicks: the brows must be above the pupils")
+    if not all(abs(b[0] - px) < 0.6 * wi for b, px in zip(brows_f, (-0.5 * wi, 0.5 * wi))):
+        raise CalibrationError("clicks: each brow must be above its own eye")
     ox, oy = -1.3 * wi, min(brows_f[:, 1].min(), 0) - 0.6 * wi
     cw = int(round(2.6 * wi))
     ch = int(round(mouth_f[1] + 0.9 * wi - oy))
@@ -550,8 +556,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         white_threshold=white_threshold,
         iris_level=iris_level,
     )
-    # lids and the neutral values: measure the calibration frame the way the tracker will
+    # the face as a whole, to tell it from anything else and to find it again
+    from tracker.face_finder import face_patch, learn_eyes_in_box
     from tracker.face_tracker import FaceTracker
+    from tracker.head_motion import HeadMotion
+
+    hm = HeadMotion()
+    hm.set_scale(ipd)
+    pupil_px = np.array([lp, rp], dtype=np.float64)
+    # stored as 8-bit grey: round now, so a loaded calibration tracks exactly like this one
+    cal.face_patch = np.clip(np.rint(face_patch(hm.grey(frame_bgr), hm.scale, pupil_px)), 0, 255).astype(np.float32)
+    cal.face_box_eyes = learn_eyes_in_box(frame_bgr, pupil_px)
+    # lids and the neutral values: measure the calibration frame the way the tracker will
 
     tr = FaceTracker(cal)
     r = tr.track(frame_bgr, index=clicks.frame)
@@ -560,3 +576,189 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     cal.neutral = r.params.replace(status="ok")
     cal.eye_ref, cal.mouth_ref = tr.colour_refs()
     return cal
+
+
+# ---------------------------------------------------------------------------------------------
+# reading a calibration file: every value checked (types exact, finite, in range)
+
+MAX_FILE_BYTES = 8 * 1024 * 1024
+MAX_PROFILE = 4096
+"""Longest brow profile (samples) a calibration file may hold."""
+
+
+def files_named_by(path: Path) -> list[str]:
+    """The picture files the calibration at ``path`` names now (none if it is missing or unreadable)."""
+    try:
+        d = safe_json.read(path, "calibration", max_bytes=MAX_FILE_BYTES, allow_nan=True, error=CalibrationError)
+    except CalibrationError:
+        return []
+    if not isinstance(d, dict):
+        return []
+    names = list(d.get("eye_templates") or []) if isinstance(d.get("eye_templates"), list) else []
+    spec = d.get("colour_tables")
+    if isinstance(spec, dict):
+        names.append(spec.get("image"))
+    names.append(d.get("face_patch"))
+    return [n for n in names if isinstance(n, str) and _plain_name(n)]
+
+
+def _plain_name(name: str) -> bool:
+    """A file name with no folder part, which :func:`atomic_file.inside` accepts."""
+    return bool(name) and "/" not in name and name not in (".", "..") and atomic_file.inside(".", name) is not None
+
+
+class _Fields:
+    """Typed access to the top-level keys of a calibration dictionary; errors name ``path``."""
+
+    def __init__(self, path: Path, d):
+        self.path = path
+        self.d = safe_json.mapping(d, f"{path}: the calibration", CalibrationError)
+
+    def where(self, key: str) -> str:
+        return f"{self.path}: '{key}'"
+
+    def get(self, key: str, kind: type):
+        if key not in self.d:
+            raise CalibrationError(f"{self.path}: malformed calibration (missing key '{key}')")
+        v = self.d[key]
+        if kind is dict:
+            return safe_json.mapping(v, self.where(key), CalibrationError)
+        return v
+
+    def number(self, key: str, lo: float = -safe_json.MAGNITUDE, hi: float = safe_json.MAGNITUDE) -> float:
+        return safe_json.number(self.get(key, float), self.where(key), CalibrationError, lo, hi)
+
+    def numbers(self, key: str, n: int, lo: float = -safe_json.MAGNITUDE, hi: float = safe_json.MAGNITUDE,
+                whole: bool = False, nan_ok: bool = False) -> tuple[float, ...]:
+        v = self.get(key, list)
+        if whole:
+            if not isinstance(v, list) or len(v) != n:
+                raise CalibrationError(f"{self.where(key)} must be a list of {n} whole numbers, got {safe_json.show(v)}")
+            return tuple(safe_json.integer(x, self.where(key), CalibrationError, int(lo), int(hi)) for x in v)
+        if not isinstance(v, list) or len(v) != n:
+            raise CalibrationError(f"{self.where(key)} must be a list of {n} numbers, got {safe_json.show(v)}")
+        return tuple(safe_json.number(x, self.where(key), CalibrationError, lo, hi, nan_ok=nan_ok) for x in v)
+
+    def optional_number(self, key: str) -> float | None:
+        v = self.d.get(key)
+        return None if v is None else safe_json.number(v, self.where(key), CalibrationError)
+
+    def optional_numbers(self, key: str, n: int) -> tuple[float, ...] | None:
+        return None if self.d.get(key) is None else self.numbers(key, n)
+
+    def names(self, key: str, n: int) -> list[str]:
+        v = self.get(key, list)
+        if not isinstance(v, list) or len(v) != n or not all(isinstance(x, str) for x in v):
+            raise CalibrationError(f"{self.where(key)} must be a list of {n} file names, got {safe_json.show(v)}")
+        return v
+
+    def profiles(self, key: str) -> list[list[float]]:
+        v = self.get(key, list)
+        if not isinstance(v, list) or len(v) != 2:
+            raise CalibrationError(f"{self.where(key)} must be a list of two profiles, got {safe_json.show(v)}")
+        out = []
+        for p in v:
+            if not isinstance(p, list) or not 1 <= len(p) <= MAX_PROFILE:
+                raise CalibrationError(f"{self.where(key)}: a profile must be a list of 1 to {MAX_PROFILE} numbers")
+            out.append([safe_json.number(x, self.where(key), CalibrationError) for x in p])
+        return out
+
+
+def _beside(path: Path, name, what: str) -> Path:
+    """The file ``name`` next to the calibration ``path``; it may not lie in another folder."""
+    if not isinstance(name, str) or not _plain_name(name):
+        raise CalibrationError(f"{path}: {what} {safe_json.show(name)} must be a file name beside the calibration")
+    return path.parent / name
+
+
+def _png_size(p: Path) -> tuple[int, int] | None:
+    """(width, height) from a PNG's header, read before any pixels are decoded; None if not a PNG."""
+    try:
+        with open(p, "rb") as f:
+            head = f.read(24)
+    except OSError:
+        return None
+    if len(head) < 24 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
+    size = _png_size(p) if p.is_file() else None
+    if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
+        return None
+    return cv2.imread(str(p), flags)
+
+
+def _load_picture(path: Path, name, what: str = "eye picture") -> np.ndarray:
+    p = _beside(path, name, what)
+    img = _read_png(p, cv2.IMREAD_GRAYSCALE, 1024)
+    if img is None:
+        raise CalibrationError(f"{p}: missing or unreadable {what} (named by {path})")
+    return img.astype(np.float32)
+
+
+def _load_tables(path: Path, d: dict, r: _Fields) -> dict[str, np.ndarray]:
+    """The baked colour tables named by a format-2 file (empty for format 1: they are rebuilt)."""
+    spec = d.get("colour_tables")
+    if d["format"] < 2 or spec is None:
+        return {}
+    spec = safe_json.mapping(spec, r.where("colour_tables"), CalibrationError)
+    order = spec.get("order")
+    if not isinstance(order, list) or sorted(o for o in order if isinstance(o, str)) != sorted(CLASSIFIERS) or len(order) != len(CLASSIFIERS):
+        raise CalibrationError(f"{r.where('colour_tables')}: 'order' must list {', '.join(CLASSIFIERS)}, got {safe_json.show(order)}")
+    p = _beside(path, spec.get("image"), "colour table image")
+    th, tw = TILE_SHAPE
+    img = _read_png(p, cv2.IMREAD_UNCHANGED, th * len(order))
+    if img is None or img.dtype != np.uint8 or img.shape != (th * len(order), tw):
+        raise CalibrationError(f"{p}: missing or unreadable colour tables (need {tw}×{th * len(order)} 8-bit grey)")
+    return {c: tile_to_table(img[i * th : (i + 1) * th]) for i, c in enumerate(order)}
+
+
+def _classifier(path: Path, d, name: str, table: np.ndarray | None) -> ColourClassifier:
+    """A colour classifier from its dictionary, every number checked before it is used."""
+    where = f"{path}: classifiers.{name}"
+    d = safe_json.mapping(d, where, CalibrationError)
+    for key in ("y_weight", "gate", "margin"):
+        safe_json.number(d.get(key), f"{where}.{key}", CalibrationError)
+    for side in ("target", "other"):
+        g = safe_json.mapping(d.get(side), f"{where}.{side}", CalibrationError)
+        means, icovs, logdets = (safe_json.sequence(g.get(k), f"{where}.{side}.{k}", CalibrationError, 64)
+                                 for k in ("means", "icovs", "logdets"))
+        if not means or not len(means) == len(icovs) == len(logdets):
+            raise CalibrationError(f"{where}.{side}: needs as many means, icovs and logdets, at least one")
+        for mu in means:
+            safe_json.numbers(mu, f"{where}.{side}.means", 3, CalibrationError)
+        for ic in icovs:
+            if not isinstance(ic, list) or len(ic) != 3:
+                raise CalibrationError(f"{where}.{side}.icovs must hold 3x3 matrices, got {safe_json.show(ic)}")
+            for row in ic:
+                safe_json.numbers(row, f"{where}.{side}.icovs", 3, CalibrationError)
+        for v in logdets:
+            safe_json.number(v, f"{where}.{side}.logdets", CalibrationError)
+    if "name" in d:
+        safe_json.string(d["name"], f"{where}.name", CalibrationError, 64)
+    try:
+        return ColourClassifier.from_dict(d, table)
+    except (KeyError, TypeError, ValueError) as e:
+        raise CalibrationError(f"{where}: malformed colour model ({' '.join(str(e).split())})") from None
+
+
+def _face_params(path: Path, d: dict) -> FaceParams:
+    """The neutral face: the ten values (NaN allowed: not measured) and the bookkeeping fields."""
+    where = f"{path}: neutral"
+    kw = {}
+    for name, default in FaceParams().as_dict().items():
+        if name not in d:
+            continue
+        v = d[name]
+        if isinstance(default, str):
+            kw[name] = safe_json.string(v, f"{where}.{name}", CalibrationError, 64)
+        elif name == "frame":
+            kw[name] = safe_json.integer(v, f"{where}.{name}", CalibrationError, 0, int(safe_json.MAGNITUDE))
+        else:
+            kw[name] = safe_json.number(v, f"{where}.{name}", CalibrationError, nan_ok=True)
+    unknown = sorted(set(d) - set(FaceParams().as_dict()))
+    if unknown:
+        raise CalibrationError(f"{where}: unknown value(s) {', '.join(map(str, unknown[:5]))}")
+    return FaceParams(**kw)

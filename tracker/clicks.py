@@ -12,8 +12,13 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from tracker import atomic_file, safe_json
+
 POINT_KEYS: tuple[str, ...] = ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth")
 """The clicked points, in file order."""
+MAX_COORD = 1e6
+"""Largest coordinate (px) accepted; points outside the frame are refused later by ``check_inside``."""
+MAX_FILE_BYTES = 1024 * 1024
 
 
 class ClicksError(ValueError):
@@ -24,15 +29,7 @@ Point = tuple[float, float]
 
 
 def _point(d: dict, key: str, where: str) -> Point:
-    v = d[key]
-    if not isinstance(v, (list, tuple)) or len(v) != 2:
-        raise ClicksError(f"{where}: '{key}' must be [x, y], got {v!r}")
-    try:
-        x, y = float(v[0]), float(v[1])
-    except (TypeError, ValueError):
-        raise ClicksError(f"{where}: '{key}' must be two numbers, got {v!r}") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ClicksError(f"{where}: '{key}' is not finite: {v!r}")
+    x, y = safe_json.numbers(d[key], f"{where}: '{key}' [x, y]", 2, ClicksError, -MAX_COORD, MAX_COORD)
     return (x, y)
 
 
@@ -55,11 +52,9 @@ class Clicks:
         missing = [k for k in ("frame",) + POINT_KEYS if k not in d]
         if missing:
             raise ClicksError(f"{where}: missing key(s) {', '.join(missing)}")
-        fr = d["frame"]
-        if isinstance(fr, bool) or not isinstance(fr, (int, float)) or fr != int(fr) or fr < 0:
-            raise ClicksError(f"{where}: 'frame' must be a non-negative integer, got {fr!r}")
+        fr = safe_json.integer(d["frame"], f"{where}: 'frame' (a frame index)", ClicksError, 0, int(safe_json.MAGNITUDE))
         pts = {k: _point(d, k, where) for k in POINT_KEYS}
-        c = cls(frame=int(fr), **pts)
+        c = cls(frame=fr, **pts)
         if c.left_pupil[0] >= c.right_pupil[0]:
             raise ClicksError(f"{where}: left_pupil must be left of right_pupil in the image (x {c.left_pupil[0]:g} >= {c.right_pupil[0]:g})")
         if c.ipd() < 4.0:
@@ -70,14 +65,8 @@ class Clicks:
     def load(cls, path: str | os.PathLike) -> "Clicks":
         """Read a CLICKS.json file; raises :class:`ClicksError` naming the file."""
         path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as e:
-            raise ClicksError(f"{path}: cannot read clicks file ({e.strerror or e})") from None
-        try:
-            d = json.loads(text)
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise ClicksError(f"{path}: not valid JSON ({e})") from None
+        atomic_file.sweep_temp(path.parent)
+        d = safe_json.read(path, "clicks file", max_bytes=MAX_FILE_BYTES, error=ClicksError)
         return cls.from_dict(d, where=str(path))
 
     def to_dict(self) -> dict:
@@ -88,8 +77,6 @@ class Clicks:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write CLICKS.json atomically."""
-        from tracker import atomic_file
-
         atomic_file.write_text(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
 
     def points(self) -> dict[str, Point]:

@@ -28,6 +28,8 @@ import numpy as np
 
 from tracker.brows import BrowFinder
 from tracker.calibration import Calibration, FaceFrame
+from tracker.face_finder import DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
+from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
 from tracker.lids import LidFinder
 from tracker.mouth import MouthFinder
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
@@ -125,12 +127,26 @@ BROW_LO, BROW_HI = 0.55, 1.6  # brow search range, × calibrated brow height
 MOUTH_HALF_W = 0.75  # × calibrated mouth width, each side of the predicted centre
 MOUTH_UP, MOUTH_DOWN = 0.32, 0.62  # above / below the predicted centre
 BALANCE_EVERY = 4  # frames between colour-balance updates (lighting drifts slowly)
+GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
+GAZE_MAX = GAZE_X
+JAW_MAX = (0.25, 0.4)  # farthest the mouth centre may sit from its rigid place (x, y)
+FOLLOW_SHIFT = 0.05  # per frame pull of the rigid pose's position towards the measured pupils
+FOLLOW_TURN = 0.1  # ... of its roll and scale (the gaze does not change those)
+STRONG_EYES = 0.2  # eye-picture correlation above the calibrated threshold that outvotes the flow
+FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrated face"
+FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
+FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
+FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
+FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
+"""Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
 
 class FaceTracker:
     """Track one calibrated performer frame by frame (see the module docstring).
 
     Frames must be ``uint8 (H, W, 3)`` BGR; sizes may differ from the calibration frame.
+    The head's rigid pose is a similarity ``pose`` (2×3) from calibration-frame px to this
+    frame's px: the calibrated pupils under it are the eyes' rigid centres ("anchors").
     """
 
     def __init__(self, calibration: Calibration, damping: float = 0.8):
@@ -150,14 +166,13 @@ class FaceTracker:
             white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level,
         )
         self.mouth_finder = MouthFinder()
-        # eye crops (face coordinates): both pupil search windows with template margins, the
-        # brows' search range above, the lid walks below; a wider one for re-acquisition
         brow_top = max(BROW_HI * h + (len(p) - c) + 2 for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights))
+        gx = int(math.ceil(GAZE_MAX * wi * 0.5))
 
         def rect(sx: int, sy: int) -> tuple[int, int, int, int]:
-            mx = sx + tw // 2 + 2
-            top = max(brow_top, sy + th // 2 + 2, LID_UP * wi + 2) + (sy - self.sy)
-            bottom = max(sy + th // 2 + 2, LID_DOWN * wi + 2)
+            mx = sx + tw // 2 + 2 + gx
+            top = max(brow_top, sy + th // 2 + 2, LID_UP * wi + 2) + (sy - self.sy) + gx
+            bottom = max(sy + th // 2 + 2, LID_DOWN * wi + 2) + gx
             return (int(math.floor(-0.5 * wi - mx)), int(math.floor(-top)), int(math.ceil(wi + 2 * mx)), int(math.ceil(top + bottom)))
 
         self.eye_rect = rect(self.sx, self.sy)
@@ -171,21 +186,33 @@ class FaceTracker:
         )
         self.lip_axis = np.asarray(cal.lip_axis, dtype=np.float32).reshape(1, 3)
         self._eye_corners = self._rect_corners(self.eye_rect)
-        self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts them
+        self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
         self._min_lip_area = max(int(0.12 * cal.mouth_area), 6)
         self._buffers: dict[tuple, np.ndarray] = {}
+        c = cal.clicks
+        self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
+        # the rigid mouth centre on the calibration frame (px), from the measured mouth offset
+        ff0 = FaceFrame.from_pupils(tuple(self._cal_pupils[0]), tuple(self._cal_pupils[1]), wi)
+        self._cal_mouth = ff0.to_image(np.array([cal.mouth_offset]))[0]
+        self._outline = np.array(FACE_OUTLINE, dtype=np.float64)
+        self._box_eyes = getattr(cal, "face_box_eyes", None) or DEFAULT_EYES
+        self.motion = HeadMotion()
+        self.motion.set_scale(cal.ipd)
         self.reset()
 
     # -------------------------------------------------------------- state
     def reset(self) -> None:
         """Forget the motion so far; the next frame starts from the calibration pose."""
-        c = self.cal.clicks
-        self.pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
+        self.pose = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
         self.velocity = np.zeros((2, 2))
-        self.mouth_face = np.array(self.cal.mouth_offset, dtype=np.float64)  # face coords
+        self.anchors = self._cal_pupils.copy()
+        self.pupils = self._cal_pupils.copy()
+        self.gaze = np.zeros((2, 2))  # iris − anchor, face px, per eye
+        self.jaw = np.zeros(2)  # mouth centre − its rigid place, face px
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
+        self.motion.reset()
         self._gains: dict = {}
         self._good_gains: dict = {}
         self._balance_age: dict = {}
@@ -235,10 +262,14 @@ class FaceTracker:
         ca, cb = a / max(a.sum(), 1.0), b / max(b.sum(), 1.0)
         return float(np.abs(ca - cb).max()) < 0.04
 
-    def _plausible_mouth(self, m) -> bool:
-        """A lip blob of about the calibrated mouth's size with its corners level."""
+    def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
+        """A mouth of about the calibrated size, corners level, near where the head puts it."""
         w = self.cal.mouth_width
-        return 0.4 * w <= m.width <= 1.8 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width
+        if not (0.4 * w <= m.width <= 1.9 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width):
+            return False
+        dx = m.centre[0] + origin[0] - predicted[0]
+        dy = m.centre[1] + origin[1] - predicted[1]
+        return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
 
     # -------------------------------------------------------------- helpers
     def _buffer(self, name: str, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
@@ -259,10 +290,20 @@ class FaceTracker:
         return np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]], dtype=np.float64)
 
     def _rect_polygon(self, ff: FaceFrame, rect) -> np.ndarray:
-        x0, y0, w, h = rect
-        return ff.to_image(np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]], dtype=np.float64))
+        return ff.to_image(self._rect_corners(rect))
 
-    def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int]):
+    def face_outline(self, anchors: np.ndarray | None = None) -> np.ndarray:
+        """The region (frame px polygon) the flow picks corners in, for these eye anchors."""
+        a = self.anchors if anchors is None else anchors
+        left, right = a[0], a[1]
+        u = right - left
+        ipd = max(math.hypot(u[0], u[1]), 1e-6)
+        u = u / ipd
+        d = np.array([-u[1], u[0]])
+        mid = 0.5 * (left + right)
+        return mid + ipd * (self._outline[:, :1] * u + self._outline[:, 1:] * d)
+
+    def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int], gaze=None):
         """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
         w, h = rect[2], rect[3]
         crop = self._balance(ff.crop(frame, rect, self._buffer("eye", (h, w, 3))), "eye")
@@ -270,68 +311,123 @@ class FaceTracker:
         grey = self._buffer("eye grey", (h, w), np.float32)
         np.copyto(grey, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY))
         ox, oy = rect[0], rect[1]
-        preds = [(-0.5 * self.wi - ox, -oy), (0.5 * self.wi - ox, -oy)]
+        g = self.gaze if gaze is None else gaze
+        preds = [(-0.5 * self.wi + g[0][0] - ox, g[0][1] - oy), (0.5 * self.wi + g[1][0] - ox, g[1][1] - oy)]
         res = [f.find(crop, grey, p, search, previous=p) for f, p in zip(self.pupil_finders, preds)]
         return crop, grey, res, (ox, oy)
+
+    def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
+        """Hold the last values and search for the face from the next frame; ``why`` goes to the debug values."""
+        self.lost = True
+        self._gains = dict(self._good_gains)
+        p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
+        return TrackResult(p, Overlay(status=LOST, rois=list(rois)), {"reacquired": False, "lost": why})
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
         """Track one frame; see the module docstring."""
         if frame_bgr.ndim != 3 or frame_bgr.shape[2] != 3 or frame_bgr.dtype != np.uint8:
             raise ValueError("frames must be uint8 (H, W, 3) BGR")
+        flow = None
+        self._grey = self.motion.grey(frame_bgr)
+        reacquired = self.lost
         if self.lost:
-            cand = self._reacquire(frame_bgr)
-            if cand is None:
+            found = self._reacquire(frame_bgr)
+            if found is None:
                 self.lost_frames += 1
-                p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
-                return TrackResult(p, Overlay(status=LOST), {"reacquired": False})
-            self.pupils = cand
+                return self._lost_result(index, time, "not found")
+            self.pose = similarity_from_pairs(self._cal_pupils, found)
+            self.anchors = found
             self.velocity[:] = 0.0
+            self.gaze[:] = 0.0
+            self.jaw[:] = 0.0
+            self.motion.reset()
             self.lost = False
             self.lost_frames = 0
-        return self._track(frame_bgr, index, time)
+        elif self.motion.active:
+            flow = self.motion.step(frame_bgr, self.face_outline(), grey=self._grey)
+            if flow is not None:
+                self.pose = compose(flow.matrix, self.pose)
+        if flow is None and not self.motion.active and not reacquired:
+            # no flow to follow (first frame, a face without texture): the eyes' own motion
+            self.pose = similarity_from_pairs(self._cal_pupils, self.anchors + self.damping * self.velocity)
+        return self._track(frame_bgr, index, time, flow is not None)
 
-    def _track(self, frame: np.ndarray, index: int, time: float) -> TrackResult:
+    def _track(self, frame: np.ndarray, index: int, time: float, flow_ok: bool) -> TrackResult:
         wi = self.wi
-        pred = self.pupils + self.damping * self.velocity
-        ff = self._frame(pred)
+        H, W = frame.shape[:2]
+        anchors = apply(self.pose, self._cal_pupils)
+        if not np.all((anchors > -0.1 * wi) & (anchors < np.array([W, H]) + 0.1 * wi)):
+            return self._lost_result(index, time, "left the frame")
+        presence = None
+        if self.cal.face_patch is not None:
+            # the face picture pins the head's position (the flow drifts, the pupils follow the gaze)
+            shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
+                                          FACE_REACH if flow_ok else 2 * FACE_REACH)
+            if presence >= FACE_PRESENT:
+                if flow_ok:
+                    # a turned head changes the picture: the weaker the match, the less it pulls
+                    trust = min(max((presence - FACE_PRESENT) / (0.9 - FACE_PRESENT), 0.0), 1.0)
+                    anchors = anchors + FACE_FOLLOW * trust * shift
+                elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
+                    anchors = anchors + shift  # no flow to trust: the picture says where the head went
+                self.pose = similarity_from_pairs(self._cal_pupils, anchors)
+        ff = self._frame(anchors)
         crop, grey, res, (ox, oy) = self._eyes(frame, ff, (self.sx, self.sy), self.eye_rect)
         closed = [r is None or r.closed for r in res]
         found = np.array([[r.x + ox, r.y + oy] if r is not None else [np.nan, np.nan] for r in res])
         preds_f = self._pupils_face
-        # a pupil found too far from where the pair says it should be is not trusted
+        scores = [r.score if r is not None else -1.0 for r in res]
+        # two clear eye pictures outvote the flow's roll and scale (it drifts on plain skin);
+        # a doubtful one must agree with the head's pose
+        strong = not any(closed) and min(scores) >= self.cal.pupil_threshold + STRONG_EYES
+        if strong:
+            g = 0.5 * (found[0] + found[1] - preds_f[0] - preds_f[1]) / wi
+            if (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 > 1.0:
+                strong = False
+        for i in range(2):  # an iris far from its eye's rigid centre is something else
+            if not closed[i] and not strong:
+                gx, gy = (found[i] - preds_f[i]) / wi
+                if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
+                    closed[i] = True
         if not any(closed):
             d = found[1] - found[0]
             ratio = math.hypot(*d) / wi
-            if not (0.8 < ratio < 1.25) or abs(d[1]) > 0.35 * wi:
-                worse = int(np.argmin([r.score for r in res]))
+            # with the flow the head's roll and scale are known: the pupils must agree with them
+            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
+            if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
+                worse = int(np.argmin(scores))
                 closed[worse] = True
+                strong = False
         pup_f = found.copy()
-        if closed[0] and closed[1]:
-            pup_f = preds_f.copy()
-        elif closed[0]:
-            pup_f[0] = pup_f[1] - np.array([wi, 0.0])
-        elif closed[1]:
-            pup_f[1] = pup_f[0] + np.array([wi, 0.0])
+        for i in range(2):
+            if closed[i]:
+                pup_f[i] = preds_f[i] + self.gaze[i]
 
-        mouth_res, mouth_origin, mouth_rect = self._mouth(frame, ff)
-        scores = [r.score if r is not None else -1.0 for r in res]
+        rigid_mouth = ff.to_face(apply(self.pose, self._cal_mouth[None]))[0]
+        predicted_mouth = rigid_mouth + self.jaw
+        mouth_res, mouth_origin, mouth_rect = self._mouth(frame, ff, predicted_mouth)
+        if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
+            mouth_res = None
         n_open = 2 - int(closed[0]) - int(closed[1])
-        if n_open == 2:
-            face_seen = True
-        elif mouth_res is None or not self._plausible_mouth(mouth_res):
-            face_seen = False  # one eye-like patch alone is too little (edges can look like one)
-        else:
+        why = ""
+        if presence is not None and presence < FACE_ABSENT:
+            why = "not this face"  # something else is where the face was (a hand, the background)
+        elif n_open == 2:
+            pass
+        elif presence is not None and presence >= FACE_PRESENT:
+            pass  # it looks like this face where the head is: eyes shut, mouth hidden
+        elif flow_ok and presence is None:
+            pass
+        elif mouth_res is None:
+            why = "no eyes, no mouth"  # one eye-like patch alone is too little (edges can look like one)
+        elif not (n_open == 1 or (flow_ok and self._same_colour(crop, self.cal.eye_ref))):
             # a wink or closed eyes: the mouth looks like this mouth; with no eye at all the
-            # eye region must also still have the calibrated face's colour
-            face_seen = n_open == 1 or self._same_colour(crop, self.cal.eye_ref)
-        if not face_seen:
-            self.lost = True
+            # head must still be followed and the eye region have the calibrated face's colour
+            why = "no eyes"
+        if why:
             self.lost_frames = 1
-            self._gains = dict(self._good_gains)
-            p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
-            ov = Overlay(status=LOST, rois=[self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
-            return TrackResult(p, ov, {"scores": scores})
+            return self._lost_result(index, time, why, [self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
 
         # lids and brows in the eye crop, along its up axis through each pupil
         k = ff.scale
@@ -382,12 +478,12 @@ class FaceTracker:
             ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
-            # the mouth centre in the face frame of the measured pupils, for the next crop
-            ff_meas = FaceFrame.from_pupils(tuple(left), tuple(right), wi)
-            self.mouth_face = ff_meas.to_face(ov.mouth_centre[None])[0]
+            jaw = np.array([mcx, mcy]) - rigid_mouth
+            self.jaw = np.clip(jaw, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
+            self.jaw *= 0.8
         if closed[0] and closed[1]:
             status = EYES_CLOSED
         conf = min(max(0.5 * (max(scores[0], 0.0) + max(scores[1], 0.0)), 0.0), 1.0)
@@ -395,18 +491,54 @@ class FaceTracker:
             conf *= 0.5
         params = FaceParams.from_values(vals, frame=index, time=time, status=status, confidence=conf)
         ov.status = status
-        # motion update
-        self.velocity = pupils_img - self.pupils
+        self._follow(anchors, pupils_img, closed, found, flow_ok, flow_ok and presence is not None and presence >= FACE_PRESENT, strong)
         self.pupils = pupils_img
         self.last = params
         self._good_gains = dict(self._gains)
-        debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down]}
+        if not self.motion.active:
+            self.motion.seed(frame, self.face_outline(), grey=self._grey)
+        debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down],
+                 "flow": flow_ok, "presence": presence}
         return TrackResult(params, ov, debug)
 
-    def _mouth(self, frame: np.ndarray, ff: FaceFrame):
-        """Crop around the predicted mouth centre and run the mouth finder."""
+    def _follow(self, anchors: np.ndarray, pupils_img: np.ndarray, closed: list, found_face: np.ndarray, flow_ok: bool,
+                pinned: bool, strong: bool = False) -> None:
+        """Pull the rigid pose towards the measured pupils (drift and gaze are slow, the flow fast).
+
+        ``pinned``: the face picture fixed the position this frame, so the pupils pull less;
+        ``strong``: both eye pictures matched clearly, so they turn the pose faster.
+        """
+        for i in range(2):
+            if not closed[i]:
+                self.gaze[i] = found_face[i] - self._pupils_face[i]
+            else:
+                self.gaze[i] *= 0.9
+        if closed[0] or closed[1]:
+            new = anchors
+        elif not flow_ok and not pinned:
+            new = pupils_img
+        else:
+            a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
+            a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
+            mid = a_mid + (FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT) * (p_mid - a_mid)
+            vec = a_vec + (0.5 if strong else FOLLOW_TURN) * (p_vec - a_vec)
+            new = np.array([mid - 0.5 * vec, mid + 0.5 * vec])
+        self.velocity = new - self.anchors
+        self.anchors = new
+        self.pose = similarity_from_pairs(self._cal_pupils, new)
+
+    def presence(self, anchors: np.ndarray) -> float | None:
+        """How much the face picture at these eye anchors looks like the calibrated one
+        (normalised correlation, −1..1), or None for a calibration without a face picture."""
+        ref = self.cal.face_patch
+        if ref is None:
+            return None
+        return patch_similarity(face_patch(self._grey, self.motion.scale, anchors), ref)
+
+    def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray):
+        """Crop around the predicted mouth centre (face coordinates) and run the mouth finder."""
         mw, mh = self.mouth_size
-        cx, cy = self.mouth_face
+        cx, cy = float(centre[0]), float(centre[1])
         rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
         crop = self._balance(ff.crop(frame, rect, self._buffer("mouth", (mh, mw, 3))), "mouth")
         self._last_mouth_crop = crop
@@ -422,20 +554,17 @@ class FaceTracker:
         return res, (rect[0], rect[1]), rect
 
     # -------------------------------------------------------------- re-acquisition
-    def _check_face(self, frame: np.ndarray, mouth: np.ndarray, mo: np.ndarray, ipd: float, ang: float) -> np.ndarray | None:
-        """Pupils (frame px) if the eye pictures match where a face with its mouth at
-        ``mouth``, inter-pupil distance ``ipd`` and roll ``ang`` (radians) has its eyes."""
+    def _check_eyes(self, frame: np.ndarray, guess: np.ndarray) -> np.ndarray | None:
+        """Pupils (frame px) if both eye pictures match near the guessed eye centres."""
         H, W = frame.shape[:2]
-        u = np.array([math.cos(ang), -math.sin(ang)])
-        d = np.array([math.sin(ang), math.cos(ang)])
-        mid = mouth - ipd * (mo[0] * u + mo[1] * d)
-        pupils = np.array([mid - 0.5 * ipd * u, mid + 0.5 * ipd * u])
+        pupils = np.asarray(guess, dtype=np.float64)
         if not (np.all(pupils >= 0) and np.all(pupils[:, 0] < W) and np.all(pupils[:, 1] < H)):
             return None
         thr = self.cal.pupil_threshold
+        zero = np.zeros((2, 2))
         for search, rect, need in ((self.wide_search, self.eye_rect_wide, thr - 0.05), ((self.sx, self.sy), self.eye_rect, thr + 0.1)):
             ff = self._frame(pupils)
-            _, _, res, (ox, oy) = self._eyes(frame, ff, search, rect)
+            _, _, res, (ox, oy) = self._eyes(frame, ff, search, rect, gaze=zero)
             if any(r is None or r.score < need for r in res):
                 return None
             found = np.array([[r.x + ox, r.y + oy] for r in res])
@@ -446,7 +575,37 @@ class FaceTracker:
         return pupils
 
     def _reacquire(self, frame: np.ndarray) -> np.ndarray | None:
-        """Search the whole frame for the face; the two pupils (frame px) or None.
+        """Find the face again: the two pupils (frame px) or None.
+
+        First where it was last seen (it may only have been covered), then in every box the
+        face detector proposes, at the eye places this performer had in such a box.
+        """
+        found = self._check_eyes(frame, self.anchors)
+        if found is not None and self._looks_like_face(found):
+            return found
+        ipd = float(math.hypot(*(self.anchors[1] - self.anchors[0])))
+        spread = 1.6 if self.lost_frames < 30 else 2.5
+        for box in detect_faces(frame, ipd, spread)[:3]:
+            found = self._check_eyes(frame, eyes_in_box(box, self._box_eyes))
+            if found is not None and self._looks_like_face(found):
+                return found
+        # the detector wants an upright, frontal face: a rolled or unusual one is looked for by its lips
+        return self._reacquire_by_lips(frame)
+
+    def _looks_like_face(self, pupils: np.ndarray) -> bool:
+        p = self.presence(pupils)
+        return p is None or p >= FACE_PRESENT
+
+    def _check_face(self, frame: np.ndarray, mouth: np.ndarray, mo: np.ndarray, ipd: float, ang: float) -> np.ndarray | None:
+        """Pupils (frame px) if the eye pictures match where a face with its mouth at
+        ``mouth``, inter-pupil distance ``ipd`` and roll ``ang`` (radians) has its eyes."""
+        u = np.array([math.cos(ang), -math.sin(ang)])
+        d = np.array([math.sin(ang), math.cos(ang)])
+        mid = mouth - ipd * (mo[0] * u + mo[1] * d)
+        return self._check_eyes(frame, np.array([mid - 0.5 * ipd * u, mid + 0.5 * ipd * u]))
+
+    def _reacquire_by_lips(self, frame: np.ndarray) -> np.ndarray | None:
+        """Search the whole frame for lip-coloured blobs; the two pupils (frame px) or None.
 
         Lip blobs are found at low resolution with the calibrated lip classifier; for each
         plausible blob the eyes are looked for where the calibration geometry puts them
@@ -481,6 +640,6 @@ class FaceTracker:
             for ipd in ipds:
                 for ang in dict.fromkeys([last_roll, 0.0]):
                     found = self._check_face(frame, mc, mo, ipd, ang)
-                    if found is not None:
+                    if found is not None and self._looks_like_face(found):
                         return found
         return None

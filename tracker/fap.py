@@ -69,7 +69,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-from tracker import atomic_file
+from tracker.outputs import ClosingWriter, StreamedFile
 from tracker.params import LOST, OK, PARAM_NAMES, FaceParams
 
 N_FAPS = 68
@@ -247,6 +247,69 @@ class FapTrack:
     mirrored: bool
 
 
+class FapWriter(ClosingWriter):
+    """Writes a FAP file frame by frame (memory does not grow with the track's length).
+
+    The frames go to an anonymous temporary file; :meth:`close` writes the header with the
+    frame count, then the frames, under a temporary name and moves the file into place.
+    :meth:`abort` discards it (a previous file stays as it was). As a context manager it closes
+    on success and aborts on an exception.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        neutral: FaceParams,
+        ipd: float,
+        fps: float = 30.0,
+        name: str = "inkface",
+        mirrored: bool = False,
+        fapu: Fapu | None = None,
+    ):
+        import tempfile
+
+        self.path = Path(path)
+        self.neutral = neutral
+        self.fapu = fapu or Fapu.from_neutral(neutral, ipd)
+        self.fps = float(fps)
+        self.name = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) or "inkface"
+        self.mirrored = mirrored
+        self.frames = 0
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._body = tempfile.TemporaryFile(dir=self.path.parent)
+
+    def write(self, r: FaceParams) -> None:
+        """Append one frame: its mask line and its value line."""
+        faps = params_to_faps(r, self.neutral, self.fapu, self.mirrored)
+        mask = " ".join("1" if i in faps else "0" for i in range(1, N_FAPS + 1))
+        values = " ".join([str(r.frame)] + [str(faps[i]) for i in sorted(faps)])
+        self._body.write(f"{mask}\n{values}\n".encode())
+        self.frames += 1
+
+    def close(self) -> Path:
+        import shutil
+
+        fu = self.fapu
+        head = "\n".join([
+            "# inkface-fap 1",
+            f"# fapu IRISD0={fu.irisd0!r} ES0={fu.es0!r} ENS0={fu.ens0!r} MNS0={fu.mns0!r} MW0={fu.mw0!r}",
+            "# neutral " + " ".join(f"{n}={float(getattr(self.neutral, n))!r}" for n in PARAM_NAMES),
+            f"# mirrored {int(self.mirrored)}",
+            f"2.1 {self.name} {self.fps:g} {self.frames}",
+        ]) + "\n"  # fmt: skip
+        try:
+            with StreamedFile(self.path) as out:
+                out._f.write(head.encode())
+                self._body.seek(0)
+                shutil.copyfileobj(self._body, out._f)
+        finally:
+            self._body.close()
+        return self.path
+
+    def abort(self) -> None:
+        self._body.close()
+
+
 def write_fap(
     path: str | os.PathLike,
     rows: Sequence[FaceParams],
@@ -258,22 +321,10 @@ def write_fap(
     fapu: Fapu | None = None,
 ) -> Fapu:
     """Export a track as a FAP file (atomic write); returns the units used."""
-    path = Path(path)
-    fapu = fapu or Fapu.from_neutral(neutral, ipd)
-    name = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) or "inkface"
-    lines = [
-        "# inkface-fap 1",
-        f"# fapu IRISD0={fapu.irisd0!r} ES0={fapu.es0!r} ENS0={fapu.ens0!r} MNS0={fapu.mns0!r} MW0={fapu.mw0!r}",
-        "# neutral " + " ".join(f"{n}={float(getattr(neutral, n))!r}" for n in PARAM_NAMES),
-        f"# mirrored {int(mirrored)}",
-        f"2.1 {name} {fps:g} {len(rows)}",
-    ]
-    for r in rows:
-        faps = params_to_faps(r, neutral, fapu, mirrored)
-        lines.append(" ".join("1" if i in faps else "0" for i in range(1, N_FAPS + 1)))
-        lines.append(" ".join([str(r.frame)] + [str(faps[i]) for i in sorted(faps)]))
-    atomic_file.write_text(path, "\n".join(lines) + "\n")
-    return fapu
+    with FapWriter(path, neutral, ipd, fps, name, mirrored, fapu) as w:
+        for r in rows:
+            w.write(r)
+    return w.fapu
 
 
 def _keyvals(path: Path, text: str) -> dict[str, float]:
@@ -399,8 +450,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--ipd", type=float, help="inter-pupil distance in pixels (CSV -> FAP; default: mouth width / 0.8)")
     ap.add_argument("--fps", type=float, default=30.0, help="frame rate written to the FAP file (default 30)")
     ap.add_argument("--mirrored", action="store_true", help="the video was mirrored (a selfie view)")
+    ap.add_argument("--force", action="store_true", help="replace DST if it exists (SRC is never replaced)")
     args = ap.parse_args(argv)
+    from tracker.outputs import OutputError, check_outputs
+
     try:
+        check_outputs(files=[args.dst], inputs=[args.src], force=args.force)
         if Path(args.src).suffix.lower() == ".fap":
             fap = read_fap(args.src)
             write_csv(args.dst, fap.rows)
@@ -413,7 +468,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise FapError(f"{args.src}: cannot tell the inter-pupil distance; pass --ipd PX")
             write_fap(args.dst, rows, neutral, ipd, fps=args.fps, name=Path(args.src).stem, mirrored=args.mirrored)
             print(f"wrote {args.dst} ({len(rows)} frames; neutral = the track's median, ipd {ipd:.1f} px)")
-    except (FapError, TrackFormatError, OSError, ValueError) as e:
+    except (FapError, TrackFormatError, OutputError, OSError, ValueError) as e:
         print(f"inkface: {e}", file=sys.stderr)
         return 2
     return 0

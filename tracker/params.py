@@ -31,7 +31,8 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from tracker.atomic_file import replacing
+from tracker.outputs import StreamedFile
+
 
 PARAM_NAMES: tuple[str, ...] = (
     "mid_x",
@@ -125,6 +126,15 @@ def params_array(rows: Iterable[FaceParams]) -> np.ndarray:
     return np.array([r.values() for r in rows], dtype=np.float64).reshape(-1, len(PARAM_NAMES))
 
 
+def track_rate(rows: Sequence[FaceParams], default: float = 30.0) -> float:
+    """Frames per second of a track from its times (the median step), ``default`` when they
+    do not tell (fewer than two distinct finite times)."""
+    t = np.array([r.time for r in rows], dtype=np.float64)
+    dt = np.diff(t[np.isfinite(t)])
+    dt = dt[dt > 0]
+    return float(1.0 / np.median(dt)) if len(dt) else float(default)
+
+
 # ---------------------------------------------------------------------------------------------
 # CSV
 
@@ -133,29 +143,87 @@ def _fmt(v: float) -> str:
     return f"{v:.4f}" if math.isfinite(v) else "nan"
 
 
+class TrackCsvWriter(StreamedFile):
+    """Writes a track CSV one row at a time, so a stream of any length needs no memory for it.
+
+    The rows go to a temporary file beside ``path``; :meth:`close` moves the finished file into
+    place (an interrupted write leaves any previous file untouched), :meth:`abort` discards it.
+    As a context manager it closes on success and aborts on an exception.
+    """
+
+    def __init__(self, path: str | os.PathLike, extra: Sequence[str] = EXTRA_COLUMNS):
+        super().__init__(path, "w", newline="")
+        self.extra = tuple(extra)
+        self.rows = 0
+        self._w = csv.writer(self._f)
+        self._w.writerow(list(CSV_COLUMNS) + list(self.extra))
+
+    def write(self, r: FaceParams) -> None:
+        """Append one frame's row: the contract's columns, then the ``extra`` fields."""
+        line = [str(r.frame)] + [_fmt(getattr(r, n)) for n in PARAM_NAMES]
+        for e in self.extra:
+            v = getattr(r, e)
+            line.append(_fmt(v) if isinstance(v, float) else str(v))
+        self._w.writerow(line)
+        self.rows += 1
+
+
 def write_csv(path: str | os.PathLike, rows: Iterable[FaceParams], extra: Sequence[str] = EXTRA_COLUMNS) -> None:
     """Write a track CSV atomically: the contract's columns, then ``extra`` fields of the record."""
-    with replacing(path) as tmp, open(tmp, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(list(CSV_COLUMNS) + list(extra))
+    with TrackCsvWriter(path, extra) as w:
         for r in rows:
-            line = [str(r.frame)] + [_fmt(getattr(r, n)) for n in PARAM_NAMES]
-            for e in extra:
-                v = getattr(r, e)
-                line.append(_fmt(v) if isinstance(v, float) else str(v))
-            w.writerow(line)
+            w.write(r)
+
+
+VALUE_LIMIT = 1e6
+"""Largest magnitude a track value may have (pixels or degrees); NaN (not measured) is allowed."""
+FRAME_LIMIT = 2**31
+TIME_LIMIT = 1e8
+"""Seconds; about three years."""
+_TOKEN_MAX = 64
+_STATUS_MAX = 32
+
+
+def _short(tok: str) -> str:
+    return repr(tok if len(tok) <= 24 else tok[:16] + "…")
+
+
+def _number(tok: str, column: str, lo: float, hi: float, nan_ok: bool) -> float:
+    tok = tok.strip()
+    if len(tok) > _TOKEN_MAX:
+        raise ValueError(f"{column} value {_short(tok)} is too long for a number")
+    try:
+        v = float(tok)
+    except ValueError:
+        raise ValueError(f"{column} value {_short(tok)} is not a number") from None
+    if math.isnan(v):
+        if nan_ok:
+            return v
+        raise ValueError(f"{column} must be a number, not NaN")
+    if not lo <= v <= hi:
+        raise ValueError(f"{column} value {_short(tok)} is out of range ({lo:g} to {hi:g})")
+    return v
+
+
+def _frame_index(tok: str) -> int:
+    v = _number(tok, "frame", -FRAME_LIMIT, FRAME_LIMIT - 1, nan_ok=False)
+    if not v.is_integer():
+        raise ValueError(f"frame {_short(tok.strip())} is not a whole number")
+    return int(v)
 
 
 def read_csv(path: str | os.PathLike) -> list[FaceParams]:
     """Read a track CSV written by Inkface or any tool that follows the contract.
 
     The first eleven columns must be the contract's; ``time``, ``status`` and ``confidence``
-    are read when present (time defaults to the frame index at 30 fps). Raises
-    :class:`TrackFormatError` with a one-line message naming the file.
+    are read when present (time defaults to the frame index at 30 fps). Values must be numbers
+    within ±:data:`VALUE_LIMIT` or NaN (not measured), frames whole numbers, times finite,
+    confidences in [0, 1] (NaN reads as 0). Raises :class:`TrackFormatError` with a one-line message naming the
+    file (and line).
     """
     path = Path(path)
     try:
-        f = open(path, newline="")
+        f = open(path, newline="", encoding="utf-8")
     except OSError as e:
         raise TrackFormatError(f"{path}: cannot open track ({e.strerror or e})") from None
     with f:
@@ -166,10 +234,18 @@ def read_csv(path: str | os.PathLike) -> list[FaceParams]:
             raise TrackFormatError(f"{path}: empty file, expected a header row") from None
         except (csv.Error, UnicodeDecodeError) as e:
             raise TrackFormatError(f"{path}: not a CSV file ({e})") from None
+        except OSError as e:
+            raise TrackFormatError(f"{path}: cannot read track ({e.strerror or e})") from None
         if tuple(header[: len(CSV_COLUMNS)]) != CSV_COLUMNS:
             raise TrackFormatError(f"{path}: header must start with {','.join(CSV_COLUMNS)}")
         idx = {name: i for i, name in enumerate(header)}
+
+        def column(row: list[str], name: str) -> str | None:
+            i = idx.get(name)
+            return row[i] if i is not None and i < len(row) else None
+
         out: list[FaceParams] = []
+        lineno = 1
         try:
             for lineno, row in enumerate(reader, start=2):
                 if not row or all(not c.strip() for c in row):
@@ -177,17 +253,30 @@ def read_csv(path: str | os.PathLike) -> list[FaceParams]:
                 if len(row) < len(CSV_COLUMNS):
                     raise TrackFormatError(f"{path}:{lineno}: expected {len(CSV_COLUMNS)} columns, got {len(row)}")
                 try:
-                    frame = int(float(row[0]))
-                    vals = [float(c) for c in row[1 : len(CSV_COLUMNS)]]
-                    t = float(row[idx["time"]]) if "time" in idx and idx["time"] < len(row) else frame / 30.0
-                    conf = float(row[idx["confidence"]]) if "confidence" in idx and idx["confidence"] < len(row) else 1.0
+                    frame = _frame_index(row[0])
+                    vals = [_number(c, n, -VALUE_LIMIT, VALUE_LIMIT, nan_ok=True)
+                            for c, n in zip(row[1 : len(CSV_COLUMNS)], PARAM_NAMES)]
+                    tok = column(row, "time")
+                    t = _number(tok, "time", -TIME_LIMIT, TIME_LIMIT, nan_ok=False) if tok is not None else frame / 30.0
+                    tok = column(row, "confidence")
+                    conf = _number(tok, "confidence", 0.0, 1.0, nan_ok=True) if tok is not None else 1.0
+                    conf = 0.0 if math.isnan(conf) else conf  # not known: no confidence
+                    status = (column(row, "status") or "").strip() or OK
+                    if len(status) > _STATUS_MAX or not status.isprintable():
+                        raise ValueError(f"status {_short(status)} is not a status")
                 except ValueError as e:
-                    raise TrackFormatError(f"{path}:{lineno}: not a number ({e})") from None
-                status = row[idx["status"]].strip() if "status" in idx and idx["status"] < len(row) else OK
-                out.append(FaceParams.from_values(vals, frame=frame, time=t, status=status or OK, confidence=conf))
+                    raise TrackFormatError(f"{path}:{lineno}: {e}") from None
+                out.append(FaceParams.from_values(vals, frame=frame, time=t, status=status, confidence=conf))
         except (csv.Error, UnicodeDecodeError) as e:
-            raise TrackFormatError(f"{path}: not a CSV file ({e})") from None
+            raise TrackFormatError(f"{path}:{lineno + 1}: not a CSV file ({_one_line(e)})") from None
+        except OSError as e:
+            raise TrackFormatError(f"{path}: cannot read track ({e.strerror or e})") from None
     return out
+
+
+def _one_line(e: BaseException) -> str:
+    lines = str(e).strip().splitlines()
+    return lines[0][:120] if lines else type(e).__name__
 
 
 # ---------------------------------------------------------------------------------------------

@@ -44,6 +44,7 @@ length followed by one packet (compressed packets above, or the plain 22-byte pa
 from __future__ import annotations
 
 import json
+import math
 import os
 import struct
 from dataclasses import dataclass, field
@@ -52,7 +53,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from tracker import atomic_file
+from tracker.outputs import StreamedFile
 from tracker.params import (
     LOST,
     OK,
@@ -537,6 +538,7 @@ def decompress_frames(coded: Iterable[tuple[bool, bytes]]) -> list[bytes]:
 STREAM_FILE_FORMAT = 1
 STREAM_FILE_KIND = "inkface-packet-stream"
 _LEN = struct.Struct("<H")
+_HEADER_MAX = 4096  # bytes of the JSON header line (ours is about 200)
 
 
 @dataclass
@@ -563,14 +565,32 @@ class StreamHeader:
         }
 
 
+class StreamFileWriter(StreamedFile):
+    """Writes a packet-stream file one packet at a time (memory does not grow with its length).
+
+    Packets go to a temporary file beside ``path``; :meth:`close` moves the finished file into
+    place, :meth:`abort` discards it (a previous file stays as it was). As a context manager it
+    closes on success and aborts on an exception.
+    """
+
+    def __init__(self, path: str | os.PathLike, header: StreamHeader):
+        super().__init__(path, "wb")
+        self.header = header
+        self.packets = 0
+        self._f.write(json.dumps(header.to_dict()).encode() + b"\n")
+
+    def write_packet(self, p: bytes) -> None:
+        if len(p) > 0xFFFF:
+            raise StreamError(f"packet of {len(p)} bytes is too long for a stream file")
+        self._f.write(_LEN.pack(len(p)) + p)
+        self.packets += 1
+
+
 def write_stream(path: str | os.PathLike, header: StreamHeader, packets: Iterable[bytes]) -> None:
     """Write a packet-stream file atomically."""
-    with atomic_file.replacing(path) as tmp, open(tmp, "wb") as f:
-        f.write(json.dumps(header.to_dict()).encode() + b"\n")
+    with StreamFileWriter(path, header) as w:
         for p in packets:
-            if len(p) > 0xFFFF:
-                raise StreamError(f"packet of {len(p)} bytes is too long for a stream file")
-            f.write(_LEN.pack(len(p)) + p)
+            w.write_packet(p)
 
 
 def read_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[bytes]]:
@@ -583,9 +603,11 @@ def read_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[bytes]]:
     nl = data.find(b"\n")
     if nl < 0:
         raise StreamError(f"{path}: not a packet-stream file (no header line)")
+    if nl > _HEADER_MAX:
+        raise StreamError(f"{path}: not a packet-stream file (header line longer than {_HEADER_MAX} bytes)")
     try:
         h = json.loads(data[:nl].decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+    except (UnicodeDecodeError, ValueError, RecursionError):  # JSONDecodeError is a ValueError
         raise StreamError(f"{path}: not a packet-stream file (header is not JSON)") from None
     if not isinstance(h, dict) or h.get("kind") != STREAM_FILE_KIND:
         raise StreamError(f"{path}: not a packet-stream file (kind is not {STREAM_FILE_KIND!r})")
@@ -602,11 +624,13 @@ def read_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[bytes]]:
             key_interval=int(h.get("key_interval", 30)),
             neutral=[int(v) & 0xFF for v in neutral] if neutral else None,
         )
-        if w <= 0 or hh <= 0 or not header.ipd > 0 or not header.fps > 0:
-            raise ValueError("frame size, ipd and fps must be positive")
+        if not (0 < w <= 65535 and 0 < hh <= 65535):
+            raise ValueError("frame size must be 1 to 65535 pixels a side")
+        if not (math.isfinite(header.ipd) and header.ipd > 0 and math.isfinite(header.fps) and header.fps > 0):
+            raise ValueError("ipd and fps must be positive numbers")
         if header.neutral is not None and len(header.neutral) != N:
             raise ValueError(f"neutral must have {N} codes")
-    except (KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError, OverflowError) as e:
         raise StreamError(f"{path}: bad packet-stream header ({e})") from None
     packets = []
     pos = nl + 1
@@ -620,23 +644,6 @@ def read_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[bytes]]:
         packets.append(data[pos : pos + n])
         pos += n
     return header, packets
-
-
-def track_to_packets(
-    rows: Sequence[FaceParams], codec: ParamCodec, compressed: bool = True, key_interval: int = 30
-) -> list[bytes]:
-    """Turn a parameter track into packets (sequence numbers from 0, timestamps from ``time``)."""
-    enc = StreamEncoder(key_interval) if compressed else None
-    out = []
-    for seq, r in enumerate(rows):
-        codes = codec.encode(r)
-        ts = int(round(r.time * 1000.0))
-        if enc is None:
-            out.append(encode_packet(codes, seq, ts, r.status))
-        else:
-            key, payload = enc.encode(codes)
-            out.append(encode_stream_packet(key, payload, seq, ts, r.status))
-    return out
 
 
 def packets_to_track(header: StreamHeader, packets: Iterable[bytes], skip_bad: bool = True) -> list[FaceParams]:
@@ -664,6 +671,44 @@ def packets_to_track(header: StreamHeader, packets: Iterable[bytes], skip_bad: b
     return out
 
 
+class TrackStreamWriter(StreamFileWriter):
+    """Records a parameter track as a packet-stream file frame by frame: sequence numbers from 0,
+    timestamps from each record's ``time``; ``frame_size`` and ``ipd`` fix the quantisation."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        frame_size: tuple[int, int],
+        ipd: float,
+        fps: float = 30.0,
+        compressed: bool = True,
+        key_interval: int = 30,
+        neutral: FaceParams | None = None,
+    ):
+        self.codec = ParamCodec(frame_size, ipd)
+        header = StreamHeader(
+            frame_size=(int(frame_size[0]), int(frame_size[1])),
+            ipd=float(ipd),
+            fps=float(fps),
+            compressed=compressed,
+            key_interval=key_interval,
+            neutral=list(self.codec.encode(neutral)) if neutral is not None else None,
+        )
+        self._enc = StreamEncoder(key_interval) if compressed else None
+        super().__init__(path, header)
+
+    def write(self, r: FaceParams) -> None:
+        """Append one frame."""
+        codes = self.codec.encode(r)
+        ts = int(round(r.time * 1000.0)) if math.isfinite(r.time) else 0
+        seq = self.packets
+        if self._enc is None:
+            self.write_packet(encode_packet(codes, seq, ts, r.status))
+        else:
+            key, payload = self._enc.encode(codes)
+            self.write_packet(encode_stream_packet(key, payload, seq, ts, r.status))
+
+
 def write_track_stream(
     path: str | os.PathLike,
     rows: Sequence[FaceParams],
@@ -675,16 +720,9 @@ def write_track_stream(
     neutral: FaceParams | None = None,
 ) -> None:
     """Record a parameter track as a packet-stream file."""
-    codec = ParamCodec(frame_size, ipd)
-    header = StreamHeader(
-        frame_size=(int(frame_size[0]), int(frame_size[1])),
-        ipd=float(ipd),
-        fps=float(fps),
-        compressed=compressed,
-        key_interval=key_interval,
-        neutral=list(codec.encode(neutral)) if neutral is not None else None,
-    )
-    write_stream(path, header, track_to_packets(rows, codec, compressed, key_interval))
+    with TrackStreamWriter(path, frame_size, ipd, fps, compressed, key_interval, neutral) as w:
+        for r in rows:
+            w.write(r)
 
 
 def read_track_stream(path: str | os.PathLike) -> tuple[StreamHeader, list[FaceParams]]:

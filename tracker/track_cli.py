@@ -2,9 +2,12 @@
 
 Calibrates on the clicked frame (or on the first frame where the face detectors find a
 face), tracks every frame of the video from the start and writes the track CSV of
-``shared/DESIGN.md`` (contract columns, then ``time``, ``status``, ``confidence``).
-Expected problems — a missing or unreadable video, a bad clicks file, a frame index past
-the end — print one line ``inkface: …`` to stderr and exit with code 2.
+``shared/DESIGN.md`` (contract columns, then ``time``, ``status``, ``confidence``), one row per
+frame, streamed to disk as it goes (the file appears when complete). Outputs are checked before
+anything is read: one that is an input (the video, the clicks) is refused, an existing one is
+replaced only with ``--force``, and the overlay folder must be new or empty. Expected problems —
+a missing or unreadable video, a bad clicks file, a frame index past the end, a refused output —
+print one line ``inkface: …`` to stderr and exit with code 2.
 """
 
 from __future__ import annotations
@@ -21,7 +24,8 @@ from tracker.auto_init import AutoInitError, auto_clicks
 from tracker.calibration import CalibrationError, calibrate
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
-from tracker.params import write_csv
+from tracker.outputs import OutputError, calibration_files, check_outputs
+from tracker.params import TrackCsvWriter
 
 AUTO_TRIES = 10
 """How many of the first frames ``--auto`` tries before giving up."""
@@ -42,6 +46,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--overlay", metavar="DIR", help="write every Nth frame with the tracked features drawn as PNG")
     parser.add_argument("--overlay-every", type=int, default=30, metavar="N", help="overlay frame spacing (default 30)")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
+    parser.add_argument("--force", action="store_true",
+                        help="replace existing outputs (the video and clicks are never replaced)")
 
 
 class _Video:
@@ -113,57 +119,87 @@ def run(args: argparse.Namespace) -> int:
     """Run the command; 0 on success, 2 on an expected error (message on stderr)."""
     try:
         return _run(args)
-    except (TrackCliError, ClicksError, CalibrationError, AutoInitError) as e:
+    except (TrackCliError, ClicksError, CalibrationError, AutoInitError, OutputError) as e:
         print(f"inkface: {e}", file=sys.stderr)
         return 2
     except OSError as e:
-        print(f"inkface: {getattr(e, 'filename', '') or ''} {e.strerror or e}".strip(), file=sys.stderr)
+        name = f"{str(e.filename)[:80]}: " if getattr(e, "filename", None) else ""
+        print(f"inkface: {name}{e.strerror or e}", file=sys.stderr)
         return 2
+
+
+def _calibrate(video: Path, frame: np.ndarray, clicks: Clicks, where: str):
+    try:
+        return calibrate(frame, clicks)
+    except CalibrationError as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        msg = msg[len("calibration: "):] if msg.startswith("calibration: ") else msg
+        raise TrackCliError(f"{video}: {msg} ({where}, frame {clicks.frame})") from None
+
+
+_OVERLAY_NAME = "track_{:06d}.png"
 
 
 def _run(args: argparse.Namespace) -> int:
     video = Path(args.video)
+    csv_out = Path(args.csv)
+    check_outputs(
+        files=[csv_out] + (calibration_files(args.calibration) if args.calibration else []),
+        folders=[args.overlay],
+        inputs=[video, args.init],
+        force=args.force,
+    )
     _Video(video).close()  # a bad video is reported before anything else
     if args.auto:
         clicks, cal_frame = _auto(video)
+        where = "found automatically"
     else:
         clicks = Clicks.load(args.init)
         cal_frame = _frame_at(video, clicks.frame)
         h, w = cal_frame.shape[:2]
         clicks.check_inside((w, h), where=str(args.init))
-    cal = calibrate(cal_frame, clicks)
-    if args.calibration:
-        cal.save(args.calibration)
+        where = f"clicks {args.init}"
+    cal = _calibrate(video, cal_frame, clicks, where)
     tracker = FaceTracker(cal)
     overlay_dir = Path(args.overlay) if args.overlay else None
     if overlay_dir is not None:
         overlay_dir.mkdir(parents=True, exist_ok=True)
+    overlays: set[str] = set()
     v = _Video(video)
-    rows = []
     t0 = _time.monotonic()
     last_print = t0
     show = not args.quiet
+    n = lost = 0
     try:
-        for i, img in v.frames():
-            res = tracker.track(img, index=i, time=i / v.fps)
-            rows.append(res.params)
-            if overlay_dir is not None and i % max(args.overlay_every, 1) == 0:
-                cv2.imwrite(str(overlay_dir / f"track_{i:06d}.png"), res.overlay.draw(img))
-            now = _time.monotonic()
-            if show and now - last_print > 1.0:
-                total = f"/{v.count_hint}" if v.count_hint else ""
-                print(f"\rtracking {video.name}: frame {i + 1}{total} ({(i + 1) / (now - t0):.0f} fps)", end="", file=sys.stderr, flush=True)
-                last_print = now
+        with TrackCsvWriter(csv_out) as out:
+            for i, img in v.frames():
+                res = tracker.track(img, index=i, time=i / v.fps)
+                out.write(res.params)
+                n += 1
+                lost += res.params.status == "lost"
+                if overlay_dir is not None and i % max(args.overlay_every, 1) == 0:
+                    name = _OVERLAY_NAME.format(i)
+                    cv2.imwrite(str(overlay_dir / name), res.overlay.draw(img))
+                    overlays.add(name)
+                now = _time.monotonic()
+                if show and now - last_print > 1.0:
+                    total = f"/{v.count_hint}" if v.count_hint else ""
+                    print(f"\rtracking {video.name}: frame {i + 1}{total} ({(i + 1) / (now - t0):.0f} fps)", end="", file=sys.stderr, flush=True)
+                    last_print = now
+            if n == 0:
+                raise TrackCliError(f"{video}: no frames could be read")
     finally:
         v.close()
     if show and last_print != t0:
         print(file=sys.stderr)
-    if not rows:
-        raise TrackCliError(f"{video}: no frames could be read")
-    write_csv(args.csv, rows)
-    lost = sum(r.status == "lost" for r in rows)
+    if args.calibration:
+        cal.save(args.calibration)
+    if overlay_dir is not None:  # frames of an earlier run in the same folder would mislead
+        for f in overlay_dir.glob("track_*.png"):
+            if f.name not in overlays and f.stem[6:].isdigit() and len(f.stem) == 12:
+                f.unlink(missing_ok=True)
     if show:
-        print(f"{len(rows)} frames tracked ({lost} lost) → {args.csv}", file=sys.stderr)
+        print(f"{n} frames tracked ({lost} lost) → {args.csv}", file=sys.stderr)
     return 0
 
 

@@ -3,7 +3,8 @@
 * :func:`leave_one_out` — for each training pair, fit the map on the *other* pairs and ask
   it about this pair's frame: the weight its own drawing does not get (1 − w_own; 0 = perfect,
   1 when only other drawings are chosen, always so when no other pair shows that drawing) and
-  the reconstruction error ‖m − Σ α_i m_i‖ (how well the chosen drawings stand in for it).
+  the reconstruction error ‖m − Σ α_i m_i‖ (how well the chosen drawings stand in for it;
+  None for the only pair of a part, which has no others to stand in for it).
 * :func:`coverage` — the reference clip's frames against the paper's map: share of frames
   that project outside the hull of the training points, how far (mean / max, in the map's
   scale-free units) and the farthest-outside frame — the expression to add next.
@@ -30,7 +31,7 @@ class LooResult:
     drawing: int
     name: str
     weight_error: float  # 1 − weight the others' map gives to this pair's drawing
-    recon_error: float  # ‖m − Σ α_i m_i‖ with that map's weights (scale-free units)
+    recon_error: float | None  # ‖m − Σ α_i m_i‖ with that map's weights (scale-free units); None: no other pair
     alone: bool  # no other pair shows this drawing, so the weight error is 1 by construction
     predicted: list[tuple[str, float]] = field(default_factory=list)
 
@@ -46,6 +47,7 @@ class Coverage:
     max_outside: float
     worst_frame: int  # index in the reference track (-1 if none outside)
     suggestion: str
+    hull: bool = True  # False while fewer than three drawings are paired: no area to be outside of
 
 
 def _mean_points(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -57,7 +59,8 @@ def leave_one_out(X: np.ndarray, y, names: list[str], mapper: str = "delaunay") 
     """Leave-one-out over training pairs: rows ``X`` ``(m, k)`` paired with drawings ``y``.
 
     For each pair, the map is fitted on the other pairs (one point per drawing, the mean of its
-    frames) and asked about this pair's features. ``names[d]`` names drawing ``d``.
+    frames) and asked about this pair's features. ``names[d]`` names drawing ``d``. Every number
+    in the results is finite: a pair with no other pair to fit on gets ``recon_error=None``.
     """
     X = np.asarray(X, dtype=np.float64)
     y = np.asarray(y, dtype=np.intp)
@@ -66,7 +69,7 @@ def leave_one_out(X: np.ndarray, y, names: list[str], mapper: str = "delaunay") 
         keep = np.arange(len(X)) != i
         alone = not np.any(y[keep] == y[i])
         if not keep.any():
-            out.append(LooResult(i, int(y[i]), names[y[i]], 1.0, float("nan"), True))
+            out.append(LooResult(i, int(y[i]), names[y[i]], 1.0, None, True))
             continue
         pts, labs = _mean_points(X[keep], y[keep])
         m = make_mapper(mapper, pts, labels=labs)
@@ -92,6 +95,10 @@ def coverage(emap: ExpressionMap, feats: np.ndarray, part: str = "", frame_ids=N
     feats, ids = feats[ok], ids[ok]
     if len(feats) == 0:
         return Coverage(part, 0, 0.0, 0.0, 0.0, -1, f"{part}: no tracked frames in the reference clip to check")
+    if getattr(emap, "mode", "tri") != "tri":  # one drawing, or drawings on a line: no hull yet
+        return Coverage(part, len(feats), 0.0, 0.0, 0.0, -1,
+                        f"{part}: pair at least three different drawings to see which frames no drawing covers",
+                        hull=False)
     dist = np.array([emap.locate(x).outside for x in feats])
     out = dist > tol * emap.scale
     share = float(out.mean())

@@ -24,7 +24,7 @@ from typing import Iterable
 
 import numpy as np
 
-from tracker import atomic_file
+from tracker import atomic_file, safe_json
 from tracker.params import PARAM_NAMES, FaceParams
 from training.features import PART_SLICES, FeatureSpace
 
@@ -53,6 +53,7 @@ class Pair:
     blend: dict[str, float] | None = None
     thumbnail: np.ndarray | None = field(default=None, repr=False)
     thumb_file: str = ""
+    source: str = ""  # where the frame came from when not the reference clip, e.g. "synthetic:smile"
 
     @property
     def is_blend(self) -> bool:
@@ -71,6 +72,8 @@ class Pair:
             d["blend"] = {k: float(v) for k, v in self.blend.items()}
         if self.thumb_file:
             d["thumbnail"] = self.thumb_file
+        if self.source:
+            d["source"] = self.source
         return d
 
 
@@ -300,15 +303,17 @@ class TrainingSession:
             "reference_clip": self.reference_clip,
             "pairs": [p.to_dict() for p in self.pairs],
         }
-        if self.reference_track is not None:
-            d["reference_track"] = [[round(float(x), 4) for x in row] for row in self.reference_track]
+        if self.reference_track is not None:  # null where the face was lost
+            d["reference_track"] = [[round(float(x), 4) if math.isfinite(x) else None for x in row]
+                                    for row in self.reference_track]
         if self.notes:
             d["notes"] = list(self.notes)
         return d
 
     def save(self, path: str | os.PathLike | None = None) -> Path:
-        """Write ``session.json`` and new thumbnails into the session folder, atomically; remove
-        thumbnails no pair uses any more. Returns the JSON path."""
+        """Write ``session.json`` and the thumbnails into the session folder as one
+        :class:`~tracker.atomic_file.Generation` (a crash leaves the previous save or this one);
+        thumbnails no pair uses any more are removed. Returns the JSON path."""
         if path is not None:
             new = self._folder(path)
             if new != self.path:
@@ -318,27 +323,24 @@ class TrainingSession:
         if self.path is None:
             raise SessionError("training session has no path to save to")
         folder = self.path
+        target = folder / SESSION_FILE
         try:
-            folder.mkdir(parents=True, exist_ok=True)
-            used = set()
+            gen = atomic_file.Generation(folder, SESSION_FILE, _thumbs_named_by(target))
             for p in self.pairs:
-                if p.thumbnail is not None and not p.thumb_file:
-                    self._thumb_seq += 1
-                    stem = re.sub(r"[^A-Za-z0-9_-]+", "_", p.drawing or "blend")
-                    name = f"{THUMB_DIR}/{p.part}-{stem}-{p.frame:06d}-{os.getpid()}-{self._thumb_seq}.png"
-                    while (folder / name).exists():
-                        self._thumb_seq += 1
-                        name = f"{THUMB_DIR}/{p.part}-{stem}-{p.frame:06d}-{os.getpid()}-{self._thumb_seq}.png"
-                    atomic_file.write_bytes(folder / name, _png(p.thumbnail))
-                    p.thumb_file = name
                 if p.thumb_file:
-                    used.add(p.thumb_file)
-            target = folder / SESSION_FILE
-            atomic_file.write_bytes(target, (json.dumps(self.to_dict(), indent=1) + "\n").encode())
+                    try:
+                        gen.keep(p.thumb_file)
+                        continue
+                    except KeyError:
+                        p.thumb_file = ""
+                if p.thumbnail is not None:
+                    stem = re.sub(r"[^A-Za-z0-9_-]+", "_", p.drawing or "blend")[:64]
+                    p.thumb_file = gen.put(f"{THUMB_DIR}/{p.part}-{stem}-{p.frame:06d}.png", _png(p.thumbnail))
+            gen.commit((json.dumps(self.to_dict(), indent=1) + "\n").encode("utf-8"))
             tdir = folder / THUMB_DIR
-            if tdir.is_dir():
+            if tdir.is_dir():  # the session's own folder: thumbnails of interrupted saves go too
                 for f in tdir.glob("*.png"):
-                    if f"{THUMB_DIR}/{f.name}" not in used:
+                    if f"{THUMB_DIR}/{f.name}" not in gen.names:
                         f.unlink(missing_ok=True)
         except OSError as e:
             raise SessionError(f"{folder}: cannot save training session ({e.strerror or e})") from None
@@ -349,59 +351,127 @@ class TrainingSession:
         """Read a session folder (or its ``session.json``). With ``artset``, also :meth:`check` it."""
         folder = cls._folder(path)
         f = folder / SESSION_FILE
-        try:
-            raw = json.loads(f.read_text())
-        except FileNotFoundError:
-            raise SessionError(f"{f}: no training session here") from None
-        except (OSError, UnicodeDecodeError) as e:
-            raise SessionError(f"{f}: cannot read ({e})") from None
-        except json.JSONDecodeError as e:
-            raise SessionError(f"{f}: not valid JSON (line {e.lineno}: {e.msg})") from None
-        try:
-            s = cls._from_dict(raw, folder, autosave)
-        except SessionError:
-            raise
-        except (KeyError, TypeError, ValueError) as e:
-            msg = f"missing key {e}" if isinstance(e, KeyError) else str(e).splitlines()[0]
-            raise SessionError(f"{f}: malformed training session ({msg})") from None
+        if not f.exists():
+            raise SessionError(f"{f}: no training session here")
+        atomic_file.sweep_temp(folder)
+        atomic_file.sweep_temp(folder / THUMB_DIR)
+        # NaN: a frame where the face was lost, as sessions before format checks wrote it
+        raw = safe_json.read(f, "training session", max_bytes=MAX_FILE_BYTES, allow_nan=True, error=SessionError)
+        s = cls._from_dict(raw, folder, autosave)
         if artset is not None:
             s.check(artset)
         return s
 
     @classmethod
-    def _from_dict(cls, raw: dict, folder: Path, autosave: bool) -> "TrainingSession":
+    def _from_dict(cls, raw, folder: Path, autosave: bool) -> "TrainingSession":
         f = folder / SESSION_FILE
         if not isinstance(raw, dict):
             raise SessionError(f"{f}: expected a JSON object")
         fmt = raw.get("format")
-        if fmt != FORMAT_VERSION:
-            raise SessionError(f"{f}: unsupported session format {fmt!r} (this build reads {FORMAT_VERSION})")
+        if isinstance(fmt, bool) or fmt != FORMAT_VERSION:
+            raise SessionError(f"{f}: unsupported session format {safe_json.show(fmt)} (this build reads {FORMAT_VERSION})")
+        r = _Reader(f)
+        if "artset" not in raw:
+            raise SessionError(f"{f}: malformed training session (missing key 'artset')")
         cal = raw.get("calibration") or {}
-        features = FeatureSpace.from_dict(cal) if "ipd" in cal else None
-        s = cls(str(raw["artset"]), features, cal.get("ref", ""), raw.get("reference_clip", ""), path=None, autosave=autosave)
+        r.mapping(cal, "calibration")
+        features = _feature_space(r, cal) if "ipd" in cal else None
+        s = cls(r.string(raw["artset"], "artset"), features, r.string(cal.get("ref", ""), "calibration.ref"),
+                r.string(raw.get("reference_clip", ""), "reference_clip"), path=None, autosave=autosave)
         if raw.get("reference_track") is not None:
-            s.reference_track = np.asarray(raw["reference_track"], dtype=np.float64).reshape(-1, len(PARAM_NAMES))
-        s.notes = [str(n) for n in raw.get("notes", [])]
-        for d in raw.get("pairs", []):
-            vals = d["values"]
-            vals = [float(vals[n]) for n in PARAM_NAMES] if isinstance(vals, dict) else [float(v) for v in vals]
-            part = str(d["part"])
-            cls._check_part(part)
-            p = Pair(part, d.get("drawing"), int(d.get("frame", 0)), _values10(vals), blend=d.get("blend"))
-            if p.blend is None and not p.drawing:
-                raise SessionError(f"{f}: a pair has neither 'drawing' nor 'blend'")
-            tf = d.get("thumbnail", "")
-            if tf:
-                tp = (folder / tf).resolve()
-                if folder.resolve() in tp.parents and tp.is_file():
-                    try:
-                        from PIL import Image
-
-                        with Image.open(tp) as im:
-                            p.thumbnail = np.asarray(im.convert("RGB"))
-                        p.thumb_file = tf
-                    except OSError:
-                        p.thumbnail = None
-            s.pairs.append(p)
+            rows = safe_json.sequence(raw["reference_track"], f"{f}: reference_track", SessionError, MAX_TRACK_ROWS)
+            s.reference_track = np.array([r.values(row, f"reference_track[{i}]", nan_ok=True) for i, row in enumerate(rows)],
+                                         dtype=np.float64).reshape(-1, len(PARAM_NAMES))
+        s.notes = [r.string(n, "notes") for n in safe_json.sequence(raw.get("notes", []), f"{f}: notes", SessionError, 10_000)]
+        for i, d in enumerate(safe_json.sequence(raw.get("pairs", []), f"{f}: pairs", SessionError, MAX_PAIRS)):
+            s.pairs.append(cls._pair_from_dict(r, d, f"pairs[{i}]", folder))
         s.path = folder
         return s
+
+    @classmethod
+    def _pair_from_dict(cls, r: "_Reader", d, where: str, folder: Path) -> Pair:
+        d = r.mapping(d, where)
+        for key in ("part", "values"):
+            if key not in d:
+                raise SessionError(f"{r.file}: malformed training session ({where}: missing key '{key}')")
+        part = r.string(d["part"], f"{where}.part")
+        if part not in PARTS:
+            raise SessionError(f"{r.file}: {where}: unknown part {safe_json.show(part)} (expected eyes or mouth)")
+        drawing = None if d.get("drawing") is None else r.string(d["drawing"], f"{where}.drawing")
+        blend = None
+        if d.get("blend") is not None:
+            raw_blend = r.mapping(d["blend"], f"{where}.blend")
+            blend = {r.string(k, f"{where}.blend"): safe_json.number(v, f"{r.file}: {where}.blend.{k}", SessionError, 0.0)
+                     for k, v in raw_blend.items()}
+            if not blend or sum(blend.values()) <= 0:
+                raise SessionError(f"{r.file}: {where}.blend: weights must not all be zero")
+        if blend is None and not drawing:
+            raise SessionError(f"{r.file}: a pair has neither 'drawing' nor 'blend'")
+        frame = safe_json.integer(d.get("frame", 0), f"{r.file}: {where}.frame", SessionError, 0, int(safe_json.MAGNITUDE))
+        source = r.string(d["source"], f"{where}.source") if d.get("source") is not None else ""
+        p = Pair(part, drawing, frame, r.values(d["values"], f"{where}.values"), blend=blend, source=source)
+        tf = d.get("thumbnail", "")
+        if tf:
+            full = atomic_file.inside(folder, r.string(tf, f"{where}.thumbnail"))
+            if full is not None and full.is_file():
+                try:
+                    from PIL import Image
+
+                    with Image.open(full) as im:
+                        if im.width * im.height <= MAX_THUMB_PIXELS:
+                            p.thumbnail = np.asarray(im.convert("RGB"))
+                            p.thumb_file = tf
+                except (OSError, ValueError, Image.DecompressionBombError):
+                    p.thumbnail = None
+        return p
+
+
+# ----------------------------------------------------------------------------- reading files
+MAX_FILE_BYTES = 64 * 1024 * 1024
+MAX_TRACK_ROWS = 2_000_000
+MAX_PAIRS = 100_000
+MAX_THUMB_PIXELS = 1024 * 1024
+
+
+def _thumbs_named_by(f: Path) -> list[str]:
+    """The thumbnails the session file ``f`` names now (none if it is missing or unreadable)."""
+    try:
+        raw = safe_json.read(f, "training session", max_bytes=MAX_FILE_BYTES, allow_nan=True, error=SessionError)
+    except SessionError:
+        return []
+    pairs = raw.get("pairs") if isinstance(raw, dict) else None
+    if not isinstance(pairs, list):
+        return []
+    return [d["thumbnail"] for d in pairs if isinstance(d, dict) and isinstance(d.get("thumbnail"), str)]
+
+
+class _Reader:
+    """Checks values of one session file; every error names the file."""
+
+    def __init__(self, file: Path):
+        self.file = file
+
+    def string(self, v, where: str) -> str:
+        return safe_json.string(v, f"{self.file}: {where}", SessionError)
+
+    def mapping(self, v, where: str) -> dict:
+        return safe_json.mapping(v, f"{self.file}: {where}", SessionError)
+
+    def values(self, v, where: str, nan_ok: bool = False) -> tuple[float, ...]:
+        """Ten values, as ``{name: number}`` or a list in PARAM_NAMES order (null: not measured)."""
+        if isinstance(v, dict):
+            missing = [n for n in PARAM_NAMES if n not in v]
+            if missing:
+                raise SessionError(f"{self.file}: malformed training session ({where}: missing {', '.join(missing)})")
+            v = [v[n] for n in PARAM_NAMES]
+        if not isinstance(v, list) or len(v) != len(PARAM_NAMES):
+            raise SessionError(f"{self.file}: {where} must be {len(PARAM_NAMES)} numbers, got {safe_json.show(v)}")
+        if nan_ok:
+            v = [math.nan if x is None else x for x in v]
+        return tuple(safe_json.number(x, f"{self.file}: {where}", SessionError, nan_ok=nan_ok) for x in v)
+
+
+def _feature_space(r: _Reader, cal: dict) -> FeatureSpace:
+    ipd = safe_json.number(cal["ipd"], f"{r.file}: calibration.ipd", SessionError, 1e-3, 1e6)
+    neutral = r.values(cal.get("neutral"), "calibration.neutral")
+    return FeatureSpace.from_dict({"ipd": ipd, "neutral": list(neutral)})

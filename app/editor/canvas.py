@@ -159,6 +159,15 @@ class LineCanvas(_ImageView):
             setattr(self, cache_name, cache)
         return cache[1]
 
+    def empty_text(self) -> str:
+        """What the canvas says when there is no drawing to show."""
+        if self.doc.artset is None:
+            return ("No character open.\nDrop head images here to start a new one, "
+                    "or use File ▸ New character from images or File ▸ Open.")
+        noun = "eye" if self.doc.part == "eyes" else self.doc.part
+        return (f"No {noun} drawings yet.\nDrop image files here or on the {self.doc.part.capitalize()} list, "
+                f"or use Add ▸ {noun.capitalize()} drawings…")
+
     # ---------------------------------------------------------------- painting
     def paintEvent(self, ev):
         p = QPainter(self)
@@ -169,9 +178,7 @@ class LineCanvas(_ImageView):
         if d is None:
             p.setPen(QColor(220, 220, 220))
             p.setFont(QFont(p.font().family(), 12))
-            what = self.doc.part if self.doc.artset else "a character"
-            p.drawText(self.rect(), Qt.AlignCenter,
-                       f"No {what} drawings yet.\nDrop image files here or use File ▸ New character.")
+            p.drawText(self.rect().adjusted(12, 12, -12, -12), Qt.AlignCenter | Qt.TextWordWrap, self.empty_text())
             return
         r = self.image_rect()
         p.fillRect(r, self._checker)

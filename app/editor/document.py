@@ -24,6 +24,7 @@ from PySide6.QtCore import QObject, QTimer, Signal
 from PySide6.QtGui import QUndoCommand, QUndoStack
 
 from art_sets import editing as ed
+from art_sets.atomic_file import sweep_temp
 from art_sets.model import ArtSet
 
 AUTOSAVE_NAME = ".artset.autosave"
@@ -74,48 +75,28 @@ def recoverable(path: Path | None) -> Path | None:
 
 
 def write_side_copy(art: ArtSet, folder: Path, written: dict) -> None:
-    """Write ``art`` as a complete art-set folder, fast: only images not already written (by
-    identity: the model never changes an array in place), light PNG compression, manifest last.
+    """Write ``art`` as a complete art-set folder, fast: light PNG compression, and images that
+    are the very arrays written last time (the model never changes an array in place) are kept
+    without encoding them again. One generation (``art_sets.io.save_artset``): a crash at any
+    moment leaves the previous side copy or this one, never a mix.
 
-    ``written`` maps file -> the array last written there; it is updated.
+    ``written`` is the cache ``save_artset`` keeps between saves into ``folder``; it is updated.
+    ``art``'s image names become the side copy's (pass a snapshot).
     """
-    import json
-    import os
-    import tempfile
+    from art_sets.io import save_artset
 
-    from PIL import Image
+    save_artset(art, folder, fast=True, cache=written)
 
-    from art_sets.io import manifest_dict
 
-    folder.mkdir(parents=True, exist_ok=True)
-    manifest = manifest_dict(art)
-    items = list(zip(manifest["heads"], art.heads))
-    for pname, p in art.parts.items():
-        items += [(d["image"], dr.image) for d, dr in zip(manifest["parts"][pname]["drawings"], p.drawings)]
+def _plain_names(art: ArtSet) -> None:
+    """Drop the ``.v2`` a generation switch may have given image names (``mouth/ah.v2.png`` ->
+    ``mouth/ah.png``), so a recovered side copy saves under the set's usual names."""
+    from art_sets.atomic_file import base_name
 
-    def atomic(target: Path, write) -> None:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                write(f)
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-
-    for rel, img in items:
-        if written.get(rel) is img and (folder / rel).is_file():
-            continue
-        atomic(folder / rel, lambda f, img=img: Image.fromarray(img, "RGBA").save(f, format="PNG", compress_level=1))
-        written[rel] = img
-    keep = {rel for rel, _ in items}
-    for old in folder.rglob("*.png"):  # PNGs of removed drawings
-        if old.relative_to(folder).as_posix() not in keep:
-            old.unlink(missing_ok=True)
-            written.pop(old.relative_to(folder).as_posix(), None)
-    text = json.dumps(manifest, indent=1, ensure_ascii=False) + "\n"
-    atomic(folder / "artset.json", lambda f: f.write(text.encode("utf-8")))
+    art.head_files = [base_name(f) for f in art.head_files]
+    for p in art.parts.values():
+        for d in p.drawings:
+            d.file = base_name(d.file) if d.file else d.file
 
 
 _SIZE_PROBLEM = re.compile(r"is \d+x\d+, the .* is \d+x\d+$")
@@ -225,6 +206,7 @@ class EditorDocument(QObject):
         self._autosave_target: Path | None = None
         self._autosave_written: dict = {}
         self.undo_stack.indexChanged.connect(self._on_stack_changed)
+        sweep_temp(_user_autosave_root(), recursive=True)  # what a crash of an earlier session left
 
     # ------------------------------------------------------------------ documents
     def new_character(
@@ -255,6 +237,8 @@ class EditorDocument(QObject):
             path = path.parent
         src = autosave_dir_for(path) if recover else path
         art = load_tolerant(src)
+        if recover:
+            _plain_names(art)
         for pname in art.parts:
             ed.make_consistent(art, pname)
         art.path = path
@@ -270,6 +254,7 @@ class EditorDocument(QObject):
     def open_recovered_untitled(self) -> ArtSet:
         """Reopen the side copy of a character that was never saved."""
         art = load_tolerant(autosave_dir_for(None))
+        _plain_names(art)
         art.path = None
         self._set_document(art, None)
         self._push_dirty_marker()

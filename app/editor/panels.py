@@ -11,8 +11,44 @@ from PySide6.QtWidgets import QListWidget, QListWidgetItem, QSizePolicy, QWidget
 
 from art_sets import editing as ed
 
+from app.views import ACCENT, BAD, OK_GREEN, WARN
+
 from .document import EditorDocument
 from .imaging import ImageCache, checker_brush, draw_control_line, qcolor_for_line, rgba_to_qimage
+
+CAPTION_H = 16  # px above each drawing of the part strip for its caption
+
+
+def _notes(missing: int, line: int | None) -> list[str]:
+    """The "to place" note of a caption, longest first."""
+    if line is not None:
+        return [f" — line {line} to place", f" · line {line}", f" · {line}"]
+    if missing:
+        return [f" — {missing} to place", f" · {missing} to place", f" · {missing}"]
+    return [""]
+
+
+def strip_caption(fm, name: str, missing: int, width: float, line: int | None = None, level: int = 0) -> str:
+    """A part-strip caption that fits ``width`` px in font metrics ``fm``: the drawing's name and,
+    when lines are still to place, how many (or which one, ``line``), in the ``level``-th
+    shortest form that fits; the name is shortened ("ne…") only when even the shortest note
+    leaves it no room. So captions of neighbouring drawings never overlap."""
+    notes = _notes(missing, line)
+    width = int(width) - 1  # elidedText may come out a pixel wider than asked
+    for note in notes[min(level, len(notes) - 1):]:
+        rest = width - fm.horizontalAdvance(note)
+        if fm.horizontalAdvance(name) <= rest:
+            return name + note
+    note = notes[-1]
+    rest = width - fm.horizontalAdvance(note)
+    if rest >= fm.horizontalAdvance(name[:2] + "…"):
+        return fm.elidedText(name, Qt.ElideRight, rest) + note
+    return fm.elidedText(name + note, Qt.ElideRight, width)
+
+
+def _fits(fm, name: str, missing: int, width: float, line: int | None, level: int) -> bool:
+    notes = _notes(missing, line)
+    return fm.horizontalAdvance(name + notes[min(level, len(notes) - 1)]) <= int(width) - 1
 
 
 def dropped_paths(mime) -> list[Path]:
@@ -107,13 +143,38 @@ class PartStrip(QWidget):
         if n == 0:
             return []
         w, h = part.size
-        cw = min((self.width() - 8) / n, 260)
-        s = min((cw - 8) / w, (self.height() - 24) / h)
+        cw = self.cell_width()
+        s = min((cw - 8) / w, (self.height() - CAPTION_H - 8) / h)
         out = []
         for i in range(n):
             x = 4 + i * cw + (cw - w * s) / 2
-            out.append((i, QRectF(x, 18, w * s, h * s), s))
+            out.append((i, QRectF(x, CAPTION_H + 2, w * s, h * s), s))
         return out
+
+    def cell_width(self) -> float:
+        """Width of each drawing's cell (its caption never runs past it)."""
+        art = self.doc.artset
+        n = len(art.parts[self.doc.part].drawings) if art is not None else 0
+        return min((self.width() - 8) / max(n, 1), 260)
+
+    def captions(self) -> list[tuple[str, QRectF]]:
+        """Each drawing's caption as painted, and the rectangle it is painted in."""
+        art = self.doc.artset
+        if art is None:
+            return []
+        part = art.parts[self.doc.part]
+        miss = ed.missing_lines(art, self.doc.part)
+        fm = self.fontMetrics()
+        cw = self.cell_width()
+        rows = []
+        for i, _r, _s in self._cells():
+            d = part.drawings[i]
+            missing = [k for k, names in miss.items() if d.name in names]
+            line = self.doc.line if self.doc.line >= 0 and d.name in miss.get(self.doc.line, []) else None
+            rows.append((d.name, len(missing), line, QRectF(4 + i * cw + 2, 1, cw - 4, CAPTION_H)))
+        # one form of the note for every drawing (the longest that fits them all), so they read alike
+        level = next((lv for lv in range(3) if all(_fits(fm, n, m, b.width(), ln, lv) for n, m, ln, b in rows)), 2)
+        return [(strip_caption(fm, n, m, b.width(), ln, level), b) for n, m, ln, b in rows]
 
     def _qimage(self, arr):
         hit = self._cache.get(id(arr))
@@ -133,6 +194,7 @@ class PartStrip(QWidget):
             return
         part = art.parts[self.doc.part]
         miss = ed.missing_lines(art, self.doc.part)
+        captions = self.captions()
         for i, r, s in self._cells():
             d = part.drawings[i]
             p.fillRect(r, self._checker)
@@ -151,17 +213,13 @@ class PartStrip(QWidget):
                                   label=False, handles=False)
                 p.setOpacity(1.0)
             missing_here = [k for k, names in miss.items() if d.name in names]
-            cap = d.name
-            if self.doc.line >= 0 and d.name in miss.get(self.doc.line, []):
-                cap += f"  — line {self.doc.line} to place"
-            elif missing_here:
-                cap += f"  — {len(missing_here)} to place"
-            p.setPen(QColor(255, 120, 100) if missing_here else QColor(225, 225, 225))
-            p.drawText(QRectF(r.left() - 20, 1, r.width() + 40, 16), Qt.AlignCenter, cap)
+            cap, box = captions[i]
+            p.setPen(BAD if missing_here else QColor(225, 225, 225))
+            p.drawText(box, Qt.AlignCenter, cap)
 
     def mousePressEvent(self, ev):
         for i, r, _ in self._cells():
-            if r.adjusted(-4, -18, 4, 4).contains(ev.position()):
+            if r.adjusted(-4, -CAPTION_H - 2, 4, 4).contains(ev.position()):
                 self.drawingClicked.emit(i)
                 return
 
@@ -191,7 +249,7 @@ class LinesList(QListWidget):
                 txt = f"line {i}: " + (f"to place in {', '.join(names)}" if names else "placed in every drawing")
                 it = QListWidgetItem(QIcon(pm), txt)
                 if names:
-                    it.setForeground(QColor(190, 70, 40))
+                    it.setForeground(BAD)
                 self.addItem(it)
             if 0 <= self.doc.line < self.count():
                 self.setCurrentRow(self.doc.line)
@@ -219,10 +277,9 @@ class ProblemsList(QListWidget):
         self.clear()
         if not any(i.severity != "advice" for i in self.doc.issues):
             it = QListWidgetItem("✓ no problems: the validator accepts this character")
-            it.setForeground(QColor(40, 140, 60))
+            it.setForeground(OK_GREEN)
             self.addItem(it)
-        marks = {"error": ("✗", QColor(200, 50, 40)), "todo": ("•", QColor(150, 100, 20)),
-                 "advice": ("ⓘ", QColor(70, 100, 150))}
+        marks = {"error": ("✗", BAD), "todo": ("•", WARN), "advice": ("ⓘ", ACCENT)}
         for k, issue in enumerate(self.doc.issues):
             mark, col = marks.get(issue.severity, marks["todo"])
             it = QListWidgetItem(f"{mark} {issue.text()}")

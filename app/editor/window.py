@@ -4,9 +4,10 @@ menus, drag-and-drop, the canvases and the tests all take the same path."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
-from PySide6.QtCore import QSize, Qt
+from PySide6.QtCore import QDir, QSize, Qt
 from PySide6.QtGui import QKeySequence
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QDialog, QDialogButtonBox, QDockWidget, QDoubleSpinBox, QFileDialog,
@@ -39,6 +40,103 @@ def _user_art_dir() -> Path | None:
         return None
 
 
+_COPY = re.compile(r"^(?P<base>.*?)\s*\(copy(?:\s+(?P<n>\d+))?\)$", re.IGNORECASE)
+
+
+def unique_copy_name(name: str, taken) -> str:
+    """``name`` itself when no other character is called that (case-insensitively), else the
+    first free one of "Name (copy)", "Name (copy 2)", "Name (copy 3)"… — a copy of a copy
+    counts on from the same base, it does not become "Name (copy) (copy)"."""
+    names = {t.strip().lower() for t in taken}
+    if name.strip().lower() not in names:
+        return name
+    m = _COPY.match(name.strip())
+    base = m.group("base") if m and m.group("base") else name.strip()
+    k = 1
+    while True:
+        cand = f"{base} (copy)" if k == 1 else f"{base} (copy {k})"
+        if cand.lower() not in names:
+            return cand
+        k += 1
+
+
+def known_characters() -> list[tuple[str, Path]]:
+    """``(name, folder)`` of every character the performance window lists: the bundled ones,
+    those in the user folder and those remembered from elsewhere."""
+    out: list[tuple[str, Path]] = []
+    try:
+        from art_sets.library import list_all
+
+        out += list_all()
+    except Exception:  # a broken user folder must not stop a save
+        pass
+    try:
+        import json
+
+        from app.settings import Settings
+
+        seen = {Path(f).resolve() for _, f in out}
+        for d in Settings().user_art_dirs():
+            p = Path(d)
+            if p.resolve() not in seen and (p / "artset.json").is_file():
+                name = json.loads((p / "artset.json").read_text(encoding="utf-8")).get("name") or p.name
+                out.append((str(name), p))
+    except Exception:
+        pass
+    return out
+
+
+class SaveFolderDialog(QFileDialog):
+    """Where to save a character: type the name of a new folder (made on saving) or of an
+    existing one, or pick one in the list. Qt's own folder chooser refuses a name that does not
+    exist yet ("Directory not found"), so this is a save dialog that lists folders only and
+    takes the folder typed, new or not, instead of opening it."""
+
+    def __init__(self, parent, start: Path | None, suggested: str = ""):
+        super().__init__(parent, "Save the character in a folder — type a new folder's name, or choose one")
+        self.setOption(QFileDialog.DontUseNativeDialog, True)
+        self.setOption(QFileDialog.DontConfirmOverwrite, True)  # save_as asks before replacing a character
+        self.setFileMode(QFileDialog.AnyFile)
+        self.setAcceptMode(QFileDialog.AcceptSave)
+        self.setFilter(QDir.AllDirs | QDir.NoDotAndDotDot | QDir.Drives)
+        self.setLabelText(QFileDialog.Accept, "Save")
+        self.setLabelText(QFileDialog.FileName, "Folder:")
+        if start is not None:
+            self.setDirectory(str(start))
+        if suggested:
+            self.selectFile(suggested)
+        self.chosen: Path | None = None
+        self.problem = ""
+        box = self.findChild(QDialogButtonBox)
+        self._ok = (box.button(QDialogButtonBox.Save) or box.button(QDialogButtonBox.Open)) if box else None
+        self._edit = self.findChild(QLineEdit, "fileNameEdit")
+
+    def typed(self) -> Path | None:
+        """The folder named in the name field (relative to the folder shown), None if empty."""
+        text = self._edit.text().strip() if self._edit is not None else ""
+        if not text:
+            return None
+        p = Path(text).expanduser()
+        return p if p.is_absolute() else Path(self.directory().absolutePath()) / p
+
+    def accept(self):
+        p = self.typed()
+        if p is None:
+            p = Path(self.directory().absolutePath())  # nothing typed: the folder shown
+        parent = p.parent
+        while not parent.exists() and parent != parent.parent:
+            parent = parent.parent
+        if p.exists() and not p.is_dir():
+            self.problem = f"{p.name} is a file: type a folder's name"
+        elif not p.exists() and not parent.is_dir():
+            self.problem = f"cannot make a folder inside {parent}"
+        else:
+            self.chosen, self.problem = p, ""
+            QDialog.accept(self)
+            return
+        QMessageBox.information(self, "Inkface", self.problem)
+
+
 def _remember_user_folder(folder: Path) -> None:
     """Tell the performance window about a character saved outside the user art folder."""
     base = _user_art_dir()
@@ -52,6 +150,18 @@ def _remember_user_folder(folder: Path) -> None:
         st.sync()
     except Exception:  # remembering is a convenience; the save itself succeeded
         pass
+
+
+def _use_the_main_windows_theme() -> None:
+    """Give the application the performance window's dark theme (``app.views``), unless it has a
+    style already (the editor opened from a program that chose its own look)."""
+    from PySide6.QtWidgets import QApplication
+
+    from app.views import apply_theme
+
+    qapp = QApplication.instance()
+    if qapp is not None and not qapp.styleSheet():
+        apply_theme(qapp)
 
 
 class NewCharacterDialog(QDialog):
@@ -151,10 +261,12 @@ class EditorWindow(QMainWindow):
 
     def __init__(self, parent=None, autosave_delay_ms: int = 1500):
         super().__init__(parent)
+        _use_the_main_windows_theme()
         self.doc = EditorDocument(self, autosave_delay_ms=autosave_delay_ms)
         self.setAcceptDrops(True)
         self.resize(1360, 860)
         # hooks the tests replace to answer questions without modal dialogs
+        self.ask_save_folder = self._ask_save_folder_dialog
         self.ask_fit = self._ask_fit_dialog
         self.ask_recover = self._ask_recover_dialog
         self.confirm_close = self._confirm_close_dialog
@@ -259,7 +371,9 @@ class EditorWindow(QMainWindow):
         self.all_heads.setChecked(True)
         self.all_heads.toggled.connect(lambda v: setattr(self.head_canvas, "paint_all_heads", v))
         hb.addWidget(self.all_heads)
-        hb.addSpacing(10)
+        hb.addStretch(1)
+        hv.addLayout(hb)
+        hb = QHBoxLayout()  # a second row, so the editor fits a 1366-pixel-wide screen
         hb.addWidget(QLabel("feather"))
         self.radius_spin = QDoubleSpinBox()
         self.radius_spin.setRange(0, 100)
@@ -487,7 +601,10 @@ class EditorWindow(QMainWindow):
                 self.ghost_combo.setCurrentIndex(names.index(cur) + 1 if cur in names else 0)
                 self.ghost_combo.blockSignals(False)
                 self._ghost_changed()
-                self.accept_button.setEnabled(bool(ed.unplaced(art, self.doc.part, self.doc.drawing)))
+                has = 0 <= self.doc.drawing < len(art.parts[self.doc.part].drawings)
+                self.accept_button.setEnabled(has and bool(ed.unplaced(art, self.doc.part, self.doc.drawing)))
+            else:
+                self.accept_button.setEnabled(False)
         finally:
             self._filling_lists = False
 
@@ -569,7 +686,7 @@ class EditorWindow(QMainWindow):
         from art_sets.io import ArtSetError
 
         side = recoverable(None)
-        if side is None or not self.ask_recover("the unsaved character", side):
+        if side is None or not self.ask_recover("The character you had not saved yet", side):
             return False
         try:
             self.doc.open_recovered_untitled()
@@ -607,18 +724,43 @@ class EditorWindow(QMainWindow):
             return self.save_as()
         return self._save_to(self.doc.path)
 
+    def copy_name(self, target: Path) -> str:
+        """The name the character gets when saved into ``target``: its own, unless another known
+        character (a bundled one it was copied from, say) is called that — then "Name (copy)"."""
+        here = {Path(target).resolve()}
+        taken = [n for n, f in known_characters() if Path(f).resolve() not in here]
+        return unique_copy_name(self.doc.artset.name, taken)
+
+    def _ask_save_folder_dialog(self, start: Path | None, suggested: str) -> Path | None:
+        dlg = SaveFolderDialog(self, start, suggested)
+        return dlg.chosen if dlg.exec() == QDialog.Accepted else None
+
     def save_as(self) -> bool:
+        """Ask for a folder (an existing one, or a new one by typing its name) and save there."""
         if self.doc.artset is None:
             return False
         start = _user_art_dir()
-        d = QFileDialog.getExistingDirectory(self, "Save the character in a folder (a new, empty one is best)", str(start or ""))
-        if not d:
+        suggested = ed.slug(unique_copy_name(self.doc.artset.name, [n for n, _ in known_characters()]))
+        if start is not None and (start / suggested).exists():
+            k = 2
+            while (start / f"{suggested}-{k}").exists():
+                k += 1
+            suggested = f"{suggested}-{k}"
+        chosen = self.ask_save_folder(start, suggested)
+        if chosen is None:
             return False
-        folder = Path(d)
+        folder = Path(chosen)
+        if folder.exists() and not folder.is_dir():
+            QMessageBox.information(self, "Inkface", f"{folder} is a file; choose or name a folder.")
+            return False
         has_set = (folder / "artset.json").exists()
         if not has_set and folder.is_dir() and (any(folder.iterdir()) or (start is not None and folder.resolve() == start.resolve())):
-            folder = folder / ed.slug(self.doc.artset.name)
-            has_set = (folder / "artset.json").exists()
+            # a folder of other things (or of all the characters): a new sub-folder for this one
+            base = ed.slug(self.copy_name(folder / ".new"))
+            sub, k = folder / base, 2
+            while sub.exists():
+                sub, k = folder / f"{base}-{k}", k + 1
+            folder, has_set = sub, False
         if is_bundled(folder):
             QMessageBox.information(self, "Inkface", "Bundled characters are not changed in place; choose another folder.")
             return False
@@ -627,18 +769,29 @@ class EditorWindow(QMainWindow):
                                        QMessageBox.Yes | QMessageBox.No, QMessageBox.No)
             if ans != QMessageBox.Yes:
                 return False
-        return self._save_to(folder)
+        return self._save_to(folder, rename=True)
 
-    def _save_to(self, folder) -> bool:
+    def _save_to(self, folder, rename: bool = False) -> bool:
+        """Save into ``folder``; with ``rename`` (a save-as), first give the character a name no
+        other character has ("Noodle (copy)")."""
         from art_sets.io import ArtSetError
 
+        old = self.doc.artset.name
+        new = self.copy_name(Path(folder)) if rename else old
+        renamed = new != old
+        if renamed:
+            self.doc.set_info(new)  # an undoable step, like typing the name
         try:
             self.doc.save(folder, runner=self._run_busy)
         except (ArtSetError, OSError, ed.EditError) as e:
+            if renamed:
+                self.doc.undo_stack.undo()
             QMessageBox.warning(self, "Inkface", f"Could not save: {' '.join(str(e).split())}")
             return False
         self._update_title()
         _remember_user_folder(Path(folder))
+        if renamed:
+            self.statusBar().showMessage(f"Saved as “{new}” in {folder}: another character is already called “{old}”", 10000)
         return True
 
     def _run_busy(self, fn, text: str = "Saving…"):

@@ -1,0 +1,816 @@
+"""Real faces: our tracker against a learned landmark tracker (the "peer") on real videos.
+
+The clips live outside the project, in ``../shared/real/`` from the repository root (or the
+folder named by ``$INKFACE_REAL_DIR``); each clip ``NAME`` has ``NAME.mp4``, ``NAME.clicks.json``,
+``NAME.mp.csv`` (the peer's ten parameters per frame plus ``ipd``) and ``NAME.points.csv`` (the
+peer's key points per frame). Everything here is a plain function, importable without running
+anything; ``python -m benchmarks.realfaces`` prints the table (``--help`` for the options).
+
+How the comparison is made (all in :func:`compare`):
+
+* **visible** frames are those where the peer has a finite row (the peer sees the face).
+* **lost %** counts visible frames whose status is not ``ok`` — except ``eyes_closed`` on a
+  frame where the peer, too, sees both eyes shut (mean lid gap under
+  :data:`CLOSED_FRACTION` of its median over the clip): that is an honest answer, not a loss.
+  ``lost``, ``mouth_lost`` and ``eyes_closed`` are also given separately (raw, % of visible).
+* **pupil error**: distance between our pupil midpoint and the peer's, in % of the peer's
+  inter-pupil distance on that frame, over visible frames we report ``ok``. **roll error**:
+  absolute difference of ``roll_deg`` over the same frames.
+* **correlations** (Pearson r) over every visible frame, using the values we report: on a lost
+  frame the tracker holds its last values, which is what the cartoon would show, so a loss
+  counts against the correlation the way the user sees it. Non-finite values of ours are held
+  from the last finite one. Mouth open = ``lip_upper + lip_lower``; eye = mean of the two eye
+  openings; brow = mean of the two brows. A constant series gives r = nan (a miss).
+* **re-acquisition**: for every return of the face after the peer lost it, frames from the
+  return to our first ``ok`` frame (the real clips have no such returns; the synthetic
+  slide-away clips of :func:`synthetic_away` do).
+
+Times are ``time.perf_counter`` around each frame's ``FaceTracker.track`` call, every frame
+included (re-acquisition too); decoding and drawing are outside the timed region.
+"""
+
+from __future__ import annotations
+
+import os
+
+if __name__ == "__main__":  # before numpy loads: one thread per process
+    for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_v, "1")
+
+import argparse
+import csv
+import math
+import re
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
+
+import cv2
+import numpy as np
+
+from tracker.auto_init import AutoInitError
+from tracker.calibration import CalibrationError, calibrate
+from tracker.clicks import Clicks, ClicksError
+from tracker.face_tracker import FaceTracker
+from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams
+from tracker.track_cli import TrackCliError, _auto, _frame_at, _Video
+
+if TYPE_CHECKING:
+    from benchmarks.harness import Table
+
+REAL_DIR_ENV = "INKFACE_REAL_DIR"
+"""Environment variable naming the folder of real clips (overrides ``../shared/real``)."""
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+OUT_DIR = REPO_ROOT / "out" / "realfaces"
+
+CLOSED_FRACTION = 0.4
+"""The peer sees the eyes shut when its mean lid gap is under this fraction of its clip median."""
+
+ON_FACE = 8.0
+"""Pupil-midpoint error (% IPD) under which a frame counts as on the face (re-acquisition)."""
+
+SETTLE = 10
+"""Consecutive right frames (truth's status, on the face) that make a re-acquisition settled."""
+
+PEER_MS = (4.3, 4.7)
+PEER_MS_SOURCE = "stated constant from issue 13 (one core of this machine), not measured: MediaPipe is not a dependency"
+"""Where :data:`PEER_MS` comes from: MediaPipe Face Mesh with refined irises, per 512×512 frame."""
+
+# Targets of issue 13, per clip. "max" targets are upper bounds, "min" lower bounds.
+TARGETS: dict[str, tuple[str, float]] = {
+    "lost_pct": ("max", 1.0),
+    "pupil_med": ("max", 3.0),
+    "pupil_p95": ("max", 8.0),
+    "roll_med": ("max", 1.5),
+    "r_open": ("min", 0.85),
+    "r_width": ("min", 0.7),
+    "r_eye": ("min", 0.7),
+    "r_brow": ("min", 0.6),
+    "ms_med": ("max", 3.0),
+    "ms_p95": ("max", 8.0),
+}
+AUTO_TARGETS = {**TARGETS, "lost_pct": ("max", 2.0), "r_open": ("min", 0.8)}
+"""``--auto`` targets: looser loss and mouth-opening bounds, the rest as with clicks."""
+
+REACQUIRE_TARGET = 5
+"""Frames from the face's return to our first ``ok`` frame (issue 13)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Data
+
+
+def real_dir(folder: str | os.PathLike | None = None) -> Path | None:
+    """The folder of real clips: ``folder``, else ``$INKFACE_REAL_DIR``, else ``../shared/real``
+    beside the repository; ``None`` when it does not exist."""
+    for cand in (folder, os.environ.get(REAL_DIR_ENV), REPO_ROOT.parent / "shared" / "real"):
+        if cand:
+            p = Path(cand)
+            return p if p.is_dir() else None
+    return None
+
+
+def clip_names(folder: Path) -> list[str]:
+    """Clips in ``folder`` that have a video, clicks and the peer's parameters, in natural order."""
+    names = []
+    natural = lambda p: [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", p.stem)]
+    for mp4 in sorted(folder.glob("*.mp4"), key=natural):
+        n = mp4.stem
+        if (folder / f"{n}.clicks.json").exists() and (folder / f"{n}.mp.csv").exists():
+            names.append(n)
+    return names
+
+
+@dataclass
+class PeerTrack:
+    """The peer's per-frame measurements of one clip.
+
+    ``values`` (n, 10) in :data:`PARAM_NAMES` order (px, degrees; NaN where the peer has no
+    face), ``ipd`` (n,) px, ``points`` key point name → (n, 2) px (empty without a points file).
+    """
+
+    values: np.ndarray
+    ipd: np.ndarray
+    points: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(n,) bool: frames where the peer has a face (finite pose and a positive IPD)."""
+        return np.all(np.isfinite(self.values[:, :3]), axis=1) & np.isfinite(self.ipd) & (self.ipd > 0)
+
+
+def _float(s: str) -> float:
+    try:
+        return float(s)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _read_rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def load_peer(folder: str | os.PathLike, name: str) -> PeerTrack:
+    """Read ``NAME.mp.csv`` (and ``NAME.points.csv`` when present); row ``i`` is frame ``i``."""
+    folder = Path(folder)
+    rows = _read_rows(folder / f"{name}.mp.csv")
+    n = max((int(float(r["frame"])) for r in rows), default=-1) + 1
+    values = np.full((n, len(PARAM_NAMES)), np.nan)
+    ipd = np.full(n, np.nan)
+    for r in rows:
+        i = int(float(r["frame"]))
+        values[i] = [_float(r.get(k, "")) for k in PARAM_NAMES]
+        ipd[i] = _float(r.get("ipd", ""))
+    points: dict[str, np.ndarray] = {}
+    pp = folder / f"{name}.points.csv"
+    if pp.exists():
+        prow = _read_rows(pp)
+        keys = sorted({k[:-2] for k in (prow[0] if prow else {}) if k.endswith("_x")})
+        for k in keys:
+            points[k] = np.full((n, 2), np.nan)
+        for r in prow:
+            i = int(float(r["frame"]))
+            if 0 <= i < n:
+                for k in keys:
+                    points[k][i] = (_float(r[f"{k}_x"]), _float(r[f"{k}_y"]))
+    return PeerTrack(values=values, ipd=ipd, points=points)
+
+
+# ---------------------------------------------------------------------------------------------
+# Running our tracker
+
+
+@dataclass
+class ClipRun:
+    """Our tracker on one clip: per-frame records and ``track`` times (ms): ``times_ms`` wall clock,
+    ``cpu_ms`` this process's CPU time (what the frame costs, whatever else the machine runs).
+
+    ``error`` is the one-line reason when calibration or start-up failed (no frames then);
+    ``overlays`` maps a kept frame index to the frame with our overlay drawn on it;
+    ``calibrate_ms`` the time to calibrate (and, with ``--auto``, to find the face first).
+    """
+
+    name: str
+    mode: str
+    params: list[FaceParams] = field(default_factory=list)
+    times_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    cpu_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    calibrate_ms: float = math.nan
+    error: str | None = None
+    overlays: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
+
+    @property
+    def statuses(self) -> list[str]:
+        return [p.status for p in self.params]
+
+
+def start_tracker(video: Path, clicks: str | os.PathLike | None = None, auto: bool = False) -> FaceTracker:
+    """Calibrate as ``python -m tracker track VIDEO (--init CLICKS | --auto)`` does and return the
+    tracker. Raises the tracker's own one-line errors."""
+    if auto:
+        found, cal_frame = _auto(video)
+    else:
+        found = Clicks.load(clicks)
+        cal_frame = _frame_at(video, found.frame)
+        h, w = cal_frame.shape[:2]
+        found.check_inside((w, h), where=str(clicks))
+    return FaceTracker(calibrate(cal_frame, found))
+
+
+def run_clip(
+    video: str | os.PathLike,
+    clicks: str | os.PathLike | None = None,
+    *,
+    auto: bool = False,
+    keep: Sequence[int] = (),
+    name: str | None = None,
+    max_frames: int | None = None,
+) -> ClipRun:
+    """Track every frame of ``video`` from frame 0, timing each ``track`` call.
+
+    ``keep``: frame indices whose overlay image to keep (for contact sheets; drawn outside the
+    timed region). ``max_frames`` stops early (for quick runs).
+    """
+    video = Path(video)
+    run = ClipRun(name=name or video.stem, mode="auto" if auto else "clicks")
+    t0 = time.perf_counter()
+    try:
+        tracker = start_tracker(video, clicks, auto=auto)
+    except (TrackCliError, ClicksError, CalibrationError, AutoInitError) as e:
+        run.error = str(e)
+        return run
+    run.calibrate_ms = (time.perf_counter() - t0) * 1000.0
+    keep = set(int(k) for k in keep)
+    v = _Video(video)
+    times, cpu = [], []
+    try:
+        for i, img in v.frames():
+            if max_frames is not None and i >= max_frames:
+                break
+            c = time.process_time()
+            t = time.perf_counter()
+            res = tracker.track(img, index=i, time=i / v.fps)
+            times.append((time.perf_counter() - t) * 1000.0)
+            cpu.append((time.process_time() - c) * 1000.0)
+            run.params.append(res.params)
+            if i in keep:
+                run.overlays[i] = res.overlay.draw(img)
+    finally:
+        v.close()
+    run.times_ms, run.cpu_ms = np.array(times), np.array(cpu)
+    return run
+
+
+# ---------------------------------------------------------------------------------------------
+# Comparing
+
+
+@dataclass
+class Metrics:
+    """What :func:`compare` measures on one clip (see the module docstring for definitions).
+
+    Percentages are of the visible frames; pupil errors in % of the peer's IPD; roll in degrees;
+    ``reacquire`` frames per return of the face (``None`` = never re-acquired); ``pupil_err``
+    the error of each visible ``ok`` frame, in frame order.
+    """
+
+    frames: int = 0
+    visible: int = 0
+    lost_pct: float = math.nan
+    status_lost_pct: float = math.nan
+    mouth_lost_pct: float = math.nan
+    eyes_closed_pct: float = math.nan
+    longest_loss: int = 0
+    ok_frames: int = 0
+    pupil_med: float = math.nan
+    pupil_p95: float = math.nan
+    roll_med: float = math.nan
+    r_open: float = math.nan
+    r_width: float = math.nan
+    r_eye: float = math.nan
+    r_brow: float = math.nan
+    reacquire: list[int | None] = field(default_factory=list)
+    pupil_err: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+
+def _shapes(v: np.ndarray) -> dict[str, np.ndarray]:
+    ix = {n: i for i, n in enumerate(PARAM_NAMES)}
+    return {
+        "r_open": v[:, ix["lip_upper"]] + v[:, ix["lip_lower"]],
+        "r_width": v[:, ix["mouth_width"]],
+        "r_eye": 0.5 * (v[:, ix["eye_open_l"]] + v[:, ix["eye_open_r"]]),
+        "r_brow": 0.5 * (v[:, ix["brow_l"]] + v[:, ix["brow_r"]]),
+    }
+
+
+def _hold(v: np.ndarray) -> np.ndarray:
+    """Replace non-finite entries by the last finite value above them (per column)."""
+    out = v.copy()
+    for i in range(1, len(out)):
+        bad = ~np.isfinite(out[i])
+        out[i, bad] = out[i - 1, bad]
+    return out
+
+
+def pearson(a: np.ndarray, b: np.ndarray) -> float:
+    """Pearson r over entries finite in both; nan when fewer than 3 or either is constant."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    m = np.isfinite(a) & np.isfinite(b)
+    if m.sum() < 3:
+        return math.nan
+    a, b = a[m] - a[m].mean(), b[m] - b[m].mean()
+    den = math.sqrt(float(a @ a) * float(b @ b))
+    return float(a @ b) / den if den > 1e-12 else math.nan
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open (start, end) index ranges where ``mask`` is true."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+def compare(ours: Sequence[FaceParams], peer: PeerTrack) -> Metrics:
+    """Measure ``ours`` (one record per frame, frame ``i`` at position ``i``) against ``peer``.
+
+    Only the frames both have are compared. See the module docstring for every definition.
+    """
+    n = min(len(ours), len(peer))
+    m = Metrics(frames=n)
+    if n == 0:
+        return m
+    ov = np.array([p.values() for p in ours[:n]], dtype=np.float64).reshape(n, len(PARAM_NAMES))
+    st = np.array([p.status for p in ours[:n]], dtype=object)
+    pv, ipd = peer.values[:n], peer.ipd[:n]
+    vis = peer.visible[:n]
+    m.visible = nv = int(vis.sum())
+    if nv == 0:
+        return m
+
+    peer_eye = _shapes(pv)["r_eye"]
+    med_eye = np.nanmedian(peer_eye[vis]) if np.isfinite(peer_eye[vis]).any() else math.nan
+    peer_closed = np.isfinite(peer_eye) & (peer_eye < CLOSED_FRACTION * med_eye) if med_eye > 0 else np.zeros(n, bool)
+    is_ok = st == OK
+    honest_closed = (st == EYES_CLOSED) & peer_closed
+    lost = vis & ~is_ok & ~honest_closed
+    m.lost_pct = 100.0 * lost.sum() / nv
+    m.status_lost_pct = 100.0 * (vis & (st == LOST)).sum() / nv
+    m.mouth_lost_pct = 100.0 * (vis & (st == MOUTH_LOST)).sum() / nv
+    m.eyes_closed_pct = 100.0 * (vis & (st == EYES_CLOSED)).sum() / nv
+    m.longest_loss = max((b - a for a, b in _runs(lost)), default=0)
+
+    okv = vis & is_ok
+    m.ok_frames = int(okv.sum())
+    if okv.any():
+        err = np.hypot(ov[okv, 0] - pv[okv, 0], ov[okv, 1] - pv[okv, 1]) / ipd[okv] * 100.0
+        m.pupil_err = err
+        m.pupil_med = float(np.median(err))
+        m.pupil_p95 = float(np.percentile(err, 95))
+        droll = (ov[okv, 2] - pv[okv, 2] + 180.0) % 360.0 - 180.0
+        m.roll_med = float(np.median(np.abs(droll)))
+
+    held = _hold(ov)
+    so, sp = _shapes(held), _shapes(pv)
+    for k in so:
+        setattr(m, k, pearson(so[k][vis], sp[k][vis]))
+
+    # returns of the face: the first visible frame after a stretch the peer did not see
+    for a, _b in _runs(vis):
+        if a == 0:
+            continue
+        later = np.flatnonzero(is_ok[a:])
+        m.reacquire.append(int(later[0]) if len(later) else None)
+    return m
+
+
+def misses(m: Metrics, times_ms: np.ndarray | None = None, auto: bool = False) -> dict[str, bool]:
+    """Target name → whether this clip misses it (nan counts as a miss)."""
+    vals = metric_values(m, times_ms)
+    out = {}
+    for k, (kind, bound) in (AUTO_TARGETS if auto else TARGETS).items():
+        v = vals.get(k, math.nan)
+        if k.startswith("ms") and times_ms is None:
+            continue
+        out[k] = not (v <= bound if kind == "max" else v >= bound)
+    return out
+
+
+def metric_values(m: Metrics, times_ms: np.ndarray | None = None) -> dict[str, float]:
+    """Target name → this clip's value (``ms_*`` from ``times_ms``, per-frame wall clock)."""
+    vals = {k: getattr(m, k) for k in TARGETS if hasattr(m, k)}
+    if times_ms is not None and len(times_ms):
+        vals["ms_med"] = float(np.median(times_ms))
+        vals["ms_p95"] = float(np.percentile(times_ms, 95))
+    return vals
+
+
+# ---------------------------------------------------------------------------------------------
+# Contact sheets
+
+PEER_COLOUR = (255, 255, 255)  # the peer's points: white dots ringed in black (no overlay colour is white)
+TILE = 320
+
+
+def sheet_frames(n: int, tiles: int = 20) -> list[int]:
+    """About ``tiles`` frame indices spread evenly over ``n`` frames (always frame 0)."""
+    if n <= 0:
+        return []
+    step = max(1, math.ceil(n / tiles))
+    return list(range(0, n, step))
+
+
+def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None = None, cols: int = 5) -> np.ndarray:
+    """A grid of our overlay frames (kept in ``run.overlays``) with the peer's points as white dots,
+    the frame index, our status and the pupil error on each tile; a title band names the clip, the
+    mode, the colours and (given ``metrics``) the clip's headline figures."""
+    idx = sorted(run.overlays)
+    if not idx:
+        return np.zeros((TILE, TILE, 3), np.uint8)
+    h0, w0 = run.overlays[idx[0]].shape[:2]
+    s = TILE / max(h0, w0)
+    th, tw = int(round(h0 * s)), int(round(w0 * s))
+    band = 22
+    rows = math.ceil(len(idx) / cols)
+    head = 44
+    sheet = np.full((head + rows * (th + band), cols * tw, 3), 32, np.uint8)
+    title = f"{run.name} ({run.mode})"
+    if metrics is not None:
+        title += (f"   lost {metrics.lost_pct:.1f}%   pupil {metrics.pupil_med:.1f}/{metrics.pupil_p95:.1f}% ipd   "
+                  f"roll {metrics.roll_med:.2f} deg   r open {metrics.r_open:.2f}  width {metrics.r_width:.2f}  "
+                  f"eye {metrics.r_eye:.2f}  brow {metrics.r_brow:.2f}")
+    legend = ("white dots: the peer's points   ours: magenta pupils, blue brows, yellow lids, cyan mouth points, "
+              "green lip outline, orange lip blob, teal regions")
+    cv2.putText(sheet, title, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (255, 255, 255), 1, cv2.LINE_AA)
+    cv2.putText(sheet, legend, (6, 37), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (200, 200, 200), 1, cv2.LINE_AA)
+    for k, i in enumerate(idx):
+        tile = cv2.resize(run.overlays[i], (tw, th), interpolation=cv2.INTER_AREA)
+        if peer is not None and i < len(peer):
+            for name, pts in peer.points.items():
+                p = pts[i]
+                if np.all(np.isfinite(p)):
+                    c = (int(round(p[0] * s)), int(round(p[1] * s)))
+                    cv2.circle(tile, c, 3, (0, 0, 0), -1, cv2.LINE_AA)
+                    cv2.circle(tile, c, 2, PEER_COLOUR, -1, cv2.LINE_AA)
+            lp, rp = peer.points.get("left_pupil"), peer.points.get("right_pupil")
+            if lp is not None and rp is not None and np.all(np.isfinite(lp[i])) and np.all(np.isfinite(rp[i])):
+                cv2.line(tile, tuple(int(round(v * s)) for v in lp[i]), tuple(int(round(v * s)) for v in rp[i]),
+                         PEER_COLOUR, 1, cv2.LINE_AA)
+        r, c = divmod(k, cols)
+        y, x = head + r * (th + band), c * tw
+        sheet[y : y + th, x : x + tw] = tile
+        st = run.params[i].status if i < len(run.params) else "?"
+        label = f"#{i} {st}"
+        if peer is not None and i < len(peer) and peer.visible[i] and i < len(run.params):
+            p = run.params[i]
+            e = math.hypot(p.mid_x - peer.values[i, 0], p.mid_y - peer.values[i, 1]) / peer.ipd[i] * 100.0
+            label += f"  pupil {e:.0f}% ipd"
+        colour = {OK: (120, 255, 120), EYES_CLOSED: (0, 200, 255), MOUTH_LOST: (0, 140, 255)}.get(st, (90, 90, 255))
+        cv2.putText(sheet, label, (x + 4, y + th + 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
+        cv2.rectangle(sheet, (x, y), (x + tw - 1, y + th + band - 1), (70, 70, 70), 1)
+    return sheet
+
+
+def write_png(path: Path, img: np.ndarray) -> None:
+    """Write ``img`` to ``path`` atomically."""
+    from tracker.atomic_file import replacing
+
+    with replacing(path, suffix=".png") as tmp:
+        if not cv2.imwrite(str(tmp), img):
+            raise OSError(f"{path}: could not write PNG")
+
+
+# ---------------------------------------------------------------------------------------------
+# One job = one clip in one mode (picklable in and out, for a process pool)
+
+
+@dataclass
+class ClipResult:
+    """Everything the tables need about one clip in one mode (no images)."""
+
+    name: str
+    mode: str
+    metrics: Metrics | None
+    times_ms: np.ndarray
+    calibrate_ms: float
+    error: str | None = None
+    sheet: str | None = None
+    cpu_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def measure_clip(folder: Path, name: str, auto: bool = False, sheets: bool = False,
+                 max_frames: int | None = None, out_dir: Path = OUT_DIR) -> ClipResult:
+    """Track clip ``name`` of ``folder`` (clicks or ``--auto``), compare with the peer, and write its
+    contact sheet when ``sheets``."""
+    peer = load_peer(folder, name)
+    n = len(peer) if max_frames is None else min(len(peer), max_frames)
+    keep = sheet_frames(n) if sheets else ()
+    run = run_clip(folder / f"{name}.mp4", folder / f"{name}.clicks.json", auto=auto, keep=keep,
+                   name=name, max_frames=max_frames)
+    if run.error is not None:
+        return ClipResult(name, run.mode, None, np.zeros(0), math.nan, error=run.error)
+    m = compare(run.params, peer)
+    sheet = None
+    if sheets:
+        path = out_dir / (f"{name}.auto.png" if auto else f"{name}.png")
+        write_png(path, contact_sheet(run, peer, m))
+        sheet = str(path)
+    return ClipResult(name, run.mode, m, run.times_ms, run.calibrate_ms, sheet=sheet, cpu_ms=run.cpu_ms)
+
+
+def measure_all(folder: Path, names: Sequence[str], modes: Sequence[bool] = (False, True), sheets: bool = False,
+                workers: int = 2, max_frames: int | None = None) -> list[ClipResult]:
+    """Every clip in every mode (``False`` = clicks, ``True`` = auto); ``workers`` > 1 uses a
+    process pool (at most 2: the machine has 2 cores). Results come back in clip, mode order."""
+    return _map(measure_clip, [(folder, n, a, sheets, max_frames) for n in names for a in modes], workers)
+
+
+# ---------------------------------------------------------------------------------------------
+# Tables
+
+COLUMNS = ["clip", "mode", "lost %", "lost/mouth/closed %", "run", "pupil med/p95 %IPD", "roll °",
+           "r open", "r width", "r eye", "r brow", "ms med/p95", "cpu ms med/p95"]
+
+
+def _c(v: float, fmt: str, miss: bool) -> str:
+    s = "—" if not math.isfinite(v) else format(v, fmt)
+    return s + ("*" if miss else "")
+
+
+def result_row(r: ClipResult) -> list[str]:
+    if r.error is not None or r.metrics is None:
+        return [r.name, r.mode, "no start*"] + ["—"] * (len(COLUMNS) - 3)
+    m = r.metrics
+    x = misses(m, r.times_ms, auto=r.mode == "auto")
+    v = metric_values(m, r.times_ms)
+    return [
+        r.name, r.mode,
+        _c(m.lost_pct, ".1f", x["lost_pct"]),
+        f"{m.status_lost_pct:.1f}/{m.mouth_lost_pct:.1f}/{m.eyes_closed_pct:.1f}",
+        str(m.longest_loss),
+        _c(m.pupil_med, ".1f", x["pupil_med"]) + "/" + _c(m.pupil_p95, ".1f", x["pupil_p95"]),
+        _c(m.roll_med, ".2f", x["roll_med"]),
+        _c(m.r_open, ".2f", x["r_open"]), _c(m.r_width, ".2f", x["r_width"]),
+        _c(m.r_eye, ".2f", x["r_eye"]), _c(m.r_brow, ".2f", x["r_brow"]),
+        _c(v.get("ms_med", math.nan), ".2f", x.get("ms_med", False)) + "/"
+        + _c(v.get("ms_p95", math.nan), ".2f", x.get("ms_p95", False)),
+        f"{np.median(r.cpu_ms):.2f}/{np.percentile(r.cpu_ms, 95):.2f}" if len(r.cpu_ms) else "—",
+    ]
+
+
+def target_row(auto: bool) -> list[str]:
+    t = AUTO_TARGETS if auto else TARGETS
+    f = lambda k: ("≤" if t[k][0] == "max" else "≥") + f"{t[k][1]:g}"
+    return ["targets", "auto" if auto else "clicks", f("lost_pct"), "", "",
+            f"{f('pupil_med')}/{f('pupil_p95')}", f("roll_med"), f("r_open"), f("r_width"), f("r_eye"),
+            f("r_brow"), f"{f('ms_med')}/{f('ms_p95')}", ""]
+
+
+def summary(results: Sequence[ClipResult], auto: bool) -> str:
+    """One line: how many clips meet each target in this mode (a failed start meets none)."""
+    rs = [r for r in results if (r.mode == "auto") == auto]
+    if not rs:
+        return ""
+    keys = list(TARGETS)
+    met = {k: 0 for k in keys}
+    all_met = 0
+    for r in rs:
+        if r.metrics is None:
+            continue
+        x = misses(r.metrics, r.times_ms, auto=auto)
+        for k in keys:
+            met[k] += 0 if x.get(k, True) else 1
+        all_met += not any(x.values())
+    parts = ", ".join(f"{k} {met[k]}/{len(rs)}" for k in keys)
+    return f"{'auto' if auto else 'clicks'}: clips meeting each target — {parts}; all targets: {all_met}/{len(rs)}"
+
+
+def pooled_times(results: Sequence[ClipResult], cpu: bool = False) -> np.ndarray:
+    """Every frame's time (wall clock, or CPU with ``cpu``) of ``results``, concatenated."""
+    ts = [r.cpu_ms if cpu else r.times_ms for r in results if len(r.times_ms)]
+    return np.concatenate(ts) if ts else np.zeros(0)
+
+
+def results_table(results: Sequence[ClipResult], notes: Sequence[str] = ()) -> "Table":
+    """The per-clip table (clicks rows, targets, auto rows, targets) with the summaries under it."""
+    from benchmarks.harness import Table
+
+    t = Table("Real faces vs the peer (MediaPipe Face Mesh)", COLUMNS)
+    for auto in (False, True):
+        rs = [r for r in results if (r.mode == "auto") == auto]
+        for r in rs:
+            t.add(*result_row(r))
+        if rs:
+            t.add(*target_row(auto))
+    lines = [summary(results, False), summary(results, True),
+             "* = misses its target; 'run' = longest run of lost frames; lost/mouth/closed = raw statuses; "
+             "ms = one track() call, every frame (re-acquisition included): wall clock (the target), and this process's "
+             "CPU time (the frame's own cost when the machine is shared)."]
+    lines += [f"{r.name} {r.mode}: no start — {r.error}" for r in results if r.error is not None]
+    t.note = "\n".join(n for n in [*lines, *notes] if n)
+    return t
+
+
+def _load() -> str:
+    try:
+        return " ".join(f"{v:.1f}" for v in os.getloadavg())
+    except OSError:
+        return "unknown"
+
+
+def speed_table(results: Sequence[ClipResult]) -> "Table":
+    """Pooled per-frame cost per mode, calibration cost, and the peer's stated cost beside them."""
+    from benchmarks.harness import Table, Timing
+
+    t = Table("Real faces: tracking cost per frame, ours vs the peer's published cost",
+              ["what", "frames", "median ms", "p95 ms", "max ms", "source"])
+    for mode in ("clicks", "auto"):
+        rs = [r for r in results if r.mode == mode]
+        for cpu in (False, True):
+            ts = pooled_times(rs, cpu)
+            if len(ts):
+                t.add(f"ours, {mode}, all clips pooled, {'CPU time' if cpu else 'wall clock'}", str(len(ts)),
+                      f"{np.median(ts):.2f}", f"{np.percentile(ts, 95):.2f}", f"{ts.max():.1f}", "measured in this run")
+        cal = [r.calibrate_ms for r in rs if math.isfinite(r.calibrate_ms)]
+        if cal:
+            c = Timing(cal)
+            t.add(f"ours, {mode}: start (find face, calibrate; once a clip)", str(c.runs), f"{c.median:.1f}", "",
+                  f"{c.hi:.1f}", "measured in this run")
+    t.add("peer: MediaPipe Face Mesh + irises, 512×512", "", f"{PEER_MS[0]}–{PEER_MS[1]}", "", "", PEER_MS_SOURCE)
+    t.note = ("targets: ours median ≤ 3 ms and p95 ≤ 8 ms on every clip, and faster than the peer. Wall clock includes "
+              "time other processes take on a shared machine (the per-clip ms columns are wall clock); CPU time counts "
+              f"only this process. Load average when done: {_load()}.")
+    return t
+
+
+# ---------------------------------------------------------------------------------------------
+# Synthetic slide-away clips (the one place with returns of the face and exact truth)
+
+
+@dataclass
+class SynthResult:
+    """One synthetic slide-away clip: return frames, frames to re-acquire each (``None`` = never),
+    our ``ok`` frames while the face was away, and :func:`compare` against the truth."""
+
+    seed: int
+    returns: list[int]
+    first_ok: list[int | None]
+    settled: list[int | None]
+    false_ok_away: int
+    metrics: Metrics
+
+
+def synthetic_away(seed: int, seconds: float = 10.0, away: tuple[float, float] = (2.0, 3.0)) -> SynthResult:
+    """``tracker synth --seed SEED --away 2:3 --away-mode slide`` written as mp4, tracked with its
+    clicks like ``tracker track``, measured against the exact truth.
+
+    A return is the first frame after an absence where the truth is ``ok`` again (the whole face
+    in view); ``first_ok`` counts frames from it to our first ``ok``; ``settled`` to the first of
+    :data:`SETTLE` consecutive frames where our status is the truth's and our pupil midpoint is
+    within :data:`ON_FACE` % IPD of it (``None`` = never). A face sliding back in is often still
+    followed for a frame or two and then dropped, so ``first_ok`` alone flatters the tracker.
+    """
+    from tracker.synthetic import Performance
+
+    perf = Performance(seconds=seconds, seed=seed, away=[away], away_mode="slide")
+    truths = perf.truths()
+    with tempfile.TemporaryDirectory(prefix="inkface-away-") as tmp:
+        mp4 = Path(tmp) / f"away_{seed}.mp4"
+        clicks = perf.write(mp4, None)
+        run = run_clip(mp4, clicks)
+    if run.error is not None:
+        raise RuntimeError(f"synthetic seed {seed}: {run.error}")
+    ipd = np.array([perf.state(i).ipd for i in range(len(perf))])
+    v = np.array([t.values() for t in truths])
+    tst = np.array([t.status for t in truths], dtype=object)
+    v_vis = v.copy()
+    v_vis[tst == LOST] = np.nan
+    m = compare(run.params, PeerTrack(values=v_vis, ipd=ipd))
+    ours = np.array([p.values() for p in run.params])
+    ok = np.array([p.status == OK for p in run.params])
+    err = np.hypot(ours[:, 0] - v[: len(ours), 0], ours[:, 1] - v[: len(ours), 1]) / ipd[: len(ours)] * 100.0
+    returns, first_ok, settled = [], [], []
+    right = (np.array([p.status for p in run.params], dtype=object) == tst[: len(ours)]) & (err <= ON_FACE)
+    gone = tst != OK
+    for a, b in _runs(gone):
+        if a == 0 or b >= len(ours) or not (tst[a:b] == LOST).any():
+            continue
+        returns.append(int(b))
+        k = np.flatnonzero(ok[b:])
+        first_ok.append(int(k[0]) if len(k) else None)
+        settled.append(_settled(right, b))
+    false_ok = int((ok & (tst[: len(ok)] == LOST)).sum())
+    return SynthResult(seed, returns, first_ok, settled, false_ok, m)
+
+
+def _settled(right: np.ndarray, start: int, length: int = SETTLE) -> int | None:
+    """Frames from ``start`` to the first run of ``length`` true entries (shorter at the clip's end)."""
+    for a, b in _runs(right):
+        a = max(int(a), start)
+        if b > a and b - a >= min(length, len(right) - a):
+            return a - start
+    return None
+
+
+SYNTH_COLUMNS = ["seed", "return frame", "frames to first ok", f"to settled ({SETTLE} right frames)", "lost %", "run",
+                 "pupil med/p95 %IPD (ok frames)", "ok frames > 8 % IPD", "ok while away"]
+
+
+def synth_row(s: SynthResult) -> list[str]:
+    f = lambda xs: ", ".join("never" if x is None else str(x) for x in xs) or "—"
+    m = s.metrics
+    bad = int((m.pupil_err > ON_FACE).sum())
+    return [str(s.seed), f(s.returns), f(s.first_ok), f(s.settled), f"{m.lost_pct:.1f}", str(m.longest_loss),
+            f"{m.pupil_med:.1f}/{m.pupil_p95:.1f}", str(bad), str(s.false_ok_away)]
+
+
+def measure_synthetic(seeds: Sequence[int] = (1, 2, 3, 4), workers: int = 2, seconds: float = 10.0) -> list[SynthResult]:
+    """:func:`synthetic_away` for each seed, over a pool of ``workers`` processes (at most 2)."""
+    return _map(synthetic_away, [(s, seconds) for s in seeds], workers)
+
+
+def _map(fn, jobs: list[tuple], workers: int) -> list:
+    if workers <= 1 or len(jobs) <= 1:
+        return [fn(*j) for j in jobs]
+    import multiprocessing as mp
+
+    with mp.get_context("fork").Pool(min(workers, 2, len(jobs))) as pool:
+        return pool.starmap(fn, jobs, chunksize=1)
+
+
+def synth_table(results: Sequence[SynthResult], seconds: float = 10.0) -> "Table":
+    from benchmarks.harness import Table
+
+    t = Table(f"Synthetic performer slides out of the frame and back (--away 2:3 --away-mode slide, {seconds:g} s)",
+              SYNTH_COLUMNS)
+    for s in results:
+        t.add(*synth_row(s))
+    t.note = (f"target: back within {REACQUIRE_TARGET} frames of the return (first frame the whole face is in view "
+              "again, truth ok); ok frames on the face (p95 ≤ 8 %, median ≤ 3 % IPD); no ok while away.")
+    return t
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m benchmarks.realfaces",
+        description="Track the real clips and print lost %, pupil / roll error, correlations and ms per frame "
+                    "against the peer, with the targets of issue 13.")
+    ap.add_argument("--dir", help=f"folder of real clips (default ${REAL_DIR_ENV} or ../shared/real)")
+    ap.add_argument("--clips", help="comma-separated clip names (default: all)")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--auto", action="store_true", help="only --auto (no clicks)")
+    mode.add_argument("--both", action="store_true", help="clicks and --auto")
+    ap.add_argument("--sheets", action="store_true", help=f"write contact sheets to {OUT_DIR.relative_to(REPO_ROOT)}/")
+    ap.add_argument("--synth", action="store_true", help="also the synthetic slide-away clips (seeds 1–4)")
+    ap.add_argument("--serial", action="store_true",
+                    help="one clip at a time on one pinned core (use this for speed figures)")
+    ap.add_argument("--frames", type=int, help="track only the first N frames of each clip")
+    args = ap.parse_args(argv)
+
+    folder = real_dir(args.dir)
+    if folder is None:
+        print(f"realfaces: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
+        return 0
+    names = clip_names(folder)
+    if args.clips:
+        want = [c.strip() for c in args.clips.split(",") if c.strip()]
+        unknown = [c for c in want if c not in names]
+        if unknown:
+            print(f"realfaces: no clip {', '.join(unknown)} in {folder} (have {', '.join(names)})", file=sys.stderr)
+            return 2
+        names = want
+    modes = (True,) if args.auto else (False, True) if args.both else (False,)
+    workers = 1 if args.serial else 2
+    note = ""
+    if args.serial:
+        from benchmarks.harness import pin_one_core
+
+        note = f"timing: serial, {pin_one_core()}."
+    else:
+        cv2.setNumThreads(1)
+        note = "timing: 2 clips in parallel (indicative only; use --serial for speed figures)."
+    t0 = time.perf_counter()
+    results = measure_all(folder, names, modes, sheets=args.sheets, workers=workers, max_frames=args.frames)
+    sheets = [r.sheet for r in results if r.sheet]
+    print(results_table(results, [note, f"contact sheets (white dots = the peer's points): {OUT_DIR}/" if sheets else ""]).render())
+    print()
+    print(speed_table(results).render())
+    if args.synth:
+        print()
+        print(synth_table(measure_synthetic(workers=workers)).render())
+    print(f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,164 @@
+"""The head as a rigid thing (optical flow), the face picture, and finding a face again."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tracker.calibration import calibrate
+from tracker.clicks import Clicks
+from tracker.face_finder import detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
+from tracker.face_tracker import FaceTracker
+from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
+from tracker.params import LOST, OK
+from tracker.synthetic import FaceState, Performance, clicks_for, render_face
+
+BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+
+
+def _textured(seed: int = 0, size=(480, 640)) -> np.ndarray:
+    """A frame of smooth random texture (corners everywhere), BGR."""
+    rng = np.random.default_rng(seed)
+    g = cv2.GaussianBlur(rng.uniform(0, 255, size).astype(np.float32), (0, 0), 2.0)
+    g = cv2.normalize(g, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    return cv2.cvtColor(g, cv2.COLOR_GRAY2BGR)
+
+
+@given(
+    a=st.tuples(st.floats(-200, 200), st.floats(-200, 200)),
+    b=st.tuples(st.floats(-200, 200), st.floats(-200, 200)),
+    angle=st.floats(-3.0, 3.0),
+    scale=st.floats(0.3, 3.0),
+    t=st.tuples(st.floats(-100, 100), st.floats(-100, 100)),
+)
+@settings(max_examples=200, deadline=None)
+def test_similarity_from_two_pairs_is_exact(a, b, angle, scale, t):
+    src = np.array([a, b])
+    if math.dist(a, b) < 1.0:
+        return
+    c, s = scale * math.cos(angle), scale * math.sin(angle)
+    m = np.array([[c, -s, t[0]], [s, c, t[1]]])
+    dst = apply(m, src)
+    got = similarity_from_pairs(src, dst)
+    assert np.allclose(got, m, atol=1e-6 * max(1.0, scale * 200))
+    assert np.allclose(apply(compose(got, m), src), apply(got, dst), atol=1e-6 * 1e3)
+
+
+def test_flow_recovers_a_known_rigid_motion():
+    img = _textured(1)
+    h, w = img.shape[:2]
+    face = np.array([[200, 120], [440, 120], [440, 360], [200, 360]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(80.0)
+    assert hm.seed(img, face) >= 20
+    ang, k, t = math.radians(2.0), 1.03, (4.0, -3.0)
+    centre = (320.0, 240.0)
+    m = cv2.getRotationMatrix2D(centre, math.degrees(ang), k)
+    m[:, 2] += t
+    moved = cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    motion = hm.step(moved, face)
+    assert motion is not None and motion.inliers >= 20
+    pts = np.array([[250.0, 150.0], [400.0, 330.0]])
+    assert np.allclose(apply(motion.matrix, pts), apply(m, pts), atol=0.3)
+    assert motion.scale == pytest.approx(k, abs=0.005)
+    assert motion.angle == pytest.approx(ang, abs=0.003)
+
+
+def test_flow_gives_up_when_the_picture_changes_completely():
+    a, b = _textured(2), _textured(3)
+    face = np.array([[200, 120], [440, 120], [440, 360], [200, 360]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(80.0)
+    hm.seed(a, face)
+    assert hm.step(b, face) is None
+
+
+def test_working_scale_is_a_power_of_two_that_keeps_the_face_mid_sized():
+    hm = HeadMotion()
+    for ipd, want in ((40, 1.0), (78, 1.0), (80, 0.5), (133, 0.5), (160, 0.25), (600, 0.125)):
+        hm.set_scale(ipd)
+        assert hm.scale == want, ipd
+    g = hm.grey(np.zeros((480, 640, 3), np.uint8))
+    assert g.shape == (60, 80)  # 640×480 at 1/8
+
+
+def test_face_picture_finds_a_shifted_face_and_tells_it_from_the_background():
+    frame, _ = render_face(BASE)
+    c = clicks_for(BASE)
+    pupils = np.array([c["left_pupil"], c["right_pupil"]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(80.0)
+    ref = face_patch(hm.grey(frame), hm.scale, pupils)
+    for shift in ((5.0, 0.0), (-4.0, 6.0)):
+        d, score = locate_face(hm.grey(frame), hm.scale, pupils + shift, ref)
+        assert score > 0.95
+        assert np.allclose(d, -np.array(shift), atol=0.6)
+    empty = render_face(BASE.replace(visible=False))[0]
+    assert patch_similarity(face_patch(hm.grey(empty), hm.scale, pupils), ref) < 0.3
+
+
+def test_face_detector_boxes_hold_the_eyes():
+    frame, _ = render_face(BASE)
+    boxes = detect_faces(frame, 80.0)
+    assert boxes, "the bundled cascade finds the synthetic performer"
+    eyes = eyes_in_box(boxes[0])
+    c = clicks_for(BASE)
+    truth = np.array([c["left_pupil"], c["right_pupil"]])
+    assert np.abs(eyes - truth).max() < 0.15 * 80
+
+
+@pytest.fixture(scope="module")
+def cal():
+    frame, _ = render_face(BASE)
+    return calibrate(frame, Clicks.from_dict(clicks_for(BASE)))
+
+
+def test_calibration_keeps_a_face_picture_and_where_the_detector_puts_the_eyes(cal, tmp_path):
+    assert cal.face_patch is not None and cal.face_patch.dtype == np.float32
+    assert cal.face_box_eyes is not None
+    (lx, ly), (rx, ry) = cal.face_box_eyes
+    assert 0.1 < lx < rx < 0.9 and abs(ly - ry) < 0.05
+    from tracker.calibration import Calibration
+
+    p = tmp_path / "me.json"
+    cal.save(p)
+    back = Calibration.load(p)
+    assert np.array_equal(back.face_patch, cal.face_patch)
+    assert np.allclose(back.face_box_eyes, cal.face_box_eyes)
+
+
+def test_a_hand_over_the_face_is_lost_not_ok(cal):
+    tr = FaceTracker(cal)
+    frame, _ = render_face(BASE)
+    assert tr.track(frame, 0).params.status == OK
+    covered = frame.copy()
+    covered[120:330, 220:420] = (90, 140, 200)  # a plain skin-coloured patch over eyes and mouth
+    r = tr.track(covered, 1)
+    assert r.params.status == LOST
+
+
+def test_fast_slide_is_followed_without_a_lost_frame(cal):
+    """The head moves 0.25 ipd a frame: too far for the pupil search windows alone."""
+    tr = FaceTracker(cal)
+    xs = [320.0 + 20.0 * i for i in range(8)]
+    for i, x in enumerate(xs):
+        img, t = render_face(BASE.replace(cx=x))
+        r = tr.track(img, i)
+        assert r.params.status == OK, i
+        assert abs(r.params.mid_x - t.mid_x) < 1.0 and abs(r.params.mid_y - t.mid_y) < 1.0
+
+
+def test_slide_out_and_back_is_found_again_within_five_frames():
+    perf = Performance(seconds=4.0, seed=2, away=[(1.5, 2.2)], away_mode="slide")
+    frames = [perf.render(i) for i in range(len(perf))]
+    c = calibrate(frames[0][0], Clicks.from_dict(perf.clicks()))
+    tr = FaceTracker(c)
+    statuses = [tr.track(img, i).params.status for i, (img, _) in enumerate(frames)]
+    back = next(i for i in range(int(2.2 * perf.fps), len(frames)) if frames[i][1].status != LOST)
+    first_ok = next(i for i in range(back, len(frames)) if statuses[i] != LOST)
+    assert first_ok - back <= 5
+    away = [i for i, (_, t) in enumerate(frames) if t.status == LOST]
+    assert sum(statuses[i] == OK for i in away) <= 1

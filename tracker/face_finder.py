@@ -1,0 +1,162 @@
+"""Finding a known face again after it was lost: a face detector, then where this person's eyes sit.
+
+OpenCV's bundled frontal-face cascade (``cv2.data.haarcascades``) proposes face boxes on a
+small grey copy of the frame, scaled so a face of the calibrated size is a few dozen pixels
+wide (the detector's cost falls with the image). Each box becomes a guess of both eye
+centres from where this performer's eyes sat inside the detector's box on the calibration
+frame (:func:`eyes_in_box`); the tracker then checks the guess with the calibrated eye
+pictures before it believes it.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+DETECT_FACE_PX = 56.0
+"""Width (px) a face of the calibrated size has in the image the detector runs on."""
+DEFAULT_EYES = ((0.32, 0.395), (0.685, 0.395))
+"""Eye centres as fractions of a frontal-face box, for when the calibration frame gave none."""
+FACE_PER_IPD = 2.8
+"""A frontal-face box's side, in inter-pupil distances (2.5–3.1 on real faces for the bundled cascade)."""
+
+
+@functools.lru_cache(maxsize=None)
+def face_cascade() -> cv2.CascadeClassifier | None:
+    """The bundled frontal-face cascade, or None when this OpenCV build has none."""
+    base = getattr(getattr(cv2, "data", None), "haarcascades", None)
+    if not base:
+        return None
+    c = cv2.CascadeClassifier(str(Path(base) / "haarcascade_frontalface_alt2.xml"))
+    return None if c.empty() else c
+
+
+def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.8) -> list[tuple[float, float, float, float]]:
+    """Frontal face boxes ``(x, y, w, h)`` in frame px, largest first.
+
+    With ``ipd_px`` (the face's expected inter-pupil distance) the search is limited to faces
+    within ``spread``× of that size and runs on a copy scaled to make such a face about
+    :data:`DETECT_FACE_PX` wide; without it every size is searched on a 160-px-high copy.
+    """
+    casc = face_cascade()
+    if casc is None:
+        return []
+    h, w = frame_bgr.shape[:2]
+    if ipd_px:
+        face = FACE_PER_IPD * ipd_px
+        s = min(1.0, DETECT_FACE_PX / max(face, 1.0))
+    else:
+        s = min(1.0, 160.0 / h)
+    size = (max(int(round(w * s)), 24), max(int(round(h * s)), 24))
+    small = cv2.resize(frame_bgr, size, interpolation=cv2.INTER_AREA) if s < 1.0 else frame_bgr
+    grey = cv2.equalizeHist(cv2.cvtColor(small, cv2.COLOR_BGR2GRAY))
+    if ipd_px:
+        f = FACE_PER_IPD * ipd_px * s
+        lo, hi = max(int(f / spread), 20), max(int(f * spread), 21)
+        boxes = casc.detectMultiScale(grey, 1.12, 2, minSize=(lo, lo), maxSize=(hi, hi))
+    else:
+        boxes = casc.detectMultiScale(grey, 1.1, 3, minSize=(20, 20))
+    out = [(x / s, y / s, bw / s, bh / s) for x, y, bw, bh in (tuple(float(v) for v in b) for b in boxes)]
+    return sorted(out, key=lambda b: -b[2] * b[3])
+
+
+def eyes_in_box(box: tuple[float, float, float, float], rel: tuple[tuple[float, float], tuple[float, float]] = DEFAULT_EYES) -> np.ndarray:
+    """Both eye centres ``(2, 2)`` (frame px, image-left first) for a face box."""
+    x, y, w, h = box
+    return np.array([[x + rel[0][0] * w, y + rel[0][1] * h], [x + rel[1][0] * w, y + rel[1][1] * h]])
+
+
+def learn_eyes_in_box(frame_bgr: np.ndarray, pupils: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """Where these pupils sit, as fractions, inside the face box the detector puts round them
+    on this frame (None when it finds no box holding both)."""
+    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2)
+    ipd = float(np.hypot(*(p[1] - p[0])))
+    for box in detect_faces(frame_bgr, ipd):
+        x, y, w, h = box
+        if all(x < px < x + w and y < py < y + h for px, py in p):
+            rel = tuple((float((px - x) / w), float((py - y) / h)) for px, py in p)
+            if abs(rel[1][0] - rel[0][0] - 1.0 / FACE_PER_IPD) < 0.2:
+                return rel  # type: ignore[return-value]
+    return None
+
+
+def box_ipd(box: tuple[float, float, float, float], rel=DEFAULT_EYES) -> float:
+    e = eyes_in_box(box, rel)
+    return float(math.hypot(*(e[1] - e[0])))
+
+
+# ---------------------------------------------------------------------------------------------
+# is the face still there?
+
+PATCH_IPD = 28.0
+"""Inter-pupil distance (px) of the stored face picture used to tell the face from anything else."""
+PATCH_RECT = (-1.0, -0.6, 2.0, 1.35)
+"""The face picture's extent in inter-pupil distances (x0, y0, w, h): brows, eyes and nose, no mouth."""
+
+
+def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], np.ndarray, np.ndarray]:
+    """The affine from the scaled grey image to the face picture (grown by ``margin`` px on
+    every side), the picture's size, and the picture's x and down axes in frame px per picture px."""
+    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2) * scale
+    (lx, ly), (rx, ry) = p
+    ipd = max(math.hypot(rx - lx, ry - ly), 1e-6)
+    k = PATCH_IPD / ipd
+    c, s = (rx - lx) / ipd, (ry - ly) / ipd  # unit eye line (x right, y down)
+    mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
+    x0, y0, w, h = (v * PATCH_IPD for v in PATCH_RECT)
+    # picture px = R·k·(grey px − mid) − origin, R turning the eye line onto +x
+    m = np.array([[k * c, k * s, 0.0], [-k * s, k * c, 0.0]])
+    m[:, 2] = -m[:, :2] @ np.array([mx, my]) - np.array([x0 - margin, y0 - margin])
+    size = (int(round(w)) + 2 * int(margin), int(round(h)) + 2 * int(margin))
+    per = 1.0 / (k * scale)
+    return m, size, np.array([c, s]) * per, np.array([-s, c]) * per
+
+
+def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray:
+    """The upright face picture (float32, blurred) for eyes at ``pupils`` (frame px).
+
+    ``grey`` is the frame in grey scaled by ``scale`` (as :class:`tracker.head_motion.HeadMotion`
+    keeps it); the picture is cut so the pupils are :data:`PATCH_IPD` px apart.
+    """
+    m, size, _, _ = _patch_warp(scale, pupils, 0)
+    out = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return cv2.GaussianBlur(out.astype(np.float32), (0, 0), 1.0)
+
+
+def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: np.ndarray, reach: float = 0.15) -> tuple[np.ndarray, float]:
+    """Where the face picture best matches near eyes at ``pupils``: the shift (frame px) that
+    moves the pupils onto the match, and the match's normalised correlation.
+
+    ``reach`` is the search half-width in inter-pupil distances.
+    """
+    margin = max(int(math.ceil(reach * PATCH_IPD)), 1)
+    m, size, ax, ay = _patch_warp(scale, pupils, margin)
+    win = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
+    if win.shape[0] < reference.shape[0] or win.shape[1] < reference.shape[1]:
+        return np.zeros(2), 0.0
+    r = cv2.matchTemplate(win, reference, cv2.TM_CCOEFF_NORMED)
+    _, best, _, (i, j) = cv2.minMaxLoc(r)
+    h, w = r.shape
+    dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
+    dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
+    du, dv = i + dx - margin, j + dy - margin
+    return du * ax + dv * ay, float(best)
+
+
+def _vertex(a: float, b: float, c: float) -> float:
+    den = float(a) - 2.0 * float(b) + float(c)
+    if den >= -1e-9:
+        return 0.0
+    return min(max(0.5 * (float(a) - float(c)) / den, -0.5), 0.5)
+
+
+def patch_similarity(patch: np.ndarray, reference: np.ndarray) -> float:
+    """Normalised correlation (−1..1) of two face pictures of the same size."""
+    if patch.shape != reference.shape:
+        return 0.0
+    return float(cv2.matchTemplate(patch, reference, cv2.TM_CCOEFF_NORMED)[0, 0])

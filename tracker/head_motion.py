@@ -1,0 +1,213 @@
+"""The head as a rigid thing: its frame-to-frame similarity motion from sparse optical flow.
+
+Colour finders look in small regions; when the head moves fast or the face pulls a big
+expression, a region placed from the last frame's features slides off. Corners on the face
+(eye corners, nostrils, brow ends, hairline, glasses frames, skin texture) move together with
+the skull, so tracking a few dozen of them with pyramidal Lucas–Kanade
+(``cv2.calcOpticalFlowPyrLK``) and fitting one rotation + uniform scale + translation to their
+motion with RANSAC (``cv2.estimateAffinePartial2D``) predicts where the eyes and the mouth
+are before any finder looks. Points on the moving mouth or on the eyes' pupils are outvoted.
+
+Everything runs on a grey copy of the frame scaled so the inter-pupil distance is about
+:data:`FLOW_IPD` pixels (cheap and, for the flow, precise enough); positions going in and
+coming out are frame pixels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+FLOW_IPD = 56.0
+"""Inter-pupil distance (px) of the scaled grey image the flow runs on."""
+MAX_POINTS = 48
+RESEED_EVERY = 12
+"""Frames between topping up the tracked corners (they drift off features and die)."""
+_LK = dict(winSize=(13, 13), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 12, 0.03))
+
+
+@dataclass
+class Motion:
+    """One frame's rigid motion: ``matrix`` (2×3, previous frame px → this frame px), the
+    number of corners that agree with it (``inliers``) out of ``tracked``."""
+
+    matrix: np.ndarray
+    inliers: int
+    tracked: int
+
+    @property
+    def scale(self) -> float:
+        return math.hypot(self.matrix[0, 0], self.matrix[1, 0])
+
+    @property
+    def angle(self) -> float:
+        """Rotation in radians, positive counter-clockwise on screen (y down)."""
+        return math.atan2(-self.matrix[1, 0], self.matrix[0, 0])
+
+
+def apply(matrix: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Points ``(n, 2)`` moved by a 2×3 affine matrix."""
+    p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    return p @ matrix[:, :2].T + matrix[:, 2]
+
+
+def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """The 2×3 similarity taking two points ``src`` exactly onto two points ``dst``."""
+    s = np.asarray(src, dtype=np.float64).reshape(2, 2)
+    d = np.asarray(dst, dtype=np.float64).reshape(2, 2)
+    vs, vd = s[1] - s[0], d[1] - d[0]
+    zs = complex(vs[0], vs[1])
+    zd = complex(vd[0], vd[1])
+    if abs(zs) < 1e-9:
+        return np.array([[1.0, 0.0, d[0, 0] - s[0, 0]], [0.0, 1.0, d[0, 1] - s[0, 1]]])
+    a = zd / zs
+    m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
+    m[:, 2] = d[0] - m[:, :2] @ s[0]
+    return m
+
+
+def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """The 2×3 affine ``outer ∘ inner`` (apply ``inner`` first)."""
+    m = outer[:, :2] @ inner[:, :2]
+    return np.concatenate([m, (outer[:, :2] @ inner[:, 2] + outer[:, 2])[:, None]], axis=1)
+
+
+class HeadMotion:
+    """Sparse optical flow on the face, one rigid motion per frame.
+
+    ``face_polygon(pts)``-style masks are built by the caller: :meth:`seed` takes the face
+    region as a polygon in frame px (where corners may be picked) and the inter-pupil
+    distance in frame px (to choose the working scale). :meth:`step` returns the motion from
+    the previous frame or None when too few corners agree (the head is covered, gone, or
+    moved beyond what the pyramid can follow).
+    """
+
+    def __init__(self, min_inliers: int = 6):
+        self.min_inliers = int(min_inliers)
+        self.scale = 1.0
+        self._prev: np.ndarray | None = None
+        self._pts: np.ndarray | None = None  # (n, 1, 2) float32, scaled px
+        self._age = 0
+        self._buf: dict[tuple, np.ndarray] = {}
+
+    # ------------------------------------------------------------------ images
+    def grey(self, frame_bgr: np.ndarray) -> np.ndarray:
+        """The frame in grey at the working scale :attr:`scale` (a power of two: area
+        averaging by a whole factor is several times cheaper than by a fraction)."""
+        g = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
+        if self.scale >= 0.999:
+            return g
+        return cv2.resize(g, None, fx=self.scale, fy=self.scale, interpolation=cv2.INTER_AREA)
+
+    def set_scale(self, ipd_px: float) -> None:
+        """Choose the working scale for a face with this inter-pupil distance (frame px):
+        1, 1/2, 1/4 … so the face's pupils end up between 0.7 and 1.4 × :data:`FLOW_IPD` apart."""
+        s = 1.0
+        while ipd_px * s > 1.4 * FLOW_IPD and s > 1 / 16:
+            s *= 0.5
+        if abs(s - self.scale) > 1e-6:
+            self.scale = s
+            self._prev = None
+            self._pts = None
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Forget the previous frame and every corner."""
+        self._prev = None
+        self._pts = None
+        self._age = 0
+
+    @property
+    def active(self) -> bool:
+        return self._prev is not None and self._pts is not None and len(self._pts) >= self.min_inliers
+
+    def seed(self, frame_bgr: np.ndarray, face_polygon: np.ndarray, grey: np.ndarray | None = None) -> int:
+        """Pick corners inside ``face_polygon`` (frame px) on this frame; returns how many."""
+        g = self.grey(frame_bgr) if grey is None else grey
+        self._prev = g
+        self._pts = self._pick(g, face_polygon, None)
+        self._age = 0
+        return 0 if self._pts is None else len(self._pts)
+
+    def _pick(self, g: np.ndarray, face_polygon: np.ndarray, keep: np.ndarray | None) -> np.ndarray | None:
+        h, w = g.shape
+        poly = np.round(np.asarray(face_polygon, dtype=np.float64) * self.scale).astype(np.int32)
+        x0, y0 = max(int(poly[:, 0].min()), 0), max(int(poly[:, 1].min()), 0)
+        x1, y1 = min(int(poly[:, 0].max()) + 1, w), min(int(poly[:, 1].max()) + 1, h)
+        if x1 - x0 < 8 or y1 - y0 < 8:
+            return keep
+        key = ("mask", y1 - y0, x1 - x0)
+        mask = self._buf.get(key)
+        if mask is None:
+            mask = self._buf[key] = np.empty((y1 - y0, x1 - x0), np.uint8)
+        mask[:] = 0
+        cv2.fillPoly(mask, [poly - (x0, y0)], 255)
+        min_d = max(3.0, 0.09 * FLOW_IPD)
+        want = MAX_POINTS
+        if keep is not None and len(keep):
+            for p in keep.reshape(-1, 2):  # no new corner next to one still tracked
+                cv2.circle(mask, (int(p[0]) - x0, int(p[1]) - y0), int(min_d), 0, -1)
+            want = MAX_POINTS - len(keep)
+        if want <= 0:
+            return keep
+        found = cv2.goodFeaturesToTrack(g[y0:y1, x0:x1], want, 0.01, min_d, mask=mask, blockSize=5)
+        if found is None:
+            return keep
+        found = found.astype(np.float32) + np.float32([x0, y0])
+        if keep is None or not len(keep):
+            return found
+        return np.concatenate([keep, found])
+
+    def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | None = None, grey: np.ndarray | None = None) -> Motion | None:
+        """The rigid motion from the previous frame to this one (frame px), or None.
+
+        ``face_polygon`` (frame px, where the face is now as far as the caller knows) lets
+        corners be topped up every :data:`RESEED_EVERY` frames or when many died. ``grey`` is
+        this frame from :meth:`grey` when the caller already made it.
+        """
+        g = self.grey(frame_bgr) if grey is None else grey
+        prev, pts = self._prev, self._pts
+        self._prev = g
+        if prev is None or pts is None or len(pts) < self.min_inliers or prev.shape != g.shape:
+            self._pts = self._pick(g, face_polygon, None) if face_polygon is not None else None
+            self._age = 0
+            return None
+        nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
+        ok = st.reshape(-1).astype(bool)
+        h, w = g.shape
+        if nxt is not None:
+            q = nxt.reshape(-1, 2)
+            ok &= (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] < w) & (q[:, 1] < h)
+        n_ok = int(ok.sum())
+        motion = None
+        if n_ok >= self.min_inliers:
+            a, b = pts[ok], nxt[ok]
+            m, inl = cv2.estimateAffinePartial2D(
+                a, b, method=cv2.RANSAC, ransacReprojThreshold=max(0.6, 0.025 * FLOW_IPD), maxIters=200,
+                confidence=0.99, refineIters=5,
+            )
+            if m is not None and inl is not None:
+                inl = inl.reshape(-1).astype(bool)
+                n_in = int(inl.sum())
+                if n_in >= self.min_inliers and n_in >= 0.4 * n_ok:
+                    s = self.scale
+                    fm = m.astype(np.float64).copy()
+                    fm[:, 2] /= s  # scaled px → frame px (rotation/scale part is unchanged)
+                    motion = Motion(fm, n_in, n_ok)
+                    pts = b[inl].reshape(-1, 1, 2)
+                else:
+                    pts = b.reshape(-1, 1, 2)
+            else:
+                pts = b.reshape(-1, 1, 2)
+        else:
+            pts = None
+        self._age += 1
+        if face_polygon is not None and (pts is None or len(pts) < 0.6 * MAX_POINTS or self._age >= RESEED_EVERY):
+            if motion is not None or pts is None:
+                pts = self._pick(g, face_polygon, pts if motion is not None else None)
+                self._age = 0
+        self._pts = pts
+        return motion
