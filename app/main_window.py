@@ -887,12 +887,13 @@ class MainWindow(QMainWindow):
                                                 ";;".join(RECORD_FILTERS))
         if not path:
             return False
-        return self.start_recording(path)
+        return self.start_recording(path, overwrite=True)  # the dialog asked before replacing
 
-    def start_recording(self, path: str) -> bool:
+    def start_recording(self, path: str, overwrite: bool = False) -> bool:
         """Record the character (MP4 / GIF / PNG folder by extension) and the track beside it.
 
-        The engine process writes the files; the background is the one on screen."""
+        The engine process writes the files; the background is the one on screen. An existing
+        recording is replaced only with ``overwrite`` (else the engine says so and proposes a name)."""
         from app.record import RecordError, _rgb_tuple, format_of
 
         try:
@@ -904,7 +905,8 @@ class MainWindow(QMainWindow):
             self.stop_recording()
         self._record_id += 1
         self.recording = str(path)
-        self.pipeline.start_recording(self._record_id, path, self.rate(), _rgb_tuple(self.char_view.background_colour()))
+        self.pipeline.start_recording(self._record_id, path, self.rate(), _rgb_tuple(self.char_view.background_colour()),
+                                      overwrite)
         self.settings.set("record/dir", str(Path(path).parent))
         self._set_record_button(True)
         self.record_label.setText(f"Recording to {Path(path).name}…")

@@ -903,8 +903,9 @@ class EngineLoop:
         self._progress_at = 0.0
         self.quit = False
 
-    def _post(self, name: str, args: tuple) -> None:
-        self._events.append((name, args))
+    def _post(self, name: str, args: tuple, key: Any = None) -> None:
+        """An event for the window (any thread); with a ``key``, a newer one replaces it unsent."""
+        self._events.append((name, args, key))
 
     def _start_capture(self, spec: SourceSpec, fake, source_id: int, previous: Capture | None = None) -> Capture:
         c = Capture(spec, self.realtime, fake, self._post, source_id, previous)
@@ -946,11 +947,12 @@ class EngineLoop:
         elif cmd == "recalibrate":
             self._recalibrate(arg)
 
-    def _start_recording(self, rid: int, path: str, fps: float, background) -> None:
+    def _start_recording(self, rid: int, path: str, fps: float, background, overwrite: bool = False) -> None:
         from app.record import RecordError, Recorder
 
         try:
-            self.recorders[rid] = Recorder(path, fps=fps, background=background, calibration=self.engine.calibration)
+            self.recorders[rid] = Recorder(path, fps=fps, background=background, calibration=self.engine.calibration,
+                                           overwrite=overwrite)
             self._post("recordStarted", (rid, path))
         except (RecordError, OSError) as e:
             self._post("recordFailed", (rid, _one_line(e)))
@@ -961,9 +963,12 @@ class EngineLoop:
             self._post("recorded", (rid, None))
             return
 
+        def progress(done: int, total: int) -> None:
+            self._post("recordProgress", (rid, done, total), key=("progress", rid))
+
         def finish():
             try:
-                res = rec.finish()
+                res = rec.finish(progress=progress)
                 n = frames_in_file(res.output)
                 if n is not None:
                     res.frames = n  # what a player finds in the file (a GIF merges repeated frames)
@@ -1030,15 +1035,13 @@ class EngineLoop:
         fr.requests_seen = self.requests_seen
 
     def _report_progress(self) -> None:
+        """Frames written so far by each recording in progress (the saver reports its own)."""
         now = time.monotonic()
         while self._saved:
             self.finishing.pop(self._saved.popleft(), None)
         if now - self._progress_at < 0.1:
             return
         self._progress_at = now
-        for rid, rec in self.finishing.items():
-            total = max(1, int(getattr(rec, "accepted", 0) or rec.frames))
-            self.chan.send(("event", "recordProgress", (rid, min(rec.frames, total), total)), key=("progress", rid))
         for rid, rec in self.recorders.items():
             self.chan.send(("event", "recording", (rid, rec.frames, rec.dropped)), key=("recording", rid))
 
@@ -1066,8 +1069,8 @@ class EngineLoop:
                     self._stamp(fr)
                     self.latest = fr
                 while self._events:
-                    name, args = self._events.popleft()
-                    self.chan.send(("event", name, args))
+                    name, args, key = self._events.popleft()
+                    self.chan.send(("event", name, args), key=key)
                 if self.recorders or self.finishing:
                     self._report_progress()
                 if self.gui_free and self.snapshot_wanted:
@@ -1418,8 +1421,9 @@ class Pipeline:
         """Ask for the newest camera frame at full size; it arrives through ``snapshot(array)``."""
         return self._send("snapshot", None, key="snapshot")
 
-    def start_recording(self, rid: int, path: str, fps: float, background) -> int:
-        return self._send("record", (int(rid), str(path), float(fps), background))
+    def start_recording(self, rid: int, path: str, fps: float, background, overwrite: bool = False) -> int:
+        """Record to ``path``; ``overwrite`` replaces what is there (else ``recordFailed`` says it exists)."""
+        return self._send("record", (int(rid), str(path), float(fps), background, bool(overwrite)))
 
     def stop_recording(self, rid: int) -> int:
         return self._send("stop_record", int(rid))
