@@ -462,7 +462,7 @@ class WindowDrive:
 
 
 def drive_performer(seed: int = 5) -> dict:
-    """Frames of a short synthetic performance and two calibrations made from it."""
+    """Frames of a short synthetic performance, its five clicks and two calibrations made from it."""
     from tracker.calibration import calibrate
     from tracker.clicks import Clicks
     from tracker.synthetic import Performance
@@ -473,8 +473,28 @@ def drive_performer(seed: int = 5) -> dict:
     frames = [perf.frame(i) for i in range(len(perf))]
     clicks = Clicks.from_dict(perf.clicks())
     other = min(len(frames) - 1, clicks.frame + 5)
-    return {"perf": perf, "frames": frames, "calibration": performance_calibration(perf),
+    return {"perf": perf, "frames": frames, "clicks": perf.clicks(), "calibration": performance_calibration(perf),
             "calibration2": calibrate(frames[other], clicks)}
+
+
+def watched_window(performer: dict, hang_s: float = 10.0):
+    """The performance window playing a fake camera at full rate, with a :class:`Heartbeat`
+    and a :class:`Watchdog` running: returns (window, heartbeat, watchdog)."""
+    from tracker.sources import FakeCamera
+
+    from app.main_window import MainWindow
+    from app.settings import Settings
+    from app.workers import SourceSpec
+
+    w = MainWindow(settings=Settings(), source=SourceSpec("camera"),
+                   fake_source=FakeCamera(performer["frames"], fps=30, loop=True), calibration=performer["calibration"])
+    w.resize(1360, 820)
+    w.show()
+    beat = Heartbeat()
+    dog = Watchdog(beat, lambda: w.pipeline.engine_pid, hang_s=hang_s)
+    beat.start()
+    dog.start()
+    return w, beat, dog
 
 
 # ------------------------------------------------------------------------------------------
@@ -492,23 +512,11 @@ def soak(minutes: float, out=sys.stdout, spacing_ms: int = 150, workdir: str | N
     for k, sub in (("INKFACE_SETTINGS", "settings.ini"), ("INKFACE_DATA", "data"), ("INKFACE_CACHE", "cache"),
                    ("INKFACE_ART_DIR", "user-art")):
         os.environ.setdefault(k, str(tmp / sub))
-    from app.main_window import MainWindow
-    from app.settings import Settings
     from app.window_cmd import make_app
-    from app.workers import SourceSpec
-    from tracker.sources import FakeCamera
 
     qapp = make_app()
     performer = drive_performer()
-    w = MainWindow(settings=Settings(), source=SourceSpec("camera"),
-                   fake_source=FakeCamera(performer["frames"], fps=30, loop=True),
-                   calibration=performer["calibration"])
-    w.resize(1360, 820)
-    w.show()
-    beat = Heartbeat()
-    dog = Watchdog(beat, lambda: w.pipeline.engine_pid, hang_s=10.0)
-    beat.start()
-    dog.start()
+    w, beat, dog = watched_window(performer)
 
     def pump(until, limit_s: float) -> bool:
         end = time.monotonic() + limit_s

@@ -20,25 +20,15 @@ from app.workers import SourceSpec  # noqa: E402
 WAIT = 60_000  # ms; generous for a loaded 2-core machine
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    """Settings, user data and cache in tmp_path, never the user's."""
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
-    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")  # settings, data and cache in tmp_path
 
 
 @pytest.fixture(scope="module")
 def performer():
     """Frames of a short synthetic performance, its clicks and the calibration from them."""
-    from tracker.synthetic import Performance
+    from benchmarks.soak_window import drive_performer
 
-    from app.workers import performance_calibration
-
-    perf = Performance(seconds=1.0, seed=5)
-    frames = [perf.frame(i) for i in range(len(perf))]
-    return {"perf": perf, "frames": frames, "clicks": perf.clicks(), "calibration": performance_calibration(perf)}
+    return drive_performer()
 
 
 def _fake_camera(frames, loop=True):

@@ -11,28 +11,20 @@ pytest.importorskip("pytestqt")
 
 from app.settings import Settings  # noqa: E402
 from app.workers import SourceSpec  # noqa: E402
-from benchmarks.soak_window import Heartbeat, Watchdog  # noqa: E402
+from benchmarks.soak_window import count_video_frames, watched_window  # noqa: E402
 
 WAIT = 60_000
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
-    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")  # settings, data and cache in tmp_path
 
 
 @pytest.fixture(scope="module")
 def performer():
-    from tracker.synthetic import Performance
+    """Frames of a short synthetic performance, its clicks and the calibration from them."""
+    from benchmarks.soak_window import drive_performer
 
-    from app.workers import performance_calibration
-
-    perf = Performance(seconds=1.0, seed=5)
-    frames = [perf.frame(i) for i in range(len(perf))]
-    return {"perf": perf, "frames": frames, "calibration": performance_calibration(perf)}
+    return drive_performer()
 
 
 def _art():
@@ -49,21 +41,13 @@ def test_requests_while_frames_flow_never_block_the_window(qtbot, performer):
     from tracker.sources import FakeCamera
     from training.defaults import default_session
 
-    from app.main_window import MainWindow
     from app.workers import load_artset
 
-    art = _art()
-    w = MainWindow(settings=Settings(), source=SourceSpec("camera"), art=art,
-                   fake_source=FakeCamera(performer["frames"], fps=30, loop=True), calibration=performer["calibration"])
+    w, beat, dog = watched_window(performer)
     qtbot.addWidget(w)
-    w.show()
-    beat = Heartbeat()
-    dog = Watchdog(beat, lambda: w.pipeline._proc.pid if w.pipeline._proc is not None else None)
-    beat.start()
-    dog.start()
     try:
         qtbot.waitUntil(lambda: w.last is not None and w.last.character is not None, timeout=WAIT)
-        session = default_session(load_artset(art))
+        session = default_session(load_artset(w.current_art()))
         for i in range(12):
             w._on_calibrated(performer["calibration"])
             w._on_session_saved(session)
@@ -245,18 +229,22 @@ def test_news_from_a_source_already_left_is_ignored(qtbot, performer):
 # recording, recalibration
 
 
-def test_stop_recording_returns_at_once_and_saves_in_the_background(qtbot, performer, tmp_path):
-    from benchmarks.soak_window import count_video_frames
-
+def _recording(qtbot, performer, out, frames: int):
+    """A window that has been recording to ``out`` for ``frames`` shown frames."""
     w = _window(qtbot, performer["frames"], performer["calibration"])
     qtbot.waitUntil(lambda: w.last is not None and w.last.character is not None, timeout=WAIT)
-    out = tmp_path / "take.gif"
     assert w.start_recording(str(out))
+    n = w.frames_shown
+    qtbot.waitUntil(lambda: w.frames_shown > n + frames, timeout=WAIT)
+    return w
+
+
+def test_stop_recording_returns_at_once_and_saves_in_the_background(qtbot, performer, tmp_path):
+    out = tmp_path / "take.gif"
+    w = _recording(qtbot, performer, out, 20)
     got = []
     w.recordingSaved.connect(got.append)
     qtbot.waitUntil(lambda: "frames" in w.record_label.text(), timeout=WAIT)  # the engine says how far it is
-    n = w.frames_shown
-    qtbot.waitUntil(lambda: w.frames_shown > n + 20, timeout=WAIT)
     w.stop_recording()
     # back at once: the button is ready again and a progress bar stands for the save
     assert got == [] and w.recording is None and w.record_btn.text() == "● Record"
@@ -270,12 +258,8 @@ def test_stop_recording_returns_at_once_and_saves_in_the_background(qtbot, perfo
 
 
 def test_closing_while_saving_waits_for_the_file(qtbot, performer, tmp_path):
-    w = _window(qtbot, performer["frames"], performer["calibration"])
-    qtbot.waitUntil(lambda: w.last is not None and w.last.character is not None, timeout=WAIT)
     out = tmp_path / "closing.mp4"
-    assert w.start_recording(str(out))
-    n = w.frames_shown
-    qtbot.waitUntil(lambda: w.frames_shown > n + 10, timeout=WAIT)
+    w = _recording(qtbot, performer, out, 10)
     w.close()  # stops the recording; the window stays until the file is closed
     qtbot.waitUntil(lambda: not w.isVisible(), timeout=WAIT)
     assert out.is_file() and w.record_result is not None and w.record_result.frames > 0

@@ -13,36 +13,18 @@ import pytest
 
 pytest.importorskip("pytestqt")
 
-from app.settings import Settings  # noqa: E402
-from app.workers import SourceSpec  # noqa: E402
-from benchmarks.soak_window import Heartbeat, Watchdog, WindowDrive, drive_performer  # noqa: E402
+from benchmarks.soak_window import WindowDrive, drive_performer, watched_window  # noqa: E402
 
 WAIT = 120_000
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
-    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")  # settings, data and cache in tmp_path
 
 
 def test_scripted_drive_never_freezes_the_window(qtbot, tmp_path):
-    from tracker.sources import FakeCamera
-
-    from app.main_window import MainWindow
-
     performer = drive_performer()
-    w = MainWindow(settings=Settings(), source=SourceSpec("camera"),
-                   fake_source=FakeCamera(performer["frames"], fps=30, loop=True), calibration=performer["calibration"])
+    w, beat, dog = watched_window(performer)
     qtbot.addWidget(w)
-    w.resize(1360, 820)
-    w.show()
-    beat = Heartbeat()
-    dog = Watchdog(beat, lambda: w.pipeline.engine_pid, hang_s=10.0)
-    beat.start()
-    dog.start()
     try:
         qtbot.waitUntil(lambda: (w.last is not None and w.last.character is not None) or dog.hung, timeout=WAIT)
         with dog.hold():  # the drive's own setup (sessions, a video file) is not the window's
