@@ -408,7 +408,8 @@ class MainWindow(QMainWindow):
         act(m, "&Calibrate…", self.open_calibration, "Ctrl+K")
         self.recalibrate_action = act(
             m, "&Recalibrate on this frame", self.recalibrate, "K",
-            tip="For when the light changed: calibrate again on the current frame, without stopping (face the camera, neutral face)")
+            tip="For when the light changed: calibrate again on the current frame without stopping "
+                "(face the camera with a neutral face)")
         act(m, "&Train…", self.open_training, "Ctrl+T")
         self.editor_action = act(m, "Art-set &editor…", self.open_editor, "Ctrl+Shift+E")
 
@@ -659,7 +660,8 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"Could not recalibrate: {workers._one_line(e)}", 8000)
             return
         self._on_calibrated(cal, path)
-        self._calibration_note = f"Recalibrated on the current frame ({how}; this session only — Calibrate… saves one)"
+        self._calibration_note = (f"Recalibrated on the current frame ({how}; this session only — "
+                                  "Calibrate… saves one)")
         self._update_calibration_label()
         self.statusBar().showMessage("Recalibrated on the current frame", 4000)
 
@@ -905,8 +907,8 @@ class MainWindow(QMainWindow):
             self.stop_recording()
         self._record_id += 1
         self.recording = str(path)
-        self.pipeline.start_recording(self._record_id, path, self.rate(), _rgb_tuple(self.char_view.background_colour()),
-                                      overwrite)
+        bg = _rgb_tuple(self.char_view.background_colour())
+        self.pipeline.start_recording(self._record_id, path, self.rate(), bg, overwrite)
         self.settings.set("record/dir", str(Path(path).parent))
         self._set_record_button(True)
         self.record_label.setText(f"Recording to {Path(path).name}…")

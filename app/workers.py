@@ -1239,7 +1239,8 @@ class Pipeline:
         self._notifier = None
         self._reader = None
         self._spool = None
-        self._refs: dict[str, Any] = {}  # "calibration"/"session": {id: (object, reference)}; "fake": (camera, reference)
+        # "calibration" / "session": {id: (object, reference)}; "fake": (camera, reference)
+        self._refs: dict[str, Any] = {}
         self._files: dict[int, tuple[Any, str]] = {}  # id(object) -> (object, file it is saved in)
         self._targets: dict = {}
         self._inbox: deque = deque()
