@@ -213,6 +213,16 @@ class PictureReader:
             except (OSError, BufferError):
                 pass
 
+    def unlink(self) -> None:
+        """Remove the engine's segment (when the engine was stopped before it could)."""
+        if self._shm is not None:
+            shm = self._shm
+            self.close()
+            try:
+                shm.unlink()
+            except OSError:
+                pass
+
 
 # ------------------------------------------------------------------------------------------
 # large payloads as files

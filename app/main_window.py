@@ -506,8 +506,8 @@ class MainWindow(QMainWindow):
             self.settings.set("source/camera", spec.camera)
         if spec.kind == "video":
             self.settings.set("source/video", spec.video)
-        self._sync_source_controls(spec)
         self.pipeline.request(calibration=self._calibration_for(spec))
+        self._sync_source_controls(spec)  # after _calibration_for: the label says which calibration
         self.pipeline.set_source(spec, fake_source)
         self.drop_label.setText("dropped 0")
         self.pause_btn.setChecked(False)

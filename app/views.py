@@ -31,8 +31,8 @@ STATUS_TIP = ("The badge says what the tracker sees in this frame:\n"
               "eyes closed — the eyes are shut (the character blinks)\n"
               "mouth lost — the mouth could not be found; the last mouth is held\n"
               "lost — no face; the character holds its pose, then relaxes\n"
-              "starting — not tracking yet: the character is loading, or there is no calibration yet and "
-              "no face has been found to start from")
+              "starting — not tracking yet: the character is loading, there is no calibration yet, or the face "
+              "has not been found since the source or the character changed")
 
 STYLE_SHEET = """
 QWidget { font-size: 10pt; }

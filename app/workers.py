@@ -667,6 +667,7 @@ class Engine:
         self.out_rate = RateMeter()  # new character pictures per second
         self.frames_done = 0
         self.last_error = ""
+        self.acquired = False  # the tracker has found the face since this puppet / source started
 
     def post(self, name: str, *args) -> None:
         self._events(name, args)
@@ -690,6 +691,7 @@ class Engine:
                 else:
                     self.puppet, self.live_art, self.calibration = puppet, bspec.art, cal
                     self._last_rgba = None
+                    self.acquired = False
                     try:
                         _tune(puppet, self.spec)
                     except Exception:
@@ -814,8 +816,10 @@ class Engine:
                 rgba = self._last_rgba = rgba.copy()
         params = getattr(pf, "params", None)
         status = str(getattr(params, "status", "")) if params is not None else ""
-        if not self.tracking():
-            status = STARTING  # no calibration yet and no face found to start from
+        if not self.tracking() or (status == "lost" and not self.acquired):
+            status = STARTING  # no calibration yet, or the face not found yet: nothing was lost
+        elif status and status != "lost":
+            self.acquired = True
         return DisplayFrame(
             index, t, image, rgba,
             params=params,
@@ -829,8 +833,8 @@ class Engine:
 
 
 STARTING = "starting"
-"""The badge before the tracker runs: the character is loading, or there is no calibration yet
-and no face has been found to start from."""
+"""The badge before the tracker has found the face: the character is loading, there is no
+calibration yet, or the face has not been found since the source or the puppet changed."""
 
 _META = ("index", "time", "params", "overlay", "weights", "timings_ms", "fps", "fps_in", "fps_out",
          "dropped_capture", "dropped_display", "art", "status", "fresh", "frames_read", "frames_done", "frame_size",
@@ -936,6 +940,7 @@ class EngineLoop:
             self.capture = self._start_capture(spec, fake, source_id, previous=old)
             self.capture.set_paused(self.paused)
             self.engine.inbox = self.capture.slot
+            self.engine.acquired = False
             self.dropped_display = 0
             self.latest = self.last_ok = None
         elif cmd == "puppet":
@@ -1089,6 +1094,7 @@ class EngineLoop:
             self.close()
 
     def close(self) -> None:
+        self.pictures.close()  # first: the window has stopped reading, and a slow exit may be cut short
         self.capture.stop()
         for rec in self.recorders.values():
             try:
@@ -1100,7 +1106,6 @@ class EngineLoop:
         self.jobs.stop()
         self.engine._loader.stop()
         self.capture.join(3.0)  # let it leave OpenCV before the process exits
-        self.pictures.close()
 
 
 def frames_in_file(path: str | Path) -> int | None:
@@ -1246,6 +1251,7 @@ class Pipeline:
         self._inbox: deque = deque()
         self._dispatching = False
         self._dead = False
+        self._stopped = False
         self._timer = QTimer()
         self._timer.setInterval(poll_ms)
         self._timer.timeout.connect(self._poll)
@@ -1274,11 +1280,17 @@ class Pipeline:
         self._timer.start()
 
     def stop(self, wait_s: float = 3.0) -> None:
-        """Ask the engine to quit (it closes an open recording) and let it go."""
-        self._timer.stop()
-        if self._notifier is not None:
-            self._notifier.setEnabled(False)
-            self._notifier = None
+        """Ask the engine to quit (it closes an open recording) and let it go (once; later calls do nothing)."""
+        if self._stopped:
+            return
+        self._stopped = True
+        try:
+            self._timer.stop()
+            if self._notifier is not None:
+                self._notifier.setEnabled(False)
+        except RuntimeError:  # Qt already deleted them (the window went away at exit)
+            pass
+        self._notifier = None
         if self._chan is not None:
             try:
                 self._send("quit", None)
@@ -1290,6 +1302,8 @@ class Pipeline:
             if self._proc.is_alive():
                 self._proc.terminate()
                 self._proc.join(2.0)
+                if self._reader is not None:
+                    self._reader.unlink()  # the engine had no time to remove its segment
             self._proc = None
         if self._chan is not None:
             self._chan.close()
