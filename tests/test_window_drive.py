@@ -54,3 +54,20 @@ def test_scripted_drive_never_freezes_the_window(qtbot, tmp_path):
     # the camera that does not exist fell back to the bundled performance, and said so
     assert w.source_spec.kind in ("camera", "video", "performance")
     w.close()
+
+
+@pytest.mark.slow
+def test_ten_minute_soak(request):
+    """The drive again and again for 10 minutes (``INKFACE_SOAK_MINUTES`` to change): the event loop
+    is never silent for 1 s and window + engine hold their memory (growth after warm-up < 5 %)."""
+    import os
+
+    if "slow" not in (request.config.getoption("markexpr") or ""):
+        pytest.skip("the 10-minute soak runs with -m slow (or: python -m benchmarks.soak_window)")
+    from benchmarks.soak_window import soak
+
+    res = soak(float(os.environ.get("INKFACE_SOAK_MINUTES", "10")))
+    assert not res["hung"], "the window hung (every thread's stack is printed above)"
+    assert res["failures"] == [] and res["mismatched_recordings"] == []
+    assert res["worst_gap_s"] < 1.0, f"the event loop was silent for {res['worst_gap_s']:.2f} s ({res['worst_at']})"
+    assert res["growth_pct"] < 5.0, res
