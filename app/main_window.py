@@ -882,20 +882,27 @@ class MainWindow(QMainWindow):
             self.stop_recording()
 
     def start_recording_dialog(self) -> bool:
-        from app.record import RECORD_FILTERS
+        """Ask where to record, proposing a name no recording uses yet (recordings never replace
+        one another: a name in use is refused with a free one proposed)."""
+        from app.record import RECORD_FILTERS, free_recording_path
 
-        start = self.settings.get("record/dir") or str(Path.home())
-        path, flt = QFileDialog.getSaveFileName(self, "Record the character to…", str(Path(start) / "inkface.mp4"),
-                                                ";;".join(RECORD_FILTERS))
+        start = Path(self.settings.get("record/dir") or str(Path.home()))
+        try:
+            proposal = free_recording_path(start / "inkface.mp4")
+        except OSError:
+            proposal = start / "inkface.mp4"
+        path, _flt = QFileDialog.getSaveFileName(self, "Record the character to…", str(proposal),
+                                                 ";;".join(RECORD_FILTERS),
+                                                 options=QFileDialog.Option.DontConfirmOverwrite)
         if not path:
             return False
-        return self.start_recording(path, overwrite=True)  # the dialog asked before replacing
+        return self.start_recording(path)
 
     def start_recording(self, path: str, overwrite: bool = False) -> bool:
         """Record the character (MP4 / GIF / PNG folder by extension) and the track beside it.
 
-        The engine process writes the files; the background is the one on screen. An existing
-        recording is replaced only with ``overwrite`` (else the engine says so and proposes a name)."""
+        The engine process writes the files; the background is the one on screen. Nothing is
+        replaced unless ``overwrite``: the engine refuses a name in use and proposes a free one."""
         from app.record import RecordError, _rgb_tuple, format_of
 
         try:

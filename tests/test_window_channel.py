@@ -281,3 +281,15 @@ def test_k_recalibrates_on_the_current_frame_without_stopping(qtbot, performer):
     n = w.frames_shown
     qtbot.waitUntil(lambda: w.frames_shown > n + 10 and w.last.status == "ok", timeout=WAIT)
     w.close()
+
+
+def test_recording_to_a_name_in_use_is_refused_with_a_free_one(qtbot, performer, tmp_path):
+    out = tmp_path / "take.mp4"
+    out.write_bytes(b"an earlier take")
+    w = _window(qtbot, performer["frames"], performer["calibration"])
+    qtbot.waitUntil(lambda: w.last is not None and w.last.character is not None, timeout=WAIT)
+    assert w.start_recording(str(out))
+    qtbot.waitUntil(lambda: "Recording failed" in w.record_label.text(), timeout=WAIT)
+    assert out.read_bytes() == b"an earlier take" and "take-2.mp4" in w.record_label.text()
+    assert w.recording is None and w.record_btn.text() == "● Record"
+    w.close()
