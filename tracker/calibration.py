@@ -32,6 +32,9 @@ from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
+from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils
+from tracker.eyes import calibration_crop as eye_calibration_crop
+from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
 FORMAT = 2
@@ -40,7 +43,7 @@ CLASSIFIERS = ("pupil", "lip", "eye")
 """Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
-SNAP_REACH = 0.05
+SNAP_REACH = 0.12
 """Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
 
 
@@ -163,6 +166,23 @@ class Calibration:
     that tells this face from anything else; None in files from before it existed."""
     face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
     """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
+    eye_model: EyeModel | None = None
+    """This performer's eyes for :class:`tracker.eyes.EyeFinder`; None in older files, which
+    track with the eye-picture, lid-walk and brow finders of ``pupils``, ``lids`` and ``brows``."""
+    mouth_model: MouthModel | None = None
+    """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
+    which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
+
+    @property
+    def classifiers(self) -> dict[str, object]:
+        """The colour classes the tracker tells apart, each with ``mask(bgr) -> bool array``
+        (for showing what calibration learned): the eye's inside, the lips and the mouth's
+        inside for a calibration with eye and mouth models, else the first tracker's pupil,
+        lip and eye colours."""
+        if self.eye_model is None or self.mouth_model is None:
+            return {"pupil": self.pupil, "lip": self.lip, "eye": self.eye}
+        return {"eye": _EyeInsideMask(self.eye_model), "lip": _LipMask(self.mouth_model),
+                "mouth inside": _MouthInsideMask(self.mouth_model)}
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -195,6 +215,9 @@ class Calibration:
             "eye_ref": list(self.eye_ref) if self.eye_ref is not None else None,
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
             "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
+            "mouth_model": self.mouth_model.to_dict() if self.mouth_model is not None else None,
+            "eye_model": self.eye_model.to_dict() if self.eye_model is not None else None,
+            "eye_model_pictures": {k: f"{stem}.{k}.png" for k in EyeModel.IMAGE_NAMES} if self.eye_model is not None else None,
             "face_box_eyes_flat": [float(v) for p in self.face_box_eyes for v in p] if self.face_box_eyes is not None else None,
         }
 
@@ -222,6 +245,12 @@ class Calibration:
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the face picture")
             d["face_patch"] = gen.put(d["face_patch"], buf.tobytes())
+        if self.eye_model is not None:
+            for k, img in self.eye_model.images().items():
+                ok, buf = cv2.imencode(".png", img)
+                if not ok:
+                    raise CalibrationError(f"{path}: could not encode the eye model's {k} picture")
+                d["eye_model_pictures"][k] = gen.put(d["eye_model_pictures"][k], buf.tobytes())
         gen.commit((json.dumps(d, indent=1) + "\n").encode("utf-8"))
 
     @classmethod
@@ -278,6 +307,8 @@ class Calibration:
             mouth_ref=r.optional_numbers("mouth_ref", 3),
             face_patch=face_patch,
             face_box_eyes=None if box_eyes is None else ((box_eyes[0], box_eyes[1]), (box_eyes[2], box_eyes[3])),
+            mouth_model=_mouth_model(path, d.get("mouth_model")),
+            eye_model=_eye_model(path, d.get("eye_model"), d.get("eye_model_pictures")),
         )
         return cal
 
@@ -371,11 +402,10 @@ def _ellipse_pixels(img: np.ndarray, cx: float, cy: float, ax: float, ay: float,
 def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     """Learn a :class:`Calibration` from one frame and the five clicks on it.
 
-    Raises :class:`CalibrationError` (one line) when the frame or the clicks are unusable,
-    e.g. a point outside the frame or no lip colour that differs from the skin.
+    Raises :class:`CalibrationError` (one line) when the frame or the clicks are unusable
+    (a point outside the frame, points that are not a face's proportions); a real face with
+    weak lip colour is not refused (the mouth model leans on its gap and inside instead).
     """
-    from tracker.mouth import MouthFinder
-
     if not (isinstance(frame_bgr, np.ndarray) and frame_bgr.ndim == 3 and frame_bgr.shape[2] == 3 and frame_bgr.dtype == np.uint8):
         raise CalibrationError("calibration frame must be a uint8 (H, W, 3) BGR image")
     H, W = frame_bgr.shape[:2]
@@ -385,13 +415,15 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         raise CalibrationError(str(e)) from None
     grey_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     ipd0 = clicks.ipd()
-    lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
-    rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    # the iris centres near the clicks (the clicks stay when nothing iris-like is there)
+    lp, rp = refine_pupils(grey_full, clicks.left_pupil, clicks.right_pupil)
     # a careful click is trusted over a snap that wandered (onto lashes, a lid crease, make-up)
     if math.dist(lp, clicks.left_pupil) > SNAP_REACH * ipd0:
         lp = clicks.left_pupil
     if math.dist(rp, clicks.right_pupil) > SNAP_REACH * ipd0:
         rp = clicks.right_pupil
+    _, rl = _refine_pupil(grey_full, lp, ipd0)
+    _, rr = _refine_pupil(grey_full, rp, ipd0)
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
     work_ipd = min(ipd, WORK_IPD_MAX)
     ff = FaceFrame.from_pupils(lp, rp, work_ipd)
@@ -475,39 +507,43 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         if hi_m - lo_m > 40:
             white_threshold = 0.5 * (lo_m + hi_m)
 
-    # lips: pixels near the mouth click that the skin model does not explain
-    # (mostly by chroma: shading and nostrils make the skin's brightness vary more than its hue)
+    # --- the eyes: irises, lids, brows, the whole eye's picture (:mod:`tracker.eyes`)
+    erect = eye_calibration_crop(wi)
+    ecrop = ff.crop(frame_bgr, erect)
+    egrey = cv2.cvtColor(ecrop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    eo = np.array(erect[:2], dtype=np.float64)
+    try:
+        learned = learn_eyes(ecrop, egrey, np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - eo, brows_f - eo, wi)
+        # the pictures are kept as 8-bit PNGs: round now, so a loaded calibration tracks like this one
+        eye_model = EyeModel.from_dict(learned.to_dict(), learned.images())
+    except EyeModelError as e:
+        raise CalibrationError(f"calibration: {e}") from None
+
+    # --- the mouth: this performer's lips, gap and inside (never refuses a face; says which cue it uses)
+    mrect = mouth_rect(mouth_f, wi)
+    mcrop = ff.crop(frame_bgr, mrect)
+    mouth_model = learn_mouth(mcrop, (mouth_f[0] - mrect[0], mouth_f[1] - mrect[1]), wi)
+    mcx = mrect[0] + mouth_model.centre[0]
+    mcy = mrect[1] + mouth_model.centre[1]
+
+    # lips as a colour class too (the whole-frame search by lip colour after a loss): the pixels
+    # inside the mouth's outline that are neither skin-like nor the dark inside
+    lips = _lip_pixels(mcrop, mouth_model)
     yw = 0.3
     skin_g = Gaussians(features(np.concatenate([skin_px, ring]), yw), 3, np.array([0.035 * yw, 0.012, 0.012]))
-    cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
-    fc = features(cand, yw)
-    not_skin = skin_g.mahalanobis2(fc) > 12.0
-    lum = fc[:, 0]
-    med = np.median(lum[not_skin]) if not_skin.any() else 0.0
-    lips = cand[not_skin & (lum > 0.55 * med)]
-    if len(lips) < 12:
-        raise CalibrationError(
-            "calibration: no lip colour distinct from the skin near the mouth click "
-            f"({clicks.mouth[0]:g}, {clicks.mouth[1]:g})"
-        )
+    if len(lips) >= 12:
+        distinct = lips[skin_g.mahalanobis2(features(lips, yw)) > 6.0]
+        lips = distinct if len(distinct) >= 12 else lips
+    else:  # no outline to speak of: the reddest pixels round the click
+        cand = _ellipse_pixels(crop, mx, my, 0.28 * wi, 0.1 * wi)
+        red = features(cand, 1.0)[:, 1]
+        lips = cand[red >= np.percentile(red, 80)]
     # a BGR direction that reads ~0 on skin and ~1 on lip, linear in colour mixtures (sub-pixel edges)
     diff = lips.astype(np.float64).mean(0) - ring.astype(np.float64).mean(0)
     lip_axis = diff / max(float(diff @ diff), 1e-6)
     lip_cls = ColourClassifier(
         lips, np.concatenate([skin_px, ring, pupil_px, brow_px, eye_interior]), y_weight=0.5, name="lip"
     )
-
-    # --- mouth geometry on the calibration frame
-    mf = MouthFinder()
-    mh, mw = int(round(0.8 * wi)), int(round(1.4 * wi))
-    mx0, my0 = int(round(mx - mw / 2)), int(round(my - mh / 2))
-    mcrop = crop[max(my0, 0) : my0 + mh, max(mx0, 0) : mx0 + mw]
-    mval = cv2.transform(mcrop.astype(np.float32), lip_axis.astype(np.float32).reshape(1, 3))
-    res = mf.find(lip_cls.prob_u8(mcrop), value=mval, seed=(mx - max(mx0, 0), my - max(my0, 0)))
-    if res is None or res.width < 0.15 * wi:
-        raise CalibrationError("calibration: no lip blob found at the mouth click")
-    mcx = res.centre[0] + max(mx0, 0) + ox
-    mcy = res.centre[1] + max(my0, 0) + oy
 
     # --- brows: cross-section through each pupil, centred on the brow's middle line
     brow_profiles, brow_centres, brow_heights = [], [], []
@@ -544,9 +580,9 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         lid_up=[0.0, 0.0],
         lid_down=[0.0, 0.0],
         mouth_offset=(float(mcx), float(mcy)),
-        mouth_width=float(res.width),
-        mouth_height=float(res.lip_upper + res.lip_lower),
-        mouth_area=float(res.area),
+        mouth_width=float(mouth_model.width),
+        mouth_height=float(mouth_model.lip_upper + mouth_model.lip_lower),
+        mouth_area=float(mouth_model.area),
         pupil_radius=float(prad),
         pupil_threshold=0.5,
         pupil=pupil_cls,
@@ -555,6 +591,8 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         lip_axis=lip_axis,
         white_threshold=white_threshold,
         iris_level=iris_level,
+        mouth_model=mouth_model,
+        eye_model=eye_model,
     )
     # the face as a whole, to tell it from anything else and to find it again
     from tracker.face_finder import face_patch, learn_eyes_in_box
@@ -599,6 +637,8 @@ def files_named_by(path: Path) -> list[str]:
     if isinstance(spec, dict):
         names.append(spec.get("image"))
     names.append(d.get("face_patch"))
+    if isinstance(d.get("eye_model_pictures"), dict):
+        names.extend(d["eye_model_pictures"].values())
     return [n for n in names if isinstance(n, str) and _plain_name(n)]
 
 
@@ -688,6 +728,85 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+class _EyeInsideMask:
+    """What the eye finder counts as the inside of an eye (white, iris, lashes): not this skin."""
+
+    def __init__(self, model: EyeModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        return self.model.skin.interior(np.asarray(bgr)) >= 0.5
+
+
+class _LipMask:
+    """Pixels either lip's colour axis puts nearer the lip than the skin beside it."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        f = np.asarray(bgr, dtype=np.float32)
+        out = np.zeros(f.shape[:2], bool)
+        for a in (self.model.axis_up, self.model.axis_down):
+            v = cv2.transform(f, np.asarray(a[:3], dtype=np.float32).reshape(1, 3)) + np.float32(a[3])
+            out |= v.reshape(f.shape[:2]) >= 0.5
+        return out
+
+
+class _MouthInsideMask:
+    """The dark gap, inside and teeth as the mouth model sees them."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        from tracker.colour_model import lut_index
+
+        return self.model.inside_table.take(lut_index(np.ascontiguousarray(bgr))).astype(bool)
+
+
+def _eye_model(path: Path, d, names) -> EyeModel | None:
+    if d is None:
+        return None
+    if not isinstance(names, dict):
+        raise CalibrationError(f"{path}: eye_model_pictures must name the eye model's pictures")
+    pics = {k: _load_picture(path, names.get(k), f"eye model {k} picture") for k in EyeModel.IMAGE_NAMES}
+    try:
+        return EyeModel.from_dict(d, pics)
+    except EyeModelError as e:
+        raise CalibrationError(f"{path}: {e}") from None
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        raise CalibrationError(f"{path}: malformed eye model ({type(e).__name__}: {e})") from None
+
+
+def _mouth_model(path: Path, d) -> MouthModel | None:
+    if d is None:
+        return None
+    try:
+        return MouthModel.from_dict(d)
+    except ValueError as e:
+        raise CalibrationError(f"{path}: mouth_model: {e}") from None
+
+
+def mouth_rect(centre_face: tuple[float, float], work_ipd: float) -> tuple[int, int, int, int]:
+    """The mouth crop ``(x0, y0, w, h)`` (face px) around a mouth centre in face coordinates."""
+    x0, y0, w, h = MOUTH_RECT
+    return (int(math.floor(centre_face[0] + x0 * work_ipd)), int(math.floor(centre_face[1] + y0 * work_ipd)),
+            int(math.ceil(w * work_ipd)), int(math.ceil(h * work_ipd)))
+
+
+def _lip_pixels(crop: np.ndarray, model: MouthModel) -> np.ndarray:
+    """BGR pixels inside the model's mouth outline that are not the mouth's dark inside."""
+    from tracker.colour_model import lut_index
+
+    mask = np.zeros(crop.shape[:2], np.uint8)
+    poly = np.asarray(model.outline, dtype=np.float64) + np.asarray(model.centre, dtype=np.float64)
+    if len(poly) >= 3:
+        cv2.fillPoly(mask, [np.round(poly).astype(np.int32)], 1)
+    inside = model.inside_table.take(lut_index(crop)).astype(bool)
+    return crop[(mask > 0) & ~inside]
 
 
 def _load_picture(path: Path, name, what: str = "eye picture") -> np.ndarray:

@@ -1,0 +1,260 @@
+"""The mouth model (calibration) and finder on synthetic frames with exact truth.
+
+Crops are cut the way the tracker cuts them: an upright face frame from the true pupils
+(``work_ipd`` between the eyes), :data:`~tracker.mouth_model.MOUTH_RECT` around the mouth centre
+predicted from the calibration.
+"""
+
+import json
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker.calibration import FaceFrame
+from tracker.colour_model import TILE_SHAPE
+from tracker.mouth_finder import SCORE_OK, MouthFinder, polygon_measures
+from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth
+from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
+
+BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+WI = 80.0
+
+
+def _frame_of(state: FaceState) -> FaceFrame:
+    lm = face_landmarks(state)
+    return FaceFrame.from_pupils(tuple(lm["left_pupil"]), tuple(lm["right_pupil"]), WI)
+
+
+def _crop(img: np.ndarray, ff: FaceFrame, centre_face) -> tuple[np.ndarray, np.ndarray]:
+    """The mouth crop around ``centre_face`` (face px) and its origin (face px)."""
+    x0 = int(math.floor(centre_face[0] + MOUTH_RECT[0] * WI))
+    y0 = int(math.floor(centre_face[1] + MOUTH_RECT[1] * WI))
+    w, h = int(math.ceil(MOUTH_RECT[2] * WI)), int(math.ceil(MOUTH_RECT[3] * WI))
+    return ff.crop(img, (x0, y0, w, h)), np.array([x0, y0], dtype=np.float64)
+
+
+def _truth_in_crop(state: FaceState, ff: FaceFrame, origin: np.ndarray) -> dict[str, np.ndarray]:
+    lm = face_landmarks(state)
+    return {k: ff.to_face(lm[k][None])[0] - origin for k in ("mouth_left", "mouth_right", "lip_upper", "lip_lower", "mouth")}
+
+
+def _calibrate(style=None):
+    """Learn from the neutral frame with the mouth click on the true centre; return (model, centre in face px)."""
+    img, _ = render_face(BASE, style)
+    ff = _frame_of(BASE)
+    click = ff.to_face(face_landmarks(BASE)["mouth"][None])[0]
+    crop, origin = _crop(img, ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    return model, np.array(model.centre) + origin
+
+
+@pytest.fixture(scope="module")
+def calibrated():
+    return _calibrate()
+
+
+def _find(model, centre_face, state, style=None, shift=(0.0, 0.0)):
+    img, _ = render_face(state, style)
+    ff = _frame_of(state)
+    pred_face = centre_face + np.array(shift)
+    crop, origin = _crop(img, ff, pred_face)
+    res = MouthFinder(model, WI).find(crop, tuple(pred_face - origin))
+    return res, _truth_in_crop(state, ff, origin)
+
+
+def _errors(res, t):
+    """|width error|, |lip_upper error|, |lip_lower error| in face px."""
+    tw = float(np.hypot(*(t["mouth_right"] - t["mouth_left"])))
+    tc = 0.5 * (t["mouth_left"] + t["mouth_right"])
+    tu = float(tc[1] - t["lip_upper"][1])
+    tl = float(t["lip_lower"][1] - tc[1])
+    return abs(res.width - tw), abs(res.lip_upper - tu), abs(res.lip_lower - tl)
+
+
+def test_calibration_finds_the_neutral_mouth(calibrated):
+    model, centre = calibrated
+    t = face_landmarks(BASE)
+    ff = _frame_of(BASE)
+    true_centre = ff.to_face(0.5 * (t["mouth_left"] + t["mouth_right"])[None])[0]
+    assert model.cue == "colour" and model.separation >= 2.0
+    assert np.hypot(*(centre - true_centre)) < 1.5
+    true_width = float(np.hypot(*(t["mouth_right"] - t["mouth_left"]))) * ff.scale
+    assert abs(model.width - true_width) < 2.0
+
+
+@pytest.mark.parametrize("expr", ["neutral", "smile", "ah", "oo", "grin", "surprise"])
+def test_expressions_match_truth(calibrated, expr):
+    model, centre = calibrated
+    res, t = _find(model, centre, BASE.with_expression(expr))
+    assert res is not None and res.score >= SCORE_OK
+    ew, eu, el = _errors(res, t)
+    assert ew < 2.5 and eu < 1.5 and el < 1.5, (expr, round(ew, 2), round(eu, 2), round(el, 2))
+
+
+def test_open_mouth_counts_teeth_and_inside_as_mouth(calibrated):
+    """A wide-open mouth with teeth: the outer lip edges, not the teeth or the dark inside."""
+    model, centre = calibrated
+    state = BASE.replace(mouth_open=1.0, teeth=True)
+    res, t = _find(model, centre, state)
+    _, eu, el = _errors(res, t)
+    assert eu < 1.5 and el < 1.5
+
+
+def test_roll_and_lean_are_handled_by_the_crop(calibrated):
+    model, centre = calibrated
+    for roll, ipd in ((12.0, 80.0), (-20.0, 70.0), (5.0, 95.0)):
+        state = BASE.replace(roll_deg=roll, ipd=ipd).with_expression("smile")
+        res, t = _find(model, centre, state)
+        ew, eu, el = _errors(res, t)
+        assert ew < 2.5 and eu < 1.5 and el < 1.5
+
+
+def test_prediction_error_is_absorbed(calibrated):
+    """The head-motion prediction is a few px off: the mouth is still found where it is."""
+    model, centre = calibrated
+    for shift in ((4.0, -3.0), (-5.0, 6.0), (0.0, 10.0)):
+        res, t = _find(model, centre, BASE.with_expression("ah"), shift=shift)
+        ew, eu, el = _errors(res, t)
+        assert ew < 2.5 and eu < 1.5 and el < 1.5
+
+
+@pytest.mark.parametrize("style", ["dark_skin", "pale_lips"])
+def test_other_performers(style):
+    model, centre = _calibrate(STYLES[style])
+    for expr in ("neutral", "ah", "smile"):
+        res, t = _find(model, centre, BASE.with_expression(expr), STYLES[style])
+        assert res is not None and res.score >= SCORE_OK, (style, expr)
+        ew, eu, el = _errors(res, t)
+        assert ew < 3.0 and eu < 2.0 and el < 2.0, (style, expr, round(ew, 2), round(eu, 2), round(el, 2))
+
+
+def test_a_noisy_blurred_jpeg_camera():
+    """Noise, blur and JPEG: corners within 3 px, and the opening follows the jaw (the lip edges are
+    softer here: within 7 px of the truth)."""
+    style = STYLES["noisy"]
+    model, centre = _calibrate(style)
+    opens = []
+    for o in (0.0, 0.4, 0.8):
+        res, t = _find(model, centre, BASE.replace(mouth_open=o), style)
+        assert res is not None and res.score >= SCORE_OK
+        ew, eu, el = _errors(res, t)
+        assert ew < 3.0 and eu + el < 7.0, (o, round(ew, 2), round(eu, 2), round(el, 2))
+        opens.append(res.lip_upper + res.lip_lower)
+    assert opens[0] < opens[1] < opens[2]
+
+
+def test_a_lip_coloured_object_away_from_the_mouth_is_ignored(calibrated):
+    model, centre = calibrated
+    state = BASE.with_expression("smile")
+    img, _ = render_face(state)
+    lip = tuple(int(c) for c in STYLES["default"].lip)
+    lm = face_landmarks(state)
+    mouth = lm["mouth"]
+    cv2.circle(img, (int(mouth[0]) + 62, int(mouth[1]) + 40), 14, lip, -1)  # beside the chin, inside the crop
+    ff = _frame_of(state)
+    crop, origin = _crop(img, ff, centre)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    ew, eu, el = _errors(res, _truth_in_crop(state, ff, origin))
+    assert ew < 2.5 and eu < 1.5 and el < 1.5
+
+
+def test_no_mouth_in_the_crop_is_not_a_confident_mouth(calibrated):
+    """Predicted on the forehead (or the face gone): no result, or one that says it is not the mouth."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre + np.array([0.0, -1.6 * WI]))
+    res = MouthFinder(model, WI).find(crop, tuple(centre + np.array([0.0, -1.6 * WI]) - origin))
+    assert res is None or res.score < SCORE_OK
+    blank = np.full_like(crop, (140, 172, 218))
+    res = MouthFinder(model, WI).find(blank, tuple(centre - origin))
+    assert res is None or res.score < SCORE_OK
+
+
+def test_dimmer_light_after_calibration(calibrated):
+    """The light falls to 60 % and turns warmer: the crop's light is matched to the calibration's."""
+    model, centre = calibrated
+    state = BASE.with_expression("ah")
+    img, _ = render_face(state)
+    dim = np.clip(img.astype(np.float32) * np.array([0.5, 0.6, 0.7], np.float32), 0, 255).astype(np.uint8)
+    ff = _frame_of(state)
+    crop, origin = _crop(dim, ff, centre)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK
+    ew, eu, el = _errors(res, _truth_in_crop(state, ff, origin))
+    assert ew < 2.5 and eu < 1.5 and el < 1.5
+
+
+def test_calibration_never_refuses():
+    """Lips the colour of the skin, or no mouth at all: a model all the same, and it says which cue."""
+    img, _ = render_face(BASE, STYLES["default"].replace(lip=STYLES["default"].skin))
+    ff = _frame_of(BASE)
+    click = ff.to_face(face_landmarks(BASE)["mouth"][None])[0]
+    crop, origin = _crop(img, ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    assert model.cue in ("colour", "contrast")
+    blank = np.full_like(crop, (140, 172, 218))
+    model = learn_mouth(blank, tuple(click - origin), WI)
+    assert model.cue == "contrast" and model.width > 0
+
+
+def test_low_contrast_lips_use_the_contrast_cue_and_still_move():
+    """Lips barely redder than the skin: the contrast cue, and the opening still follows the jaw."""
+    style = STYLES["default"].replace(lip=(128, 156, 214))
+    model, centre = _calibrate(style)
+    opens = []
+    for o in (0.0, 0.5, 1.0):
+        res, t = _find(model, centre, BASE.replace(mouth_open=o), style)
+        assert res is not None
+        opens.append(res.lip_upper + res.lip_lower)
+    assert opens[0] < opens[1] < opens[2]
+
+
+def test_model_round_trips_through_json(calibrated):
+    model, centre = calibrated
+    d = json.loads(json.dumps(model.to_dict()))
+    images = model.images()
+    assert set(images) == {"inside"} and all(v.shape == TILE_SHAPE and v.dtype == np.uint8 for v in images.values())
+    again = MouthModel.from_dict(d, images)
+    assert np.array_equal(again.inside_table, model.inside_table)
+    img, _ = render_face(BASE.with_expression("smile"))
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    a = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    b = MouthFinder(again, WI).find(crop, tuple(centre - origin))
+    assert np.allclose(a.polygon, b.polygon, atol=1e-3) and abs(a.score - b.score) < 1e-6
+
+
+def test_from_dict_names_the_problem():
+    with pytest.raises(ValueError, match="mouth model"):
+        MouthModel.from_dict({"format": 99})
+    model, _ = _calibrate()
+    d = model.to_dict()
+    del d["axis_up"]
+    with pytest.raises(ValueError, match="malformed"):
+        MouthModel.from_dict(d)
+
+
+def test_polygon_measures_of_a_known_lens():
+    t = np.linspace(-1, 1, 41)
+    top = np.stack([50 + 30 * t, 40 - 10 * (1 - t * t)], axis=1)
+    bottom = np.stack([50 - 30 * t, 40 + 14 * (1 - t * t)], axis=1)
+    left, right, up, down = polygon_measures(np.concatenate([top, bottom[1:-1]]))
+    assert left == pytest.approx((20.0, 40.0)) and right == pytest.approx((80.0, 40.0))
+    assert up == pytest.approx(10.0, abs=0.05) and down == pytest.approx(14.0, abs=0.05)
+
+
+def test_fisher_axis_maps_skin_to_zero_and_lip_to_one_whatever_the_shading():
+    rng = np.random.default_rng(1)
+    skin = np.array([140.0, 172.0, 218.0])
+    lip = np.array([92.0, 78.0, 188.0])
+    shade = rng.uniform(0.6, 1.1, (400, 1))
+    skin_px = skin * shade + rng.normal(0, 2, (400, 3))
+    lip_px = lip + rng.normal(0, 3, (300, 3))
+    axis, sep = fisher_axis(lip_px, skin_px)
+    v = lambda c: np.asarray(c) @ axis[:3] + axis[3]
+    assert v(lip) == pytest.approx(1.0, abs=0.05) and abs(v(skin)) < 0.05
+    assert abs(v(0.6 * skin)) < 0.05 and abs(v(1.1 * skin)) < 0.05  # shading leaves skin at 0
+    assert sep > 5
