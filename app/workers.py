@@ -20,6 +20,7 @@ frames by file. Why a process and not QThreads: see the note above :class:`Hook`
 from __future__ import annotations
 
 import json
+import sys
 import threading
 import time
 from collections import deque
@@ -1163,8 +1164,9 @@ def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
     for how, clicks in tries:
         try:
             return calibrate(image, clicks()), how
-        except Exception as e:  # the next way may still work
+        except Exception as e:  # the next way may still work; say why this one did not
             last = e
+            print(f"inkface: recalibration {how} did not work: {_one_line(e)}", file=sys.stderr)
     raise ValueError(f"could not calibrate on this frame ({_one_line(last) if last else 'no face'})")
 
 
