@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import shiboken6
 from PySide6.QtCore import QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import (
@@ -29,6 +30,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QMainWindow,
     QMessageBox,
+    QProgressBar,
     QPushButton,
     QScrollArea,
     QSlider,
@@ -56,6 +58,11 @@ FILTER_LABELS = {
 
 from app.workers import PERFORMANCE_CALIBRATION
 
+DROPPED_TIP = ("Frames of this source that were skipped to stay live instead of falling behind:\n"
+               "• not tracked: the source delivered a new frame while the tracker was still busy with the last\n"
+               "• not shown: a finished picture was replaced by a newer one before the window could paint it\n"
+               "Counting starts again when the source changes.")
+
 
 def available_filters() -> list[str]:
     """Filter names the training package offers (the paper's first), or the known defaults."""
@@ -81,6 +88,8 @@ class MainWindow(QMainWindow):
     """Inkface's performance window."""
 
     frameShown = Signal(int)  # frame index, after the views were updated
+    calibrationOpened = Signal(object)  # the CalibrationWindow, once the frame for it arrived
+    recordingSaved = Signal(object)  # app.record.RecordResult, when a stopped recording is closed
 
     def __init__(
         self,
@@ -99,7 +108,11 @@ class MainWindow(QMainWindow):
         self.last: DisplayFrame | None = None
         self.frames_shown = 0
         self.recording: str | None = None  # output path while recording
-        self._record_result = None
+        self.record_result = None  # the newest finished recording (app.record.RecordResult)
+        self._record_id = 0  # of the recording in progress (0: none)
+        self._saving: dict[int, str] = {}  # recordings being closed in the engine: id -> path
+        self._close_when_saved = False
+        self._snapshot_wanted = False
         self._fake = fake_source
         self._calibration = calibration  # given or made in the calibration window: wins over saved ones
         self._calibration_note = ""
@@ -127,8 +140,14 @@ class MainWindow(QMainWindow):
         pl.error.connect(lambda m: self.statusBar().showMessage(f"Problem: {m}", 6000))
         pl.sourceFailed.connect(self._on_source_failed)
         pl.sourceOpened.connect(self._on_source_opened)
+        pl.snapshot.connect(self._on_snapshot)
+        pl.recording.connect(self._on_recording)
+        pl.recordProgress.connect(self._on_record_progress)
         pl.recorded.connect(self._on_recorded)
         pl.recordFailed.connect(self._on_record_failed)
+        pl.recalibrated.connect(self._on_recalibrated)
+        pl.recalibrateFailed.connect(lambda m: self.statusBar().showMessage(f"Could not recalibrate: {m}", 8000))
+        self.destroyed.connect(lambda *_a, p=pl: p.stop())  # deleted without a close (tests): the engine goes too
         self.video_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(video=box))
         self.char_view.sizeChanged.connect(lambda box: self.pipeline.set_targets(char=box))
         self._sync_source_controls(spec)
@@ -187,8 +206,12 @@ class MainWindow(QMainWindow):
         sb = QStatusBar()
         self.setStatusBar(sb)
         self.fps_label = QLabel("— fps")
+        self.fps_label.setToolTip("in: frames read from the source per second · out: new character drawings per "
+                                  "second (the output rate: 10, 15 or 30)")
         self.stage_label = QLabel("")
+        self.stage_label.setToolTip("Milliseconds per frame in each stage of the engine")
         self.drop_label = QLabel("")
+        self.drop_label.setToolTip(DROPPED_TIP)
         self.source_label = QLabel("")
         for lab in (self.source_label, self.stage_label, self.drop_label, self.fps_label):
             sb.addPermanentWidget(lab)
@@ -325,6 +348,10 @@ class MainWindow(QMainWindow):
         self.record_label.setObjectName("hint")
         self.record_label.setWordWrap(True)
         gv.addWidget(self.record_label)
+        self.save_progress = QProgressBar()
+        self.save_progress.setToolTip("Writing the frames still queued and closing the files; the performance goes on")
+        self.save_progress.setVisible(False)
+        gv.addWidget(self.save_progress)
         v.addWidget(g)
         v.addStretch(1)
         return panel
@@ -379,6 +406,10 @@ class MainWindow(QMainWindow):
 
         m = mb.addMenu("&Tools")
         act(m, "&Calibrate…", self.open_calibration, "Ctrl+K")
+        self.recalibrate_action = act(
+            m, "&Recalibrate on this frame", self.recalibrate, "K",
+            tip="For when the light changed: calibrate again on the current frame without stopping "
+                "(face the camera with a neutral face)")
         act(m, "&Train…", self.open_training, "Ctrl+T")
         self.editor_action = act(m, "Art-set &editor…", self.open_editor, "Ctrl+Shift+E")
 
@@ -475,9 +506,10 @@ class MainWindow(QMainWindow):
             self.settings.set("source/camera", spec.camera)
         if spec.kind == "video":
             self.settings.set("source/video", spec.video)
-        self._sync_source_controls(spec)
         self.pipeline.request(calibration=self._calibration_for(spec))
+        self._sync_source_controls(spec)  # after _calibration_for: the label says which calibration
         self.pipeline.set_source(spec, fake_source)
+        self.drop_label.setText("dropped 0")
         self.pause_btn.setChecked(False)
 
     def _sync_source_controls(self, spec: SourceSpec) -> None:
@@ -523,8 +555,11 @@ class MainWindow(QMainWindow):
         if spec.kind == "camera":
             self.statusBar().showMessage(f"No camera: {msg}. Playing the bundled performance instead.", 10000)
             if not self._camera_failed_once and self.isVisible() and not _testing():
-                QMessageBox.information(self, "No camera",
-                                        f"{msg}\n\nInkface will play the bundled performance instead.")
+                box = QMessageBox(QMessageBox.Icon.Information, "No camera",
+                                  f"{msg}\n\nInkface will play the bundled performance instead.",
+                                  QMessageBox.StandardButton.Ok, self)
+                box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+                box.open()  # not exec(): the event loop, and the performance, go on
             self._camera_failed_once = True
             self.set_source(SourceSpec("performance"))
         elif spec.kind == "video":
@@ -580,25 +615,71 @@ class MainWindow(QMainWindow):
     def _update_calibration_label(self) -> None:
         self.calib_label.setText(f"{self.performer()}: {self._calibration_note}" if self._calibration_note else self.performer())
 
-    def open_calibration(self):
-        """Freeze the current frame and open the calibration window on it."""
-        frame = self.pipeline.full_frame()
+    def open_calibration(self) -> None:
+        """Ask the engine for the current frame at full size; the calibration window opens on
+        it when it arrives (:attr:`calibrationOpened`), the performance playing on meanwhile."""
+        self._snapshot_wanted = True
+        self.pipeline.request_snapshot()
+        self.statusBar().showMessage("Taking the current frame for calibration…", 3000)
+
+    def _on_snapshot(self, frame) -> None:
+        if not self._snapshot_wanted:
+            return
+        self._snapshot_wanted = False
         if frame is None:
             self.statusBar().showMessage("No frame to calibrate on yet", 4000)
-            return None
+            return
         from app.calibration_window import CalibrationWindow
 
         dlg = CalibrationWindow(np.array(frame), performer=self.performer(), parent=self)
-        dlg.calibrated.connect(self._on_calibrated)
-        self._children.append(dlg)
+        dlg.calibrated.connect(lambda cal, d=dlg: self._on_calibrated(cal, getattr(d, "saved_to", None)))
+        self._adopt(dlg)
         dlg.show()
-        return dlg
+        self.calibrationOpened.emit(dlg)
 
-    def _on_calibrated(self, cal) -> None:
+    def _on_calibrated(self, cal, path: str | Path | None = None) -> None:
+        """Use a new calibration; ``path`` is the file it was saved to (sent instead of the object)."""
         self._calibration = cal
         self._calibration_note = f"Calibrated just now ({self.performer()})"
         self._update_calibration_label()
+        if path is not None:
+            self.pipeline.note_file(cal, path)
         self.pipeline.request(calibration=cal)
+
+    def recalibrate(self) -> None:
+        """Calibrate again on the current frame (K), for when the light changed; frames go on."""
+        self.pipeline.recalibrate()
+        self.statusBar().showMessage("Recalibrating on the current frame…", 3000)
+
+    def _on_recalibrated(self, path: str, how: str) -> None:
+        try:
+            from tracker.calibration import Calibration
+
+            cal = Calibration.load(path)
+        except Exception as e:
+            self.statusBar().showMessage(f"Could not recalibrate: {workers._one_line(e)}", 8000)
+            return
+        self._on_calibrated(cal, path)
+        self._calibration_note = (f"Recalibrated on the current frame ({how}; this session only — "
+                                  "Calibrate… saves one)")
+        self._update_calibration_label()
+        self.statusBar().showMessage("Recalibrated on the current frame", 4000)
+
+    def _adopt(self, win: QWidget) -> None:
+        """Keep a child window; closed ones are let go (deleted) so repeated use does not pile up."""
+        keep = []
+        for c in self._children:
+            if shiboken6.isValid(c) and c.isVisible():
+                keep.append(c)
+            elif shiboken6.isValid(c):
+                c.deleteLater()
+        self._children = keep + [win]
+
+    def _feed_children(self) -> None:
+        """Live frames for open training windows (they record clips from them)."""
+        for c in self._children:
+            if hasattr(c, "live_frame") and shiboken6.isValid(c) and c.isVisible():
+                c.live_frame(self.last)
 
     # ----------------------------------------------------------------------------- training
     def _load_session(self, art_path: str):
@@ -627,8 +708,7 @@ class MainWindow(QMainWindow):
                              calibration=cal, parent=self)
         win.sessionSaved.connect(self._on_session_saved)
         win.recordingChanged.connect(lambda on: self.pipeline.set_targets(full=on))
-        self.frameShown.connect(lambda _i: win.live_frame(self.last))
-        self._children.append(win)
+        self._adopt(win)
         win.show()
         return win
 
@@ -761,25 +841,36 @@ class MainWindow(QMainWindow):
             return
         self.last = fr
         if fr.video is not None:
-            self.video_view.set_frame(fr.video, fr.overlay, fr.params, fr.frame_size)
+            self.video_view.set_frame(fr.video, fr.overlay, fr.params, fr.frame_size, status=fr.status)
         if fr.character is not None:
             self.char_view.set_image(fr.character, fr.art)
             self.char_view.placeholder = "Loading the character…"
         self.frames_shown += 1
+        self._feed_children()
         self.frameShown.emit(fr.index)
 
     def _refresh_status(self) -> None:
         fr = self.last
         if fr is None:
             return
-        self.fps_label.setText(f"{fr.fps:5.1f} fps")
+        if self.pause_btn.isChecked():
+            self.fps_label.setText("paused")
+        else:
+            self.fps_label.setText(f"in {fr.fps_in:4.1f} · out {fr.fps_out:4.1f} fps")
+        self.fps_label.setToolTip(
+            f"in: {fr.fps_in:.1f} frames per second read from the source\n"
+            f"tracked: {fr.fps:.1f} frames per second\n"
+            f"out: {fr.fps_out:.1f} new character drawings per second (output rate {self.rate()} fps)")
         t = fr.timings_ms or {}
         if t:
             parts = [f"{k} {v:.1f}" for k, v in t.items() if isinstance(v, (int, float))]
             self.stage_label.setText("ms: " + " · ".join(parts))
-        self.drop_label.setText(f"dropped {fr.dropped_capture + fr.dropped_display}")
-        if self.recording is not None:
-            self.record_label.setText(f"Recording to {Path(self.recording).name}…")
+        if fr.source_id == self.pipeline.source_id:
+            dropped = fr.dropped_capture + fr.dropped_display
+            pct = f" ({100.0 * dropped / fr.frames_read:.0f} %)" if fr.frames_read else ""
+            self.drop_label.setText(f"dropped {dropped}{pct}")
+            self.drop_label.setToolTip(f"{DROPPED_TIP}\n\nThis source: {fr.frames_read} frames read, "
+                                       f"{fr.dropped_capture} not tracked, {fr.dropped_display} not shown.")
 
     # ---------------------------------------------------------------------------- record
     def _on_record_toggled(self, on: bool) -> None:
@@ -791,19 +882,27 @@ class MainWindow(QMainWindow):
             self.stop_recording()
 
     def start_recording_dialog(self) -> bool:
-        from app.record import RECORD_FILTERS
+        """Ask where to record, proposing a name no recording uses yet (recordings never replace
+        one another: a name in use is refused with a free one proposed)."""
+        from app.record import RECORD_FILTERS, free_recording_path
 
-        start = self.settings.get("record/dir") or str(Path.home())
-        path, flt = QFileDialog.getSaveFileName(self, "Record the character to…", str(Path(start) / "inkface.mp4"),
-                                                ";;".join(RECORD_FILTERS))
+        start = Path(self.settings.get("record/dir") or str(Path.home()))
+        try:
+            proposal = free_recording_path(start / "inkface.mp4")
+        except OSError:
+            proposal = start / "inkface.mp4"
+        path, _flt = QFileDialog.getSaveFileName(self, "Record the character to…", str(proposal),
+                                                 ";;".join(RECORD_FILTERS),
+                                                 options=QFileDialog.Option.DontConfirmOverwrite)
         if not path:
             return False
         return self.start_recording(path)
 
-    def start_recording(self, path: str) -> bool:
+    def start_recording(self, path: str, overwrite: bool = False) -> bool:
         """Record the character (MP4 / GIF / PNG folder by extension) and the track beside it.
 
-        The engine process writes the files; the background is the one on screen."""
+        The engine process writes the files; the background is the one on screen. Nothing is
+        replaced unless ``overwrite``: the engine refuses a name in use and proposes a free one."""
         from app.record import RecordError, _rgb_tuple, format_of
 
         try:
@@ -811,53 +910,81 @@ class MainWindow(QMainWindow):
         except RecordError as e:
             QMessageBox.warning(self, "Record", str(e))
             return False
-        self._record_result = None
+        if self.recording is not None:
+            self.stop_recording()
+        self._record_id += 1
         self.recording = str(path)
-        self.pipeline.start_recording(path, self.rate(), _rgb_tuple(self.char_view.background_colour()))
+        bg = _rgb_tuple(self.char_view.background_colour())
+        self.pipeline.start_recording(self._record_id, path, self.rate(), bg, overwrite)
         self.settings.set("record/dir", str(Path(path).parent))
-        self.record_btn.blockSignals(True)
-        self.record_btn.setChecked(True)
-        self.record_btn.setText("■ Stop recording")
-        self.record_btn.blockSignals(False)
-        self.record_action.setChecked(True)
+        self._set_record_button(True)
+        self.record_label.setText(f"Recording to {Path(path).name}…")
         return True
 
-    def stop_recording(self, timeout_s: float = 60.0):
-        """Stop and wait (pumping the engine's messages) until the files are closed."""
-        import time
-
+    def stop_recording(self) -> None:
+        """Stop recording; the engine closes the files on its own thread while the performance
+        plays on, a progress bar shows how far it is, and :attr:`recordingSaved` says when done."""
         if self.recording is None:
-            return None
+            return
+        self._saving[self._record_id] = self.recording
+        self.pipeline.stop_recording(self._record_id)
         self.recording = None
-        self.record_btn.blockSignals(True)
-        self.record_btn.setChecked(False)
-        self.record_btn.setText("● Record")
-        self.record_btn.blockSignals(False)
-        self.record_action.setChecked(False)
-        self._record_result = _PENDING
-        self.pipeline.stop_recording()
-        end = time.monotonic() + timeout_s
-        while self._record_result is _PENDING and time.monotonic() < end and self.pipeline.running:
-            self.pipeline._poll()
-            time.sleep(0.01)
-        res = self._record_result
-        return None if res is _PENDING else res
+        self._set_record_button(False)
+        self._show_saving()
 
-    def _on_recorded(self, result) -> None:
-        self._record_result = result
+    def _set_record_button(self, on: bool) -> None:
+        self.record_btn.blockSignals(True)
+        self.record_btn.setChecked(on)
+        self.record_btn.setText("■ Stop recording" if on else "● Record")
+        self.record_btn.blockSignals(False)
+        self.record_action.setChecked(on)
+
+    def _show_saving(self, done: int = 0, total: int = 0) -> None:
+        if not self._saving:
+            self.save_progress.setVisible(False)
+            return
+        names = ", ".join(Path(p).name for p in self._saving.values())
+        self.save_progress.setVisible(True)
+        self.save_progress.setRange(0, max(1, total))
+        self.save_progress.setValue(min(done, max(1, total)))
+        self.save_progress.setFormat(f"Saving {names}… %p %")
+        if self.recording is None:
+            self.record_label.setText(f"Saving {names}… ({done} of {total} frames written)" if total
+                                      else f"Saving {names}…")
+
+    def _on_recording(self, rid: int, frames: int, dropped: int) -> None:
+        if rid == self._record_id and self.recording is not None:
+            extra = f", {dropped} dropped (the disk could not keep up)" if dropped else ""
+            self.record_label.setText(f"Recording to {Path(self.recording).name}… {frames} frames{extra}")
+
+    def _on_record_progress(self, rid: int, done: int, total: int) -> None:
+        if rid in self._saving:
+            self._show_saving(done, total)
+
+    def _on_recorded(self, rid: int, result) -> None:
+        self._saving.pop(rid, None)
+        self._show_saving()
         if result is not None:
+            self.record_result = result
             self.record_label.setText(result.describe())
             self.statusBar().showMessage(result.describe(), 8000)
+            self.recordingSaved.emit(result)
+        self._close_if_saved()
 
-    def _on_record_failed(self, msg: str) -> None:
-        self._record_result = None
-        self.recording = None
-        self.record_btn.blockSignals(True)
-        self.record_btn.setChecked(False)
-        self.record_btn.setText("● Record")
-        self.record_btn.blockSignals(False)
+    def _on_record_failed(self, rid: int, msg: str) -> None:
+        self._saving.pop(rid, None)
+        self._show_saving()
+        if rid == self._record_id and self.recording is not None:
+            self.recording = None
+            self._set_record_button(False)
         self.record_label.setText(f"Recording failed: {msg}")
         self.statusBar().showMessage(f"Recording failed: {msg}", 10000)
+        self._close_if_saved()
+
+    def _close_if_saved(self) -> None:
+        if self._close_when_saved and not self._saving:
+            self._close_when_saved = False
+            QTimer.singleShot(0, self.close)
 
     def export_snapshot(self) -> None:
         if self.last is None or self.last.character is None:
@@ -871,7 +998,7 @@ class MainWindow(QMainWindow):
         from app.record import RerenderDialog
 
         dlg = RerenderDialog(self.strip.entries(), self.char_view.background_colour(), self.rate(), parent=self)
-        self._children.append(dlg)
+        self._adopt(dlg)
         dlg.show()
 
     # ------------------------------------------------------------------------ drag & drop
@@ -922,6 +1049,12 @@ class MainWindow(QMainWindow):
     def closeEvent(self, ev) -> None:
         if self.recording is not None:
             self.stop_recording()
+        if self._saving and self.pipeline.running and not self._close_when_saved:
+            # the files are still being closed: close when they are (closing again does not wait)
+            self._close_when_saved = True
+            self.statusBar().showMessage("Saving the recording… Inkface closes when it is saved", 0)
+            ev.ignore()
+            return
         self.settings.set_geometry("main", self.saveGeometry())
         self.settings.sync()
         for c in self._children:
@@ -930,14 +1063,11 @@ class MainWindow(QMainWindow):
             except RuntimeError:
                 pass
         self._status_timer.stop()
-        self.pipeline.stop()
+        self.pipeline.stop(wait_s=30.0 if self._saving else 3.0)  # the engine finishes a save it started
         super().closeEvent(ev)
 
     def sizeHint(self) -> QSize:
         return QSize(1360, 820)
-
-
-_PENDING = object()
 
 
 def _testing() -> bool:

@@ -25,7 +25,14 @@ ACCENT = QColor("#7aa2f7")
 OK_GREEN = QColor("#9ece6a")
 WARN = QColor("#e0af68")
 BAD = QColor("#f7768e")
-STATUS_COLOURS = {"ok": OK_GREEN, "eyes_closed": WARN, "mouth_lost": WARN, "lost": BAD}
+STATUS_COLOURS = {"ok": OK_GREEN, "eyes_closed": WARN, "mouth_lost": WARN, "lost": BAD, "starting": ACCENT}
+STATUS_TIP = ("The badge says what the tracker sees in this frame:\n"
+              "ok — both eyes and the mouth are tracked\n"
+              "eyes closed — the eyes are shut (the character blinks)\n"
+              "mouth lost — the mouth could not be found; the last mouth is held\n"
+              "lost — no face; the character holds its pose, then relaxes\n"
+              "starting — not tracking yet: the character is loading, there is no calibration yet, or the face "
+              "has not been found since the source or the character changed")
 
 STYLE_SHEET = """
 QWidget { font-size: 10pt; }
@@ -317,15 +324,19 @@ class VideoView(QWidget):
         self.show_overlay = True
         self.placeholder = "No video yet"
         self.frame_size: tuple[int, int] | None = None
+        self.status = ""
         self.sizeChanged = Hook()  # (w, h) in device pixels of the picture area
         self.setMinimumSize(320, 240)
+        self.setToolTip(STATUS_TIP)
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
 
     def set_frame(self, image: QImage | None, overlay: Any = None, params: Any = None,
-                  frame_size: tuple[int, int] | None = None) -> None:
+                  frame_size: tuple[int, int] | None = None, status: str | None = None) -> None:
         """Show ``image``; overlay coordinates are pixels of a ``frame_size`` frame (default:
-        the image's own size; the engine may send the picture pre-scaled for display)."""
+        the image's own size; the engine may send the picture pre-scaled for display).
+        ``status`` is the badge (default: the tracker's status in ``overlay`` / ``params``)."""
         self.image, self.overlay, self.params = image, overlay, params
+        self.status = status if status is not None else overlay_status(overlay, params)
         self.frame_size = frame_size if frame_size and frame_size[0] > 0 else None
         self.update()
 
@@ -358,8 +369,8 @@ class VideoView(QWidget):
         sy = r.height() / fh
         if self.show_overlay and self.overlay is not None:
             paint_overlay(p, self.overlay, lambda x, y: QPointF(r.x() + (x + 0.5) * sx, r.y() + (y + 0.5) * sy), sx)
-        status = overlay_status(self.overlay, self.params)
-        if status:
+        status = self.status
+        if status and not status.startswith("error"):
             paint_pill(p, QPointF(r.x() + 10, r.y() + 10), status.replace("_", " "), STATUS_COLOURS.get(status, WARN))
 
 

@@ -1,22 +1,26 @@
 """Capture, tracking and rendering off the GUI thread — in a separate engine process.
 
-* The **engine process** (:func:`engine_main`) runs a :class:`Capture` thread that reads the
+* The **engine process** (:class:`EngineLoop`) runs a :class:`Capture` thread that reads the
   frame source (camera, video file, the synthetic performance) into a one-item
   :class:`LatestSlot`, paced to the source's rate for files; when the engine has not taken the
   previous frame it is overwritten and counted as dropped — frames are never queued. The
   :class:`Engine` steps ``training.puppet.Puppet`` on the newest frame (track → filter → map →
-  render) and keeps only its newest result for the window; it is sent when the window has
-  acknowledged the previous one, so a slow window drops frames too. Characters are built on a
-  loader thread so video keeps flowing meanwhile. Recording happens there as well.
-* The **window side** (:class:`Pipeline`) polls the pipe from a timer and turns the newest
-  frame into QImages on the GUI thread. Requests (another source, character, rate, filter,
-  gain …) are messages; nothing heavy ever runs on the GUI thread.
+  render) and keeps only its newest result for the window; it is published when the window has
+  taken the previous one, so a slow window drops frames too. Characters are built on a loader
+  thread so video keeps flowing meanwhile. Recording happens there as well; a stopped
+  recording is closed on its own thread while frames go on.
+* The **window side** (:class:`Pipeline`) posts requests and reads what came back from the
+  event loop (a socket notifier), turning the newest frame into QImages on the GUI thread.
 
-Why a process and not QThreads: see the note above :class:`Hook`.
+Neither side ever waits for the other (:mod:`app.channel`): requests and events are small
+non-blocking messages, pictures travel through shared memory, calibrations, sessions and test
+frames by file. Why a process and not QThreads: see the note above :class:`Hook`.
 """
 
 from __future__ import annotations
 
+import json
+import sys
 import threading
 import time
 from collections import deque
@@ -139,7 +143,9 @@ class DisplayFrame:
     overlay: Any = None
     weights: Any = None
     timings_ms: dict = field(default_factory=dict)
-    fps: float = 0.0
+    fps: float = 0.0  # frames tracked per second
+    fps_in: float = 0.0  # frames read from the source per second
+    fps_out: float = 0.0  # new character pictures per second (the output rate)
     dropped_capture: int = 0
     dropped_display: int = 0
     art: str = ""
@@ -148,6 +154,8 @@ class DisplayFrame:
     frames_read: int = 0  # by the capture so far
     frames_done: int = 0  # by the engine so far
     frame_size: tuple = (0, 0)  # (w, h) of the camera frame; ``frame_bgr`` may be scaled for display
+    source_id: int = 0  # the window's number for the source this frame came from
+    requests_seen: int = 0  # the newest request the engine had read before making this frame
     video: QImage | None = None
     character: QImage | None = None
 
@@ -327,7 +335,12 @@ PERFORMANCE_CALIBRATION = "performance"
 
 def resolve_calibration(cal):
     """Turn a calibration request into a ``Calibration``: the bundled performer's own
-    (``"performance"``), clicks beside a video (``("clicks", clicks_json, video)``), or an object as is."""
+    (``"performance"``), clicks beside a video (``("clicks", clicks_json, video)``), a saved
+    calibration (``("file", calibration_json, n)``), or an object as is."""
+    if isinstance(cal, tuple) and cal and cal[0] == "file":
+        from tracker.calibration import Calibration
+
+        return Calibration.load(cal[1])
     if cal == PERFORMANCE_CALIBRATION:
         return performance_calibration(bundled_performance())
     if isinstance(cal, tuple) and cal and cal[0] == "clicks":
@@ -342,6 +355,16 @@ def resolve_calibration(cal):
                     return calibrate(fr.image, clicks)
         raise ValueError(f"{cal[2]}: has no frame {clicks.frame} for {Path(cal[1]).name}")
     return cal
+
+
+def resolve_session(session):
+    """A training session from a request: ``("file", folder, n)`` is read (without autosave:
+    the engine never writes it), None stays None (the default training), an object as is."""
+    if isinstance(session, tuple) and session and session[0] == "file":
+        from training.session import TrainingSession
+
+        return TrainingSession.load(session[1], autosave=False)
+    return session
 
 
 def load_artset(path: str | Path):
@@ -428,27 +451,123 @@ class Hook:
             fn(*args)
 
 
+class RateMeter:
+    """Events per second over the last ``window_s`` seconds (0 when none came lately)."""
+
+    def __init__(self, window_s: float = 2.0):
+        self.window_s = window_s
+        self._times: deque[float] = deque()
+
+    def tick(self, t: float | None = None) -> None:
+        t = time.perf_counter() if t is None else t
+        self._times.append(t)
+        self._trim(t)
+
+    def _trim(self, now: float) -> None:
+        while self._times and now - self._times[0] > self.window_s:
+            self._times.popleft()
+
+    def rate(self, now: float | None = None) -> float:
+        now = time.perf_counter() if now is None else now
+        self._trim(now)
+        if len(self._times) < 2:
+            return 0.0
+        span = max(now - self._times[0], self._times[-1] - self._times[0], 1e-6)
+        return (len(self._times) - 1) / span if now - self._times[-1] < 0.5 else len(self._times) / self.window_s
+
+
+class Worker(threading.Thread):
+    """(Engine process) one long-lived thread for slow jobs (building a puppet, closing a
+    recording), so the engine loop never runs them and a burst of requests does not become a
+    crowd of threads. A job submitted with a ``key`` replaces a waiting job of that key (latest
+    wins); others wait their turn. After each job freed memory is handed back to the system."""
+
+    def __init__(self, name: str):
+        super().__init__(name=name, daemon=True)
+        self._cond = threading.Condition()
+        self._jobs: deque = deque()
+        self._halt = False
+        self.start()
+
+    def submit(self, fn: Callable[[], None], key: Any = None) -> None:
+        with self._cond:
+            if key is not None:
+                self._jobs = deque(j for j in self._jobs if j[0] != key)
+            self._jobs.append((key, fn))
+            self._cond.notify()
+
+    def run(self) -> None:
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: self._jobs or self._halt)
+                if not self._jobs:
+                    return
+                _, fn = self._jobs.popleft()
+            try:
+                fn()
+            finally:
+                trim_memory()
+
+    def stop(self, wait_s: float = 0.0) -> None:
+        """No new jobs; those queued still run (``wait_s``: how long to wait for them)."""
+        with self._cond:
+            self._halt = True
+            self._cond.notify()
+        if wait_s:
+            self.join(wait_s)
+
+
+_LIBC: Any = None
+
+
+def trim_memory() -> None:
+    """Return freed heap memory to the system (glibc's ``malloc_trim``; a no-op elsewhere).
+
+    Building a puppet or closing a recording frees hundreds of MB in blocks that glibc would
+    otherwise keep, so a long session's footprint would creep up after every rebuild."""
+    global _LIBC
+    if _LIBC is None:
+        try:
+            import ctypes
+
+            _LIBC = ctypes.CDLL("libc.so.6")
+            _LIBC.malloc_trim.argtypes = [ctypes.c_size_t]
+        except (OSError, AttributeError):
+            _LIBC = False
+    if _LIBC:
+        _LIBC.malloc_trim(0)
+
+
 class Capture(threading.Thread):
-    """(Engine process) reads a frame source into a :class:`LatestSlot`.
+    """(Engine process) reads a frame source into its own :class:`LatestSlot`.
 
     ``realtime`` paces file and synthetic sources to their fps (cameras pace themselves);
     with ``realtime=False`` it waits for the engine to take each frame (no drops: used to
-    measure the loop's top speed). ``events`` receives ``(name, args)`` notifications.
+    measure the loop's top speed). ``events`` receives ``(name, args)`` notifications, each
+    tagged with ``source_id`` (the window's number for this source) so late news from a source
+    the window has left is recognisable. ``previous`` (the capture this one replaces) is
+    joined on this thread before the source opens, so a camera is released before it is
+    opened again and the engine loop never waits for either.
     """
 
-    def __init__(self, slot: LatestSlot, spec: SourceSpec, realtime: bool, source, events: Callable):
+    def __init__(self, spec: SourceSpec, realtime: bool, source, events: Callable, source_id: int = 0,
+                 previous: "Capture | None" = None):
         super().__init__(name="inkface-capture", daemon=True)
-        self.slot = slot
+        self.slot = LatestSlot()
         self.spec = spec
         self.realtime = realtime
+        self.source_id = source_id
         self._given_source = source
         self._events = events
+        self._previous = previous
         self._halt = threading.Event()
         self._paused = threading.Event()
         self.frames_read = 0
+        self.rate = RateMeter()
 
     def post(self, name: str, *args) -> None:
-        self._events(name, args)
+        if not self._halt.is_set():
+            self._events(name, (self.source_id, *args))
 
     def stop(self) -> None:
         self._halt.set()
@@ -458,7 +577,13 @@ class Capture(threading.Thread):
         (self._paused.set if paused else self._paused.clear)()
 
     def run(self) -> None:  # noqa: C901 - one loop, kept together on purpose
+        if self._previous is not None:
+            self._previous.join(5.0)
+            self._previous = None
+        if self._halt.is_set():
+            return
         try:
+            self._given_source = _rebuild(self._given_source)  # a test's fake camera, read from its file
             src = self._given_source if self._given_source is not None else open_source(self.spec)
         except Exception as e:  # SourceError, missing core, bad file: one line for the user
             self.post("sourceFailed", _one_line(e))
@@ -492,8 +617,11 @@ class Capture(threading.Thread):
                         while not self.slot.wait_empty(0.1):
                             if self._halt.is_set():
                                 break
+                    if self._halt.is_set():
+                        break
                     shown += 1
                     self.frames_read += 1
+                    self.rate.tick()
                     self.slot.put((fr.index + offset, fr.time + offset / fps, fr.image))
                 if self._halt.is_set():
                     break
@@ -515,7 +643,10 @@ class Capture(threading.Thread):
 
 class Engine:
     """(Engine process) steps the puppet on the newest captured frame and keeps the latest
-    result for the window; builds puppets on a loader thread so frames keep flowing."""
+    result for the window; builds puppets on a :class:`Worker` so frames keep flowing.
+
+    The spec's ``calibration`` and ``session`` are references (see :func:`resolve_calibration`
+    and :func:`resolve_session`): what they name is loaded off the engine loop."""
 
     def __init__(self, inbox: LatestSlot, spec: PuppetSpec, events: Callable):
         self.inbox = inbox
@@ -531,11 +662,13 @@ class Engine:
         self.building = False
         self._gen = 0
         self._built = None
-        self._build_lock = threading.Lock()
+        self._loader = Worker("inkface-puppet-loader")
         self._last_rgba: np.ndarray | None = None
-        self._times: deque[float] = deque(maxlen=60)
+        self.rate = RateMeter()  # frames tracked per second
+        self.out_rate = RateMeter()  # new character pictures per second
         self.frames_done = 0
         self.last_error = ""
+        self.acquired = False  # the tracker has found the face since this puppet / source started
 
     def post(self, name: str, *args) -> None:
         self._events(name, args)
@@ -545,7 +678,7 @@ class Engine:
             self._pending = spec
 
     def _apply_pending(self) -> None:
-        """Apply the GUI's latest request; swap in a puppet a loader thread has finished."""
+        """Apply the window's latest request; swap in a puppet a loader thread has finished."""
         with self._lock:
             spec, self._pending = self._pending, None
             built, self._built = self._built, None
@@ -559,21 +692,25 @@ class Engine:
                 else:
                     self.puppet, self.live_art, self.calibration = puppet, bspec.art, cal
                     self._last_rgba = None
+                    self.acquired = False
                     try:
                         _tune(puppet, self.spec)
                     except Exception:
                         pass
                     self.post("puppetReady", bspec.art)
+            del built, puppet
+            trim_memory()  # the puppet replaced (or the build not used) is freed now
         if spec is None:
             return
         old = self.spec
         target_puppet = self.puppet if self.live_art == old.art else None
+        session_changed = not _same(spec.session, old.session)
         rebuild = (
             target_puppet is None
             or spec.art != old.art
             or spec.detail != old.detail
             or not _same(spec.calibration, old.calibration)
-            or (spec.session is not old.session and not callable(getattr(self.puppet, "set_session", None)))
+            or (session_changed and not callable(getattr(self.puppet, "set_session", None)))
             or (
                 any(getattr(spec, k) != getattr(old, k) for k in ("fps", "filter", "strength", "gain"))
                 and not _can_tune(self.puppet)
@@ -587,31 +724,36 @@ class Engine:
         if rebuild:
             self._gen += 1
             self.building = True
-            threading.Thread(target=self._build, args=(self._gen, spec), name="inkface-puppet-loader", daemon=True).start()
+            self._loader.submit(lambda g=self._gen, sp=spec: self._build(g, sp), key="build")
             return
-        if spec.session is not old.session and spec.session is not None:
+        if session_changed:
             try:
-                self.puppet.set_session(spec.session)
+                session = resolve_session(spec.session)
+                if session is None:
+                    from training.defaults import default_session
+
+                    session = default_session(self.puppet.artset)
+                self.puppet.set_session(session)
             except Exception as e:
                 self.post("puppetFailed", _one_line(e))
         _tune(self.puppet, spec)
 
     def _build(self, gen: int, spec: PuppetSpec) -> None:
-        """Load the art set, resolve the calibration and build the puppet (loader thread)."""
+        """Load the art set, resolve the calibration and session, build the puppet (loader thread)."""
         puppet = cal = None
         err = ""
+        if gen != self._gen:  # superseded while it waited
+            return
         try:
-            with self._build_lock:  # one build at a time; a superseded one is skipped
-                if gen != self._gen:
-                    return
-                art = self._cache.get(spec.art)
-                if art is None:
-                    art = load_artset(spec.art)
-                    self._cache[spec.art] = art
-                cal = self._resolve_calibration(spec.calibration)
-                if gen != self._gen:
-                    return
-                puppet = make_puppet(art, replace(spec, calibration=cal))
+            art = self._cache.get(spec.art)
+            if art is None:
+                art = load_artset(spec.art)
+                self._cache[spec.art] = art
+            cal = self._resolve_calibration(spec.calibration)
+            session = resolve_session(spec.session)
+            if gen != self._gen:
+                return
+            puppet = make_puppet(art, replace(spec, calibration=cal, session=session))
         except Exception as e:
             err = _one_line(e) or type(e).__name__
         finally:
@@ -622,12 +764,18 @@ class Engine:
         self.inbox.notify_taken()
 
     def _resolve_calibration(self, cal):
-        key = cal if isinstance(cal, (str, tuple)) else None
-        if key is None:
-            return cal
-        if key not in self._cal_cache:
-            self._cal_cache[key] = resolve_calibration(cal)
-        return self._cal_cache[key]
+        """The Calibration a reference names; the bundled performer's and clicks files are
+        kept (they are the same every time), calibration files are read each time."""
+        if isinstance(cal, str) or (isinstance(cal, tuple) and cal and cal[0] == "clicks"):
+            if cal not in self._cal_cache:
+                self._cal_cache[cal] = resolve_calibration(cal)
+            return self._cal_cache[cal]
+        return resolve_calibration(cal)
+
+    def tracking(self) -> bool:
+        """True once the puppet's tracker runs (it waits for a calibration or a found face)."""
+        p = self.puppet
+        return p is not None and getattr(p, "tracker", True) is not None
 
     def step(self, timeout: float) -> DisplayFrame | None:
         """Apply requests, then process the newest frame (waiting up to ``timeout`` s)."""
@@ -644,19 +792,22 @@ class Engine:
                 self.last_error = msg
                 self.post("error", msg)
             out = DisplayFrame(index, t, image, status=f"error: {msg}")
-        self._times.append(time.perf_counter())
-        if len(self._times) > 1:
-            out.fps = (len(self._times) - 1) / max(1e-9, self._times[-1] - self._times[0])
+        now = time.perf_counter()
+        self.rate.tick(now)
+        if out.rgba is not None and out.fresh:
+            self.out_rate.tick(now)
+        out.fps = self.rate.rate(now)
+        out.fps_out = self.out_rate.rate(now)
         self.frames_done += 1
         return out
 
     def _process(self, index: int, t: float, image: np.ndarray) -> DisplayFrame:
         p = self.puppet
         if p is None:
-            return DisplayFrame(index, t, image, status="loading the character" if self.building else "no character")
+            return DisplayFrame(index, t, image, status=STARTING)
         pf = p.step(image, index, t)
         if pf is None:
-            return DisplayFrame(index, t, image, art=self.live_art)
+            return DisplayFrame(index, t, image, art=self.live_art, status=STARTING)
         rgba = getattr(pf, "rgba_pm", None)
         fresh = bool(getattr(pf, "fresh", True))
         if rgba is not None:
@@ -665,6 +816,11 @@ class Engine:
             else:  # a private copy: the renderer may reuse its buffer for the next frame
                 rgba = self._last_rgba = rgba.copy()
         params = getattr(pf, "params", None)
+        status = str(getattr(params, "status", "")) if params is not None else ""
+        if not self.tracking() or (status == "lost" and not self.acquired):
+            status = STARTING  # no calibration yet, or the face not found yet: nothing was lost
+        elif status and status != "lost":
+            self.acquired = True
         return DisplayFrame(
             index, t, image, rgba,
             params=params,
@@ -672,13 +828,18 @@ class Engine:
             weights=getattr(pf, "weights", None),
             timings_ms=dict(getattr(pf, "timings_ms", {}) or {}),
             art=self.live_art,
-            status=str(getattr(params, "status", "")) if params is not None else "",
+            status=status,
             fresh=fresh,
         )
 
 
-_META = ("index", "time", "params", "overlay", "weights", "timings_ms", "fps", "dropped_capture", "dropped_display",
-         "art", "status", "fresh", "frames_read", "frames_done", "frame_size")
+STARTING = "starting"
+"""The badge before the tracker has found the face: the character is loading, there is no
+calibration yet, or the face has not been found since the source or the puppet changed."""
+
+_META = ("index", "time", "params", "overlay", "weights", "timings_ms", "fps", "fps_in", "fps_out",
+         "dropped_capture", "dropped_display", "art", "status", "fresh", "frames_read", "frames_done", "frame_size",
+         "source_id", "requests_seen")
 
 
 def fit_size(w: int, h: int, box: tuple[int, int] | None) -> tuple[int, int]:
@@ -704,171 +865,366 @@ def scale_for_view(img: np.ndarray, box: tuple[int, int] | None) -> np.ndarray:
     return cv2.resize(img, (tw, th), interpolation=interp)
 
 
-def _send_frame(conn, fr: DisplayFrame, send_video: bool, last_sent_rgba, targets: dict, cache: dict) -> None:
-    """A frame over the pipe: the small fields as ordinary pipe messages, the two pictures as raw bytes, scaled
-    to the views' sizes (``targets``) unless the window asked for full frames."""
-    img = None
-    if send_video and fr.frame_bgr is not None:
-        img = fr.frame_bgr if targets.get("full") else scale_for_view(fr.frame_bgr, targets.get("video"))
-    rgba = fr.rgba
-    same = rgba is not None and rgba is last_sent_rgba and cache.get("box") == targets.get("char")
-    if rgba is not None and not same:
-        rgba = scale_for_view(rgba, targets.get("char"))
-        cache["box"] = targets.get("char")
-    if fr.frame_bgr is not None:
-        fr.frame_size = (int(fr.frame_bgr.shape[1]), int(fr.frame_bgr.shape[0]))
-    meta = {k: getattr(fr, k) for k in _META}
-    meta["video_shape"] = None if img is None else img.shape
-    meta["rgba_shape"] = None if rgba is None or same else rgba.shape
-    meta["rgba_same"] = same
-    conn.send(("frame", meta))
-    if img is not None:
-        conn.send_bytes(np.ascontiguousarray(img).reshape(-1).data)
-    if rgba is not None and not same:
-        conn.send_bytes(np.ascontiguousarray(rgba).reshape(-1).data)
+# ------------------------------------------------------------------------------------------
+# the engine loop
 
 
-def engine_main(conn, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake_source=None) -> None:
-    """The engine process: capture thread + puppet + recorder; talks to the window over ``conn``."""
-    import os
-    import signal
+class EngineLoop:
+    """(Engine process) the loop: requests in, one frame through the puppet, pictures out.
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the window's to handle; it stops us
+    Per pass it reads every request that has arrived (so a request waits at most one frame),
+    steps the puppet on the newest captured frame, and publishes the newest result if the
+    window has taken the previous one — otherwise that result waits and is replaced by the
+    next (counted as dropped). Nothing here waits on the window: sends are non-blocking and
+    pictures go into shared memory. A stopped recording is closed on the saver thread.
+    """
 
-    for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ.setdefault(v, "1")
-    events: deque = deque()
-    post = lambda name, args: events.append((name, args))  # noqa: E731 - threads append, main loop sends
-    inbox = LatestSlot()
-    engine = Engine(inbox, spec, post)
-    objects: dict[str, Any] = {}  # "calibration" / "session" as last sent by the window
+    def __init__(self, chan, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake=None):
+        from app.channel import SharedPictures
 
-    def start_capture(src_spec, fake):
-        c = Capture(inbox, src_spec, realtime, _rebuild(fake), post)
+        self.chan = chan
+        self.realtime = realtime
+        self._events: deque = deque()  # (name, args) posted by any thread, sent by the loop
+        self.capture = self._start_capture(source, fake, 0)
+        self.engine = Engine(self.capture.slot, spec, self._post)
+        self.pictures = SharedPictures()
+        self.gui_free = True
+        self.paused = False
+        self.send_video = True
+        self.targets: dict = {}  # view sizes for display scaling; "full": send camera-size frames
+        self._char_box = None
+        self.latest: DisplayFrame | None = None
+        self.last_shown: DisplayFrame | None = None  # newest processed frame (for snapshots, recalibration)
+        self.last_ok: DisplayFrame | None = None  # newest frame with face, eyes and mouth tracked
+        self.dropped_display = 0
+        self._last_sent_rgba = None
+        self.snapshot_wanted = False
+        self.requests_seen = 0
+        self.recorders: dict[int, Any] = {}  # id -> Recorder, while recording
+        self.finishing: dict[int, Any] = {}  # id -> Recorder, until its files are closed
+        self._saved: deque = deque()  # ids whose files are closed (appended by the saver)
+        self.saver = Worker("inkface-record-saver")  # closes stopped recordings in turn
+        self.jobs = Worker("inkface-engine-jobs")  # recalibrations
+        self._progress_at = 0.0
+        self.quit = False
+
+    def _post(self, name: str, args: tuple, key: Any = None) -> None:
+        """An event for the window (any thread); with a ``key``, a newer one replaces it unsent."""
+        self._events.append((name, args, key))
+
+    def _start_capture(self, spec: SourceSpec, fake, source_id: int, previous: Capture | None = None) -> Capture:
+        c = Capture(spec, self.realtime, fake, self._post, source_id, previous)
         c.start()
         return c
 
-    capture = start_capture(source, fake_source)
-    gui_free = True
-    send_video = True
-    targets: dict = {}  # view sizes for display scaling; "full": send camera-size frames
-    scale_cache: dict = {}
-    last_frame: np.ndarray | None = None
-    latest: DisplayFrame | None = None
-    dropped_display = 0
-    last_sent_rgba = None
-    recorder = None
-    try:
-        while True:
-            while conn.poll():
-                msg = conn.recv()
-                cmd = msg.get("cmd")
-                if cmd == "quit":
-                    return
-                if cmd == "ack":
-                    gui_free = True
-                elif cmd == "video":
-                    send_video = bool(msg["on"])
-                elif cmd == "targets":
-                    targets.update(msg["targets"])
-                elif cmd == "snapshot":
-                    post("snapshot", (last_frame,))
-                elif cmd == "pause":
-                    capture.set_paused(bool(msg["on"]))
-                elif cmd == "source":
-                    capture.stop()
-                    capture.join(3.0)
-                    inbox.clear()
-                    capture = start_capture(msg["spec"], msg.get("fake"))
-                elif cmd == "puppet":
-                    for key in ("calibration", "session"):
-                        if key in msg:
-                            objects[key] = msg[key]
-                    engine.request(replace(msg["spec"], calibration=objects.get("calibration"),
-                                           session=objects.get("session")))
-                elif cmd == "record":
-                    from app.record import RecordError, Recorder
+    # requests ---------------------------------------------------------------------------
+    def handle(self, msg: tuple) -> None:  # noqa: C901 - one dispatch table
+        seq, cmd, arg = msg
+        self.requests_seen = max(self.requests_seen, seq)
+        if cmd == "quit":
+            self.quit = True
+        elif cmd == "ack":
+            self.gui_free = True
+        elif cmd == "video":
+            self.send_video = bool(arg)
+        elif cmd == "targets":
+            self.targets = dict(arg)
+        elif cmd == "snapshot":
+            self.snapshot_wanted = True
+        elif cmd == "pause":
+            self.paused = bool(arg)
+            self.capture.set_paused(self.paused)
+        elif cmd == "source":
+            spec, fake, source_id = arg
+            old = self.capture
+            old.stop()
+            self.capture = self._start_capture(spec, fake, source_id, previous=old)
+            self.capture.set_paused(self.paused)
+            self.engine.inbox = self.capture.slot
+            self.engine.acquired = False
+            self.dropped_display = 0
+            self.latest = self.last_ok = None
+        elif cmd == "puppet":
+            self.engine.request(arg)
+        elif cmd == "record":
+            self._start_recording(*arg)
+        elif cmd == "stop_record":
+            self._stop_recording(arg)
+        elif cmd == "recalibrate":
+            self._recalibrate(arg)
 
-                    try:
-                        recorder = Recorder(msg["path"], fps=msg["fps"], background=msg.get("background"),
-                                            calibration=engine.calibration)
-                        post("recordStarted", (msg["path"],))
-                    except RecordError as e:
-                        recorder = None
-                        post("recordFailed", (str(e),))
-                elif cmd == "stop_record":
-                    if recorder is not None:
-                        rec, recorder = recorder, None
-                        try:
-                            post("recorded", (rec.finish(),))
-                        except Exception as e:
-                            post("recordFailed", (_one_line(e),))
-                    else:
-                        post("recorded", (None,))
-            fr = engine.step(timeout=0.005)
-            if fr is not None:
-                last_frame = fr.frame_bgr
-                if recorder is not None:
-                    recorder.add(fr)
-                if latest is not None:
-                    dropped_display += 1  # the window never saw it: dropped, not queued
-                latest = fr
-            while events:
-                name, args = events.popleft()
-                conn.send(("event", name, args))
-            if latest is not None and gui_free:
-                latest.dropped_capture = inbox.dropped
-                latest.dropped_display = dropped_display
-                latest.frames_read = capture.frames_read
-                latest.frames_done = engine.frames_done
-                _send_frame(conn, latest, send_video, last_sent_rgba, targets, scale_cache)
-                last_sent_rgba = latest.rgba
-                latest = None
-                gui_free = False
-    except (EOFError, BrokenPipeError, ConnectionResetError, KeyboardInterrupt):
-        return
-    finally:
-        capture.stop()
-        capture.join(3.0)  # let it leave OpenCV before the process exits
-        if recorder is not None:
+    def _start_recording(self, rid: int, path: str, fps: float, background, overwrite: bool = False) -> None:
+        from app.record import RecordError, Recorder
+
+        try:
+            self.recorders[rid] = Recorder(path, fps=fps, background=background, calibration=self.engine.calibration,
+                                           overwrite=overwrite)
+            self._post("recordStarted", (rid, path))
+        except (RecordError, OSError) as e:
+            self._post("recordFailed", (rid, _one_line(e)))
+
+    def _stop_recording(self, rid: int) -> None:
+        rec = self.recorders.pop(rid, None)
+        if rec is None:
+            self._post("recorded", (rid, None))
+            return
+
+        def progress(done: int, total: int) -> None:
+            self._post("recordProgress", (rid, done, total), key=("progress", rid))
+
+        def finish():
             try:
-                recorder.finish()
+                res = rec.finish(progress=progress)
+                n = frames_in_file(res.output)
+                if n is not None:
+                    res.frames = n  # what a player finds in the file (a GIF merges repeated frames)
+                self._post("recorded", (rid, res))
+            except Exception as e:
+                self._post("recordFailed", (rid, _one_line(e)))
+            finally:
+                self._saved.append(rid)
+
+        self.finishing[rid] = rec
+        self.saver.submit(finish)
+
+    def _recalibrate(self, save_to: str) -> None:
+        """Calibrate again on the newest frame (for when the light changed), on a thread."""
+        fr = self.last_shown
+        ok = self.last_ok  # a blink at the key press: the newest fully tracked frame, if recent
+        if fr is not None and ok is not None and ok is not fr and fr.status != "ok" and fr.time - ok.time < 1.0:
+            fr = ok
+        if fr is None or fr.frame_bgr is None:
+            self._post("recalibrateFailed", ("no frame to calibrate on yet",))
+            return
+        image, overlay, index = fr.frame_bgr, fr.overlay, fr.index
+        old = self.engine.calibration
+
+        def work():
+            try:
+                cal, how = recalibrate(image, overlay, old, index)
+                cal.save(save_to)
+                self._post("recalibrated", (save_to, how))
+            except Exception as e:
+                self._post("recalibrateFailed", (_one_line(e),))
+
+        self.jobs.submit(work, key="recalibrate")
+
+    # frames -------------------------------------------------------------------------------
+    def publish(self, fr: DisplayFrame, kind: str = "frame") -> None:
+        """Pictures into shared memory, the rest as a small notice (only when the window is free)."""
+        img = None
+        if fr.frame_bgr is not None and (self.send_video or kind == "snapshot"):
+            full = kind == "snapshot" or self.targets.get("full")
+            img = fr.frame_bgr if full else scale_for_view(fr.frame_bgr, self.targets.get("video"))
+        rgba = fr.rgba if kind == "frame" else None
+        same = rgba is not None and rgba is self._last_sent_rgba and self._char_box == self.targets.get("char")
+        if rgba is not None and not same:
+            self._last_sent_rgba = rgba
+            self._char_box = self.targets.get("char")
+            rgba = scale_for_view(rgba, self._char_box)
+        if fr.frame_bgr is not None:
+            fr.frame_size = (int(fr.frame_bgr.shape[1]), int(fr.frame_bgr.shape[0]))
+        name, layout = self.pictures.write([img, None if same else rgba])
+        meta = {k: getattr(fr, k) for k in _META}
+        meta["rgba_same"] = same
+        self.chan.send(("frame", kind, meta, name, layout), key="frame")
+        self.gui_free = False
+
+    def _stamp(self, fr: DisplayFrame) -> None:
+        cap = self.capture
+        fr.dropped_capture = cap.slot.dropped
+        fr.dropped_display = self.dropped_display
+        fr.frames_read = cap.frames_read
+        fr.frames_done = self.engine.frames_done
+        fr.fps_in = cap.rate.rate()
+        fr.source_id = cap.source_id
+        fr.requests_seen = self.requests_seen
+
+    def _report_progress(self) -> None:
+        """Frames written so far by each recording in progress (the saver reports its own)."""
+        now = time.monotonic()
+        while self._saved:
+            self.finishing.pop(self._saved.popleft(), None)
+        if now - self._progress_at < 0.1:
+            return
+        self._progress_at = now
+        for rid, rec in self.recorders.items():
+            self.chan.send(("event", "recording", (rid, rec.frames, rec.dropped)), key=("recording", rid))
+
+    # the loop ---------------------------------------------------------------------------
+    def run(self) -> None:
+        from app.channel import ChannelClosed
+
+        try:
+            while not self.quit:
+                for msg in self.chan.receive():
+                    self.handle(msg)
+                if self.chan.closed:
+                    return
+                if self.quit:
+                    break
+                fr = self.engine.step(timeout=0.005)
+                if fr is not None:
+                    self.last_shown = fr
+                    if fr.status == "ok":
+                        self.last_ok = fr
+                    for rec in self.recorders.values():
+                        rec.add(fr)
+                    if self.latest is not None:
+                        self.dropped_display += 1  # the window never saw it: dropped, not queued
+                    self._stamp(fr)
+                    self.latest = fr
+                while self._events:
+                    name, args, key = self._events.popleft()
+                    self.chan.send(("event", name, args), key=key)
+                if self.recorders or self.finishing:
+                    self._report_progress()
+                if self.gui_free and self.snapshot_wanted:
+                    self.snapshot_wanted = False
+                    if self.last_shown is None:
+                        self.chan.send(("event", "snapshot", (None,)))
+                    else:
+                        self.publish(self.last_shown, "snapshot")
+                if self.gui_free and self.latest is not None:
+                    self.publish(self.latest)
+                    self.latest = None
+                self.chan.flush()
+        except ChannelClosed:
+            return
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        self.pictures.close()  # first: the window has stopped reading, and a slow exit may be cut short
+        self.capture.stop()
+        for rec in self.recorders.values():
+            try:
+                rec.finish()  # the window is gone or quitting: keep what was recorded
             except Exception:
                 pass
+        self.recorders.clear()
+        self.saver.stop(wait_s=60.0)  # the recordings already stopped are closed too
+        self.jobs.stop()
+        self.engine._loader.stop()
+        self.capture.join(3.0)  # let it leave OpenCV before the process exits
 
 
-def _portable(source):
-    """A fake camera as ``("fake", frames, fps, loop)`` so it can cross to the engine process
-    (sources hold locks, which cannot cross a process pipe); anything else as is."""
-    if source is None or isinstance(source, tuple):
-        return source
-    frames = getattr(source, "frames", None)
-    if frames is not None:
-        return ("fake", list(frames), float(getattr(source, "fps", 30.0)), bool(getattr(source, "loop", False)))
-    return source
+def frames_in_file(path: str | Path) -> int | None:
+    """How many frames a recording holds as a reader sees it (MP4/AVI from the container, GIF
+    frames, PNGs in a folder); None when it cannot be told."""
+    p = Path(path)
+    try:
+        if p.is_dir():
+            return len(list(p.glob("*.png")))
+        if p.suffix.lower() == ".gif":
+            from PIL import Image
+
+            with Image.open(p) as im:
+                return int(getattr(im, "n_frames", 1))
+        import cv2
+
+        cap = cv2.VideoCapture(str(p))
+        try:
+            n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+        finally:
+            cap.release()
+        return n if n > 0 else None
+    except (OSError, ValueError):
+        return None
+
+
+def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
+    """A new calibration on ``image``: at the points the tracker found in it, else where the
+    face detector finds the face, else at the old calibration's clicks. Returns (Calibration, how)."""
+    from tracker.calibration import calibrate
+    from tracker.clicks import Clicks
+
+    tries = []
+    if overlay is not None and str(getattr(overlay, "status", "")) != "lost":
+        try:
+            pupils = np.asarray(overlay.pupils, float)
+            brows = np.asarray(overlay.brows, float)
+            mouth = np.asarray(overlay.mouth_centre, float)
+            if np.all(np.isfinite(pupils)) and np.all(np.isfinite(brows)) and np.all(np.isfinite(mouth)):
+                tries.append(("at the tracked points", lambda: Clicks.from_dict({
+                    "frame": int(index), "left_pupil": list(pupils[0]), "right_pupil": list(pupils[1]),
+                    "left_brow": list(brows[0]), "right_brow": list(brows[1]), "mouth": list(mouth)})))
+        except (AttributeError, TypeError, ValueError):
+            pass
+
+    def found():
+        from tracker.auto_init import auto_clicks
+
+        return auto_clicks(image, int(index))
+
+    tries.append(("where the face was found", found))
+    if old is not None and getattr(old, "clicks", None) is not None:
+        tries.append(("at the previous clicks", lambda: old.clicks))
+    last: Exception | None = None
+    for how, clicks in tries:
+        try:
+            return calibrate(image, clicks()), how
+        except Exception as e:  # the next way may still work; say why this one did not
+            last = e
+            print(f"inkface: recalibration {how} did not work: {_one_line(e)}", file=sys.stderr)
+    raise ValueError(f"could not calibrate on this frame ({_one_line(last) if last else 'no face'})")
+
+
+def engine_main(sock, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake_source=None) -> None:
+    """The engine process: capture thread + puppet + recorder; talks to the window over ``sock``."""
+    import faulthandler
+    import os
+    import signal
+
+    from app.channel import Channel
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the window's to handle; it stops us
+    if hasattr(signal, "SIGUSR1"):
+        faulthandler.register(signal.SIGUSR1, all_threads=True)  # `kill -USR1 <pid>`: print every stack
+    for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ.setdefault(v, "1")
+    chan = Channel(sock)
+    try:
+        EngineLoop(chan, source, spec, realtime, fake_source).run()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        chan.close()
 
 
 def _rebuild(source):
-    """(Engine process) the source :func:`_portable` described."""
+    """(Engine process) the fake camera a window-side reference describes (or None)."""
     if isinstance(source, tuple) and source and source[0] == "fake":
+        from app.channel import read_frames
         from tracker.sources import FakeCamera
 
-        return FakeCamera(source[1], fps=source[2], loop=source[3])
+        return FakeCamera(read_frames(source[1]), fps=source[2], loop=source[3])
     return source
 
 
-class Pipeline:
-    """(Window side) the engine process and the timer that polls it.
+# ------------------------------------------------------------------------------------------
+# the window side
 
-    ``request(**changes)`` changes the puppet (character, rate, filter, gain ...),
-    ``set_source`` plays from elsewhere, ``take()`` returns the newest :class:`DisplayFrame`
-    (with its QImages made here, on the GUI thread). Hooks: ``frameReady``, ``puppetReady``,
-    ``puppetFailed``, ``error``, ``sourceOpened``, ``sourceFailed``, ``recorded``,
-    ``recordFailed``.
+
+class Pipeline:
+    """(Window side) the engine process, the channel to it, and the newest frame it sent.
+
+    ``request(**changes)`` changes the puppet (character, rate, filter, gain, calibration,
+    training session ...), ``set_source`` plays from elsewhere, ``take()`` returns the newest
+    :class:`DisplayFrame` (its QImages made here, on the GUI thread). Every call returns at
+    once: requests are posted on the :class:`app.channel.Channel` (latest wins per kind) and
+    answers come back as hooks, dispatched from the GUI event loop: ``frameReady``,
+    ``puppetReady``, ``puppetFailed``, ``error``, ``sourceOpened``, ``sourceFailed``,
+    ``finishedSource``, ``snapshot``, ``recordStarted``, ``recording``, ``recordProgress``,
+    ``recorded``, ``recordFailed``, ``recalibrated``, ``recalibrateFailed``.
     """
 
+    HOOKS = ("frameReady", "puppetReady", "puppetFailed", "error", "sourceOpened", "sourceFailed", "finishedSource",
+             "snapshot", "recordStarted", "recording", "recordProgress", "recorded", "recordFailed", "recalibrated",
+             "recalibrateFailed")
+
     def __init__(self, source: SourceSpec, puppet: PuppetSpec, realtime: bool = True, fake_source=None,
-                 poll_ms: int = 4):
+                 poll_ms: int = 20):
         self.source_spec = source
         self.spec = puppet
         self.realtime = realtime
@@ -878,14 +1234,26 @@ class Pipeline:
         self.dropped_capture = self.dropped_display = 0
         self.frames_received = 0
         self.send_video = True
-        self._sent_cal = self._sent_session = _UNSENT
-        for name in ("frameReady", "puppetReady", "puppetFailed", "error", "sourceOpened", "sourceFailed",
-                     "finishedSource", "recorded", "recordFailed", "recordStarted", "snapshot"):
+        self.requests_sent = 0  # sequence number of the newest request
+        self.source_id = 0
+        for name in self.HOOKS:
             setattr(self, name, Hook())
         self._latest: DisplayFrame | None = None
         self._prev: DisplayFrame | None = None
+        self._last_rgba: np.ndarray | None = None
         self._proc = None
-        self._conn = None
+        self._chan = None
+        self._notifier = None
+        self._reader = None
+        self._spool = None
+        # "calibration" / "session": {id: (object, reference)}; "fake": (camera, reference)
+        self._refs: dict[str, Any] = {}
+        self._files: dict[int, tuple[Any, str]] = {}  # id(object) -> (object, file it is saved in)
+        self._targets: dict = {}
+        self._inbox: deque = deque()
+        self._dispatching = False
+        self._dead = False
+        self._stopped = False
         self._timer = QTimer()
         self._timer.setInterval(poll_ms)
         self._timer.timeout.connect(self._poll)
@@ -893,159 +1261,270 @@ class Pipeline:
     # lifecycle --------------------------------------------------------------------------
     def start(self) -> None:
         import multiprocessing as mp
+        import socket
 
+        from PySide6.QtCore import QSocketNotifier
+
+        from app.channel import Channel, PictureReader, Spool
+
+        self._spool = self._spool or Spool()
+        self._reader = PictureReader()
+        mine, theirs = socket.socketpair()
         ctx = mp.get_context("spawn")
-        self._conn, child = ctx.Pipe()
-        spec, extra = self._spec_message(self.spec)
-        spec = replace(spec, calibration=extra.get("calibration"), session=extra.get("session"))
-        self._proc = ctx.Process(target=engine_main, args=(child, self.source_spec, spec, self.realtime,
-                                                           _portable(self._fake)),
+        self._proc = ctx.Process(target=engine_main, args=(theirs, self.source_spec, self._wire(self.spec),
+                                                           self.realtime, self._fake_ref(self._fake)),
                                  name="inkface-engine", daemon=True)
         self._proc.start()
-        child.close()
+        theirs.close()
+        self._chan = Channel(mine)
+        self._notifier = QSocketNotifier(mine.fileno(), QSocketNotifier.Type.Read)
+        self._notifier.activated.connect(lambda *_: self._poll())
         self._timer.start()
 
-    def stop(self, wait_s: float = 5.0) -> None:
-        self._timer.stop()
-        if self._conn is not None:
+    def stop(self, wait_s: float = 3.0) -> None:
+        """Ask the engine to quit (it closes an open recording) and let it go (once; later calls do nothing)."""
+        if self._stopped:
+            return
+        self._stopped = True
+        try:
+            self._timer.stop()
+            if self._notifier is not None:
+                self._notifier.setEnabled(False)
+        except RuntimeError:  # Qt already deleted them (the window went away at exit)
+            pass
+        self._notifier = None
+        if self._chan is not None:
             try:
-                self._conn.send({"cmd": "quit"})
-            except (OSError, BrokenPipeError):
+                self._send("quit", None)
+                self._chan.flush()
+            except OSError:
                 pass
         if self._proc is not None:
-            # keep draining: the engine may be blocked sending a frame into a full pipe
-            end = time.monotonic() + wait_s
-            while self._proc.is_alive() and time.monotonic() < end:
-                try:
-                    if self._conn is not None and self._conn.poll(0.01):
-                        self._conn.recv_bytes()
-                except (EOFError, OSError):
-                    self._proc.join(0.05)
+            self._proc.join(wait_s)
             if self._proc.is_alive():
                 self._proc.terminate()
                 self._proc.join(2.0)
+                if self._reader is not None:
+                    self._reader.unlink()  # the engine had no time to remove its segment
             self._proc = None
-        if self._conn is not None:
-            self._conn.close()
-            self._conn = None
+        if self._chan is not None:
+            self._chan.close()
+            self._chan = None
+        if self._reader is not None:
+            self._reader.close()
+        if self._spool is not None:
+            self._spool.close()
+            self._spool = None
 
     @property
     def running(self) -> bool:
         return self._proc is not None and self._proc.is_alive()
 
-    def _send(self, msg: dict) -> None:
-        if self._conn is not None:
+    @property
+    def engine_pid(self) -> int | None:
+        return None if self._proc is None else self._proc.pid
+
+    def _send(self, cmd: str, arg: Any = None, key: Any = None) -> int:
+        """Post a request (never waits); returns its sequence number."""
+        from app.channel import ChannelClosed
+
+        self.requests_sent += 1
+        if self._chan is not None and not self._dead:
             try:
-                self._conn.send(msg)
-            except (OSError, BrokenPipeError):
-                self.error.emit("the engine process has stopped")
+                self._chan.send((self.requests_sent, cmd, arg), key=key)
+            except ChannelClosed:
+                self._engine_gone()
+        return self.requests_sent
+
+    # large payloads by file ---------------------------------------------------------------
+    def note_file(self, obj: Any, path: str | Path) -> None:
+        """``obj`` (a calibration) is saved in ``path``: send the path instead of writing a copy."""
+        self._files[id(obj)] = (obj, str(path))
+
+    def _ref(self, kind: str, obj: Any, fresh: bool = False) -> Any:
+        """What crosses to the engine for a calibration or session: small values as they are,
+        objects as a file reference ``("file", path, n)``. A session saved in its folder is read
+        from there; anything else is written to the spool. Calibrations do not change once made,
+        so each is written once; a session handed over again (``fresh``) is read again."""
+        if obj is None or isinstance(obj, (str, tuple)):
+            return obj
+        cache = self._refs.setdefault(kind, {})
+        held = cache.get(id(obj))
+        if held is not None and held[0] is obj and not (fresh and kind == "session"):
+            return held[1]
+        noted = self._files.pop(id(obj), None)
+        folder = getattr(obj, "path", None) if kind == "session" else None
+        if self._spool is None:
+            from app.channel import Spool
+
+            self._spool = Spool()
+        try:
+            if noted is not None and noted[0] is obj:
+                path = noted[1]
+            elif folder is not None and (Path(folder) / "session.json").is_file():
+                path = str(folder)  # the training window saved it there before handing it over
+            elif kind == "calibration":
+                path = str(self._spool.path("calibration", ".json"))
+                obj.save(path)
+            else:
+                spooled = self._spool.path("session")
+                spooled.mkdir(parents=True, exist_ok=True)
+                (spooled / "session.json").write_text(json.dumps(obj.to_dict()) + "\n")
+                path = str(spooled)
+        except Exception as e:  # a full disk, an odd object: say so, keep what the engine has
+            self.error.emit(f"could not hand the {kind} to the engine: {_one_line(e)}")
+            return held[1] if held is not None else None
+        ref = ("file", path, self.requests_sent + 1)
+        cache[id(obj)] = (obj, ref)
+        while len(cache) > 4:
+            cache.pop(next(iter(cache)))
+        return ref
+
+    def _wire(self, spec: PuppetSpec, changed: tuple = ()) -> PuppetSpec:
+        return replace(spec, calibration=self._ref("calibration", spec.calibration),
+                       session=self._ref("session", spec.session, fresh="session" in changed))
+
+    def _fake_ref(self, fake) -> tuple | None:
+        """A fake camera as ``("fake", frames.npy, fps, loop)`` (its frames go by file)."""
+        if fake is None:
+            return None
+        frames = getattr(fake, "frames", None)
+        if frames is None:
+            raise TypeError(f"cannot send a {type(fake).__name__} to the engine (only a FakeCamera)")
+        held = self._refs.get("fake")
+        if held is not None and (held[0] is fake or _same_frames(held[0].frames, frames)):
+            return held[1][:2] + (float(getattr(fake, "fps", 30.0)), bool(getattr(fake, "loop", False)))
+        from app.channel import Spool, write_frames
+
+        if self._spool is None:
+            self._spool = Spool()
+        path = write_frames(self._spool.path("fake", ".npy"), frames)
+        ref = ("fake", str(path), float(getattr(fake, "fps", 30.0)), bool(getattr(fake, "loop", False)))
+        self._refs["fake"] = (fake, ref)
+        return ref
 
     # requests ---------------------------------------------------------------------------
-    def _spec_message(self, spec: PuppetSpec) -> tuple[PuppetSpec, dict]:
-        """The spec without its big objects, plus those objects that changed since last sent."""
-        extra = {}
-        if not _same(spec.calibration, self._sent_cal):
-            extra["calibration"] = spec.calibration
-            self._sent_cal = spec.calibration
-        if spec.session is not self._sent_session:
-            extra["session"] = spec.session
-            self._sent_session = spec.session
-        return replace(spec, calibration=None, session=None), extra
-
-    def request(self, **changes) -> None:
+    def request(self, **changes) -> int:
         """Change the puppet; the engine applies it before its next frame."""
         self.spec = replace(self.spec, **changes)
-        if self._conn is not None:
-            spec, extra = self._spec_message(self.spec)
-            self._send({"cmd": "puppet", "spec": spec, **extra})
+        return self._send("puppet", self._wire(self.spec, tuple(changes)), key="puppet")
 
-    def set_source(self, spec: SourceSpec, fake_source=None) -> None:
+    def set_source(self, spec: SourceSpec, fake_source=None) -> int:
         self.source_spec = spec
         self._fake = fake_source
-        self._send({"cmd": "source", "spec": spec, "fake": _portable(fake_source)})
+        self.source_id = self.requests_sent + 1
+        self.dropped_capture = self.dropped_display = 0
+        return self._send("source", (spec, self._fake_ref(fake_source), self.source_id), key="source")
 
-    def set_paused(self, paused: bool) -> None:
-        self._send({"cmd": "pause", "on": bool(paused)})
+    def set_paused(self, paused: bool) -> int:
+        return self._send("pause", bool(paused), key="pause")
 
-    def set_video(self, on: bool) -> None:
+    def set_video(self, on: bool) -> int:
         self.send_video = bool(on)
-        self._send({"cmd": "video", "on": bool(on)})
+        return self._send("video", bool(on), key="video")
 
     def set_targets(self, video: tuple[int, int] | None = None, char: tuple[int, int] | None = None,
-                    full: bool | None = None) -> None:
+                    full: bool | None = None) -> int:
         """Sizes (device pixels) the pictures are shown at; ``full`` asks for camera-size frames."""
-        t = {}
         if video is not None:
-            t["video"] = tuple(int(v) for v in video)
+            self._targets["video"] = tuple(int(v) for v in video)
         if char is not None:
-            t["char"] = tuple(int(v) for v in char)
+            self._targets["char"] = tuple(int(v) for v in char)
         if full is not None:
-            t["full"] = bool(full)
-        self._send({"cmd": "targets", "targets": t})
+            self._targets["full"] = bool(full)
+        return self._send("targets", dict(self._targets), key="targets")
 
-    def full_frame(self, timeout_s: float = 5.0) -> np.ndarray | None:
-        """The newest camera frame at full size (waits for the engine, pumping its messages)."""
-        got: list = []
-        fn = got.append
-        self.snapshot.connect(fn)
-        try:
-            self._send({"cmd": "snapshot"})
-            end = time.monotonic() + timeout_s
-            while not got and time.monotonic() < end and self.running:
-                self._poll()
-                time.sleep(0.005)
-        finally:
-            self.snapshot.disconnect(fn)
-        return got[0] if got else None
+    def request_snapshot(self) -> int:
+        """Ask for the newest camera frame at full size; it arrives through ``snapshot(array)``."""
+        return self._send("snapshot", None, key="snapshot")
 
-    def start_recording(self, path: str, fps: float, background) -> None:
-        self._send({"cmd": "record", "path": str(path), "fps": float(fps), "background": background})
+    def start_recording(self, rid: int, path: str, fps: float, background, overwrite: bool = False) -> int:
+        """Record to ``path``; ``overwrite`` replaces what is there (else ``recordFailed`` says it exists)."""
+        return self._send("record", (int(rid), str(path), float(fps), background, bool(overwrite)))
 
-    def stop_recording(self) -> None:
-        self._send({"cmd": "stop_record"})
+    def stop_recording(self, rid: int) -> int:
+        return self._send("stop_record", int(rid))
+
+    def recalibrate(self) -> int:
+        """Calibrate again on the newest frame; the result arrives through ``recalibrated(path, how)``."""
+        if self._spool is None:
+            return self.requests_sent
+        return self._send("recalibrate", str(self._spool.path("recalibration", ".json")), key="recalibrate")
 
     # polling ----------------------------------------------------------------------------
     def _poll(self) -> None:
-        conn = self._conn
-        if conn is None:
+        """Read what has arrived and dispatch it (from the event loop; never waits)."""
+        chan = self._chan
+        if chan is None or self._dead:
             return
-        got_frame = False
         try:
-            while conn.poll():
-                msg = conn.recv()
-                if msg[0] == "event":
-                    _, name, args = msg
-                    if name == "puppetReady":
-                        self.live_art = args[0]
-                    getattr(self, name).emit(*args)
-                    if self._conn is None:
-                        return
-                elif msg[0] == "frame":
-                    self._latest = self._receive_frame(conn, msg[1])
-                    got_frame = True
-                    conn.send({"cmd": "ack"})
-        except (EOFError, OSError):
-            self._timer.stop()
-            self.error.emit("the engine process has stopped")
+            chan.flush()
+        except OSError:
+            pass
+        self._inbox.extend(chan.receive())
+        if chan.closed and not self._inbox:
+            self._engine_gone()
             return
-        if got_frame:
-            self.frameReady.emit()
+        if self._dispatching:  # a hook opened a nested event loop: the outer call goes on
+            return
+        self._dispatching = True
+        try:
+            got_frame = False
+            while self._inbox and self._chan is not None:
+                msg = self._inbox.popleft()
+                if msg[0] == "event":
+                    self._event(msg[1], msg[2])
+                elif msg[0] == "frame":
+                    got_frame = self._frame(*msg[1:]) or got_frame
+            if got_frame:
+                self.frameReady.emit()
+        finally:
+            self._dispatching = False
+        if self._chan is not None and self._chan.closed:
+            self._engine_gone()
 
-    def _receive_frame(self, conn, meta: dict) -> DisplayFrame:
-        video = rgba = None
-        if meta["video_shape"] is not None:
-            video = np.frombuffer(conn.recv_bytes(), np.uint8).reshape(meta["video_shape"])
-        if meta["rgba_shape"] is not None:
-            rgba = np.frombuffer(conn.recv_bytes(), np.uint8).reshape(meta["rgba_shape"])
-        elif meta["rgba_same"] and self._prev is not None:
-            rgba = self._prev.rgba
+    def _event(self, name: str, args: tuple) -> None:
+        if name in ("sourceOpened", "sourceFailed", "finishedSource"):
+            if args[0] != self.source_id:
+                return  # news from a source the window has already left
+            args = args[1:]
+        elif name == "puppetReady":
+            self.live_art = args[0]
+        getattr(self, name).emit(*args)
+
+    def _frame(self, kind: str, meta: dict, name: str, layout: list) -> bool:
+        try:
+            video, rgba = self._reader.read(name, layout)
+        except (OSError, ValueError) as e:  # the segment vanished: the engine is going away
+            self._send("ack", None, key="ack")
+            self.error.emit(f"lost a frame from the engine ({_one_line(e)})")
+            return False
+        self._send("ack", None, key="ack")
+        if kind == "snapshot":
+            self.snapshot.emit(video)
+            return False
+        if rgba is None and meta.get("rgba_same"):
+            rgba = self._last_rgba  # the output rate held the picture: it was not sent again
+        self._last_rgba = rgba
         fr = DisplayFrame(meta["index"], meta["time"], video, rgba)
         for k in _META[2:]:
             setattr(fr, k, meta[k])
+        if fr.source_id != self.source_id:
+            fr.dropped_capture = fr.dropped_display = 0  # counted for the source the window left
         self.frames_received += 1
         self.dropped_capture, self.dropped_display = fr.dropped_capture, fr.dropped_display
         self.frames_read, self.frames_done = fr.frames_read, fr.frames_done
-        return fr
+        self._latest = fr
+        return True
+
+    def _engine_gone(self) -> None:
+        if self._dead:
+            return
+        self._dead = True
+        self._timer.stop()
+        if self._notifier is not None:
+            self._notifier.setEnabled(False)
+        self.error.emit("the engine process has stopped")
 
     def take(self) -> DisplayFrame | None:
         """The newest frame (once), with its QImages made on this (the GUI) thread."""
@@ -1054,9 +1533,6 @@ class Pipeline:
             fr.to_images(self._prev, video=self.send_video)
             self._prev = fr
         return fr
-
-
-_UNSENT = object()
 
 
 def _task_main(conn, target: str, args: tuple) -> None:
@@ -1154,6 +1630,11 @@ def _same(a, b) -> bool:
     if isinstance(a, (str, tuple)) or isinstance(b, (str, tuple)):
         return a == b
     return a is b
+
+
+def _same_frames(a, b) -> bool:
+    """The same frame arrays in the same order (a new fake camera over the same frames)."""
+    return len(a) == len(b) and all(x is y for x, y in zip(a, b))
 
 
 def _can_tune(puppet) -> bool:

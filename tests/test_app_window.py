@@ -20,25 +20,15 @@ from app.workers import SourceSpec  # noqa: E402
 WAIT = 60_000  # ms; generous for a loaded 2-core machine
 
 
-@pytest.fixture(autouse=True)
-def _isolated(tmp_path, monkeypatch):
-    """Settings, user data and cache in tmp_path, never the user's."""
-    monkeypatch.setenv("INKFACE_SETTINGS", str(tmp_path / "settings.ini"))
-    monkeypatch.setenv("INKFACE_DATA", str(tmp_path / "data"))
-    monkeypatch.setenv("INKFACE_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setenv("INKFACE_ART_DIR", str(tmp_path / "user-art"))
+pytestmark = pytest.mark.usefixtures("isolated_user_dirs")  # settings, data and cache in tmp_path
 
 
 @pytest.fixture(scope="module")
 def performer():
     """Frames of a short synthetic performance, its clicks and the calibration from them."""
-    from tracker.synthetic import Performance
+    from benchmarks.soak_window import drive_performer
 
-    from app.workers import performance_calibration
-
-    perf = Performance(seconds=1.0, seed=5)
-    frames = [perf.frame(i) for i in range(len(perf))]
-    return {"perf": perf, "frames": frames, "clicks": perf.clicks(), "calibration": performance_calibration(perf)}
+    return drive_performer()
 
 
 def _fake_camera(frames, loop=True):
@@ -89,8 +79,11 @@ def test_window_opens_and_frames_flow(qtbot, window):
     # the picture arrives scaled to the view (the engine scales, the window only copies)
     box = window.video_view.image_rect()
     assert abs(fr.video.width() - box.width()) <= 2 or fr.video.width() == 640
-    full = window.pipeline.full_frame()
-    assert full is not None and full.shape == (480, 640, 3)
+    got = []
+    window.pipeline.snapshot.connect(got.append)
+    window.pipeline.request_snapshot()  # returns at once; the frame comes back through the hook
+    qtbot.waitUntil(lambda: len(got) == 1, timeout=WAIT)
+    assert got[0] is not None and got[0].shape == (480, 640, 3)
     assert fr.character.width() > 0 and fr.params is not None
     assert set(fr.timings_ms) and all(v >= 0 for v in fr.timings_ms.values())
     window._refresh_status()
@@ -133,7 +126,9 @@ def test_recording_writes_video_and_track(qtbot, window, tmp_path):
     out = tmp_path / "rec" / "take.mp4"
     assert window.start_recording(str(out))
     _wait_frames(qtbot, window, 8)
-    res = window.stop_recording()
+    with qtbot.waitSignal(window.recordingSaved, timeout=WAIT) as saved:
+        window.stop_recording()  # returns at once; the files are closed in the engine
+    res = saved.args[0]
     assert res is not None and res.frames >= 4
     assert out.is_file() and out.stat().st_size > 1000
     from tracker.params import read_csv
