@@ -244,7 +244,6 @@ class MainWindow(QMainWindow):
         f.addRow("Input", self.source_combo)
         self.camera_spin = QSpinBox()
         self.camera_spin.setRange(0, 9)
-        self.camera_spin.setButtonSymbols(QSpinBox.ButtonSymbols.NoButtons)
         self.camera_spin.setToolTip("Camera index (0 is usually the built-in one); scroll or type")
         self.camera_spin.valueChanged.connect(self._on_camera_index)
         f.addRow("Camera", self.camera_spin)
