@@ -670,6 +670,11 @@ class Recorder:
             if self._csv is not None:
                 self._csv.abort()
             raise RecordError(f"{self.writer.path}: {self.error}")
+        if self.writer.frames == 0:  # Stop before the first frame: say so rather than name a file that is not there
+            self.writer.abort()
+            if self._csv is not None:
+                self._csv.abort()
+            raise RecordError(f"{self.writer.path}: no frames arrived before Stop, so nothing was written")
         out = self.writer.close()
         track = None
         extra: list[Path] = []

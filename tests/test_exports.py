@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image, ImageSequence
 
-from app.record import FrameWriter, GifStream, Recorder, to_straight
+from app.record import FrameWriter, GifStream, RecordError, Recorder, to_straight
 from tracker.params import FaceParams, read_csv
 
 
@@ -158,3 +158,13 @@ def test_finish_reports_progress_and_a_failed_write_leaves_nothing(tmp_path):
         rec.finish()
     assert not (tmp_path / "b.gif").exists() and not (tmp_path / "b.csv").exists()
     assert not list(tmp_path.glob(".*"))
+
+
+@pytest.mark.parametrize("name", ["a.gif", "a.mp4", "frames/a.png"])
+def test_stop_before_the_first_frame_says_nothing_was_written(tmp_path, name):
+    """A recording stopped before a frame arrived used to report "Saved 0 frames to a.gif" for a
+    file that was never made."""
+    rec = Recorder(tmp_path / name, fps=30)
+    with pytest.raises(RecordError, match="nothing was written"):
+        rec.finish()
+    assert not (tmp_path / name).exists() and not list(tmp_path.glob("*.csv")) and not list(tmp_path.glob(".*"))
