@@ -19,7 +19,9 @@ frames by file. Why a process and not QThreads: see the note above :class:`Hook`
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import sys
 import threading
 import time
@@ -1170,6 +1172,25 @@ def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
     raise ValueError(f"could not calibrate on this frame ({_one_line(last) if last else 'no face'})")
 
 
+ENGINE_ENV = {"MALLOC_ARENA_MAX": "2"}
+"""Environment the engine process starts with (a user's own setting wins). glibc gives every
+thread that allocates its own heap arena; the engine's capture, loader and saver threads come and
+go with each source, character and recording, and their arenas fragment: in the 10-minute soak
+the engine grew from 297 to 412 MB with the default, and stayed within 261–304 MB with two arenas (window + engine −1.8 % after warm-up)."""
+
+
+@contextlib.contextmanager
+def _engine_environment():
+    """Set :data:`ENGINE_ENV` while the engine process is spawned (it inherits the environment)."""
+    added = {k: v for k, v in ENGINE_ENV.items() if k not in os.environ}
+    os.environ.update(added)
+    try:
+        yield
+    finally:
+        for k in added:
+            os.environ.pop(k, None)
+
+
 def engine_main(sock, source: SourceSpec, spec: PuppetSpec, realtime: bool, fake_source=None) -> None:
     """The engine process: capture thread + puppet + recorder; talks to the window over ``sock``."""
     import faulthandler
@@ -1274,7 +1295,8 @@ class Pipeline:
         self._proc = ctx.Process(target=engine_main, args=(theirs, self.source_spec, self._wire(self.spec),
                                                            self.realtime, self._fake_ref(self._fake)),
                                  name="inkface-engine", daemon=True)
-        self._proc.start()
+        with _engine_environment():
+            self._proc.start()
         theirs.close()
         self._chan = Channel(mine)
         self._notifier = QSocketNotifier(mine.fileno(), QSocketNotifier.Type.Read)

@@ -293,3 +293,18 @@ def test_recording_to_a_name_in_use_is_refused_with_a_free_one(qtbot, performer,
     assert out.read_bytes() == b"an earlier take" and "take-2.mp4" in w.record_label.text()
     assert w.recording is None and w.record_btn.text() == "● Record"
     w.close()
+
+
+def test_the_engine_starts_with_two_heap_arenas_unless_the_user_says_otherwise(monkeypatch):
+    import os
+
+    from app import workers
+
+    monkeypatch.delenv("MALLOC_ARENA_MAX", raising=False)
+    with workers._engine_environment():
+        assert os.environ["MALLOC_ARENA_MAX"] == "2"
+    assert "MALLOC_ARENA_MAX" not in os.environ
+    monkeypatch.setenv("MALLOC_ARENA_MAX", "8")
+    with workers._engine_environment():
+        assert os.environ["MALLOC_ARENA_MAX"] == "8"
+    assert os.environ["MALLOC_ARENA_MAX"] == "8"
