@@ -317,6 +317,10 @@ class Calibration:
 # calibrate
 
 
+# grey-level spread (0–255) below which an eye picture is a flat wall, not an eye: real eyes on the
+# clips measure 17–62 (5–30 on darkened, noisy copies), a flat background under codec noise 1–2
+MIN_EYE_CONTRAST = 3.0
+
 def _odd(v: float, lo: int = 3) -> int:
     n = max(int(round(v)), lo)
     return n if n % 2 else n + 1
@@ -467,6 +471,11 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
         t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
         temps.append(np.rint(t).astype(np.float32))
+    for t, side, c in zip(temps, ("left", "right"), (clicks.left_pupil, clicks.right_pupil)):
+        if float(t.std()) < MIN_EYE_CONTRAST:
+            raise CalibrationError(
+                f"clicks: nothing eye-like at the {side} pupil click ({c[0]:g}, {c[1]:g}): the picture there is flat"
+            )
 
     # --- samples
     def region(fx, fy, hw, hh):
