@@ -758,6 +758,19 @@ def layer_files_in(folder: str | Path) -> list[tuple[str, Path]]:
     return layer_order(files)
 
 
+def check_layer_sizes(files: Sequence[tuple[str | Path, np.ndarray]]) -> None:
+    """Refuse, in one line naming the file, layer images of one drawing that differ in size."""
+    if not files:
+        return
+    first, img0 = files[0]
+    w0, h0 = img0.shape[1], img0.shape[0]
+    for path, img in files[1:]:
+        w, h = img.shape[1], img.shape[0]
+        if (w, h) != (w0, h0):
+            raise EditError(f"{Path(path).name} is {w}x{h} but {Path(first).name} is {w0}x{h0}: "
+                            "the layers of one drawing must be the same size")
+
+
 def import_layered_drawing(artset: ArtSet, part: str, name: str, layers: Sequence[tuple[str, np.ndarray]],
                            fit: str = "resize") -> int:
     """Add a drawing made of ``layers`` (``(name, image)``, bottom first); returns its index.

@@ -572,6 +572,7 @@ class EditorDocument(QObject):
         layer names: ``10-eyeball.png`` under ``20-lids.png``)."""
         ordered = ed.layer_order(paths)
         layers = [(n, ed.load_image(p)) for n, p in ordered]
+        ed.check_layer_sizes([(p, img) for (_, p), (_, img) in zip(ordered, layers)])
         return self.edit(f"import layered {part} drawing", lambda art: ed.import_layered_drawing(art, part, name, layers, fit),
                          select={"part": part, "drawing": lambda i: i, "line": -1})
 

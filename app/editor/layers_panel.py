@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QSize, Qt
+from PySide6.QtCore import QSize, Qt, QTimer
 from PySide6.QtWidgets import (
     QCheckBox, QFileDialog, QGridLayout, QInputDialog, QLabel, QListWidget, QListWidgetItem, QMenu,
     QPushButton, QSizePolicy, QVBoxLayout, QWidget,
@@ -36,12 +36,14 @@ class LayerList(QListWidget):
         self.setDefaultDropAction(Qt.MoveAction)
         self.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Expanding)
 
-    def dropEvent(self, ev):
-        src = self.currentRow()
-        super().dropEvent(ev)  # Qt moves the row; the document then rebuilds the list from the model
-        dst = self.currentRow()
-        if src >= 0 and dst >= 0 and dst != src:
-            self.panel.move_row(src, dst)
+        self.model().rowsMoved.connect(self._rows_moved)
+
+    def _rows_moved(self, _parent, start: int, _end: int, _dest, row: int) -> None:
+        """A row dragged to another place: move the layer in the model, after Qt's drop ends
+        (the list is then refilled from the model)."""
+        dst = row - 1 if row > start else row
+        if dst != start:
+            QTimer.singleShot(0, lambda: self.panel.move_row(start, dst))
 
 
 class LayersPanel(QWidget):
@@ -265,7 +267,9 @@ class LayersPanel(QWidget):
             self.doc.move_layer(self.doc.part, self.doc.layer, self.doc.layer + direction)
 
     def move_row(self, src_row: int, dst_row: int) -> None:
+        """Move the layer shown in row ``src_row`` to row ``dst_row`` (rows run top layer first)."""
         self._safely(lambda: self.doc.move_layer(self.doc.part, self.layer_of(src_row), self.layer_of(dst_row)))
+        self.refill()
 
     def convert(self) -> None:
         p = self._part()
@@ -301,11 +305,9 @@ class LayersPanel(QWidget):
         p = self._part()
         if p is None or not p.drawings:
             return "resize"
-        odd = []
-        for path in paths:
-            img = ed.load_image(path)
-            if (img.shape[1], img.shape[0]) != p.size:
-                odd.append(Path(path).name)
+        images = [(path, ed.load_image(path)) for path in paths]
+        ed.check_layer_sizes(images)
+        odd = [Path(path).name for path, img in images if (img.shape[1], img.shape[0]) != p.size]
         return self.ask_fit(self.doc.part, odd) if odd else "resize"
 
     def import_folder(self, folder: str | None = None) -> int | None:

@@ -122,7 +122,8 @@ class MorphEngine:
             shown = [part.drawings[i] for i in uniq]
             names = {tuple(ly.name for ly in d.layers) for d in shown}
             drawings = shown if len(names) == 1 and next(iter(names)) else None
-            src = (list(images), list(raw_lines))
+            src = (list(images) + [ly.image for d in shown for ly in d.layers],
+                   list(raw_lines) + [ly.lines for d in shown for ly in d.layers])
             with self._lock:
                 built, self._built = self._built, None
             if built is not None and not isinstance(built[1], Exception):
@@ -150,7 +151,10 @@ class MorphEngine:
 
     @staticmethod
     def _src_matches(a, b) -> bool:
-        return len(a[0]) == len(b[0]) and all(x is y for x, y in zip(a[0] + a[1], b[0] + b[1]))
+        """Same arrays (drawings' and layers' pictures and lines; a layer without lines of its own
+        is None) in the same places: edits replace arrays, so identity means unchanged."""
+        return (len(a[0]) == len(b[0]) and len(a[1]) == len(b[1])
+                and all(x is y for x, y in zip(a[0] + a[1], b[0] + b[1])))
 
 
 def _one_line(e: BaseException) -> str:

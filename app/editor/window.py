@@ -23,6 +23,7 @@ from .document import EditorDocument, is_bundled, recoverable
 from .panels import (
     DropList, LinesList, PartStrip, ProblemsList, cached_icon, dropped_paths, image_paths, thumb_icon,
 )
+from .layers_panel import LayersPanel
 from .preview import PreviewPanel
 
 IMAGE_FILTER = "Images (*.png *.jpg *.jpeg *.bmp *.gif *.tif *.tiff *.webp)"
@@ -461,6 +462,15 @@ class EditorWindow(QMainWindow):
         pd.setWidget(self.preview)
         pd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
         self.addDockWidget(Qt.RightDockWidgetArea, pd)
+
+        self.layers_panel = LayersPanel(self.doc)
+        self.layers_panel.ask_fit = lambda key, names: self.ask_fit(key, names)
+        lyd = QDockWidget("Layers", self)
+        lyd.setObjectName("layers")
+        lyd.setWidget(self.layers_panel)
+        lyd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(Qt.RightDockWidgetArea, lyd)
+        self.splitDockWidget(lyd, pd, Qt.Vertical)
 
         self.lines_list = LinesList(self.doc)
         ld = QDockWidget("Lines", self)
