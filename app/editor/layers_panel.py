@@ -35,6 +35,9 @@ class LayerList(QListWidget):
         self.setDragDropMode(QListWidget.InternalMove)
         self.setDefaultDropAction(Qt.MoveAction)
         self.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Expanding)
+        self.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
+        self.setTextElideMode(Qt.ElideRight)
+        self.setMinimumHeight(4 * 38 + 6)  # four rows: a character's eyes or mouth seldom need more
 
         self.model().rowsMoved.connect(self._rows_moved)
 

@@ -488,6 +488,7 @@ class EditorWindow(QMainWindow):
         self.splitDockWidget(ld, prd, Qt.Horizontal)
         self.resizeDocks([dock, pd], [250, 330], Qt.Horizontal)
         self.resizeDocks([ld], [150], Qt.Vertical)
+        self.resizeDocks([lyd, pd], [330, 500], Qt.Vertical)
         self._build_menus()
 
     def _build_menus(self):
