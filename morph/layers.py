@@ -10,7 +10,10 @@ layers that share the drawing's lines share one set of tables and, per frame, on
 and meshes. A layer that is the same picture with the same lines in every drawing (an eyeball
 that never changes) is kept as it is and never warped. Each frame, a moving layer is only warped
 inside the rectangle its content can reach under that frame's meshes (the mesh cells whose corners
-sample its content), so a small layer, such as a lower lid, costs little.
+sample its content), so a small layer, such as a lower lid, costs little. Layers are also only
+warped where the layers above them are not all opaque this frame (found the same way from each
+drawing's box of see-through pixels): under an upper lid that covers the box but for a slot, the
+eyeball and lower lid are drawn in the slot's rectangle, and the lid is laid over them only there.
 
 Everything is premultiplied RGBA uint8 (see ``morph``).
 """
@@ -34,6 +37,9 @@ from morph.polymorph import PartMorpher, _blend3_u8, blend_u8
 _REACH_MARGIN = 4.0
 
 
+Rect = tuple[int, int, int, int]  # pixels [x0, x1) × [y0, y1) of the part
+
+
 @dataclass
 class _Layer:
     name: str
@@ -41,6 +47,10 @@ class _Layer:
     pm: list[np.ndarray]  # premultiplied image per drawing (one shared array when static)
     boxes: np.ndarray | None = None  # (n, 4) float x0, y0, x1, y1 of each drawing's content, widened for bilinear reads
     full: bool = True  # every drawing's content spans the part: no rectangle to find per frame
+    holes: np.ndarray | None = None  # (n, 4) the same for each drawing's see-through (α < 255) pixels
+    covers: bool = False  # opaque somewhere in every drawing: what lies under it can be hidden
+    static_rect: Rect | None = None  # a static layer's content rectangle (None: transparent)
+    static_hole: Rect | None = None  # a static layer's see-through rectangle (None: opaque everywhere)
 
 
 class LayeredMorpher:
@@ -114,9 +124,10 @@ class LayeredMorpher:
         self.detail_sigma = float(detail_sigma)
         self.grid = self.groups[0].grid if self.groups else MeshGrid(self.size, cells)
         self._spans = self.grid.cell_spans()
+        self._edge_border = all(g.border == cv2.BORDER_REPLICATE for g in self.groups)
+        self.cull = True  # skip what the layers above hide (tests switch it off to compare)
         for ly in self.layers:
-            if ly.group >= 0:
-                self._content_boxes(ly)
+            self._content_boxes(ly)
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
@@ -126,25 +137,46 @@ class LayeredMorpher:
 
     # --- load time -------------------------------------------------------------------------
     def _content_boxes(self, ly: _Layer) -> None:
-        """Each drawing's bounding box of non-transparent pixels, one pixel wider (bilinear reads)."""
+        """Each drawing's bounding boxes of non-transparent and of see-through pixels, one pixel
+        wider (bilinear reads). A box that touches the part's edge runs on past it: the warp reads
+        outside the drawing along the edges, and repeats the edge pixels there."""
         w, h = self.size
-        boxes = np.full((self.n, 4), (np.inf, np.inf, -np.inf, -np.inf))
-        for i, pm in enumerate(ly.pm):
-            ys, xs = np.nonzero(pm[:, :, 3])
-            if len(xs):
-                boxes[i] = (xs.min() - 1.0, ys.min() - 1.0, xs.max() + 1.0, ys.max() + 1.0)
-        ly.boxes = boxes
-        ly.full = bool(np.all(boxes[:, :2] <= -1.0) and np.all(boxes[:, 2] >= w) and np.all(boxes[:, 3] >= h))
+        n = 1 if ly.group < 0 else self.n
+        boxes = np.full((n, 4), (np.inf, np.inf, -np.inf, -np.inf))
+        holes = boxes.copy()
+        for i, pm in enumerate(ly.pm[:n]):
+            for out, mask in ((boxes, pm[:, :, 3] > 0), (holes, pm[:, :, 3] < 255)):
+                rows, cols = np.nonzero(mask.any(axis=1))[0], np.nonzero(mask.any(axis=0))[0]
+                if len(rows):
+                    out[i] = (-np.inf if cols[0] == 0 else cols[0] - 1.0, -np.inf if rows[0] == 0 else rows[0] - 1.0,
+                              np.inf if cols[-1] == w - 1 else cols[-1] + 1.0, np.inf if rows[-1] == h - 1 else rows[-1] + 1.0)
+        if not self._edge_border:  # outside the drawing is transparent: a hole anywhere near the edge
+            holes[np.isfinite(holes[:, 0])] = (-np.inf, -np.inf, np.inf, np.inf)
+        ly.boxes, ly.holes = boxes, holes
+        ly.full = bool(np.all(boxes[:, :2] == -np.inf) and np.all(boxes[:, 2:] == np.inf))
+        ly.covers = not bool(np.all(holes == (-np.inf, -np.inf, np.inf, np.inf)))
+        if ly.group < 0:
+            ly.static_rect = self._clip(boxes[0])
+            ly.static_hole = self._clip(holes[0])
 
-    def _frame_rect(self, ly: _Layer, planes: np.ndarray, act) -> tuple[int, int, int, int] | None:
-        """The pixels ``(x0, y0, x1, y1)`` of the part where ``ly`` can be non-transparent this
-        frame, or None: the mesh cells some of whose corners, for some active drawing, sample
-        inside that drawing's content box (a pixel's source is a convex mix of its cell's corners)."""
+    def _clip(self, box) -> Rect | None:
+        """A float box (bilinear margin included) as the pixel rectangle it covers in the part."""
         w, h = self.size
-        if ly.full:
-            return 0, 0, w, h
+        if not box[0] <= box[2]:
+            return None
+        x0 = 0 if box[0] == -np.inf else max(0, int(box[0]) + 1)
+        y0 = 0 if box[1] == -np.inf else max(0, int(box[1]) + 1)
+        x1 = w if box[2] == np.inf else min(w, int(box[2]))
+        y1 = h if box[3] == np.inf else min(h, int(box[3]))
+        return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
+
+    def _frame_rect(self, boxes: np.ndarray, planes: np.ndarray, act) -> Rect | None:
+        """The pixels ``(x0, y0, x1, y1)`` of the part whose samples, this frame, can fall inside
+        ``boxes`` (one per drawing) of some active drawing, or None: the mesh cells some of whose
+        corners lie beyond each side of the box (a pixel's source is a convex mix of its cell's
+        corners)."""
         k = len(act)
-        b = ly.boxes[[ia for ia, _ in act]]
+        b = boxes[[ia for ia, _ in act]]
         # a cell can sample a box if one of its corners lies beyond each of the box's sides
         inside = np.empty((4, k) + planes.shape[2:], bool)
         np.greater_equal(planes[:k, 0], b[:, 0, None, None], out=inside[0])
@@ -192,51 +224,97 @@ class LayeredMorpher:
             return out
         if out is None:
             out = np.empty_like(self.pm[0])
-        planes_of: dict[int, np.ndarray] = {}
-        wts = [wa for _, wa in act]
         w, h = self.size
-        for k, ly in enumerate(self.layers):
-            if ly.group < 0:
-                if k == 0:
-                    np.copyto(out, ly.pm[0])
-                else:
-                    over_u8(ly.pm[0], out, out, self._inv)
-                continue
-            m = self.groups[ly.group]
-            if ly.group not in planes_of:
-                planes = m._mesh_planes(act)
+        full = (0, 0, w, h)
+        planes_of: dict[int, np.ndarray] = {}
+        for ly in self.layers:
+            if ly.group >= 0 and ly.group not in planes_of:
+                planes = self.groups[ly.group]._mesh_planes(act)
                 if jitter is not None:
                     planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
                 planes_of[ly.group] = planes
-            rect = self._frame_rect(ly, planes_of[ly.group], act)
-            if k == 0 and rect != (0, 0, w, h):
-                out[...] = 0
+        # top down: where each layer can show (its content, where the layers above let it through)
+        cull = self.cull and not detail  # the detail blend may take an opaque pixel under 255
+        rects: list[Rect | None] = [None] * len(self.layers)
+        vis: Rect | None = full
+        for k in range(len(self.layers) - 1, -1, -1):
+            ly = self.layers[k]
+            if ly.group < 0:
+                rect, hole = ly.static_rect, ly.static_hole
+            else:
+                rect = full if ly.full else self._frame_rect(ly.boxes, planes_of[ly.group], act)
+                hole = full if not ly.covers else self._frame_rect(ly.holes, planes_of[ly.group], act)
+            if not cull:
+                rect, hole = full, full
+            rects[k] = _meet(rect, vis)
+            vis = _meet(vis, hole)
+            if vis is None:
+                break
+        # bottom up: each layer laid over what lies under it, where something does
+        wts = [wa for _, wa in act]
+        drawn: Rect | None = None
+        for k, ly in enumerate(self.layers):
+            rect = rects[k]
             if rect is None:
                 continue
             x0, y0, x1, y1 = rect
-            if rect == (0, 0, w, h):
-                mx, my = m.grid.upsample_planes(planes_of[ly.group], reuse=True)
+            if drawn is None and rect != full:
+                out[...] = 0
+            if ly.group < 0:
+                blended = ly.pm[0][y0:y1, x0:x1]
             else:
-                mx, my = m.grid.upsample_rect(planes_of[ly.group], rect)
-            n_px = (y1 - y0) * (x1 - x0) * 4
-            bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(y1 - y0, x1 - x0, 4) for j in range(5)]
-            warped = [
-                cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
-                          borderMode=m.border, borderValue=(0, 0, 0, 0))
-                for j, (ia, _) in enumerate(act)
-            ]
-            if detail and len(act) > 1:
-                blended = detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
-            elif len(act) == 3:
-                blended = _blend3_u8(warped, wts, out=bufs[4], scratch=bufs[3])
+                blended = self._blend_layer(ly, planes_of[ly.group], act, wts, rect, detail)
+            under = _meet(drawn, rect)
+            if under is None:
+                out[y0:y1, x0:x1] = blended
             else:
-                blended = blend_u8(warped, wts, out=bufs[4])
-            region = out[y0:y1, x0:x1]
-            if k == 0:
-                region[...] = blended
-            else:
-                over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
+                ux0, uy0, ux1, uy1 = under
+                top = blended[uy0 - y0:uy1 - y0, ux0 - x0:ux1 - x0]
+                region = out[uy0:uy1, ux0:ux1]
+                n_px = (uy1 - uy0) * (ux1 - ux0) * 4
+                over_u8(top, region, region, self._inv.reshape(-1)[:n_px].reshape(uy1 - uy0, ux1 - ux0, 4))
+                for sy0, sy1, sx0, sx1 in ((y0, uy0, x0, x1), (uy1, y1, x0, x1), (uy0, uy1, x0, ux0), (uy0, uy1, ux1, x1)):
+                    if sy1 > sy0 and sx1 > sx0:  # the rest of the rectangle has nothing under it
+                        out[sy0:sy1, sx0:sx1] = blended[sy0 - y0:sy1 - y0, sx0 - x0:sx1 - x0]
+            drawn = rect if drawn is None else _join(drawn, rect)
+        if drawn is None:
+            out[...] = 0
         return out
+
+    def _blend_layer(self, ly: _Layer, planes: np.ndarray, act, wts, rect: Rect, detail: bool) -> np.ndarray:
+        """Layer ``ly`` of the active drawings warped with this frame's meshes and blended, in ``rect``
+        (a scratch buffer of the rectangle's size)."""
+        m = self.groups[ly.group]
+        x0, y0, x1, y1 = rect
+        if rect == (0, 0) + self.size:
+            mx, my = m.grid.upsample_planes(planes, reuse=True)
+        else:
+            mx, my = m.grid.upsample_rect(planes, rect)
+        n_px = (y1 - y0) * (x1 - x0) * 4
+        bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(y1 - y0, x1 - x0, 4) for j in range(5)]
+        warped = [
+            cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
+                      borderMode=m.border, borderValue=(0, 0, 0, 0))
+            for j, (ia, _) in enumerate(act)
+        ]
+        if detail and len(act) > 1:
+            return detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
+        if len(act) == 3:
+            return _blend3_u8(warped, wts, out=bufs[4], scratch=bufs[3])
+        return blend_u8(warped, wts, out=bufs[4])
+
+
+def _meet(a: Rect | None, b: Rect | None) -> Rect | None:
+    """The intersection of two rectangles (None: empty)."""
+    if a is None or b is None:
+        return None
+    x0, y0, x1, y1 = max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])
+    return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
+
+
+def _join(a: Rect, b: Rect) -> Rect:
+    """The smallest rectangle holding both."""
+    return min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3])
 
 
 class _Plain:

@@ -110,8 +110,7 @@ def test_per_frame_rectangles_change_no_pixel(artset, w, jitter):
     """A moving layer warped only where its content can land gives the full-box warp exactly."""
     fast = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
     full = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
-    for ly in full.layers:
-        ly.full = True
+    full.cull = False
     jit = np.random.default_rng(len(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
     np.testing.assert_array_equal(fast.render(*w, jitter=jit), full.render(*w, jitter=jit))
 
@@ -191,3 +190,44 @@ def test_renderer_passes_the_body_from_the_art_set(artset):
     assert r.compositor.body is not None and r.compositor.body_follow == 0.4 and r.compositor.body_roll == 0.1
     frame = r.render(pose=(0, 0, 25))
     assert frame[-1, :, 3].min() == 255
+
+
+@pytest.fixture(scope="module")
+def ivy_parts():
+    from art_sets.io import load_artset
+    from art_sets.library import bundled_dir
+
+    art = load_artset(bundled_dir() / "ivy")
+    out = {}
+    for part in (art.eyes, art.mouth):
+        fast = LayeredMorpher(part.drawings, alpha_steps=5)
+        slow = LayeredMorpher(part.drawings, alpha_steps=5)
+        slow.cull = False
+        out[part.name] = fast, slow
+    return out
+
+
+@st.composite
+def weights_of_seven(draw):
+    return _weights(draw, 5)
+
+
+@settings(max_examples=25, deadline=None)
+@given(w=weights_of_seven(), jitter=st.booleans(), part=st.sampled_from(["eyes", "mouth"]))
+def test_what_opaque_layers_hide_is_skipped_without_changing_a_pixel(ivy_parts, w, jitter, part):
+    """Layers are warped only where the layers above are not all opaque this frame (under an upper
+    lid, only in its slot), with the same pixels as warping every layer on the whole box."""
+    fast, slow = ivy_parts[part]
+    jit = np.random.default_rng(sum(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
+    np.testing.assert_array_equal(fast.render(*w, jitter=jit), slow.render(*w, jitter=jit))
+
+
+def test_opaque_top_layers_leave_only_their_slot_to_the_layers_under_them(ivy_parts):
+    fast, _ = ivy_parts["eyes"]
+    top = fast.layers[-1]
+    assert top.covers and fast.layers[0].group < 0  # the eyeball is never warped
+    act = fast.active((0, 1, 2), (0.3, 0.3, 0.4))
+    planes = fast.groups[top.group]._mesh_planes(act)
+    x0, y0, x1, y1 = fast._frame_rect(top.holes, planes, act)
+    w, h = fast.size
+    assert (x1 - x0) * (y1 - y0) < 0.8 * w * h  # the lid's skin hides the rest
