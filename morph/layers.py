@@ -45,12 +45,12 @@ class _Layer:
     name: str
     group: int  # index into LayeredMorpher.groups, or -1 for a static layer
     pm: list[np.ndarray]  # premultiplied image per drawing (one shared array when static)
-    boxes: np.ndarray | None = None  # (n, 4) float x0, y0, x1, y1 of each drawing's content, widened for bilinear reads
+    boxes: np.ndarray | None = None  # (n, b, 4) float x0, y0, x1, y1 of each drawing's content, widened for bilinear reads
     full: bool = True  # every drawing's content spans the part: no rectangle to find per frame
-    holes: np.ndarray | None = None  # (n, 4) the same for each drawing's see-through (α < 255) pixels
-    covers: bool = False  # opaque somewhere in every drawing: what lies under it can be hidden
-    static_rect: Rect | None = None  # a static layer's content rectangle (None: transparent)
-    static_hole: Rect | None = None  # a static layer's see-through rectangle (None: opaque everywhere)
+    holes: np.ndarray | None = None  # (n, b, 4) the same for each drawing's see-through (α < 255) pixels
+    covers: bool = False  # opaque somewhere in some drawing: what lies under it can be hidden
+    static_rect: list = None  # a static layer's content rectangles ([]: transparent)
+    static_hole: list = None  # a static layer's see-through rectangles ([]: opaque everywhere)
 
 
 class LayeredMorpher:
@@ -137,27 +137,32 @@ class LayeredMorpher:
 
     # --- load time -------------------------------------------------------------------------
     def _content_boxes(self, ly: _Layer) -> None:
-        """Each drawing's bounding boxes of non-transparent and of see-through pixels, one pixel
-        wider (bilinear reads). A box that touches the part's edge runs on past it: the warp reads
-        outside the drawing along the edges, and repeats the edge pixels there."""
+        """Each drawing's bounding boxes of non-transparent and of see-through pixels, one per run of
+        columns holding some (two eyes: two boxes), one pixel wider (bilinear reads). A box that
+        touches the part's edge runs on past it: the warp reads outside the drawing along the
+        edges, and repeats the edge pixels there."""
         w, h = self.size
         n = 1 if ly.group < 0 else self.n
-        boxes = np.full((n, 4), (np.inf, np.inf, -np.inf, -np.inf))
-        holes = boxes.copy()
-        for i, pm in enumerate(ly.pm[:n]):
-            for out, mask in ((boxes, pm[:, :, 3] > 0), (holes, pm[:, :, 3] < 255)):
-                rows, cols = np.nonzero(mask.any(axis=1))[0], np.nonzero(mask.any(axis=0))[0]
-                if len(rows):
-                    out[i] = (-np.inf if cols[0] == 0 else cols[0] - 1.0, -np.inf if rows[0] == 0 else rows[0] - 1.0,
-                              np.inf if cols[-1] == w - 1 else cols[-1] + 1.0, np.inf if rows[-1] == h - 1 else rows[-1] + 1.0)
-        if not self._edge_border:  # outside the drawing is transparent: a hole anywhere near the edge
-            holes[np.isfinite(holes[:, 0])] = (-np.inf, -np.inf, np.inf, np.inf)
-        ly.boxes, ly.holes = boxes, holes
-        ly.full = bool(np.all(boxes[:, :2] == -np.inf) and np.all(boxes[:, 2:] == np.inf))
-        ly.covers = not bool(np.all(holes == (-np.inf, -np.inf, np.inf, np.inf)))
+        found: dict[str, list[list[tuple]]] = {"boxes": [], "holes": []}
+        for pm in ly.pm[:n]:
+            for key, mask in (("boxes", pm[:, :, 3] > 0), ("holes", pm[:, :, 3] < 255)):
+                found[key].append(_column_boxes(mask))
+        for key, per in found.items():
+            if key == "holes" and not self._edge_border:  # outside is transparent: a hole near every edge
+                per = [[(-np.inf, -np.inf, np.inf, np.inf)] if b else [] for b in per]
+            most = max(1, max(len(b) for b in per))
+            arr = np.empty((n, most, 4))
+            arr[:] = (np.inf, np.inf, -np.inf, -np.inf)  # an empty box: nothing samples inside it
+            for i, b in enumerate(per):
+                if b:
+                    arr[i, :len(b)] = b
+            setattr(ly, key, arr)
+        everything = (-np.inf, -np.inf, np.inf, np.inf)
+        ly.full = all(len(b) == 1 and b[0] == everything for b in found["boxes"])
+        ly.covers = not all(everything in b for b in found["holes"]) and self._edge_border
         if ly.group < 0:
-            ly.static_rect = self._clip(boxes[0])
-            ly.static_hole = self._clip(holes[0])
+            ly.static_rect = [r for b in found["boxes"][0] if (r := self._clip(b))]
+            ly.static_hole = [r for b in found["holes"][0] if (r := self._clip(b))]
 
     def _clip(self, box) -> Rect | None:
         """A float box (bilinear margin included) as the pixel rectangle it covers in the part."""
@@ -170,27 +175,30 @@ class LayeredMorpher:
         y1 = h if box[3] == np.inf else min(h, int(box[3]))
         return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
-    def _frame_rect(self, boxes: np.ndarray, planes: np.ndarray, act) -> Rect | None:
-        """The pixels ``(x0, y0, x1, y1)`` of the part whose samples, this frame, can fall inside
-        ``boxes`` (one per drawing) of some active drawing, or None: the mesh cells some of whose
-        corners lie beyond each side of the box (a pixel's source is a convex mix of its cell's
-        corners)."""
-        k = len(act)
-        b = boxes[[ia for ia, _ in act]]
-        # a cell can sample a box if one of its corners lies beyond each of the box's sides
-        inside = np.empty((4, k) + planes.shape[2:], bool)
-        np.greater_equal(planes[:k, 0], b[:, 0, None, None], out=inside[0])
-        np.less_equal(planes[:k, 0], b[:, 2, None, None], out=inside[1])
-        np.greater_equal(planes[:k, 1], b[:, 1, None, None], out=inside[2])
-        np.less_equal(planes[:k, 1], b[:, 3, None, None], out=inside[3])
-        corner = inside[..., :-1, :-1] | inside[..., 1:, :-1] | inside[..., :-1, 1:] | inside[..., 1:, 1:]  # (4, k, c, c)
-        hit = corner.all(axis=0).any(axis=0)
-        rows = np.nonzero(hit.any(axis=1))[0]
-        if not len(rows):
-            return None
-        cols = np.nonzero(hit.any(axis=0))[0]
+    @staticmethod
+    def _cell_bounds(planes: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
+        """Per mesh cell and active drawing, the least and greatest x and y its four corners sample
+        (each ``(k, cells, cells)``): a pixel's source is a convex mix of its cell's corners."""
+        def pick(p, f):
+            return f(f(p[:, :-1, :-1], p[:, 1:, :-1]), f(p[:, :-1, 1:], p[:, 1:, 1:]))
+
+        px, py = planes[:k, 0], planes[:k, 1]
+        return pick(px, np.minimum), pick(px, np.maximum), pick(py, np.minimum), pick(py, np.maximum)
+
+    def _frame_rects(self, boxes: np.ndarray, bounds: tuple[np.ndarray, ...], act) -> list[Rect]:
+        """The pixels of the part whose samples, this frame, can fall inside ``boxes`` (one per
+        drawing) of some active drawing: the mesh cells whose corners' bounding box meets the box,
+        as one rectangle per run of such cell columns (two eyes' slots are two rectangles)."""
+        b = boxes[[ia for ia, _ in act]][:, :, :, None, None]  # (k, boxes, 4, 1, 1)
+        x_lo, x_hi, y_lo, y_hi = (c[:, None] for c in bounds)  # (k, 1, cells, cells)
+        hit = (x_lo <= b[:, :, 2]) & (x_hi >= b[:, :, 0]) & (y_lo <= b[:, :, 3]) & (y_hi >= b[:, :, 1])
+        hit = hit.any(axis=(0, 1))
         xs, ys = self._spans
-        return int(xs[cols[0], 0]), int(ys[rows[0], 0]), int(xs[cols[-1], 1]), int(ys[rows[-1], 1])
+        out = []
+        for c0, c1 in _runs(hit.any(axis=0)):
+            rows = np.flatnonzero(hit[:, c0:c1 + 1].any(axis=1))
+            out.append((int(xs[c0, 0]), int(ys[rows[0], 0]), int(xs[c1, 1]), int(ys[rows[-1], 1])))
+        return out
 
     @staticmethod
     def _stack(images: Sequence[np.ndarray]) -> np.ndarray:
@@ -227,57 +235,64 @@ class LayeredMorpher:
         w, h = self.size
         full = (0, 0, w, h)
         planes_of: dict[int, np.ndarray] = {}
+        bounds_of: dict[int, tuple[np.ndarray, ...]] = {}
         for ly in self.layers:
             if ly.group >= 0 and ly.group not in planes_of:
                 planes = self.groups[ly.group]._mesh_planes(act)
                 if jitter is not None:
                     planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
                 planes_of[ly.group] = planes
-        # top down: where each layer can show (its content, where the layers above let it through)
+        # top down: where each layer can show (its content, where the layers above let it through),
+        # and where the layers under it can show (what it is laid over)
         cull = self.cull and not detail  # the detail blend may take an opaque pixel under 255
-        rects: list[Rect | None] = [None] * len(self.layers)
-        vis: Rect | None = full
-        for k in range(len(self.layers) - 1, -1, -1):
+        n = len(self.layers)
+        rects: list[list[Rect]] = [[] for _ in range(n)]
+        under: list[list[Rect]] = [[] for _ in range(n)]
+        vis: list[Rect] = [full]
+        for k in range(n - 1, -1, -1):
             ly = self.layers[k]
-            if ly.group < 0:
+            if not cull:
+                rect, hole = [full], [full]
+            elif ly.group < 0:
                 rect, hole = ly.static_rect, ly.static_hole
             else:
-                rect = full if ly.full else self._frame_rect(ly.boxes, planes_of[ly.group], act)
-                hole = full if not ly.covers else self._frame_rect(ly.holes, planes_of[ly.group], act)
-            if not cull:
-                rect, hole = full, full
-            rects[k] = _meet(rect, vis)
-            vis = _meet(vis, hole)
-            if vis is None:
+                g = ly.group
+                if (ly.covers or not ly.full) and g not in bounds_of:
+                    bounds_of[g] = self._cell_bounds(planes_of[g], len(act))
+                rect = [full] if ly.full else self._frame_rects(ly.boxes, bounds_of[g], act)
+                hole = self._frame_rects(ly.holes, bounds_of[g], act) if ly.covers else [full]
+            rects[k] = _meet_all(rect, vis)
+            vis = _meet_all(vis, hole)
+            under[k] = _meet_all(vis, rects[k])
+            if not vis:
                 break
-        # bottom up: each layer laid over what lies under it, where something does
+        # bottom up: each layer's rectangles blended, laid over what lies under them, and copied out
         wts = [wa for _, wa in act]
-        drawn: Rect | None = None
+        first = True
         for k, ly in enumerate(self.layers):
-            rect = rects[k]
-            if rect is None:
-                continue
-            x0, y0, x1, y1 = rect
-            if drawn is None and rect != full:
-                out[...] = 0
-            if ly.group < 0:
-                blended = ly.pm[0][y0:y1, x0:x1]
-            else:
-                blended = self._blend_layer(ly, planes_of[ly.group], act, wts, rect, detail)
-            under = _meet(drawn, rect)
-            if under is None:
+            if first and rects[k] and rects[k] != [full]:
+                out[...] = 0  # what no layer covers stays transparent
+            for rect in rects[k]:
+                x0, y0, x1, y1 = rect
+                if ly.group < 0:
+                    n_px = (y1 - y0) * (x1 - x0) * 4
+                    blended = self._scratch[4 * n_px:5 * n_px].reshape(y1 - y0, x1 - x0, 4)
+                    np.copyto(blended, ly.pm[0][y0:y1, x0:x1])
+                else:
+                    blended = self._blend_layer(ly, planes_of[ly.group], act, wts, rect, detail)
+                if not first:
+                    for u in under[k]:
+                        v = _meet(u, rect)
+                        if v is None:
+                            continue
+                        vx0, vy0, vx1, vy1 = v
+                        top = blended[vy0 - y0:vy1 - y0, vx0 - x0:vx1 - x0]
+                        n_px = (vy1 - vy0) * (vx1 - vx0) * 4
+                        over_u8(top, out[vy0:vy1, vx0:vx1], top, self._inv.reshape(-1)[:n_px].reshape(vy1 - vy0, vx1 - vx0, 4))
                 out[y0:y1, x0:x1] = blended
-            else:
-                ux0, uy0, ux1, uy1 = under
-                top = blended[uy0 - y0:uy1 - y0, ux0 - x0:ux1 - x0]
-                region = out[uy0:uy1, ux0:ux1]
-                n_px = (uy1 - uy0) * (ux1 - ux0) * 4
-                over_u8(top, region, region, self._inv.reshape(-1)[:n_px].reshape(uy1 - uy0, ux1 - ux0, 4))
-                for sy0, sy1, sx0, sx1 in ((y0, uy0, x0, x1), (uy1, y1, x0, x1), (uy0, uy1, x0, ux0), (uy0, uy1, ux1, x1)):
-                    if sy1 > sy0 and sx1 > sx0:  # the rest of the rectangle has nothing under it
-                        out[sy0:sy1, sx0:sx1] = blended[sy0 - y0:sy1 - y0, sx0 - x0:sx1 - x0]
-            drawn = rect if drawn is None else _join(drawn, rect)
-        if drawn is None:
+            if rects[k]:
+                first = False
+        if first:
             out[...] = 0
         return out
 
@@ -304,6 +319,25 @@ class LayeredMorpher:
         return blend_u8(warped, wts, out=bufs[4])
 
 
+def _column_boxes(mask: np.ndarray) -> list[tuple[float, float, float, float]]:
+    """Bounding boxes ``(x0, y0, x1, y1)`` of ``mask``, one per run of columns holding some of it,
+    widened by a pixel; a side touching the image's edge is pushed to infinity."""
+    h, w = mask.shape
+    out = []
+    for c0, c1 in _runs(mask.any(axis=0)):
+        rows = np.flatnonzero(mask[:, c0:c1 + 1].any(axis=1))
+        r0, r1 = int(rows[0]), int(rows[-1])
+        out.append((-np.inf if c0 == 0 else c0 - 1.0, -np.inf if r0 == 0 else r0 - 1.0,
+                    np.inf if c1 == w - 1 else c1 + 1.0, np.inf if r1 == h - 1 else r1 + 1.0))
+    return out
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """``(first, last)`` index of each run of True in a 1-D boolean array."""
+    edges = np.flatnonzero(np.diff(flags.astype(np.int8), prepend=0, append=0)).tolist()
+    return [(a, b - 1) for a, b in zip(edges[::2], edges[1::2])]
+
+
 def _meet(a: Rect | None, b: Rect | None) -> Rect | None:
     """The intersection of two rectangles (None: empty)."""
     if a is None or b is None:
@@ -312,9 +346,9 @@ def _meet(a: Rect | None, b: Rect | None) -> Rect | None:
     return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
 
-def _join(a: Rect, b: Rect) -> Rect:
-    """The smallest rectangle holding both."""
-    return min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3])
+def _meet_all(a: list[Rect], b: list[Rect]) -> list[Rect]:
+    """The intersections of each rectangle of ``a`` with each of ``b`` (disjoint when both lists are)."""
+    return [r for p in a for q in b if (r := _meet(p, q)) is not None]
 
 
 class _Plain:
