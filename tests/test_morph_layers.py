@@ -110,7 +110,8 @@ def test_per_frame_rectangles_change_no_pixel(artset, w, jitter):
     """A moving layer warped only where its content can land gives the full-box warp exactly."""
     fast = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
     full = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
-    full.cull = False
+    for ly in full.layers:
+        ly.full = True
     jit = np.random.default_rng(len(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
     np.testing.assert_array_equal(fast.render(*w, jitter=jit), full.render(*w, jitter=jit))
 
@@ -202,33 +203,21 @@ def ivy_parts():
     for part in (art.eyes, art.mouth):
         fast = LayeredMorpher(part.drawings, alpha_steps=5)
         slow = LayeredMorpher(part.drawings, alpha_steps=5)
-        slow.cull = False
+        for ly in slow.layers:
+            ly.full = True
         out[part.name] = fast, slow
     return out
 
 
 @st.composite
-def weights_of_seven(draw):
+def weights_of_five(draw):
     return _weights(draw, 5)
 
 
 @settings(max_examples=25, deadline=None)
-@given(w=weights_of_seven(), jitter=st.booleans(), part=st.sampled_from(["eyes", "mouth"]))
-def test_what_opaque_layers_hide_is_skipped_without_changing_a_pixel(ivy_parts, w, jitter, part):
-    """Layers are warped only where the layers above are not all opaque this frame (under an upper
-    lid, only in its slot), with the same pixels as warping every layer on the whole box."""
+@given(w=weights_of_five(), jitter=st.booleans(), part=st.sampled_from(["eyes", "mouth"]))
+def test_per_frame_rectangles_change_no_pixel_of_a_bundled_character(ivy_parts, w, jitter, part):
+    """Ivy's lower lid and lower lip reach the box's edges (the warp reads past them there)."""
     fast, slow = ivy_parts[part]
     jit = np.random.default_rng(sum(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
     np.testing.assert_array_equal(fast.render(*w, jitter=jit), slow.render(*w, jitter=jit))
-
-
-def test_opaque_top_layers_leave_only_their_slot_to_the_layers_under_them(ivy_parts):
-    fast, _ = ivy_parts["eyes"]
-    top = fast.layers[-1]
-    assert top.covers and fast.layers[0].group < 0  # the eyeball is never warped
-    act = fast.active((0, 1, 2), (0.3, 0.3, 0.4))
-    planes = fast.groups[top.group]._mesh_planes(act)
-    slots = fast._frame_rects(top.holes, fast._cell_bounds(planes, len(act)), act)
-    w, h = fast.size
-    assert len(slots) == 2  # one under each lid
-    assert sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in slots) < 0.6 * w * h  # the lid's skin hides the rest
