@@ -212,3 +212,8 @@ def test_preview_slider_renders_the_layered_blend(make_window, images, tmp_path,
     shown = np.frombuffer(q.constBits(), np.uint8).reshape(q.height(), q.bytesPerLine())[:, :q.width() * 4]
     np.testing.assert_array_equal(shown.reshape(q.height(), q.width(), 4), want)
     assert prev.engine.note == ""
+    # beside it the plain cross-dissolve of the same two drawings (from the morpher's pictures)
+    d = prev.dissolve_view._img.convertToFormat(QImage.Format_RGBA8888)
+    dis = np.frombuffer(d.constBits(), np.uint8).reshape(d.height(), d.bytesPerLine())[:, :d.width() * 4]
+    ref = ed.cross_dissolve([eyes.drawings[0].image, eyes.drawings[2].image], [0.7, 0.3])
+    assert np.abs(dis.reshape(ref.shape).astype(int) - ref).max() <= 3
