@@ -25,7 +25,7 @@ from typing import Iterable, Sequence
 import numpy as np
 from PIL import Image
 
-from art_sets.model import ArtSet, Drawing, Part
+from art_sets.model import ArtSet, Body, Drawing, Layer, Part
 
 FIT_MODES = ("resize", "crop")
 HOLE_MARGIN = 2.0  # px along a part box's edge that holes leave closed (the validator checks 2)
@@ -194,9 +194,13 @@ def drawing_file(part: str, name: str) -> str:
 
 
 def clone(artset: ArtSet) -> ArtSet:
-    """A structural copy sharing the (never mutated) image and line arrays: cheap undo snapshots."""
+    """A structural copy sharing the (never mutated) image and line arrays: cheap undo snapshots.
+
+    Drawings, layers and the body are new objects, so a save that renames files in the copy
+    leaves the original as it was."""
     parts = {
-        k: Part(p.name, tuple(p.box), [replace(d) for d in p.drawings]) for k, p in artset.parts.items()
+        k: Part(p.name, tuple(p.box), [replace(d, layers=[replace(ly) for ly in d.layers]) for d in p.drawings])
+        for k, p in artset.parts.items()
     }
     return replace(
         artset,
@@ -204,6 +208,7 @@ def clone(artset: ArtSet) -> ArtSet:
         head_files=list(artset.head_files),
         parts=parts,
         extra=copy.deepcopy(artset.extra),
+        body=None if artset.body is None else replace(artset.body),
     )
 
 
@@ -228,6 +233,19 @@ def same_artset(a: ArtSet, b: ArtSet) -> bool:
                 return False
             if not np.array_equal(np.asarray(d.lines).reshape(-1, 4), np.asarray(e.lines).reshape(-1, 4)):
                 return False
+            if len(d.layers) != len(e.layers):
+                return False
+            for x, y in zip(d.layers, e.layers):
+                if (x.name, x.file, x.lines is None) != (y.name, y.file, y.lines is None) or not np.array_equal(x.image, y.image):
+                    return False
+                if x.lines is not None and not np.array_equal(np.reshape(x.lines, (-1, 4)), np.reshape(y.lines, (-1, 4))):
+                    return False
+    if (a.body is None) != (b.body is None):
+        return False
+    if a.body is not None:
+        x, y = a.body, b.body
+        if (x.file, x.follow, x.roll, x.pivot) != (y.file, y.follow, y.roll, y.pivot) or not np.array_equal(x.image, y.image):
+            return False
     return True
 
 
@@ -332,17 +350,30 @@ def set_head(artset: ArtSet, index: int, image: np.ndarray) -> None:
     artset.heads[index] = img
 
 
-def add_drawing(artset: ArtSet, part: str, name: str, image: np.ndarray, fit: str = "resize") -> int:
+def add_drawing(artset: ArtSet, part: str, name: str, image: np.ndarray, fit: str = "resize",
+                layer: int | None = None) -> int:
     """Append a drawing to ``part``, fitted to the box; returns its index.
 
     It gets a copy of the part's lines (from the first drawing) marked unplaced, so line counts
-    stay equal.
+    stay equal. In a part drawn in layers the picture becomes layer ``layer`` (default the top
+    one) of the new drawing and the other layers are copies of the first drawing's, since every
+    drawing of a part has the same layers.
     """
     p = artset.parts[part]
     name = unique_name(slug(name), p.names())
     d = Drawing(name=name, image=as_rgba(image), lines=np.zeros((0, 4)), file="")
     if d.size != p.size:
         d = fit_drawing(d, p.size, fit)
+    if p.drawings and p.drawings[0].layers:
+        first = p.drawings[0]
+        k = len(first.layers) - 1 if layer is None else min(max(int(layer), 0), len(first.layers) - 1)
+        layers = [replace(ly) for ly in first.layers]
+        layers[k] = replace(layers[k], image=d.image, file="")
+        new = Drawing.from_layers(name, layers, first.lines)
+        p.drawings.append(new)
+        for key_layer in _line_sets(artset, part):
+            _set_unplaced(artset, line_set_key(artset, part, key_layer), name, range(len(lines_of(new, key_layer))))
+        return len(p.drawings) - 1
     d.file = unique_name(drawing_file(part, name), [e.file for e in p.drawings])
     if p.drawings:
         d.lines = np.array(p.drawings[0].lines, np.float64).reshape(-1, 4)
@@ -357,8 +388,7 @@ def remove_drawing(artset: ArtSet, part: str, index: int) -> None:
     p = artset.parts[part]
     name = p.drawings[index].name
     del p.drawings[index]
-    _unplaced_map(artset, part).pop(name, None)
-    _tidy_unplaced(artset)
+    _rename_marks(artset, part, name, None)
 
 
 def rename_drawing(artset: ArtSet, part: str, index: int, new_name: str) -> str:
@@ -366,13 +396,13 @@ def rename_drawing(artset: ArtSet, part: str, index: int, new_name: str) -> str:
     p = artset.parts[part]
     d = p.drawings[index]
     name = unique_name(slug(new_name), [e.name for i, e in enumerate(p.drawings) if i != index])
-    marks = _unplaced_map(artset, part).pop(d.name, None)
+    old = d.name
     p.drawings[index] = replace(
         d, name=name,
         file=unique_name(drawing_file(part, name), [e.file for i, e in enumerate(p.drawings) if i != index]),
+        layers=[replace(ly, file=_renamed_layer_file(ly.file, part, old, name)) for ly in d.layers],
     )
-    if marks:
-        _unplaced_map(artset, part)[name] = marks
+    _rename_marks(artset, part, old, name)
     return name
 
 
@@ -423,6 +453,406 @@ def set_box(artset: ArtSet, part: str, box: Sequence[float], mode: str = "resize
         fit_part(artset, part, mode, indices=range(len(p.drawings)))
 
 
+# ----------------------------------------------------------------------------- layers
+#
+# Every drawing of a layered part has the same layers in the same order (format 2), so the
+# layer list is edited for the whole part at once; the pixels of a layer differ per drawing.
+# Layer indices count from the bottom, as in the manifest.
+
+DEFAULT_LAYER = "drawing"
+"""Name of the one layer a single picture becomes when its part is converted to layers."""
+
+
+def is_layered(part: Part) -> bool:
+    """True when the part's drawings are stacks of layers."""
+    return bool(part.drawings) and bool(part.drawings[0].layers)
+
+
+def shared_lines_layer(part: Part) -> int | None:
+    """The topmost layer that moves with the drawing's own lines (None: single pictures, or every
+    layer has lines of its own): the layer to select to edit the drawing's lines."""
+    layers = part.drawings[0].layers if part.drawings else []
+    return next((k for k in range(len(layers) - 1, -1, -1) if layers[k].lines is None), None)
+
+
+def _layered_part(artset: ArtSet, part: str) -> Part:
+    p = artset.parts[part]
+    if not p.drawings:
+        raise EditError(f"{part}: add drawings first")
+    if not is_layered(p):
+        raise EditError(f"the {part} drawings are single pictures: convert them to layers first")
+    return p
+
+
+def _layer_index(p: Part, k: int) -> int:
+    n = len(p.drawings[0].layers)
+    if not 0 <= k < n:
+        raise EditError(f"{p.name} has {n} layer(s); there is no layer {k}")
+    return k
+
+
+def _restack(d: Drawing, layers: list[Layer]) -> Drawing:
+    """``d`` with ``layers`` (its picture the new flattening)."""
+    return replace(Drawing.from_layers(d.name, layers, d.lines), file=d.file)
+
+
+def layer_file(part: str, drawing: str, layer: str) -> str:
+    """Manifest path of one drawing's picture of a layer: ``part/drawing/layer.png``."""
+    return f"{part}/{slug(drawing)}/{slug(layer)}.png"
+
+
+def shared_layer_file(part: str, layer: str) -> str:
+    """Manifest path of a layer that is one picture in every drawing: ``part/layer.png``."""
+    return f"{part}/{slug(layer)}.png"
+
+
+def _renamed_layer_file(file: str, part: str, old_drawing: str, new_drawing: str) -> str:
+    """A layer file that follows its drawing's default folder to the drawing's new name."""
+    prefix = f"{part}/{slug(old_drawing)}/"
+    if file.startswith(prefix):
+        return f"{part}/{slug(new_drawing)}/" + file[len(prefix):]
+    return file
+
+
+def _shares_file(p: Part, k: int) -> bool:
+    """True when layer ``k`` names one file with one picture in every drawing."""
+    first = p.drawings[0].layers[k]
+    return bool(first.file) and all(
+        d.layers[k].file == first.file and (d.layers[k].image is first.image or np.array_equal(d.layers[k].image, first.image))
+        for d in p.drawings)
+
+
+def make_layered(artset: ArtSet, part: str, name: str = DEFAULT_LAYER) -> None:
+    """Make each single-picture drawing of ``part`` a stack of one layer: its picture, moving with
+    the drawing's lines, kept in the drawing's PNG. Renders exactly as before. Nothing to do for a
+    part already in layers."""
+    p = artset.parts[part]
+    if not p.drawings:
+        raise EditError(f"{part}: add drawings first")
+    if is_layered(p):
+        return
+    lname = slug(name)
+    p.drawings = [_restack(replace(d, file=""), [Layer(lname, d.image, None, d.file or drawing_file(part, d.name))])
+                  for d in p.drawings]
+
+
+def flatten_part(artset: ArtSet, part: str) -> None:
+    """Make every layered drawing of ``part`` one picture again: its layers stacked, moving with the
+    drawing's lines (layers' own lines are dropped). Nothing to do for single pictures."""
+    p = artset.parts[part]
+    if not is_layered(p):
+        return
+    names = [ly.name for ly in p.drawings[0].layers]
+    taken = [e.file for e in p.drawings]
+    p.drawings = [Drawing(d.name, d.image, np.asarray(d.lines, np.float64).reshape(-1, 4),
+                          unique_name(drawing_file(part, d.name), taken)) for d in p.drawings]
+    un = artset.extra.get("editor", {}).get("unplaced", {})
+    for n in names:
+        un.pop(f"{part}/{n}", None)
+    _tidy_unplaced(artset)
+
+
+def add_layer(artset: ArtSet, part: str, name: str = "layer", index: int | None = None,
+              image: np.ndarray | None = None, own_lines: bool = False, fit: str = "resize") -> int:
+    """Insert a layer into every drawing of ``part`` at ``index`` (bottom first; default on top);
+    returns its index. A part of single pictures is converted to layers first.
+
+    ``image`` (fitted to the box) is the layer's picture in every drawing, kept in one file;
+    without it the layer is transparent everywhere. ``own_lines`` gives it its own control lines,
+    starting as copies of each drawing's lines; else it moves with the drawing's lines.
+    """
+    p = artset.parts[part]
+    make_layered(artset, part)
+    n = len(p.drawings[0].layers)
+    if n >= _max_layers():
+        raise EditError(f"{part}: at most {_max_layers()} layers a drawing (the layers limit)")
+    k = n if index is None else min(max(int(index), 0), n)
+    lname = unique_name(slug(name), [ly.name for ly in p.drawings[0].layers])
+    w, h = p.size
+    if image is None:
+        pic, file = np.zeros((h, w, 4), np.uint8), ""
+    else:
+        pic = _fit_layer_image(image, p.size, fit)
+        file = unique_name(shared_layer_file(part, lname), _layer_files(p))
+    for i, d in enumerate(p.drawings):
+        layers = list(d.layers)
+        own = np.asarray(d.lines, np.float64).reshape(-1, 4).copy() if own_lines else None
+        layers.insert(k, Layer(lname, pic, own, file))
+        p.drawings[i] = _restack(d, layers)
+    if own_lines:
+        _copy_marks(artset, part, part, f"{part}/{lname}")
+    return k
+
+
+def _max_layers() -> int:
+    from art_sets.io import MAX_LAYERS
+
+    return MAX_LAYERS
+
+
+def _layer_files(p: Part) -> list[str]:
+    return [ly.file for d in p.drawings for ly in d.layers if ly.file] + [d.file for d in p.drawings if d.file]
+
+
+def _fit_layer_image(image: np.ndarray, size: tuple[int, int], fit: str) -> np.ndarray:
+    if fit not in FIT_MODES:
+        raise EditError(f"fit mode must be one of {FIT_MODES}, got {fit!r}")
+    img = as_rgba(image)
+    if (img.shape[1], img.shape[0]) == tuple(size):
+        return img
+    return resize_image(img, size) if fit == "resize" else crop_image(img, size)[0]
+
+
+def _copy_marks(artset: ArtSet, part: str, src_key: str, dst_key: str) -> None:
+    marks = artset.extra.get("editor", {}).get("unplaced", {}).get(src_key, {})
+    for name, idx in list(marks.items()):
+        _set_unplaced(artset, dst_key, name, idx)
+
+
+def _drop_marks(artset: ArtSet, key: str) -> None:
+    artset.extra.get("editor", {}).get("unplaced", {}).pop(key, None)
+    _tidy_unplaced(artset)
+
+
+def remove_layer(artset: ArtSet, part: str, k: int) -> None:
+    """Remove layer ``k`` from every drawing of ``part`` (not the last one: flatten the part instead)."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    if len(p.drawings[0].layers) == 1:
+        raise EditError(f"{part}: a drawing in layers keeps at least one layer (flatten the part to make single pictures)")
+    _drop_marks(artset, f"{part}/{p.drawings[0].layers[k].name}")
+    for i, d in enumerate(p.drawings):
+        p.drawings[i] = _restack(d, [ly for j, ly in enumerate(d.layers) if j != k])
+
+
+def rename_layer(artset: ArtSet, part: str, k: int, new_name: str) -> str:
+    """Rename layer ``k`` in every drawing; returns the name used (file-safe, unique in the stack).
+    Files named after the old name follow it."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    old = p.drawings[0].layers[k].name
+    name = unique_name(slug(new_name), [ly.name for j, ly in enumerate(p.drawings[0].layers) if j != k])
+    if name == old:
+        return name
+    moves = {shared_layer_file(part, old): shared_layer_file(part, name)}
+    taken = set(_layer_files(p))
+    for i, d in enumerate(p.drawings):
+        ly = d.layers[k]
+        moves.setdefault(layer_file(part, d.name, old), layer_file(part, d.name, name))
+        file = moves.get(ly.file, ly.file)
+        if file != ly.file and file in taken:
+            file = ""  # a file of that name is used by something else: let the save choose one
+        layers = list(d.layers)
+        layers[k] = replace(ly, name=name, file=file)
+        p.drawings[i] = replace(d, layers=layers)
+    un = artset.extra.get("editor", {}).get("unplaced", {})
+    if f"{part}/{old}" in un:
+        un[f"{part}/{name}"] = un.pop(f"{part}/{old}")
+    return name
+
+
+def move_layer(artset: ArtSet, part: str, k: int, to: int) -> int:
+    """Move layer ``k`` to position ``to`` (bottom first, clamped) in every drawing; returns where it went."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    n = len(p.drawings[0].layers)
+    to = min(max(int(to), 0), n - 1)
+    for i, d in enumerate(p.drawings):
+        layers = list(d.layers)
+        layers.insert(to, layers.pop(k))
+        p.drawings[i] = _restack(d, layers)
+    return to
+
+
+def duplicate_layer(artset: ArtSet, part: str, k: int) -> int:
+    """A copy of layer ``k`` (pictures and own lines) just above it in every drawing; returns its index."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    if len(p.drawings[0].layers) >= _max_layers():
+        raise EditError(f"{part}: at most {_max_layers()} layers a drawing (the layers limit)")
+    src = p.drawings[0].layers[k]
+    name = unique_name(f"{src.name}-copy", [ly.name for ly in p.drawings[0].layers])
+    shared = _shares_file(p, k)
+    file = unique_name(shared_layer_file(part, name), _layer_files(p)) if shared else ""
+    for i, d in enumerate(p.drawings):
+        ly = d.layers[k]
+        lines = None if ly.lines is None else np.asarray(ly.lines, np.float64).reshape(-1, 4).copy()
+        layers = list(d.layers)
+        layers.insert(k + 1, Layer(name, ly.image, lines, file))
+        p.drawings[i] = _restack(d, layers)
+    if src.lines is not None:
+        _copy_marks(artset, part, f"{part}/{src.name}", f"{part}/{name}")
+    return k + 1
+
+
+def set_layer_own_lines(artset: ArtSet, part: str, k: int, own: bool) -> None:
+    """Give layer ``k`` control lines of its own (copies of each drawing's lines, to move onto its
+    features) or let it move with the drawing's lines again (its own lines are dropped)."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    first = p.drawings[0].layers[k]
+    if (first.lines is not None) == bool(own) and all((d.layers[k].lines is not None) == bool(own) for d in p.drawings):
+        return
+    key = f"{part}/{first.name}"
+    _drop_marks(artset, key)
+    for i, d in enumerate(p.drawings):
+        layers = list(d.layers)
+        lines = np.asarray(d.lines, np.float64).reshape(-1, 4).copy() if own else None
+        layers[k] = replace(layers[k], lines=lines)
+        p.drawings[i] = replace(d, layers=layers)
+    if own:
+        _copy_marks(artset, part, part, key)
+
+
+def set_layer_image(artset: ArtSet, part: str, drawing: int, k: int, image: np.ndarray, fit: str = "resize",
+                    every_drawing: bool = False) -> None:
+    """Replace the picture of layer ``k`` in one drawing (or, ``every_drawing``, in all of them, then
+    kept in one file). Fitted to the box; the lines stay."""
+    p = _layered_part(artset, part)
+    _layer_index(p, k)
+    pic = _fit_layer_image(image, p.size, fit)
+    targets = range(len(p.drawings)) if every_drawing else [int(drawing)]
+    name = p.drawings[0].layers[k].name
+    file = unique_name(shared_layer_file(part, name), [f for f in _layer_files(p) if f != p.drawings[0].layers[k].file]) \
+        if every_drawing else None
+    for i in targets:
+        d = p.drawings[i]
+        ly = d.layers[k]
+        if file is None:  # one drawing: a file shared with other drawings is left to them
+            shared = any(e.layers[k].file == ly.file for j, e in enumerate(p.drawings) if j != i)
+            new_file = "" if shared or not ly.file else ly.file
+        else:
+            new_file = file
+        layers = list(d.layers)
+        layers[k] = replace(ly, image=pic, file=new_file)
+        p.drawings[i] = _restack(d, layers)
+
+
+_LAYER_NUMBER = re.compile(r"^\s*(\d+)[\s._-]*(.*)$")
+
+
+def layer_order(paths: Iterable[str | Path]) -> list[tuple[str, Path]]:
+    """Layer names and files of a layered drawing, bottom first: by the number a file name starts
+    with (``10-eyeball.png`` under ``20-lids.png``), files without one after those, by name.
+    The name is the file name without that number (``eyeball``), unique in the stack."""
+    keyed = []
+    for p in (Path(x) for x in paths):
+        m = _LAYER_NUMBER.match(p.stem)
+        number = int(m.group(1)) if m and m.group(2) else None
+        rest = m.group(2) if number is not None else p.stem
+        keyed.append(((0, number) if number is not None else (1, 0), p.name.lower(), slug(rest), p))
+    out: list[tuple[str, Path]] = []
+    for _, _, name, p in sorted(keyed, key=lambda t: (t[0], t[1])):
+        out.append((unique_name(name, [n for n, _ in out]), p))
+    return out
+
+
+def layer_files_in(folder: str | Path) -> list[tuple[str, Path]]:
+    """:func:`layer_order` of the image files directly inside ``folder``."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise EditError(f"{folder}: not a folder")
+    files = [q for q in folder.iterdir() if q.is_file() and q.suffix.lower() in IMAGE_SUFFIXES]
+    if not files:
+        raise EditError(f"{folder}: no image files to make layers of")
+    return layer_order(files)
+
+
+def check_layer_sizes(files: Sequence[tuple[str | Path, np.ndarray]]) -> None:
+    """Refuse, in one line naming the file, layer images of one drawing that differ in size."""
+    if not files:
+        return
+    first, img0 = files[0]
+    w0, h0 = img0.shape[1], img0.shape[0]
+    for path, img in files[1:]:
+        w, h = img.shape[1], img.shape[0]
+        if (w, h) != (w0, h0):
+            raise EditError(f"{Path(path).name} is {w}x{h} but {Path(first).name} is {w0}x{h0}: "
+                            "the layers of one drawing must be the same size")
+
+
+def import_layered_drawing(artset: ArtSet, part: str, name: str, layers: Sequence[tuple[str, np.ndarray]],
+                           fit: str = "resize") -> int:
+    """Add a drawing made of ``layers`` (``(name, image)``, bottom first); returns its index.
+
+    The first drawings of a part set its layers. Later ones are matched to the part's layers by
+    name: a layer the part lacks is added to every drawing (transparent in the others, placed
+    above the layer it follows in the import), a layer of the part the import lacks stays
+    transparent in the new drawing. Single pictures already in the part become a layer first.
+    The new drawing gets the part's lines, marked unplaced.
+    """
+    p = artset.parts[part]
+    if not layers:
+        raise EditError("a layered drawing needs at least one layer")
+    if len(layers) > _max_layers():
+        raise EditError(f"{len(layers)} layers; at most {_max_layers()} are allowed (the layers limit)")
+    incoming: list[tuple[str, np.ndarray]] = []
+    for lname, img in layers:
+        incoming.append((unique_name(slug(lname), [n for n, _ in incoming]), as_rgba(img)))
+    if not p.drawings:  # the first drawings set the box size, as a single picture does
+        w, h = incoming[0][1].shape[1], incoming[0][1].shape[0]
+        if (w, h) != p.size:
+            set_box(artset, part, default_box(artset.canvas, part, (w, h)))
+    if p.drawings:
+        make_layered(artset, part)
+    size = p.size
+    pics = {n: _fit_layer_image(img, size, fit) for n, img in incoming}
+    if p.drawings:
+        have = [ly.name for ly in p.drawings[0].layers]
+        for pos, (n, _) in enumerate(incoming):
+            if n not in have:
+                below = next((have.index(m) + 1 for m, _ in reversed(incoming[:pos]) if m in have), 0)
+                add_layer(artset, part, n, index=below)
+                have = [ly.name for ly in p.drawings[0].layers]
+        first = p.drawings[0]
+        stack = [Layer(ly.name, pics.get(ly.name, np.zeros((size[1], size[0], 4), np.uint8)),
+                       None if ly.lines is None else np.asarray(ly.lines, np.float64).reshape(-1, 4).copy(), "")
+                 for ly in first.layers]
+        lines = np.asarray(first.lines, np.float64).reshape(-1, 4).copy()
+    else:
+        stack = [Layer(n, pics[n], None, "") for n, _ in incoming]
+        lines = np.zeros((0, 4))
+    dname = unique_name(slug(name), p.names())
+    new = Drawing.from_layers(dname, stack, lines)
+    p.drawings.append(new)
+    if len(p.drawings) > 1:
+        for key_layer in _line_sets(artset, part):
+            _set_unplaced(artset, line_set_key(artset, part, key_layer), dname, range(len(lines_of(new, key_layer))))
+    return len(p.drawings) - 1
+
+
+# ----------------------------------------------------------------------------- body
+
+
+def set_body(artset: ArtSet, image: np.ndarray, fit: str = "resize") -> None:
+    """Give the character a body (neck, shoulders: drawn under the head), or a new picture for it;
+    fitted to the canvas. A new body follows the head by the default fraction and does not roll."""
+    pic = _fit_layer_image(image, artset.canvas, fit)
+    if artset.body is None:
+        artset.body = Body(pic, "body.png")
+    else:
+        artset.body = replace(artset.body, image=pic)
+
+
+def remove_body(artset: ArtSet) -> None:
+    artset.body = None
+
+
+def set_body_motion(artset: ArtSet, follow: float | None = None, roll: float | None = None) -> None:
+    """How the body moves with the head: ``follow`` of its translation, ``roll`` of its roll (0..1 each)."""
+    if artset.body is None:
+        raise EditError("the character has no body: add a body image first")
+    vals = {}
+    for key, v in (("follow", follow), ("roll", roll)):
+        if v is None:
+            continue
+        v = float(v)
+        if not (np.isfinite(v) and 0.0 <= v <= 1.0):
+            raise EditError(f"body {key} must be from 0 to 1, got {v:g}")
+        vals[key] = v
+    artset.body = replace(artset.body, **vals)
+
+
 # ----------------------------------------------------------------------------- control lines
 
 
@@ -446,8 +876,42 @@ def _editor_extra(artset: ArtSet) -> dict:
     return artset.extra.setdefault("editor", {})
 
 
-def _unplaced_map(artset: ArtSet, part: str) -> dict[str, list[int]]:
-    return _editor_extra(artset).setdefault("unplaced", {}).setdefault(part, {})
+def line_set_key(artset: ArtSet, part: str, layer: int | None = None) -> str:
+    """The name of a line set: ``part`` for the drawings' own lines, ``"part/layer-name"`` for
+    the own lines of a layer (also how ``line_names`` in the bundled manifests are keyed)."""
+    k = own_lines_layer(artset.parts[part], layer)
+    return part if k is None else f"{part}/{artset.parts[part].drawings[0].layers[k].name}"
+
+
+def own_lines_layer(part: Part, layer: int | None) -> int | None:
+    """``layer`` when that layer moves with control lines of its own, else None (it moves with
+    the drawing's lines, which are then the ones edited)."""
+    if layer is None or layer < 0 or not part.drawings:
+        return None
+    d = part.drawings[0]
+    if layer >= len(d.layers):
+        return None
+    return layer if d.layers[layer].lines is not None else None
+
+
+def lines_of(drawing: Drawing, layer: int | None = None) -> np.ndarray:
+    """The control lines ``(n, 4)`` a drawing's ``layer`` moves with (the drawing's own for None
+    or for a layer that shares them)."""
+    if layer is not None and 0 <= layer < len(drawing.layers) and drawing.layers[layer].lines is not None:
+        return np.asarray(drawing.layers[layer].lines, np.float64).reshape(-1, 4)
+    return np.asarray(drawing.lines, np.float64).reshape(-1, 4)
+
+
+def _put_lines(drawing: Drawing, layer: int | None, lines: np.ndarray) -> None:
+    lines = np.asarray(lines, np.float64).reshape(-1, 4)
+    if layer is not None and 0 <= layer < len(drawing.layers) and drawing.layers[layer].lines is not None:
+        drawing.layers[layer] = replace(drawing.layers[layer], lines=lines)
+    else:
+        drawing.lines = lines
+
+
+def _unplaced_map(artset: ArtSet, key: str) -> dict[str, list[int]]:
+    return _editor_extra(artset).setdefault("unplaced", {}).setdefault(key, {})
 
 
 def _tidy_unplaced(artset: ArtSet) -> None:
@@ -467,53 +931,83 @@ def _tidy_unplaced(artset: ArtSet) -> None:
         del artset.extra["editor"]
 
 
-def _set_unplaced(artset: ArtSet, part: str, name: str, indices: Iterable[int], value: bool = True) -> None:
-    m = _unplaced_map(artset, part)
+def _set_unplaced(artset: ArtSet, key: str, name: str, indices: Iterable[int], value: bool = True) -> None:
+    m = _unplaced_map(artset, key)
     cur = set(m.get(name, []))
     cur = cur | set(int(i) for i in indices) if value else cur - set(int(i) for i in indices)
     m[name] = sorted(cur)
     _tidy_unplaced(artset)
 
 
-def unplaced(artset: ArtSet, part: str, drawing: int) -> set[int]:
-    """Line indices of a drawing that were copied in but not yet moved onto its feature."""
+def _line_sets(artset: ArtSet, part: str) -> list[int | None]:
+    """Every line set of a part: the drawings' own (None), then each layer with its own lines."""
+    p = artset.parts[part]
+    layers = p.drawings[0].layers if p.drawings else []
+    return [None] + [k for k, ly in enumerate(layers) if ly.lines is not None]
+
+
+def _rename_marks(artset: ArtSet, part: str, old: str, new: str | None) -> None:
+    """Move (``new`` None: drop) the unplaced marks of drawing ``old`` in every line set of ``part``."""
+    un = artset.extra.get("editor", {}).get("unplaced", {})
+    for key in [k for k in un if k == part or k.startswith(part + "/")]:
+        marks = un[key].pop(old, None)
+        if marks and new is not None:
+            un[key][new] = marks
+    _tidy_unplaced(artset)
+
+
+def unplaced(artset: ArtSet, part: str, drawing: int, layer: int | None = None) -> set[int]:
+    """Line indices of a drawing (in the line set of ``layer``) that were copied in but not yet
+    moved onto its feature."""
     name = artset.parts[part].drawings[drawing].name
-    return set(artset.extra.get("editor", {}).get("unplaced", {}).get(part, {}).get(name, []))
+    key = line_set_key(artset, part, layer)
+    return set(artset.extra.get("editor", {}).get("unplaced", {}).get(key, {}).get(name, []))
 
 
-def line_count(part: Part) -> int:
-    """The largest number of lines any drawing of the part has."""
-    return max((len(np.asarray(d.lines).reshape(-1, 4)) for d in part.drawings), default=0)
+def line_count(part: Part, layer: int | None = None) -> int:
+    """The largest number of lines any drawing of the part has (in the line set of ``layer``)."""
+    k = own_lines_layer(part, layer)
+    return max((len(lines_of(d, k)) for d in part.drawings), default=0)
 
 
-def missing_lines(artset: ArtSet, part: str) -> dict[int, list[str]]:
+def missing_lines(artset: ArtSet, part: str, layer: int | None = None) -> dict[int, list[str]]:
     """For each line index, the names of drawings that miss it (no such line, or still unplaced)."""
     p = artset.parts[part]
-    n = line_count(p)
+    k = own_lines_layer(p, layer)
+    n = line_count(p, k)
     out: dict[int, list[str]] = {i: [] for i in range(n)}
     for di, d in enumerate(p.drawings):
-        have = len(np.asarray(d.lines).reshape(-1, 4))
-        un = unplaced(artset, part, di)
+        have = len(lines_of(d, k))
+        un = unplaced(artset, part, di, k)
         for i in range(n):
             if i >= have or i in un:
                 out[i].append(d.name)
     return out
 
 
-def make_consistent(artset: ArtSet, part: str) -> None:
-    """Pad drawings that have fewer lines than the part with copies from the fullest drawing (unplaced)."""
+def make_consistent(artset: ArtSet, part: str, layer: int | None = None) -> None:
+    """Pad drawings that have fewer lines than the part with copies from the fullest drawing
+    (unplaced), in the line set of ``layer``."""
     p = artset.parts[part]
-    n = line_count(p)
+    k = own_lines_layer(p, layer)
+    n = line_count(p, k)
     if n == 0:
         return
-    ref = max(p.drawings, key=lambda d: len(np.asarray(d.lines).reshape(-1, 4)))
-    ref_lines = np.asarray(ref.lines, np.float64).reshape(-1, 4)
+    key = line_set_key(artset, part, k)
+    ref = max(p.drawings, key=lambda d: len(lines_of(d, k)))
+    ref_lines = lines_of(ref, k)
     for d in p.drawings:
-        lines = np.asarray(d.lines, np.float64).reshape(-1, 4)
+        lines = lines_of(d, k)
         if len(lines) < n:
             extra = _scale_lines(ref_lines[len(lines):], ref.size, d.size)
-            d.lines = np.vstack([lines, extra])
-            _set_unplaced(artset, part, d.name, range(len(lines), n))
+            _put_lines(d, k, np.vstack([lines, extra]))
+            _set_unplaced(artset, key, d.name, range(len(lines), n))
+
+
+def make_all_consistent(artset: ArtSet, part: str) -> None:
+    """:func:`make_consistent` for every line set of the part."""
+    for k in _line_sets(artset, part):
+        make_consistent(artset, part, k)
 
 
 def _scale_lines(lines: np.ndarray, src: tuple[int, int], dst: tuple[int, int]) -> np.ndarray:
@@ -530,74 +1024,84 @@ def clamp_line(line: Sequence[float], size: tuple[int, int]) -> np.ndarray:
     return ln
 
 
-def add_line(artset: ArtSet, part: str, drawing: int, line: Sequence[float]) -> int:
+def add_line(artset: ArtSet, part: str, drawing: int, line: Sequence[float], layer: int | None = None) -> int:
     """Add a line to one drawing; every other drawing of the part gets a copy, marked unplaced.
 
+    ``layer``: the line goes to that layer's own lines when it has them (else to the drawing's).
     Returns the new line's index. Lines shorter than one pixel are refused.
     """
     p = artset.parts[part]
+    k = own_lines_layer(p, layer)
     d = p.drawings[drawing]
     ln = clamp_line(line, d.size)
     if np.hypot(ln[2] - ln[0], ln[3] - ln[1]) < 1.0:
         raise EditError("a control line must be at least one pixel long")
-    make_consistent(artset, part)
-    index = line_count(p)
+    make_consistent(artset, part, k)
+    index = line_count(p, k)
+    key = line_set_key(artset, part, k)
     for j, e in enumerate(p.drawings):
         row = ln if j == drawing else _scale_lines(ln, d.size, e.size)[0]
-        e.lines = np.vstack([np.asarray(e.lines, np.float64).reshape(-1, 4), row[None, :]])
+        _put_lines(e, k, np.vstack([lines_of(e, k), row[None, :]]))
         if j != drawing:
-            _set_unplaced(artset, part, e.name, [index])
+            _set_unplaced(artset, key, e.name, [index])
     return index
 
 
-def move_line(artset: ArtSet, part: str, drawing: int, index: int, line: Sequence[float]) -> None:
+def move_line(artset: ArtSet, part: str, drawing: int, index: int, line: Sequence[float],
+              layer: int | None = None) -> None:
     """Set line ``index`` of one drawing (clamped into the drawing); it counts as placed there."""
+    k = own_lines_layer(artset.parts[part], layer)
     d = artset.parts[part].drawings[drawing]
-    lines = np.array(d.lines, np.float64).reshape(-1, 4)
+    lines = lines_of(d, k).copy()
     lines[index] = clamp_line(line, d.size)
-    d.lines = lines
-    _set_unplaced(artset, part, d.name, [index], value=False)
+    _put_lines(d, k, lines)
+    _set_unplaced(artset, line_set_key(artset, part, k), d.name, [index], value=False)
 
 
-def mark_placed(artset: ArtSet, part: str, drawing: int, indices: Iterable[int] | None = None) -> None:
+def mark_placed(artset: ArtSet, part: str, drawing: int, indices: Iterable[int] | None = None,
+                layer: int | None = None) -> None:
     """Accept copied lines as they are (default: all of the drawing's lines)."""
+    k = own_lines_layer(artset.parts[part], layer)
     d = artset.parts[part].drawings[drawing]
     if indices is None:
-        indices = range(len(np.asarray(d.lines).reshape(-1, 4)))
-    _set_unplaced(artset, part, d.name, indices, value=False)
+        indices = range(len(lines_of(d, k)))
+    _set_unplaced(artset, line_set_key(artset, part, k), d.name, indices, value=False)
 
 
-def delete_line(artset: ArtSet, part: str, index: int) -> None:
+def delete_line(artset: ArtSet, part: str, index: int, layer: int | None = None) -> None:
     """Remove line ``index`` from every drawing of the part (later lines move down by one)."""
     p = artset.parts[part]
+    k = own_lines_layer(p, layer)
+    m = _unplaced_map(artset, line_set_key(artset, part, k))
     for d in p.drawings:
-        lines = np.asarray(d.lines, np.float64).reshape(-1, 4)
+        lines = lines_of(d, k)
         if index < len(lines):
-            d.lines = np.delete(lines, index, axis=0)
-        m = _unplaced_map(artset, part)
+            _put_lines(d, k, np.delete(lines, index, axis=0))
         if d.name in m:
             m[d.name] = sorted(i if i < index else i - 1 for i in m[d.name] if i != index)
     _tidy_unplaced(artset)
 
 
-def swap_direction(artset: ArtSet, part: str, drawing: int, index: int) -> None:
+def swap_direction(artset: ArtSet, part: str, drawing: int, index: int, layer: int | None = None) -> None:
     """Reverse line ``index`` in one drawing (start and end swapped)."""
-    d = artset.parts[part].drawings[drawing]
-    ln = np.asarray(d.lines, np.float64).reshape(-1, 4)[index]
-    move_line(artset, part, drawing, index, [ln[2], ln[3], ln[0], ln[1]])
+    ln = lines_of(artset.parts[part].drawings[drawing], own_lines_layer(artset.parts[part], layer))[index]
+    move_line(artset, part, drawing, index, [ln[2], ln[3], ln[0], ln[1]], layer)
 
 
-def copy_lines(artset: ArtSet, part: str, src: int, dst: int) -> None:
+def copy_lines(artset: ArtSet, part: str, src: int, dst: int, layer: int | None = None) -> None:
     """Replace ``dst``'s lines with ``src``'s (scaled if sizes differ), all marked unplaced.
 
     If ``src`` has more lines than the part's other drawings, those get the extra lines too.
     """
     p = artset.parts[part]
+    k = own_lines_layer(p, layer)
     s, d = p.drawings[src], p.drawings[dst]
-    d.lines = _scale_lines(s.lines, s.size, d.size)
-    _unplaced_map(artset, part)[d.name] = []
-    _set_unplaced(artset, part, d.name, range(len(d.lines)))
-    make_consistent(artset, part)
+    new = _scale_lines(lines_of(s, k), s.size, d.size)
+    _put_lines(d, k, new)
+    key = line_set_key(artset, part, k)
+    _unplaced_map(artset, key)[d.name] = []
+    _set_unplaced(artset, key, d.name, range(len(new)))
+    make_consistent(artset, part, k)
 
 
 def snap_point(
@@ -838,18 +1342,21 @@ def suggest_lines(image: np.ndarray, part: str) -> np.ndarray:
     return lines
 
 
-def add_starter_lines(artset: ArtSet, part: str) -> int:
+def add_starter_lines(artset: ArtSet, part: str, layer: int | None = None) -> int:
     """Append :func:`suggest_lines` to every drawing of ``part`` (placed: each is its own);
-    returns the number of lines added per drawing."""
+    returns the number of lines added per drawing.
+
+    For a layer with its own lines the lines frame that layer's ink and go to its lines."""
     p = artset.parts[part]
     if not p.drawings:
         raise EditError(f"{part}: add drawings first")
-    make_consistent(artset, part)
+    k = own_lines_layer(p, layer)
+    make_consistent(artset, part, k)
     n = 0
     for d in p.drawings:
-        new = suggest_lines(d.image, part)
+        new = suggest_lines(d.image if k is None else d.layers[k].image, part)
         n = len(new)
-        d.lines = np.vstack([np.asarray(d.lines, np.float64).reshape(-1, 4), new])
+        _put_lines(d, k, np.vstack([lines_of(d, k), new]))
     return n
 
 
@@ -939,22 +1446,11 @@ def triangle_weights(point: Sequence[float], corners: Sequence[Sequence[float]])
 
 
 def _on_disk(folder: Path) -> tuple[set[str], dict[str, np.ndarray | None]]:
-    """Files the folder's current manifest names, and a lazy cache for their pixels."""
-    from art_sets.io import MANIFEST
+    """Files the folder's current manifest names (every PNG path in it: heads, drawings, layers,
+    the body, keys this version does not know), and a lazy cache for their pixels."""
+    from art_sets.io import _files_named_by
 
-    mf = folder / MANIFEST
-    files: set[str] = set()
-    if mf.is_file():
-        try:
-            data = json.loads(mf.read_text(encoding="utf-8"))
-            files.update(str(f) for f in data.get("heads", []) if isinstance(f, str))
-            for p in (data.get("parts") or {}).values():
-                for d in (p or {}).get("drawings", []):
-                    if isinstance(d, dict) and isinstance(d.get("image"), str):
-                        files.add(d["image"])
-        except (OSError, ValueError, AttributeError, TypeError):
-            pass
-    return files, {}
+    return set(_files_named_by(folder)), {}
 
 
 def _same_pixels(path: Path, image: np.ndarray, cache: dict) -> bool:
@@ -981,41 +1477,73 @@ def plan_save(artset: ArtSet, folder: str | Path) -> ArtSet:
     uses with different pixels.
 
     An image whose pixels changed goes to a file the old manifest does not name, so a crash at
-    any moment of ``save_artset`` leaves the old manifest with all of its old files intact.
+    any moment of ``save_artset`` leaves the old manifest with all of its old files intact. Heads,
+    single-picture drawings, every layer's picture and the body go through this; a layer that names
+    one file with the same pixels in several drawings keeps one file.
     """
     folder = Path(folder)
     old_files, cache = _on_disk(folder)
     art = clone(artset)
     used: set[str] = set()
+    given: dict[str, tuple[np.ndarray, str]] = {}  # path asked for -> (pixels, path chosen)
 
     def choose(rel: str, image: np.ndarray) -> str:
+        hit = given.get(rel)
+        if hit is not None and (hit[0] is image or np.array_equal(hit[0], image)):
+            return hit[1]  # the same picture named again (a layer shared by drawings)
         cands = [rel, _alternate(rel)]
         for c in cands:  # unchanged file: keep it
             if c not in used and c in old_files and _same_pixels(folder / c, image, cache):
-                return c
+                return _take(rel, image, c)
         for c in cands:
             if c not in used and c not in old_files:
-                return c
+                return _take(rel, image, c)
         k = 3
         while True:
             p = Path(rel)
             c = str(p.with_name(f"{p.stem}.v{k}{p.suffix}"))
             if c not in used and c not in old_files:
-                return c
+                return _take(rel, image, c)
             k += 1
+
+    def _take(rel: str, image: np.ndarray, chosen: str) -> str:
+        used.add(chosen)
+        given.setdefault(rel, (image, chosen))
+        return chosen
 
     files = []
     for i, img in enumerate(art.heads):
         rel = art.head_files[i] if i < len(art.head_files) and art.head_files[i] else f"head-{i + 1}.png"
-        rel = choose(rel, img)
-        used.add(rel)
-        files.append(rel)
+        files.append(choose(rel, img))
     art.head_files = files
     for pname, p in art.parts.items():
         for d in p.drawings:
-            d.file = choose(d.file or drawing_file(pname, d.name), d.image)
-            used.add(d.file)
+            if not d.layers:
+                d.file = choose(d.file or drawing_file(pname, d.name), d.image)
+                continue
+            for ly in d.layers:
+                rel = ly.file or layer_file(pname, d.name, ly.name)
+                hit = given.get(rel)
+                if hit is not None and not (hit[0] is ly.image or np.array_equal(hit[0], ly.image)):
+                    rel = layer_file(pname, d.name, ly.name)  # a shared file this drawing no longer shares
+                ly.file = choose(rel, ly.image)
+    if art.body is not None:
+        art.body.file = choose(art.body.file or "body.png", art.body.image)
     return art
+
+
+def saved_files(artset: ArtSet) -> set[str]:
+    """Every image path ``artset``'s manifest names (heads, pictures, layers, body)."""
+    out = set(artset.head_files)
+    for p in artset.parts.values():
+        for d in p.drawings:
+            if d.layers:
+                out.update(ly.file for ly in d.layers if ly.file)
+            elif d.file:
+                out.add(d.file)
+    if artset.body is not None and artset.body.file:
+        out.add(artset.body.file)
+    return out
 
 
 def save_safely(artset: ArtSet, folder: str | Path) -> ArtSet:
@@ -1030,7 +1558,7 @@ def save_safely(artset: ArtSet, folder: str | Path) -> ArtSet:
     old_files, _ = _on_disk(folder)
     art = plan_save(artset, folder)
     save_artset(art, folder)
-    keep = set(art.head_files) | {d.file for p in art.parts.values() for d in p.drawings}
+    keep = saved_files(art) | _on_disk(folder)[0]  # and pictures keys of other programs name
     for rel in old_files - keep:
         target = folder / rel
         try:

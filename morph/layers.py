@@ -126,13 +126,19 @@ class LayeredMorpher:
 
     # --- load time -------------------------------------------------------------------------
     def _content_boxes(self, ly: _Layer) -> None:
-        """Each drawing's bounding box of non-transparent pixels, one pixel wider (bilinear reads)."""
+        """Each drawing's bounding box of non-transparent pixels, one pixel wider (bilinear reads).
+        With the edge border, a box that touches the part's edge runs on past it: the warp reads
+        outside the drawing there and repeats the edge pixels."""
         w, h = self.size
+        edge = self.groups[ly.group].border == cv2.BORDER_REPLICATE
         boxes = np.full((self.n, 4), (np.inf, np.inf, -np.inf, -np.inf))
         for i, pm in enumerate(ly.pm):
             ys, xs = np.nonzero(pm[:, :, 3])
             if len(xs):
                 boxes[i] = (xs.min() - 1.0, ys.min() - 1.0, xs.max() + 1.0, ys.max() + 1.0)
+                if edge:
+                    boxes[i, :2][boxes[i, :2] < 0] = -np.inf
+                    boxes[i, 2:][boxes[i, 2:] >= (w, h)] = np.inf
         ly.boxes = boxes
         ly.full = bool(np.all(boxes[:, :2] <= -1.0) and np.all(boxes[:, 2] >= w) and np.all(boxes[:, 3] >= h))
 

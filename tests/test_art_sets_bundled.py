@@ -79,6 +79,9 @@ def test_features_show_through_the_holes(art):
                 assert a.max() < 40, f"{part.name}/{d.name}: head {k + 1} covers a control line (alpha {a.max()})"
 
 
+_corner_ref: dict = {}
+
+
 def test_line_order_means_the_same_feature(art):
     w = art.eyes.size[0]
     for d in art.eyes.drawings:
@@ -101,8 +104,13 @@ def test_line_order_means_the_same_feature(art):
         assert inner_up[0, 0] < inner_up[-1, 2], d.name  # left to right
         assert np.allclose(inner_up[0, :2], inner_dn[0, :2]) and np.allclose(inner_up[-1, 2:], inner_dn[-1, 2:]), d.name
         assert inner_up[:, [1, 3]].mean() <= inner_dn[:, [1, 3]].mean() + 1e-6, d.name  # upper lip above lower lip
-        outer_up, outer_dn = up[N_INNER + N_BAND:], low[N_INNER + N_BAND:N_INNER + N_BAND + N_OUTER]
+        outer_up, outer_dn = up[N_INNER + N_BAND:N_INNER + N_BAND + N_OUTER], low[N_INNER + N_BAND:N_INNER + N_BAND + N_OUTER]
         assert outer_up[:, [1, 3]].mean() < inner_up[:, [1, 3]].mean() and outer_dn[:, [1, 3]].mean() > inner_dn[:, [1, 3]].mean()
+        # the last lines of both lip layers cross just beyond each corner, the same shape in every mouth
+        for lines in (up, low):
+            corners = lines[-4:].reshape(2, 2, 4) - np.tile([inner_up[0, :2], inner_up[-1, 2:]], (1, 1, 2)).reshape(2, 1, 4)
+            ref = _corner_ref.setdefault(art.name, corners)
+            np.testing.assert_allclose(corners, ref, atol=0.03, err_msg=d.name)  # the manifest keeps 0.01 px
 
 
 def test_lines_sit_on_drawn_features(art):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt, Signal
-from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPen
+from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPen, QTransform
 from PySide6.QtWidgets import QMenu, QSizePolicy, QWidget
 
 from art_sets import editing as ed
@@ -131,6 +131,7 @@ class LineCanvas(_ImageView):
         self._ghost_cache: tuple[int, QImage] | None = None
         doc.changed.connect(self.update)
         doc.selectionChanged.connect(self.update)
+        doc.viewChanged.connect(self.update)
 
     # ---------------------------------------------------------------- model access
     def _part(self):
@@ -147,10 +148,11 @@ class LineCanvas(_ImageView):
         return d.size if d is not None else (4, 3)
 
     def lines(self) -> np.ndarray:
+        """The lines being edited: the selected layer's own, else the drawing's."""
         if self._live is not None:
             return self._live
         d = self._drawing()
-        return np.asarray(d.lines, np.float64).reshape(-1, 4) if d is not None else np.zeros((0, 4))
+        return ed.lines_of(d, self.doc.line_layer) if d is not None else np.zeros((0, 4))
 
     def _qimage(self, arr: np.ndarray, cache_name: str) -> QImage:
         cache = getattr(self, cache_name)
@@ -185,19 +187,20 @@ class LineCanvas(_ImageView):
         part = self._part()
         if 0 <= self.ghost < len(part.drawings) and self.ghost != self.doc.drawing:
             p.setOpacity(0.30)
-            p.drawImage(r, self._qimage(part.drawings[self.ghost].image, "_ghost_cache"))
+            p.drawImage(r, self._qimage(self.doc.shown_image(self.doc.part, self.ghost), "_ghost_cache"))
             p.setOpacity(1.0)
-            gl = np.asarray(part.drawings[self.ghost].lines, np.float64).reshape(-1, 4)
+            gl = ed.lines_of(part.drawings[self.ghost], self.doc.line_layer)
             for i, ln in enumerate(gl):
                 p.setPen(QPen(qcolor_for_line(i, 90), 1.2, Qt.DotLine))
                 p.drawLine(self.to_widget(ln[0], ln[1]), self.to_widget(ln[2], ln[3]))
             p.setOpacity(0.75)
-        p.drawImage(r, self._qimage(d.image, "_image_cache"))
+        p.drawImage(r, self._qimage(self.doc.shown_image(self.doc.part, min(self.doc.drawing, len(part.drawings) - 1)),
+                                    "_image_cache"))
         p.setOpacity(1.0)
         p.setPen(QPen(QColor(30, 30, 30, 160), 1))
         p.setBrush(Qt.NoBrush)
         p.drawRect(r)
-        un = ed.unplaced(self.doc.artset, self.doc.part, self.doc.drawing)
+        un = ed.unplaced(self.doc.artset, self.doc.part, self.doc.drawing, self.doc.line_layer)
         lines = self.lines()
         order = [i for i in range(len(lines)) if i != self.doc.line] + ([self.doc.line] if 0 <= self.doc.line < len(lines) else [])
         for i in order:
@@ -223,7 +226,12 @@ class LineCanvas(_ImageView):
                    "Del: delete · Tab: next line · [ ]: drawings · wheel: zoom · middle-drag: pan · 0: fit")
         p.setPen(QColor(230, 230, 230))
         nmiss = len(un)
-        txt = f"{self.doc.part} ▸ {d.name}   {d.size[0]}×{d.size[1]} px   {len(lines)} line(s)"
+        txt = f"{self.doc.part} ▸ {d.name}"
+        if d.layers and 0 <= self.doc.layer < len(d.layers):
+            ly = d.layers[self.doc.layer]
+            txt += f" ▸ {ly.name}{' (solo)' if self.doc.solo else ''}"
+            txt += "   its own lines" if ly.lines is not None else "   the drawing's lines"
+        txt += f"   {d.size[0]}×{d.size[1]} px   {len(lines)} line(s)"
         if nmiss:
             txt += f"   —   {nmiss} dashed line(s) still to place"
         p.drawText(QRectF(8, 2, self.width() - 16, 16), Qt.AlignLeft | Qt.AlignVCenter, txt)
@@ -324,7 +332,7 @@ class LineCanvas(_ImageView):
         elif k == Qt.Key_0:
             self.reset_view()
         elif k == Qt.Key_Tab or k == Qt.Key_Backtab:
-            n = ed.line_count(self._part()) if self._part() else 0
+            n = ed.line_count(self._part(), self.doc.line_layer) if self._part() else 0
             if n:
                 step = -1 if k == Qt.Key_Backtab else 1
                 self.doc.select(line=(self.doc.line + step) % n)
@@ -346,11 +354,11 @@ class LineCanvas(_ImageView):
             i = hit[0]
             m.addAction(f"Delete line {i} (in every drawing)", lambda: self.doc.delete_line(self.doc.part, i))
             m.addAction(f"Reverse line {i} here", lambda: self.doc.reverse_line(self.doc.part, self.doc.drawing, i))
-            if i in ed.unplaced(art, self.doc.part, self.doc.drawing):
+            if i in ed.unplaced(art, self.doc.part, self.doc.drawing, self.doc.line_layer):
                 m.addAction(f"Line {i} is right here: accept it",
                             lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing, [i]))
             m.addSeparator()
-        if ed.unplaced(art, self.doc.part, self.doc.drawing):
+        if ed.unplaced(art, self.doc.part, self.doc.drawing, self.doc.line_layer):
             m.addAction("Accept all dashed lines as placed", lambda: self.doc.accept_lines(self.doc.part, self.doc.drawing))
         sub = m.addMenu("Copy all lines from")
         for j, d in enumerate(part.drawings):
@@ -380,6 +388,7 @@ class HeadCanvas(_ImageView):
         self._live_pivot = None
         self._live_head: np.ndarray | None = None
         self._mouse = None
+        self.pose = (0.0, 0.0)  # a test pose (shift right in canvas px, tilt in degrees) to see the body stay
         self._images = ImageCache(rgba_to_qimage, limit=48)
         doc.changed.connect(self._invalidate)
         doc.selectionChanged.connect(self._invalidate)
@@ -396,22 +405,75 @@ class HeadCanvas(_ImageView):
         out.update(self._live_boxes)
         return out
 
+    def set_pose(self, shift: float, tilt: float) -> None:
+        """Show the character moved ``shift`` px right and tilted ``tilt`` degrees (counter-clockwise,
+        as the renderer turns it): the head turns about the pivot, the body follows as set."""
+        self.pose = (float(shift), float(tilt))
+        self.update()
+
+    def _pose_transforms(self, r: QRectF) -> tuple[QTransform, QTransform]:
+        """Canvas-pixel → widget transforms of the head (with its parts) and of the body for ``pose``."""
+        art = self.doc.artset
+        s = self.scale()
+        shift, tilt = self.pose
+
+        def about(pivot, deg, dx):
+            t = QTransform()
+            t.translate(r.left(), r.top())
+            t.scale(s, s)
+            t.translate(pivot[0] + dx, pivot[1])
+            t.rotate(-deg)  # QPainter turns clockwise on a y-down screen; a positive roll turns counter-clockwise
+            t.translate(-pivot[0], -pivot[1])
+            return t
+
+        body = art.body
+        head_t = about(art.pivot, tilt, shift)
+        if body is None:
+            return head_t, head_t
+        bp = body.pivot if body.pivot is not None else art.pivot
+        return head_t, about(bp, tilt * body.roll, shift * body.follow)
+
     def _draw_composite(self, p: QPainter, r: QRectF) -> None:
-        """The parts (the selected drawing for the selected part, the first for the other) at
-        their boxes, then the head over them — or the head alone."""
+        """The body, the parts (the selected drawing for the selected part, the first for the
+        other) at their boxes, then the head over them — or the head alone. With a test pose the
+        head and parts turn about the pivot and the body moves as its follow and roll say."""
         art = self.doc.artset
         head = self._live_head if self._live_head is not None else art.heads[self.doc.head % len(art.heads)]
         s = self.scale()
+        head_t, body_t = self._pose_transforms(r)
         if not self.head_only:
             p.fillRect(r, QColor(250, 248, 242))
+            if art.body is not None:
+                p.save()
+                p.setClipRect(r)
+                p.setTransform(body_t)
+                w, h = art.canvas
+                img = self._images.get(art.body.image)
+                steps = (-1, 0, 1) if self.pose != (0.0, 0.0) else (0,)
+                for ty in steps:  # mirrored out on every side, as the renderer continues a moved body
+                    for tx in steps:
+                        tile = img if (tx, ty) == (0, 0) else img.mirrored(tx != 0, ty != 0)
+                        p.drawImage(QRectF(tx * w, ty * h, w, h), tile)
+                p.restore()
+            p.save()
+            if self.pose != (0.0, 0.0):
+                p.setClipRect(r)
+                p.setTransform(head_t)
+                r_parts, s_parts = QRectF(0, 0, *art.canvas), 1.0
+            else:
+                r_parts, s_parts = r, s
             for name, part in art.parts.items():
                 if not part.drawings:
                     continue
                 i = min(self.doc.drawing, len(part.drawings) - 1) if name == self.doc.part else 0
                 img = part.drawings[i].image
                 x, y = part.box[0], part.box[1]
-                p.drawImage(QRectF(r.left() + x * s, r.top() + y * s, img.shape[1] * s, img.shape[0] * s),
-                            self._images.get(img))
+                p.drawImage(QRectF(r_parts.left() + x * s_parts, r_parts.top() + y * s_parts,
+                                   img.shape[1] * s_parts, img.shape[0] * s_parts), self._images.get(img))
+            head_img = self._images.get(head) if head is not self._live_head else rgba_to_qimage(head)
+            p.drawImage(r_parts, head_img)
+            p.restore()
+            return
         p.drawImage(r, self._images.get(head) if head is not self._live_head else rgba_to_qimage(head))
 
     def paintEvent(self, ev):

@@ -16,6 +16,8 @@ from __future__ import annotations
 import re
 import shutil
 import threading
+
+import numpy as np
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
@@ -25,7 +27,7 @@ from PySide6.QtGui import QUndoCommand, QUndoStack
 
 from art_sets import editing as ed
 from art_sets.atomic_file import sweep_temp
-from art_sets.model import ArtSet
+from art_sets.model import ArtSet, flatten, layer_names
 
 AUTOSAVE_NAME = ".artset.autosave"
 
@@ -103,6 +105,23 @@ def _plain_names(art: ArtSet) -> None:
         art.body.file = base_name(art.body.file)
 
 
+_STACKS: dict[tuple, tuple] = {}  # ids of the layer pictures -> (the pictures, their stack)
+
+
+def _stacked(images: tuple, shape) -> "np.ndarray":
+    """``flatten(images)`` (transparent for none), kept for the last few stacks asked for: the
+    canvases repaint often and the pictures never change in place."""
+    key = tuple(id(im) for im in images)
+    hit = _STACKS.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], images)):
+        return hit[1]
+    out = flatten(images) if images else np.zeros(shape, np.uint8)
+    if len(_STACKS) > 32:
+        _STACKS.pop(next(iter(_STACKS)))
+    _STACKS[key] = (images, out)
+    return out
+
+
 _SIZE_PROBLEM = re.compile(r"is \d+x\d+, the .* is \d+x\d+$")
 
 
@@ -154,20 +173,39 @@ class Issue:
     drawing: int | None = None
     line: int | None = None
     head: int | None = None
+    layer: int | None = None  # the layer whose own lines the issue is about
 
     def text(self) -> str:
         where = f"{self.file}: " if self.file else ""
         return f"{where}{self.message}"
 
 
+CURRENT = "current"
+"""Passed as ``layer`` to a line edit of :class:`EditorDocument`: the selected layer's line set."""
+
+
 class SnapshotCommand(QUndoCommand):
     """An undoable edit stored as the art set before and after it."""
 
-    def __init__(self, doc: "EditorDocument", text: str, before: ArtSet, after: ArtSet, selection=None):
+    MERGE_ID = 1601  # QUndoCommand.id of edits that merge with the one before them (a spin box stepped)
+
+    def __init__(self, doc: "EditorDocument", text: str, before: ArtSet, after: ArtSet, selection=None,
+                 merge: bool = False):
         super().__init__(text)
         self.doc, self.before, self.after = doc, before, after
         self.sel_before = doc.selection()
         self.sel_after = selection if selection is not None else self.sel_before
+        self.merge = merge
+
+    def id(self) -> int:
+        return self.MERGE_ID if self.merge else -1
+
+    def mergeWith(self, other) -> bool:
+        """Steps of one setting in a row are one undo step (same text, both merging)."""
+        if not (self.merge and getattr(other, "merge", False) and other.text() == self.text()):
+            return False
+        self.after, self.sel_after = other.after, other.sel_after
+        return True
 
     def redo(self) -> None:
         self.doc._restore(self.after, self.sel_after)
@@ -181,6 +219,7 @@ class EditorDocument(QObject):
 
     changed = Signal()  # the art set changed (edit, undo, redo, open, new)
     selectionChanged = Signal()
+    viewChanged = Signal()  # which layers are shown while drawing (not part of the art set, not undone)
     problemsChanged = Signal()
     autosaved = Signal(str)
     message = Signal(str)  # a one-line note for the status bar
@@ -195,6 +234,9 @@ class EditorDocument(QObject):
         self.drawing = 0
         self.line = -1
         self.head = 0
+        self.layer = -1  # selected layer of the part, bottom first (-1: its drawings are single pictures)
+        self.hidden_layers: dict[str, set[str]] = {}  # per part, names of layers hidden while drawing
+        self.solo = False  # show only the selected layer while drawing
         self.issues: list[Issue] = []
         self._base_heads: dict = {}  # head file -> the head as loaded/added, before holes were cut
         self._autosave_timer = QTimer(self)
@@ -244,7 +286,7 @@ class EditorDocument(QObject):
         if recover:
             _plain_names(art)
         for pname in art.parts:
-            ed.make_consistent(art, pname)
+            ed.make_all_consistent(art, pname)
         art.path = path
         self._set_document(art, path)
         if recover:
@@ -276,6 +318,8 @@ class EditorDocument(QObject):
         self.undo_stack.clear()
         self.part = "mouth" if art.mouth.drawings or not art.eyes.drawings else "eyes"
         self.drawing, self.line, self.head = 0, -1, 0
+        self.layer = self._default_layer()
+        self.hidden_layers, self.solo = {}, False
         self.issues = []
         self._compute_issues([])
         self.changed.emit()
@@ -286,17 +330,25 @@ class EditorDocument(QObject):
         return self.artset is not None and not self.undo_stack.isClean()
 
     # ------------------------------------------------------------------ selection
-    def selection(self) -> tuple[str, int, int, int]:
-        return (self.part, self.drawing, self.line, self.head)
+    def selection(self) -> tuple[str, int, int, int, int]:
+        return (self.part, self.drawing, self.line, self.head, self.layer)
 
     def select(self, part: str | None = None, drawing: int | None = None, line: int | None = None,
-               head: int | None = None) -> None:
+               head: int | None = None, layer: int | None = None) -> None:
         if part is not None and part != self.part:
             self.part = part
             if drawing is None:
                 drawing = 0
             if line is None:
                 line = -1
+            if layer is None:
+                layer = self._default_layer()
+        if layer is not None and layer != self.layer:
+            old = self.line_layer
+            self.layer = layer
+            self._clamp_selection()
+            if self.line_layer != old and line is None:
+                line = -1  # another line set: the selected line means something else there
         if drawing is not None:
             self.drawing = drawing
         if line is not None:
@@ -306,23 +358,66 @@ class EditorDocument(QObject):
         self._clamp_selection()
         self.selectionChanged.emit()
 
+    def _default_layer(self) -> int:
+        """The top layer of the selected part, or -1 for single pictures."""
+        if self.artset is None:
+            return -1
+        return len(layer_names(self.artset.parts[self.part])) - 1
+
+    @property
+    def line_layer(self) -> int | None:
+        """The layer whose own control lines are drawn and edited, or None: the drawings' lines
+        (single pictures, or a layer that moves with the drawing's lines)."""
+        if self.artset is None:
+            return None
+        return ed.own_lines_layer(self.artset.parts[self.part], self.layer if self.layer >= 0 else None)
+
     def _clamp_selection(self) -> None:
         if self.artset is None:
             return
         p = self.artset.parts[self.part]
         self.drawing = min(max(self.drawing, 0), max(len(p.drawings) - 1, 0))
-        n = ed.line_count(p)
+        nl = len(layer_names(p))
+        self.layer = min(max(self.layer, 0), nl - 1) if nl else -1
+        n = ed.line_count(p, self.line_layer)
         if self.line >= n:
             self.line = n - 1 if n else -1
         self.head = min(max(self.head, 0), max(len(self.artset.heads) - 1, 0))
 
+    # ------------------------------------------------------------------ what is shown while drawing
+    def layer_visible(self, part: str, name: str) -> bool:
+        return name not in self.hidden_layers.get(part, set())
+
+    def set_layer_visible(self, part: str, name: str, visible: bool) -> None:
+        hidden = self.hidden_layers.setdefault(part, set())
+        (hidden.discard if visible else hidden.add)(name)
+        self.viewChanged.emit()
+
+    def set_solo(self, on: bool) -> None:
+        self.solo = bool(on)
+        self.viewChanged.emit()
+
+    def shown_image(self, part: str, drawing: int):
+        """The picture of a drawing as the editor shows it: straight RGBA, its layers stacked
+        without the hidden ones (only the selected layer when solo)."""
+        d = self.artset.parts[part].drawings[drawing]
+        if not d.layers:
+            return d.image
+        if self.solo and part == self.part and 0 <= self.layer < len(d.layers):
+            return d.layers[self.layer].image
+        hidden = self.hidden_layers.get(part, set())
+        if not hidden & {ly.name for ly in d.layers}:
+            return d.image
+        return _stacked(tuple(ly.image for ly in d.layers if ly.name not in hidden), d.image.shape)
+
     # ------------------------------------------------------------------ undoable edits
-    def edit(self, text: str, fn: Callable[[ArtSet], object], select: dict | None = None):
+    def edit(self, text: str, fn: Callable[[ArtSet], object], select: dict | None = None, merge: bool = False):
         """Run ``fn(artset)`` as one undoable command; returns what ``fn`` returned.
 
         ``fn`` mutates the art set through ``art_sets.editing``; an ``EditError`` leaves the
         document unchanged and is re-raised. ``select`` (keys part/drawing/line/head, values may
-        be callables of ``fn``'s result) is the selection after the edit.
+        be callables of ``fn``'s result) is the selection after the edit. ``merge``: one undo step
+        with the edit before it when that has the same text and merged too (a setting stepped).
         """
         if self.artset is None:
             raise ed.EditError("no character is open")
@@ -332,8 +427,8 @@ class EditorDocument(QObject):
         sel = list(self.selection())
         for k, v in (select or {}).items():
             v = v(result) if callable(v) else v
-            sel[("part", "drawing", "line", "head").index(k)] = v
-        self.undo_stack.push(SnapshotCommand(self, text, before, work, tuple(sel)))
+            sel[("part", "drawing", "line", "head", "layer").index(k)] = v
+        self.undo_stack.push(SnapshotCommand(self, text, before, work, tuple(sel), merge=merge))
         return result
 
     def push_state(self, text: str, before: ArtSet, after: ArtSet) -> None:
@@ -344,7 +439,7 @@ class EditorDocument(QObject):
         path = self.artset.path if self.artset is not None else None
         self.artset = ed.clone(state)
         self.artset.path = path
-        self.part, self.drawing, self.line, self.head = selection
+        self.part, self.drawing, self.line, self.head, self.layer = selection
         self._clamp_selection()
         self.changed.emit()
         self.selectionChanged.emit()
@@ -354,8 +449,10 @@ class EditorDocument(QObject):
         paths = list(paths)
         images = [(ed.name_from_path(p, part), ed.load_image(p)) for p in paths]
 
+        layer = self.layer if part == self.part and self.layer >= 0 else None
+
         def fn(art):
-            return [ed.add_drawing(art, part, n, img, fit) for n, img in images]
+            return [ed.add_drawing(art, part, n, img, fit, layer) for n, img in images]
 
         return self.edit(f"add {len(images)} {part} drawing(s)", fn,
                          select={"part": part, "drawing": lambda r: r[0] if r else self.drawing})
@@ -378,6 +475,11 @@ class EditorDocument(QObject):
         return self.edit("rename drawing", lambda art: ed.rename_drawing(art, part, index, name))
 
     def replace_image(self, part: str, index: int, path: str | Path, fit: str = "resize") -> None:
+        """Swap a drawing's picture; for a drawing in layers, the selected layer's picture in it."""
+        if self.artset is not None and ed.is_layered(self.artset.parts[part]):
+            k = self.layer if part == self.part and self.layer >= 0 else len(self.artset.parts[part].drawings[0].layers) - 1
+            self.set_layer_image(part, index, k, path, fit=fit)
+            return
         img = ed.load_image(path)
         self.edit("replace drawing image", lambda art: ed.replace_drawing_image(art, part, index, img, fit))
 
@@ -387,32 +489,108 @@ class EditorDocument(QObject):
     def fit_heads(self, mode: str) -> None:
         self.edit(f"{mode} heads to the canvas", lambda art: ed.fit_heads(art, mode))
 
-    def add_line(self, part: str, drawing: int, line) -> int:
-        return self.edit("add line", lambda art: ed.add_line(art, part, drawing, line),
+    def _lines_layer(self, layer) -> int | None:
+        return self.line_layer if layer == CURRENT else layer
+
+    def add_line(self, part: str, drawing: int, line, layer=CURRENT) -> int:
+        k = self._lines_layer(layer)
+        return self.edit("add line", lambda art: ed.add_line(art, part, drawing, line, k),
                          select={"part": part, "drawing": drawing, "line": lambda r: r})
 
-    def move_line(self, part: str, drawing: int, index: int, line) -> None:
-        self.edit("move line", lambda art: ed.move_line(art, part, drawing, index, line),
+    def move_line(self, part: str, drawing: int, index: int, line, layer=CURRENT) -> None:
+        k = self._lines_layer(layer)
+        self.edit("move line", lambda art: ed.move_line(art, part, drawing, index, line, k),
                   select={"part": part, "drawing": drawing, "line": index})
 
-    def delete_line(self, part: str, index: int) -> None:
-        self.edit("delete line", lambda art: ed.delete_line(art, part, index),
+    def delete_line(self, part: str, index: int, layer=CURRENT) -> None:
+        k = self._lines_layer(layer)
+        self.edit("delete line", lambda art: ed.delete_line(art, part, index, k),
                   select={"line": -1})
 
-    def reverse_line(self, part: str, drawing: int, index: int) -> None:
-        self.edit("reverse line", lambda art: ed.swap_direction(art, part, drawing, index))
+    def reverse_line(self, part: str, drawing: int, index: int, layer=CURRENT) -> None:
+        k = self._lines_layer(layer)
+        self.edit("reverse line", lambda art: ed.swap_direction(art, part, drawing, index, k))
 
-    def copy_lines(self, part: str, src: int, dst: int) -> None:
-        self.edit("copy lines", lambda art: ed.copy_lines(art, part, src, dst),
+    def copy_lines(self, part: str, src: int, dst: int, layer=CURRENT) -> None:
+        k = self._lines_layer(layer)
+        self.edit("copy lines", lambda art: ed.copy_lines(art, part, src, dst, k),
                   select={"part": part, "drawing": dst})
 
-    def add_starter_lines(self, part: str) -> int:
+    def add_starter_lines(self, part: str, layer=CURRENT) -> int:
         """Frame each drawing's ink with starter lines (four per feature) to refine by hand."""
-        return self.edit("starter lines", lambda art: ed.add_starter_lines(art, part),
+        k = self._lines_layer(layer)
+        return self.edit("starter lines", lambda art: ed.add_starter_lines(art, part, k),
                          select={"part": part, "line": -1})
 
-    def accept_lines(self, part: str, drawing: int, indices=None) -> None:
-        self.edit("accept lines", lambda art: ed.mark_placed(art, part, drawing, indices))
+    def accept_lines(self, part: str, drawing: int, indices=None, layer=CURRENT) -> None:
+        k = self._lines_layer(layer)
+        self.edit("accept lines", lambda art: ed.mark_placed(art, part, drawing, indices, k))
+
+    # layers: the part's stack (same layers in every drawing), each edit one undo step
+    def make_layered(self, part: str) -> None:
+        self.edit(f"convert {part} drawings to layers", lambda art: ed.make_layered(art, part),
+                  select={"part": part, "layer": 0})
+
+    def flatten_part(self, part: str) -> None:
+        self.edit(f"flatten {part} layers", lambda art: ed.flatten_part(art, part), select={"part": part, "layer": -1})
+
+    def add_layer(self, part: str, name: str = "layer", index: int | None = None, image_path=None,
+                  own_lines: bool = False, fit: str = "resize") -> int:
+        image = None if image_path is None else ed.load_image(image_path)
+        if image_path is not None and name == "layer":
+            name = ed.layer_order([image_path])[0][0]
+        return self.edit(f"add layer {name}", lambda art: ed.add_layer(art, part, name, index, image, own_lines, fit),
+                         select={"part": part, "layer": lambda k: k, "line": -1})
+
+    def remove_layer(self, part: str, k: int) -> None:
+        self.edit("remove layer", lambda art: ed.remove_layer(art, part, k),
+                  select={"part": part, "layer": max(k - 1, 0), "line": -1})
+
+    def rename_layer(self, part: str, k: int, name: str) -> str:
+        return self.edit("rename layer", lambda art: ed.rename_layer(art, part, k, name), select={"part": part})
+
+    def move_layer(self, part: str, k: int, to: int) -> int:
+        return self.edit("move layer up" if to > k else "move layer down", lambda art: ed.move_layer(art, part, k, to),
+                         select={"part": part, "layer": lambda r: r})
+
+    def duplicate_layer(self, part: str, k: int) -> int:
+        return self.edit("duplicate layer", lambda art: ed.duplicate_layer(art, part, k),
+                         select={"part": part, "layer": lambda r: r})
+
+    def set_layer_own_lines(self, part: str, k: int, own: bool) -> None:
+        self.edit("layer gets its own lines" if own else "layer moves with the drawing's lines",
+                  lambda art: ed.set_layer_own_lines(art, part, k, own), select={"part": part, "layer": k, "line": -1})
+
+    def set_layer_image(self, part: str, drawing: int, k: int, path, every_drawing: bool = False,
+                        fit: str = "resize") -> None:
+        img = ed.load_image(path)
+        self.edit("set layer picture", lambda art: ed.set_layer_image(art, part, drawing, k, img, fit, every_drawing),
+                  select={"part": part, "layer": k})
+
+    def import_layered(self, part: str, name: str, paths, fit: str = "resize") -> int:
+        """A new drawing of ``part`` from layer image files (their names give the order and the
+        layer names: ``10-eyeball.png`` under ``20-lids.png``)."""
+        ordered = ed.layer_order(paths)
+        layers = [(n, ed.load_image(p)) for n, p in ordered]
+        ed.check_layer_sizes([(p, img) for (_, p), (_, img) in zip(ordered, layers)])
+        return self.edit(f"import layered {part} drawing", lambda art: ed.import_layered_drawing(art, part, name, layers, fit),
+                         select={"part": part, "drawing": lambda i: i, "line": -1})
+
+    def import_layered_folder(self, part: str, folder, fit: str = "resize") -> int:
+        """A new drawing of ``part`` from a folder of layer images, named after the folder."""
+        files = [p for _, p in ed.layer_files_in(folder)]
+        return self.import_layered(part, ed.name_from_path(Path(folder).name, part), files, fit)
+
+    # the body under the head
+    def set_body(self, path, fit: str = "resize") -> None:
+        img = ed.load_image(path)
+        self.edit("set body", lambda art: ed.set_body(art, img, fit))
+
+    def remove_body(self) -> None:
+        self.edit("remove body", ed.remove_body)
+
+    def set_body_motion(self, follow: float | None = None, roll: float | None = None) -> None:
+        self.edit("body motion", lambda art: ed.set_body_motion(art, follow, roll), merge=True)
 
     def set_box(self, part: str, box, mode: str = "resize") -> None:
         self.edit(f"set {part} box", lambda art: ed.set_box(art, part, box, mode))
@@ -480,6 +658,10 @@ class EditorDocument(QObject):
         for pname, p in saved.parts.items():
             for d, s in zip(self.artset.parts[pname].drawings, p.drawings):
                 d.file = s.file
+                for ly, sl in zip(d.layers, s.layers):
+                    ly.file = sl.file
+        if self.artset.body is not None and saved.body is not None:
+            self.artset.body.file = saved.body.file
         for old, new in zip(self.artset.head_files, saved.head_files):
             if old in self._base_heads:
                 self._base_heads[new] = self._base_heads[old]
@@ -591,16 +773,24 @@ class EditorDocument(QObject):
             for di in ed.size_mismatches(p):
                 d = p.drawings[di]
                 todo.append(Issue("todo", d.file, f"{d.size[0]}x{d.size[1]} but the {pname} box is {p.size[0]}x{p.size[1]}: resize or crop it", pname, di))
-            miss = ed.missing_lines(art, pname)
-            for di, d in enumerate(p.drawings):
-                idx = [i for i, names in miss.items() if d.name in names]
-                if idx:
-                    which = f"line {idx[0]}" if len(idx) == 1 else f"lines {', '.join(map(str, idx))}"
-                    todo.append(Issue("todo", d.file, f"{pname} {which} not placed yet in {d.name!r} (dashed)", pname, di, idx[0]))
+            sets = ed._line_sets(art, pname) if p.drawings else [None]
+            for k in sets:
+                where = pname if k is None else f"{pname} layer {p.drawings[0].layers[k].name!r}"
+                miss = ed.missing_lines(art, pname, k)
+                for di, d in enumerate(p.drawings):
+                    idx = [i for i, names in miss.items() if d.name in names]
+                    if idx:
+                        which = f"line {idx[0]}" if len(idx) == 1 else f"lines {', '.join(map(str, idx))}"
+                        todo.append(Issue("todo", d.file, f"{where} {which} not placed yet in {d.name!r} (dashed)",
+                                          pname, di, idx[0], layer=k if k is not None else ed.shared_lines_layer(p)))
             if not p.drawings:
                 todo.append(Issue("todo", "", f"{pname}: add drawings (drop image files on the {pname} list)", pname))
             elif ed.line_count(p) == 0:
                 todo.append(Issue("todo", p.drawings[0].file, f"{pname}: draw control lines (drag on the drawing)", pname, 0))
+            for k in sets[1:]:
+                if ed.line_count(p, k) == 0:
+                    todo.append(Issue("todo", "", f"{pname} layer {p.drawings[0].layers[k].name!r}: draw its own control lines "
+                                                  f"(select the layer, drag on the drawing)", pname, 0, layer=k))
         self.issues = list(getattr(self, "_validator_issues", [])) + todo
         self.problemsChanged.emit()
 
@@ -626,9 +816,12 @@ class EditorDocument(QObject):
             issue.part = m.group(1) or m.group(2)
         for pname, p in art.parts.items():
             for di, d in enumerate(p.drawings):
-                if d.file == rel or f"drawing {d.name!r}" in msg or f"({d.name})" in msg:
+                files = {d.file} | {ly.file for ly in d.layers}
+                if rel in files or f"drawing {d.name!r}" in msg or f"({d.name})" in msg:
                     if issue.part in (None, pname):
                         issue.part, issue.drawing = pname, di
+                        issue.layer = next((k for k, ly in enumerate(d.layers)
+                                            if ly.file == rel or f"layer {ly.name!r}" in msg), None)
                         break
             if issue.drawing is not None:
                 break

@@ -130,6 +130,7 @@ class PartStrip(QWidget):
         self._checker = checker_brush(4)
         doc.changed.connect(self.update)
         doc.selectionChanged.connect(self.update)
+        doc.viewChanged.connect(self.update)
 
     def sizeHint(self):
         return QSize(600, 120)
@@ -163,7 +164,7 @@ class PartStrip(QWidget):
         if art is None:
             return []
         part = art.parts[self.doc.part]
-        miss = ed.missing_lines(art, self.doc.part)
+        miss = ed.missing_lines(art, self.doc.part, self.doc.line_layer)
         fm = self.fontMetrics()
         cw = self.cell_width()
         rows = []
@@ -193,18 +194,18 @@ class PartStrip(QWidget):
         if art is None:
             return
         part = art.parts[self.doc.part]
-        miss = ed.missing_lines(art, self.doc.part)
+        miss = ed.missing_lines(art, self.doc.part, self.doc.line_layer)
         captions = self.captions()
         for i, r, s in self._cells():
             d = part.drawings[i]
             p.fillRect(r, self._checker)
-            p.drawImage(r, self._qimage(d.image))
+            p.drawImage(r, self._qimage(self.doc.shown_image(self.doc.part, i)))
             sel = i == self.doc.drawing
             p.setPen(QPen(QColor(255, 200, 40) if sel else QColor(20, 20, 20), 3 if sel else 1))
             p.setBrush(Qt.NoBrush)
             p.drawRect(r.adjusted(-1, -1, 1, 1))
-            un = ed.unplaced(art, self.doc.part, i)
-            for k, ln in enumerate(np.asarray(d.lines, np.float64).reshape(-1, 4)):
+            un = ed.unplaced(art, self.doc.part, i, self.doc.line_layer)
+            for k, ln in enumerate(ed.lines_of(d, self.doc.line_layer)):
                 a = QPointF(r.left() + ln[0] * s, r.top() + ln[1] * s)
                 b = QPointF(r.left() + ln[2] * s, r.top() + ln[3] * s)
                 if self.doc.line >= 0 and k != self.doc.line:
@@ -242,7 +243,7 @@ class LinesList(QListWidget):
             art = self.doc.artset
             if art is None:
                 return
-            miss = ed.missing_lines(art, self.doc.part)
+            miss = ed.missing_lines(art, self.doc.part, self.doc.line_layer)
             for i, names in miss.items():
                 pm = QPixmap(14, 14)
                 pm.fill(qcolor_for_line(i))
@@ -293,5 +294,5 @@ class ProblemsList(QListWidget):
             return
         issue = self.doc.issues[k]
         if issue.part or issue.head is not None:
-            self.doc.select(part=issue.part, drawing=issue.drawing, line=issue.line, head=issue.head)
+            self.doc.select(part=issue.part, drawing=issue.drawing, line=issue.line, head=issue.head, layer=issue.layer)
         self.issueActivated.emit(issue)

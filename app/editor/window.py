@@ -23,6 +23,7 @@ from .document import EditorDocument, is_bundled, recoverable
 from .panels import (
     DropList, LinesList, PartStrip, ProblemsList, cached_icon, dropped_paths, image_paths, thumb_icon,
 )
+from .layers_panel import LayersPanel
 from .preview import PreviewPanel
 
 IMAGE_FILTER = "Images (*.png *.jpg *.jpeg *.bmp *.gif *.tif *.tiff *.webp)"
@@ -449,36 +450,32 @@ class EditorWindow(QMainWindow):
             ll.addWidget(g, 0 if key == "heads" else 1)
             self.lists[key] = lst
         self._filling_lists = False
-        dock = QDockWidget("Character", self)
-        dock.setObjectName("character")
-        dock.setWidget(left)
-        dock.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
-        self.addDockWidget(Qt.LeftDockWidgetArea, dock)
-
+        dock = self._dock("Character", "character", left, Qt.LeftDockWidgetArea)
         self.preview = PreviewPanel(self.doc)
-        pd = QDockWidget("Preview", self)
-        pd.setObjectName("preview")
-        pd.setWidget(self.preview)
-        pd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
-        self.addDockWidget(Qt.RightDockWidgetArea, pd)
-
+        pd = self._dock("Preview", "preview", self.preview, Qt.RightDockWidgetArea)
+        self.layers_panel = LayersPanel(self.doc)
+        self.layers_panel.ask_fit = lambda key, names: self.ask_fit(key, names)
+        lyd = self._dock("Layers", "layers", self.layers_panel, Qt.RightDockWidgetArea)
+        self.splitDockWidget(lyd, pd, Qt.Vertical)
         self.lines_list = LinesList(self.doc)
-        ld = QDockWidget("Lines", self)
-        ld.setObjectName("lines")
-        ld.setWidget(self.lines_list)
-        ld.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
-        self.addDockWidget(Qt.BottomDockWidgetArea, ld)
+        ld = self._dock("Lines", "lines", self.lines_list, Qt.BottomDockWidgetArea)
         self.problems = ProblemsList(self.doc)
         self.problems.issueActivated.connect(self._issue_activated)
-        prd = QDockWidget("Problems", self)
-        prd.setObjectName("problems")
-        prd.setWidget(self.problems)
-        prd.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
-        self.addDockWidget(Qt.BottomDockWidgetArea, prd)
+        prd = self._dock("Problems", "problems", self.problems, Qt.BottomDockWidgetArea)
         self.splitDockWidget(ld, prd, Qt.Horizontal)
         self.resizeDocks([dock, pd], [250, 330], Qt.Horizontal)
         self.resizeDocks([ld], [150], Qt.Vertical)
+        self.resizeDocks([lyd, pd], [330, 500], Qt.Vertical)
         self._build_menus()
+
+    def _dock(self, title: str, name: str, widget: QWidget, area) -> QDockWidget:
+        """``widget`` in a movable, floatable dock at ``area`` (``name`` keys its saved place)."""
+        d = QDockWidget(title, self)
+        d.setObjectName(name)
+        d.setWidget(widget)
+        d.setFeatures(QDockWidget.DockWidgetMovable | QDockWidget.DockWidgetFloatable)
+        self.addDockWidget(area, d)
+        return d
 
     def _build_menus(self):
         mb = self.menuBar()

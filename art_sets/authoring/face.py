@@ -40,8 +40,13 @@ BAND_U = (0.0, 0.25, 0.5, 0.75, 1.0)
 LID_BAND = 0.14  # eye half-widths from a lid to the line that holds its stroke
 FOLD_U = (0.1, 0.5, 0.9)
 FOLD = 0.12  # the fold line's distance under the brow, in eye half-widths (brows keep 0.4 above the lid)
-LIP_INNER_U = (0.0, 0.25, 0.5, 0.75, 1.0)
-LIP_OUTER_U = (0.0, 1 / 3, 2 / 3, 1.0)
+# Lips curve much more than lids, and Beier–Neely keeps a pixel's distance from its line in pixels:
+# a stroke that bows 2 px off a long chord in an open mouth and lies on it in a closed one lands
+# 2 px apart in the blend (a doubled lip line). Short chords keep that under a pixel.
+LIP_INNER_U = tuple(np.linspace(0.0, 1.0, 9))
+LIP_OUTER_U = tuple(np.linspace(0.0, 1.0, 7))
+LIP_BAND_U = BAND_U  # the lines that hold a stroke, beside it
+CORNER_OUT, CORNER_HALF = 0.08, 0.12  # mouth-scale units: where the corner lines sit beyond each corner, their half-length
 
 EYE_LINE_NAMES = [f"{side} {feat} {i + 1}" for side in ("left", "right")
                   for feat, us in (("upper lid", LID_U), ("above the upper lid", BAND_U), ("brow", BROW_U),
@@ -50,11 +55,13 @@ EYE_LINE_NAMES = [f"{side} {feat} {i + 1}" for side in ("left", "right")
 LOWER_LID_LINE_NAMES = [f"{side} {feat} {i + 1}" for side in ("left", "right")
                         for feat, us in (("lower lid", LID_U), ("under the lower lid", BAND_U)) for i in range(len(us) - 1)]
 MOUTH_LINE_NAMES = [f"{feat} {i + 1}" for feat, us in (("upper lip inner edge", LIP_INNER_U),
-                                                       ("above the upper lip's inner edge", BAND_U),
+                                                       ("above the upper lip's inner edge", LIP_BAND_U),
                                                        ("upper lip outer edge", LIP_OUTER_U))
                     for i in range(len(us) - 1)]
+CORNER_LINE_NAMES = [f"{side} mouth corner {what}" for side in ("left", "right") for what in ("upright", "across")]
 LOWER_LIP_LINE_NAMES = ([n.replace("upper", "lower").replace("above", "under") for n in MOUTH_LINE_NAMES]
-                        + [f"lower teeth tops {i + 1}" for i in range(len(BAND_U) - 1)])
+                        + [f"lower teeth tops {i + 1}" for i in range(len(LIP_BAND_U) - 1)] + CORNER_LINE_NAMES)
+MOUTH_LINE_NAMES = MOUTH_LINE_NAMES + CORNER_LINE_NAMES
 EYE_LAYERS = ("eyeball", "lower-lid", "upper-lid")
 MOUTH_LAYERS = ("inside", "lower-lip", "upper-lip")
 
@@ -193,16 +200,31 @@ class MouthGeom:
 
     def upper_lines(self, band: float) -> np.ndarray:
         """The ``upper-lip`` layer's lines: chords along the inner edge, along a curve ``band``
-        mouth-scale units above it (holding the edge's stroke) and along the outer edge."""
-        return np.concatenate([chords(self.inner_up, LIP_INNER_U), chords(self.inner_up - (0, band * self.scale), BAND_U),
-                               chords(self.outer_up, LIP_OUTER_U)])
+        mouth-scale units above it (holding the edge's stroke), along the outer edge, and the
+        corners' lines."""
+        d = (0, band * self.scale)
+        return np.concatenate([chords(self.inner_up, LIP_INNER_U), chords(self.inner_up - d, LIP_BAND_U),
+                               chords(self.outer_up, LIP_OUTER_U), self.corner_lines()])
+
+    def corner_lines(self) -> np.ndarray:
+        """Two short lines crossing just beyond each corner of the mouth (upright, and across pointing
+        out), the same in every mouth: the crease drawn there moves with its corner as one piece
+        instead of turning with the ends of the lips' chains (up in a smile, down in a frown)."""
+        h, d = CORNER_HALF * self.scale, CORNER_OUT * self.scale
+        out = []
+        for (x, y), sgn in ((self.left, -1), (self.right, 1)):
+            cx = x + sgn * d
+            out += [[cx, y + h, cx, y - h], [cx - sgn * h / 2, y, cx + sgn * h, y]]
+        return np.array(out)
 
     def lower_lines(self, band: float, teeth: float) -> np.ndarray:
-        """The ``lower-lip`` layer's lines, as :meth:`upper_lines` for the lower lip, and chords along
-        a curve ``teeth`` mouth-scale units above the inner edge: the lower teeth and tongue standing
-        on the lip move with it."""
-        return np.concatenate([chords(self.inner_dn, LIP_INNER_U), chords(self.inner_dn + (0, band * self.scale), BAND_U),
-                               chords(self.outer_dn, LIP_OUTER_U), chords(self.inner_dn - (0, teeth * self.scale), BAND_U)])
+        """The ``lower-lip`` layer's lines, as :meth:`upper_lines` for the lower lip (the holding
+        curve under the inner edge), chords along a curve ``teeth`` mouth-scale units above the inner
+        edge (the lower teeth and tongue standing on the lip move with it), and the corners'."""
+        d = (0, band * self.scale)
+        return np.concatenate([chords(self.inner_dn, LIP_INNER_U), chords(self.inner_dn + d, LIP_BAND_U),
+                               chords(self.outer_dn, LIP_OUTER_U),
+                               chords(self.inner_dn - (0, teeth * self.scale), LIP_BAND_U), self.corner_lines()])
 
 
 def mouth_geom(center, scale: float, pose: MouthPose, n: int = 61) -> MouthGeom:
@@ -444,7 +466,7 @@ class Character:
             if self.tusks > 0:
                 ts = self._part_surface(box, tex)
                 self.draw_tusks(ts, g, self._rng(2, 3))
-                held = np.concatenate([chords(g.inner_dn, LIP_INNER_U), chords(g.inner_dn - (0, self.tusks * g.scale), BAND_U)])
+                held = np.concatenate([chords(g.inner_dn, LIP_INNER_U), chords(g.inner_dn - (0, self.tusks * g.scale), LIP_BAND_U)])
                 layers.append(Layer("tusks", ts.to_rgba(), self._to_box(held, box), f"mouth/{dname}/tusks.png"))
             drawings.append(Drawing.from_layers(dname, layers, self._to_box(g.upper_lines(self.lip_band), box)))
         return Part("mouth", box, drawings)
