@@ -173,6 +173,17 @@ class Calibration:
     """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
     which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
 
+    @property
+    def classifiers(self) -> dict[str, object]:
+        """The colour classes the tracker tells apart, each with ``mask(bgr) -> bool array``
+        (for showing what calibration learned): the eye's inside, the lips and the mouth's
+        inside for a calibration with eye and mouth models, else the first tracker's pupil,
+        lip and eye colours."""
+        if self.eye_model is None or self.mouth_model is None:
+            return {"pupil": self.pupil, "lip": self.lip, "eye": self.eye}
+        return {"eye": _EyeInsideMask(self.eye_model), "lip": _LipMask(self.mouth_model),
+                "mouth inside": _MouthInsideMask(self.mouth_model)}
+
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
         return {
@@ -305,6 +316,10 @@ class Calibration:
 # ---------------------------------------------------------------------------------------------
 # calibrate
 
+
+# grey-level spread (0–255) below which an eye picture is a flat wall, not an eye: real eyes on the
+# clips measure 17–62 (5–30 on darkened, noisy copies), a flat background under codec noise 1–2
+MIN_EYE_CONTRAST = 3.0
 
 def _odd(v: float, lo: int = 3) -> int:
     n = max(int(round(v)), lo)
@@ -456,6 +471,11 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
         t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
         temps.append(np.rint(t).astype(np.float32))
+    for t, side, c in zip(temps, ("left", "right"), (clicks.left_pupil, clicks.right_pupil)):
+        if float(t.std()) < MIN_EYE_CONTRAST:
+            raise CalibrationError(
+                f"clicks: nothing eye-like at the {side} pupil click ({c[0]:g}, {c[1]:g}): the picture there is flat"
+            )
 
     # --- samples
     def region(fx, fy, hw, hh):
@@ -717,6 +737,43 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+class _EyeInsideMask:
+    """What the eye finder counts as the inside of an eye (white, iris, lashes): not this skin."""
+
+    def __init__(self, model: EyeModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        return self.model.skin.interior(np.asarray(bgr)) >= 0.5
+
+
+class _LipMask:
+    """Pixels either lip's colour axis puts nearer the lip than the skin beside it."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        f = np.asarray(bgr, dtype=np.float32)
+        out = np.zeros(f.shape[:2], bool)
+        for a in (self.model.axis_up, self.model.axis_down):
+            v = cv2.transform(f, np.asarray(a[:3], dtype=np.float32).reshape(1, 3)) + np.float32(a[3])
+            out |= v.reshape(f.shape[:2]) >= 0.5
+        return out
+
+
+class _MouthInsideMask:
+    """The dark gap, inside and teeth as the mouth model sees them."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        from tracker.colour_model import lut_index
+
+        return self.model.inside_table.take(lut_index(np.ascontiguousarray(bgr))).astype(bool)
 
 
 def _eye_model(path: Path, d, names) -> EyeModel | None:
