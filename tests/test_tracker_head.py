@@ -12,7 +12,7 @@ from tracker.calibration import calibrate
 from tracker.clicks import Clicks
 from tracker.face_finder import detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
 from tracker.face_tracker import FaceTracker
-from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
+from tracker.head_motion import HeadMotion, apply, compose, fit_similarity, similarity_from_pairs
 from tracker.params import LOST, OK
 from tracker.synthetic import FaceState, Performance, clicks_for, render_face
 
@@ -162,3 +162,36 @@ def test_slide_out_and_back_is_found_again_within_five_frames():
     assert first_ok - back <= 5
     away = [i for i, (_, t) in enumerate(frames) if t.status == LOST]
     assert sum(statuses[i] == OK for i in away) <= 1
+
+
+@given(
+    angle=st.floats(-0.5, 0.5),
+    scale=st.floats(0.5, 2.0),
+    t=st.tuples(st.floats(-50, 50), st.floats(-50, 50)),
+    seed=st.integers(0, 1000),
+)
+@settings(max_examples=100, deadline=None)
+def test_fit_similarity_recovers_a_similarity_and_averages_noise(angle, scale, t, seed):
+    rng = np.random.default_rng(seed)
+    src = rng.uniform(0, 200, (30, 2))
+    c, s = scale * math.cos(angle), scale * math.sin(angle)
+    m = np.array([[c, -s, t[0]], [s, c, t[1]]])
+    assert np.allclose(fit_similarity(src, apply(m, src)), m, atol=1e-6)
+    noisy = apply(m, src) + rng.normal(0, 0.5, src.shape)
+    got = fit_similarity(src, noisy)
+    assert np.abs(apply(got, src) - apply(m, src)).max() < 1.0  # the fit is better than the noise's extremes
+
+
+def test_flow_follows_corners_near_the_frame_edge_and_far_apart():
+    """The flow looks only near its corners: corners spread over the whole frame, some at its
+    edge, still give the rigid motion."""
+    img = _textured(4)
+    h, w = img.shape[:2]
+    face = np.array([[2, 2], [w - 3, 2], [w - 3, h - 3], [2, h - 3]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(60.0)
+    assert hm.seed(img, face) >= 30
+    m = np.float64([[1, 0, 5.0], [0, 1, -4.0]])
+    motion = hm.step(cv2.warpAffine(img, m, (w, h), borderMode=cv2.BORDER_REFLECT), face)
+    assert motion is not None
+    assert np.allclose(motion.matrix[:, 2], (5.0, -4.0), atol=0.3)

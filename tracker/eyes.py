@@ -728,42 +728,58 @@ class EyeFinder:
         top, bottom = max(top, self.sy + self.pad + 2), max(bottom, self.sy + self.pad + 2)
         self.rect = (int(math.floor(-half_w)), int(math.floor(-top)), int(math.ceil(2 * half_w)), int(math.ceil(top + bottom)))
 
-    def _set_pictures(self) -> None:
-        """The pictures in use: the adapted ones with :data:`ADAPT_FLOOR` of the calibration's."""
+    def _set_pictures(self, iris: bool = True, eye: bool = True) -> None:
+        """The pictures in use (the iris pictures, the eye pictures or both): the adapted ones
+        with :data:`ADAPT_FLOOR` of the calibration's."""
         f = ADAPT_FLOOR
-        self._iris = [f * c + (1.0 - f) * a for c, a in zip(self._calib_iris, self._adapted_iris)]
-        self._eye = [f * c + (1.0 - f) * a for c, a in zip(self._calib_eye, self._adapted_eye)]
-        self._iris_half = [cv2.pyrDown(t) for t in self._iris]
-        self._eye_half = [cv2.pyrDown(t) for t in self._eye]
-        self._iris_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris]
-        self._iris_half_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris_half]
-        self._fine_matrices()
-        self._eye_matrices()
+        if iris:
+            self._iris = [f * c + (1.0 - f) * a for c, a in zip(self._calib_iris, self._adapted_iris)]
+            self._iris_half = [cv2.pyrDown(t) for t in self._iris]
+            self._iris_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris]
+            self._iris_half_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris_half]
+            if hasattr(self, "_fine_K4"):
+                self._fine_pictures()
+            else:
+                self._fine_matrices()
+        if eye:
+            self._eye = [f * c + (1.0 - f) * a for c, a in zip(self._calib_eye, self._adapted_eye)]
+            self._eye_half = [cv2.pyrDown(t) for t in self._eye]
+            self._eye_matrices()
 
     def _fine_matrices(self) -> None:
         """For the full-resolution refinement, per eye: a patch size that holds the iris
         picture and the disc, and the columns whose dot products with a patch give the
         correlation's numerator (the picture, zero mean and unit norm), the disc mean and the
-        patch's sum under the picture; the picture's mask and 1 / its pixel count."""
+        patch's sum under the picture; the picture's mask and 1 / its pixel count. Only the
+        numerator's column changes when the pictures adapt (:meth:`_fine_pictures`)."""
         hh = max(max(th, self._disc_neg[i].shape[0] // 2) for i, (th, _) in enumerate(self._iris_hw))
         hw = max(max(tw, self._disc_neg[i].shape[1] // 2) for i, (_, tw) in enumerate(self._iris_hw))
         self._fine_half = (hh, hw)
         A = (2 * hh + 1) * (2 * hw + 1)
         K = np.zeros((2, 2 * hh + 1, 2 * hw + 1, 3), np.float32)
-        for i, t in enumerate(self._iris):
+        for i in range(2):
             th, tw = self._iris_hw[i]
-            z = t - t.mean()
-            K[i, hh - th : hh + th + 1, hw - tw : hw + tw + 1, 0] = z / max(float(np.sqrt((z * z).sum())), 1e-6)
             d = -self._disc_neg[i]
             b0, b1 = d.shape[0] // 2, d.shape[1] // 2
             K[i, hh - b0 : hh + b0 + 1, hw - b1 : hw + b1 + 1, 1] = d
             K[i, hh - th : hh + th + 1, hw - tw : hw + tw + 1, 2] = 1.0
         self._fine_K = K.reshape(2, A, 3)
+        self._fine_K4 = K  # the same memory, patch-shaped
         self._fine_mask = np.ascontiguousarray(self._fine_K[:, :, 2:])
         self._fine_all = bool(np.all(self._fine_mask == 1.0))  # the picture fills the patch
-        self._fine_inv_n = np.array([[1.0 / (t.shape[0] * t.shape[1])] for t in self._iris], np.float32)
+        self._fine_inv_n = np.array([[1.0 / ((2 * th + 1) * (2 * tw + 1))] for th, tw in self._iris_hw], np.float32)
         n = 2 * FINE + 1
         self._fine_buf = np.empty((2, n * n, A), np.float32)
+        self._fine_pictures()
+
+    def _fine_pictures(self) -> None:
+        """The numerator columns of :meth:`_fine_matrices` from the iris pictures in use."""
+        hh, hw = self._fine_half
+        for i, t in enumerate(self._iris):
+            th, tw = self._iris_hw[i]
+            z = t - float(t.mean())
+            z *= 1.0 / max(math.sqrt(float((z * z).sum())), 1e-6)
+            self._fine_K4[i, hh - th : hh + th + 1, hw - tw : hw + tw + 1, 0] = z
 
     def _eye_matrices(self) -> None:
         """For the eye picture's score, per eye: the window (half px) around the eye point that
@@ -1082,7 +1098,8 @@ class EyeFinder:
         near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
         if near.sum() < max(16, 0.1 * len(px)):
             return None
-        return np.median(px[near], axis=0).astype(np.float64)
+        sel = px[near]
+        return np.partition(sel, len(sel) // 2, axis=0)[len(sel) // 2].astype(np.float64)  # the median
 
     def measure_gain(self, crop: np.ndarray, centres) -> np.ndarray | None:
         """This frame's per-channel gain from the skin around the eyes (:meth:`skin_colour`,
@@ -1090,7 +1107,8 @@ class EyeFinder:
         now = self.skin_colour(crop, centres, self._gain)
         if now is None:
             return None
-        return np.clip(self.model.skin_bgr / np.maximum(now, 1.0), GAIN_LIMITS[0], GAIN_LIMITS[1])
+        lo, hi = GAIN_LIMITS
+        return np.array([min(max(r / max(c, 1.0), lo), hi) for r, c in zip(self.model.skin_bgr.tolist(), now.tolist())])
 
     # ------------------------------------------------------------------ main entry
     def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
@@ -1139,23 +1157,28 @@ class EyeFinder:
         if not all(e.open and e.score >= ADAPT_MIN_SCORE for e in result.eyes):
             return False
         self._adapt_count += 1
-        if self._adapt_count % ADAPT_EVERY:
+        phase = self._adapt_count % ADAPT_EVERY
+        if phase > 2:
             return True
-        # every ADAPT_EVERY-th confident frame counts for all of them (the cost is shared)
+        # every ADAPT_EVERY-th confident frame counts for all of them; the three updates (iris
+        # pictures, eye pictures, light) fall on different frames so no frame pays for all
         rate = min((ADAPT_RATE if rate is None else float(rate)) * ADAPT_EVERY, 1.0)
-        grey = np.asarray(crop_grey, dtype=np.float32)
+        if phase == 2:
+            centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
+            g = self.measure_gain(crop_bgr, centres)
+            if g is not None:
+                self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
+                # shading and expressions move it by several per cent; only a change of the
+                # light itself (beyond the dead zone) is applied
+                self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+            return True
+        pics, calib = (self._adapted_iris, self._calib_iris) if phase == 0 else (self._adapted_eye, self._calib_eye)
+        grey = crop_grey if crop_grey.dtype in (np.uint8, np.float32) else np.asarray(crop_grey, dtype=np.float32)
         for i, e in enumerate(result.eyes):
-            for pics, calib in ((self._adapted_iris, self._calib_iris), (self._adapted_eye, self._calib_eye)):
-                h, w = calib[i].shape[0] // 2, calib[i].shape[1] // 2
-                pics[i] = (1.0 - rate) * pics[i] + rate * subpixel_cut(grey, e.x, e.y, w, h)
-        self._set_pictures()
-        centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
-        g = self.measure_gain(crop_bgr, centres)
-        if g is not None:
-            self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
-            # shading and expressions move it by several per cent; only a change of the
-            # light itself (beyond the dead zone) is applied
-            self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+            h, w = calib[i].shape
+            now = cv2.getRectSubPix(grey, (w, h), (float(e.x), float(e.y)), patchType=cv2.CV_32F)
+            pics[i] = cv2.addWeighted(pics[i], 1.0 - rate, now, rate, 0.0)
+        self._set_pictures(iris=phase == 0, eye=phase == 1)
         return True
 
     def reset_adaptation(self) -> None:

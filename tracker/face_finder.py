@@ -98,22 +98,21 @@ PATCH_RECT = (-1.0, -0.6, 2.0, 1.35)
 """The face picture's extent in inter-pupil distances (x0, y0, w, h): brows, eyes and nose, no mouth."""
 
 
-def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], np.ndarray, np.ndarray]:
+def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], tuple[float, float], tuple[float, float]]:
     """The affine from the scaled grey image to the face picture (grown by ``margin`` px on
     every side), the picture's size, and the picture's x and down axes in frame px per picture px."""
-    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2) * scale
-    (lx, ly), (rx, ry) = p
+    (lx, ly), (rx, ry) = ((float(x) * scale, float(y) * scale) for x, y in np.asarray(pupils, dtype=np.float64).reshape(2, 2).tolist())
     ipd = max(math.hypot(rx - lx, ry - ly), 1e-6)
     k = PATCH_IPD / ipd
     c, s = (rx - lx) / ipd, (ry - ly) / ipd  # unit eye line (x right, y down)
     mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
     x0, y0, w, h = (v * PATCH_IPD for v in PATCH_RECT)
     # picture px = R·k·(grey px − mid) − origin, R turning the eye line onto +x
-    m = np.array([[k * c, k * s, 0.0], [-k * s, k * c, 0.0]])
-    m[:, 2] = -m[:, :2] @ np.array([mx, my]) - np.array([x0 - margin, y0 - margin])
+    a, b = k * c, k * s
+    m = np.array([[a, b, -(a * mx + b * my) - (x0 - margin)], [-b, a, -(a * my - b * mx) - (y0 - margin)]])
     size = (int(round(w)) + 2 * int(margin), int(round(h)) + 2 * int(margin))
     per = 1.0 / (k * scale)
-    return m, size, np.array([c, s]) * per, np.array([-s, c]) * per
+    return m, size, (c * per, s * per), (-s * per, c * per)
 
 
 def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray:
@@ -145,7 +144,7 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
     dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
     dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
     du, dv = i + dx - margin, j + dy - margin
-    return du * ax + dv * ay, float(best)
+    return np.array([du * ax[0] + dv * ay[0], du * ax[1] + dv * ay[1]]), float(best)
 
 
 def _vertex(a: float, b: float, c: float) -> float:
