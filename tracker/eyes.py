@@ -96,6 +96,9 @@ darker than any skin" to count as interior."""
 BANDS = {"below": (0.15, 0.3), "above": (0.14, 0.3), "half": 0.15}
 """Skin sample bands at calibration: below and above each iris (distances from it) and
 their half-width."""
+BRIGHTER = 0.5
+"""Skin colour up to this fraction brighter than the skin's mean (same hue and saturation) is
+still skin."""
 SKIN_SELECT = 2.0
 """Mahalanobis units beyond the interior ramp's start that still count as skin when the
 light is measured."""
@@ -280,16 +283,27 @@ class SkinModel:
         self.mean = np.asarray(self.mean, dtype=np.float64).reshape(3)
         self.cov = np.asarray(self.cov, dtype=np.float64).reshape(3, 3)
         try:
-            L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
+            self._L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
         except np.linalg.LinAlgError:
             raise EyeModelError("eye model: the skin covariance is not positive definite") from None
+        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0, 0.0]], np.float32)
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """The per-pixel transform and ramp scale for the current levels and dark rule (again
+        whenever :meth:`set_levels` or :meth:`set_dark` change them)."""
+        L = self._L
         # rows: whitened coordinates; the fourth is the dark ramp (1/2 at ``dark``, rising as
         # the luminance falls) so that one transform gives everything the membership needs
+        # and the fifth how far along the skin's own colour a pixel lies beyond the mean (0 at
+        # the mean, 1 at twice its brightness): see _distance
         ramp = -_YCC[:1] / self.dark_ramp
-        W = np.concatenate([L.T @ _YCC, ramp])
-        c = np.append(L.T @ self.mean, -(self.dark / self.dark_ramp + 0.5))
-        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (4, 4) for cv2.transform
-        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0]], np.float32)
+        wm = L.T @ self.mean
+        self._wm2 = max(float(wm @ wm), 1e-9)
+        Wz = L.T @ _YCC
+        W = np.concatenate([Wz, ramp, (wm @ Wz)[None, :] / self._wm2])
+        c = np.concatenate([wm, [-(self.dark / self.dark_ramp + 0.5), 1.0]])
+        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (5, 4) for cv2.transform
         self._scale = 1.0 / (self.hi - self.lo)
         self._gain_key: np.ndarray | None = None
         self._gain_M = self._M
@@ -306,28 +320,54 @@ class SkinModel:
         b = bgr if isinstance(bgr, np.ndarray) and bgr.dtype == np.float32 else np.asarray(bgr, dtype=np.float32)
         return cv2.transform(b.reshape(-1, 1, 3), M)
 
-    def _membership(self, z: np.ndarray) -> np.ndarray:
-        d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+    def _distance(self, z: np.ndarray) -> np.ndarray:
+        """Mahalanobis distance ``(n,)`` from the skin of the pixels transformed to ``z``,
+        measured from the nearest of the skin colours from its mean to :data:`BRIGHTER` times
+        brighter (the same hue and saturation, more light): a lit lid, a highlight or a
+        brighter light keep the skin's colour, while the eye's interior is darker (iris,
+        pupil, lashes) or paler (the white)."""
+        d2 = cv2.transform(z * z, self._sum3).ravel()
+        u = z[:, 0, 4]
+        t = np.minimum(np.maximum(u, 0.0), BRIGHTER)
+        u = u * 2.0
+        u -= t
+        t *= u
+        t *= self._wm2
+        d2 -= t  # |z − t·wm|² = |z|² − t (2u − t) |wm|²
+        np.maximum(d2, 0.0, out=d2)
+        return np.sqrt(d2, out=d2)
+
+    def _membership(self, z: np.ndarray, dark: bool = True) -> np.ndarray:
+        d = self._distance(z)
         e = d - self.lo
         e *= self._scale
-        if self.dark > 0:
+        if dark and self.dark > 0:
             np.maximum(e, z[:, 0, 3], out=e)
         np.maximum(e, 0.0, out=e)
         return np.minimum(e, 1.0, out=e)
 
     def distance(self, bgr: np.ndarray) -> np.ndarray:
         """Mahalanobis distance of each pixel (``(..., 3)`` BGR) from the skin, ``(n,)``."""
-        z = self._transform(bgr, None)
-        return cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+        return self._distance(self._transform(bgr, None))
 
     def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
         """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
         ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration)."""
         return self._membership(self._transform(bgr, gain)).reshape(np.shape(bgr)[:-1])
 
-    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
-        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs)."""
-        return self._membership(self._transform(column, gain)).tolist()
+    def profile(self, column: np.ndarray, gain: np.ndarray | None = None, dark: bool = True) -> list[float]:
+        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs);
+        ``dark=False`` leaves the dark rule out (colour only)."""
+        return self._membership(self._transform(column, gain), dark).tolist()
+
+    def profiles(self, column: np.ndarray, gain: np.ndarray | None = None) -> tuple[list[float], list[float]]:
+        """:meth:`profile` of a column by colour only and with the dark rule, in one pass."""
+        z = self._transform(column, gain)
+        e = self._membership(z, False)
+        if self.dark <= 0:
+            v = e.tolist()
+            return v, v
+        return e.tolist(), np.maximum(e, np.minimum(z[:, 0, 3], 1.0)).tolist()
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
@@ -360,15 +400,26 @@ class SkinModel:
         if ds:
             mid = float(np.clip(0.5 * min(ds), NOT_SKIN_LO + 1.5, LEVEL_MAX))
             self.lo, self.hi = mid - 1.5, mid + 1.5
+            self._prepare()
 
-    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
+    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray, doubtful: list[np.ndarray] = ()) -> None:
         """Count as interior what is much darker than any skin: half-way between the iris's
-        middle and the darkest skin (10th percentile of each group), when the iris is at most
-        :data:`DARK_RATIO` as bright."""
+        middle and the darkest skin, when the iris is at most :data:`DARK_RATIO` as bright.
+
+        The darkest skin is the 10th percentile of each ``skin`` group and the median of each
+        ``doubtful`` one: a band over the eye that is mostly a shadowed lid keeps its shadow
+        on the skin side, but the lashes and crease a tenth of it may hold (darker than the
+        skin, and as dark as a brown iris) do not switch the rule off."""
+        lum = [np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0] for g in list(skin) + list(doubtful)]
+        q = [10.0] * len(skin) + [50.0] * len(doubtful)
+        levels = [float(np.percentile(y, p)) for y, p in zip(lum, q) if len(y)]
+        if not levels:
+            return
         yi = float(np.median(np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC[0]))
-        ys = min(float(np.percentile(np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0], 10)) for g in skin if len(g))
+        ys = min(levels)
         if yi <= DARK_RATIO * ys:
             self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), max(0.25 * (ys - yi), 1.0)
+            self._prepare()
 
     def to_dict(self) -> dict:
         return {
@@ -622,9 +673,11 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_heights.append(float(height))
 
     groups, middle, ring, sclera = _colour_samples(crop, pupils, radius, brow_heights, wi)
-    skin = SkinModel.fit(groups, middle, doubtful=("above the eyes",))
+    doubtful = ("above the eyes",)
+    skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])
-    skin.set_dark(list(groups.values()), middle)  # darker than every skin sample, even a shadowed lid
+    # darker than every skin sample, even a shadowed lid
+    skin.set_dark([g for k, g in groups.items() if k not in doubtful], middle, [groups[k] for k in doubtful])
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
@@ -937,19 +990,30 @@ class EyeFinder:
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
-    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
+    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
+             dark: bool = True) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
         of the interior runs up and down the strip through ``at``, each row classified by its
-        mean colour, the lash line off the upper one."""
+        mean colour, the lash line off the upper one. With ``dark`` (the default, how the
+        calibrated gap is measured) what is much darker than any skin is interior too."""
         col, c = self._column(crop, i, at)
-        return self._lid_runs(self.skin.profile(col, gain), c, i, at)
+        return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at)
 
-    def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float]]:
-        """:meth:`lids` of both eyes (at ``ats[0]``, ``ats[1]``), their colours classified together."""
+    def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float, float]]:
+        """For both eyes (at ``ats[0]``, ``ats[1]``), their colours classified together: the
+        :meth:`lids` by colour only — where the skin ends — and the gap with the dark rule,
+        which says whether the eye is open: a dark iris is much darker than any skin, but so
+        are the lash line and a shadowed crease beside the lids, so the rule tells that the
+        iris shows, not where the lids are."""
         (c0, k0), (c1, k1) = self._column(crop, 0, ats[0]), self._column(crop, 1, ats[1])
-        e = self.skin.profile(np.concatenate((c0, c1)), gain)
+        e, ed = self.skin.profiles(np.concatenate((c0, c1)), gain)
         n = len(c0)
-        return [self._lid_runs(e[:n], k0, 0, ats[0]), self._lid_runs(e[n:], k1, 1, ats[1])]
+        out = []
+        for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
+            up, down = self._lid_runs(e[a:b], k, i, ats[i])
+            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i]) if ed is not e else (up, down)
+            out.append((up, down, gu + gd))
+        return out
 
     def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> float:
         """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
@@ -1124,17 +1188,17 @@ class EyeFinder:
         pts = []
         for i in range(2):
             iris = found[i][:2]
-            up, down = lids[i]
-            w = min(max(((up + down) / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
+            gap = lids[i][2]
+            w = min(max((gap / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
             pt = iris
             if w < 1.0:
                 sx, sy = self._slit(crop_bgr, iris, gain)
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
-                lids[i] = self.lids(crop_bgr, i, pt, gain)
+                lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
             pts.append((pt, w))
         brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
         eyes = []
-        for i, ((pt, w), (up, down), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
+        for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
