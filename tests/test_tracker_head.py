@@ -12,7 +12,7 @@ from tracker.calibration import calibrate
 from tracker.clicks import Clicks
 from tracker.face_finder import detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
 from tracker.face_tracker import FaceTracker
-from tracker.head_motion import HeadMotion, apply, compose, fit_similarity, similarity_from_pairs
+from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
 from tracker.params import LOST, OK
 from tracker.synthetic import FaceState, Performance, clicks_for, render_face
 
@@ -110,6 +110,19 @@ def test_face_detector_boxes_hold_the_eyes():
     assert np.abs(eyes - truth).max() < 0.15 * 80
 
 
+@pytest.mark.parametrize("expected_ipd", [64.0, 80.0, 100.0])
+def test_face_detector_bands_together_cover_the_full_search(expected_ipd):
+    """A lost face is looked for one band of sizes per frame: the bands in turn find it, from
+    the colour frame or from a grey copy the tracker already made."""
+    frame, _ = render_face(BASE)
+    found = [b for k in range(3) for b in detect_faces(frame, expected_ipd, 1.6, band=(k, 3))]
+    truth = np.array([clicks_for(BASE)["left_pupil"], clicks_for(BASE)["right_pupil"]])
+    assert any(np.abs(eyes_in_box(b) - truth).max() < 0.15 * 80 for b in found)
+    g = cv2.resize(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+    found = [b for k in range(3) for b in detect_faces(frame, expected_ipd, 1.6, band=(k, 3), grey=(g, 0.5))]
+    assert any(np.abs(eyes_in_box(b) - truth).max() < 0.15 * 80 for b in found)
+
+
 @pytest.fixture(scope="module")
 def cal():
     frame, _ = render_face(BASE)
@@ -162,24 +175,6 @@ def test_slide_out_and_back_is_found_again_within_five_frames():
     assert first_ok - back <= 5
     away = [i for i, (_, t) in enumerate(frames) if t.status == LOST]
     assert sum(statuses[i] == OK for i in away) <= 1
-
-
-@given(
-    angle=st.floats(-0.5, 0.5),
-    scale=st.floats(0.5, 2.0),
-    t=st.tuples(st.floats(-50, 50), st.floats(-50, 50)),
-    seed=st.integers(0, 1000),
-)
-@settings(max_examples=100, deadline=None)
-def test_fit_similarity_recovers_a_similarity_and_averages_noise(angle, scale, t, seed):
-    rng = np.random.default_rng(seed)
-    src = rng.uniform(0, 200, (30, 2))
-    c, s = scale * math.cos(angle), scale * math.sin(angle)
-    m = np.array([[c, -s, t[0]], [s, c, t[1]]])
-    assert np.allclose(fit_similarity(src, apply(m, src)), m, atol=1e-6)
-    noisy = apply(m, src) + rng.normal(0, 0.5, src.shape)
-    got = fit_similarity(src, noisy)
-    assert np.abs(apply(got, src) - apply(m, src)).max() < 1.0  # the fit is better than the noise's extremes
 
 
 def test_flow_follows_corners_near_the_frame_edge_and_far_apart():

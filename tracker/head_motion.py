@@ -27,10 +27,6 @@ MAX_POINTS = 48
 RESEED_EVERY = 12
 """Frames between topping up the tracked corners (they drift off features and die)."""
 _LK = dict(winSize=(9, 9), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03))
-FLOW_REACH = 0.7
-"""How far (× :data:`FLOW_IPD`) around the tracked corners the flow looks: beyond any motion
-the pyramid can follow in one frame, so cutting the images there changes nothing but the cost
-(the pyramids are built only over that part)."""
 
 
 @dataclass
@@ -71,19 +67,6 @@ def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
     m[:, 2] = d[0] - m[:, :2] @ s[0]
     return m
-
-
-def fit_similarity(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
-    """The 2×3 similarity (rotation, uniform scale, shift) taking points ``src`` ``(n, 2)``
-    closest to ``dst`` in the least-squares sense (closed form; n >= 2 distinct points)."""
-    P = np.concatenate([np.asarray(src, dtype=np.float64).reshape(-1, 2), np.asarray(dst, dtype=np.float64).reshape(-1, 2)], axis=1)
-    n = len(P)
-    (sx, sy, dx, dy) = (P.sum(axis=0) / n).tolist()
-    G = (P.T @ P).tolist()  # second moments of (sx, sy, dx, dy)
-    den = max(G[0][0] + G[1][1] - n * (sx * sx + sy * sy), 1e-12)
-    a = (G[0][2] + G[1][3] - n * (sx * dx + sy * dy)) / den
-    b = (G[0][3] - G[1][2] - n * (sx * dy - sy * dx)) / den
-    return np.array([[a, -b, dx - (a * sx - b * sy)], [b, a, dy - (b * sx + a * sy)]])
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -178,22 +161,6 @@ class HeadMotion:
             return found
         return np.concatenate([keep, found])
 
-    def _flow(self, prev: np.ndarray, g: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Where the corners ``pts`` of ``prev`` went in ``g`` and which were followed, the
-        flow run on the part of both images within :data:`FLOW_REACH` of the corners."""
-        h, w = g.shape
-        reach = FLOW_REACH * FLOW_IPD
-        q = pts.reshape(-1, 2)
-        x0, y0 = max(int(q[:, 0].min() - reach), 0), max(int(q[:, 1].min() - reach), 0)
-        x1, y1 = min(int(q[:, 0].max() + reach) + 1, w), min(int(q[:, 1].max() + reach) + 1, h)
-        o = np.float32([x0, y0])
-        nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev[y0:y1, x0:x1], g[y0:y1, x0:x1], pts - o, None, **_LK)
-        ok = st.reshape(-1).astype(bool)
-        nxt += o
-        q = nxt.reshape(-1, 2)
-        ok &= (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] < w) & (q[:, 1] < h)
-        return nxt, ok
-
     def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | None = None, grey: np.ndarray | None = None) -> Motion | None:
         """The rigid motion from the previous frame to this one (frame px), or None.
 
@@ -208,21 +175,27 @@ class HeadMotion:
             self._pts = self._pick(g, face_polygon, None) if face_polygon is not None else None
             self._age = 0
             return None
-        nxt, ok = self._flow(prev, g, pts)
+        nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
+        ok = st.reshape(-1).astype(bool)
+        h, w = g.shape
+        if nxt is not None:
+            q = nxt.reshape(-1, 2)
+            ok &= (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] < w) & (q[:, 1] < h)
         n_ok = int(ok.sum())
         motion = None
         if n_ok >= self.min_inliers:
             a, b = pts[ok], nxt[ok]
             m, inl = cv2.estimateAffinePartial2D(
                 a, b, method=cv2.RANSAC, ransacReprojThreshold=max(0.6, 0.025 * FLOW_IPD), maxIters=200,
-                confidence=0.99, refineIters=0,
+                confidence=0.99, refineIters=5,
             )
             if m is not None and inl is not None:
                 inl = inl.reshape(-1).astype(bool)
                 n_in = int(inl.sum())
                 if n_in >= self.min_inliers and n_in >= 0.4 * n_ok:
-                    fm = fit_similarity(a[inl].reshape(-1, 2), b[inl].reshape(-1, 2))
-                    fm[:, 2] /= self.scale  # scaled px → frame px (rotation/scale part is unchanged)
+                    s = self.scale
+                    fm = m.astype(np.float64).copy()
+                    fm[:, 2] /= s  # scaled px → frame px (rotation/scale part is unchanged)
                     motion = Motion(fm, n_in, n_ok)
                     pts = b[inl].reshape(-1, 1, 2)
                 else:
