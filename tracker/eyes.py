@@ -13,13 +13,17 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   like that disc on both sides at once, lose. The best pair is refined at full resolution
   (darkness × correlation, parabola through the peak).
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
-  Gaussian in YCrCb learned below, above and between the eyes at calibration) or much
-  darker than any of it: sclera, iris, pupil and lashes. The upper and lower lid
-  distances are the soft lengths of the interior runs up and down a strip of columns
-  through the iris; the ramp from skin to interior is centred half-way to the iris's and
-  the sclera's own colours, so a blurred edge is found where it is and colour that bleeds
-  past a lid (compressed video) does not count. The calibrated lash line is taken off the
-  upper run (the run ends on the lashes' top; the lid's margin is their bottom).
+  Gaussian in YCrCb learned below, above and between the eyes at calibration; the skin's
+  own colour up to half again as bright — a lit lid, a highlight, more light — still counts
+  as skin): sclera, iris, pupil and lashes. The upper and lower lid distances are the soft
+  lengths of the interior runs up and down a strip of columns through the iris; the ramp
+  from skin to interior is centred half-way to the iris's and the sclera's own colours, so
+  a blurred edge is found where it is and colour that bleeds past a lid (compressed video)
+  does not count. The calibrated lash line is taken off the upper run (the run ends on the
+  lashes' top; the lid's margin is their bottom). Whether the eye is open is read from the
+  same runs with what is much darker than any skin counted as interior too: a dark iris
+  shows by that rule even where its colour is close to the skin's, but the lash line and a
+  shadowed crease are as dark, so the rule says that the iris shows, not where the lids are.
 * **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
   the eye point moves from the iris to the middle of what is visible of the eye (the slit
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
@@ -752,6 +756,7 @@ class EyeFinder:
         u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (prior[0] * wi))
         v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
         self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
+        self._maps = np.empty((2,) + self._prior.shape, np.float32)  # both eyes' coarse maps, reused
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
@@ -769,7 +774,6 @@ class EyeFinder:
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
-        self._slit_index = np.arange(2 * max(self._slit_half) + 4, dtype=np.float32)
         self._set_pictures()
         # the crop this needs (face coordinates)
         half_w = 0.5 * wi + max(self.sx + self.pad, SOCKET_HW * wi + SOCKET_SEARCH[0] * wi + self.sx, 0.25 * wi + self.sx) + 2
@@ -882,31 +886,32 @@ class EyeFinder:
         m = mag.ravel().copy()
         k = m.size // 2
         m.partition(k)
-        wgt = mag * (1.0 / max(float(m[k]), 1.0))
-        np.minimum(wgt, 3.0, out=wgt)
+        # min(|g| / median, 3) / |g|, i.e. min(1 / median, 3 / |g|)
         mag += 1e-3
-        wgt /= mag
+        wgt = np.divide(3.0, mag, out=mag)
+        np.minimum(wgt, 1.0 / max(float(m[k]), 1.0), out=wgt)
         gx *= wgt
         gy *= wgt
         sc = self._ring_votes(gx, gy, ph)
         sc += 1.0
         sc *= dark[ph : dark.shape[0] - ph, ph : dark.shape[1] - ph]
-        maps, origins = [], []
         sxh, syh = self.sx // 2, self.sy // 2
         ws, hs = 2 * sxh + 1, 2 * syh + 1
+        maps = self._maps
+        origins = []
         for i, (cx, cy) in enumerate(cs):
             u0, v0 = (cx - x0) // 2 - sxh - ph, (cy - y0) // 2 - syh - ph  # window in the inner part
             th, tw = self._iris_half_hw[i]
-            ncc = cv2.matchTemplate(half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw],
-                                    self._iris_half[i], cv2.TM_CCOEFF_NORMED)
-            np.maximum(ncc, 0.0, out=ncc)
-            ncc += 1.0
-            ncc *= sc[v0 : v0 + hs, u0 : u0 + ws]
-            ncc *= self._prior
-            maps.append(ncc)
+            cv2.matchTemplate(half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw],
+                              self._iris_half[i], cv2.TM_CCOEFF_NORMED, result=maps[i])
             # half px k is the mean of the strip's full px 2k and 2k+1
-            origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
-        return maps, origins
+            origins.append(((u0, v0), (x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5)))
+        np.maximum(maps, 0.0, out=maps)
+        maps += 1.0
+        maps *= self._prior
+        for i, ((u0, v0), _) in enumerate(origins):
+            maps[i] *= sc[v0 : v0 + hs, u0 : u0 + ws]
+        return maps, [o for _, o in origins]
 
     def _ring_votes(self, gx: np.ndarray, gy: np.ndarray, p: int) -> np.ndarray:
         """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
@@ -1044,7 +1049,6 @@ class EyeFinder:
         X0, Y0 = xi - hx - 2 * ((hx + 1) // 2), yi - hy - 2 * ((hy + 1) // 2)
         X0, Y0 = (X0 if X0 >= 0 else X0 % 2), (Y0 if Y0 >= 0 else Y0 % 2)
         E = self.skin.interior(crop[Y0 : min(yi + 2 * hy + 2, h) : 2, X0 : min(xi + 2 * hx + 2, w) : 2], gain)
-        ar = self._slit_index
         x, y = at
         for _ in range(2):
             xi, yi = int(round(x)), int(round(y))
@@ -1052,13 +1056,12 @@ class EyeFinder:
             i0, i1 = max(-(-(yi - hy - Y0) // 2), 0), min(-(-(yi + hy + 1 - Y0) // 2), E.shape[0])
             if i1 <= i0 or j1 <= j0:
                 break
-            e = E[i0:i1, j0:j1]
-            cols = e.sum(axis=0)
-            tot = float(cols.sum())
+            mo = cv2.moments(E[i0:i1, j0:j1])
+            tot = mo["m00"]
             if tot < 0.25:
                 break
-            x = X0 + 2.0 * float(cols @ ar[j0:j1]) / tot
-            y = Y0 + 2.0 * float(e.sum(axis=1) @ ar[i0:i1]) / tot
+            x = X0 + 2.0 * (j0 + mo["m10"] / tot)
+            y = Y0 + 2.0 * (i0 + mo["m01"] / tot)
         return x, y
 
     # ------------------------------------------------------------------ brow, score, light
