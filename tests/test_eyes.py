@@ -167,6 +167,26 @@ def test_the_light_is_followed_by_adaptation():
     assert f._gain is None
 
 
+def test_adaptation_spreads_its_updates_over_frames():
+    """Each confident frame updates at most one of the iris pictures, the eye pictures and
+    the light; within ADAPT_EVERY confident frames all three have been updated once."""
+    from tracker.eyes import ADAPT_EVERY
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    dim = BASE.replace(light=(0.8, 0.82, 0.85), gaze_x=0.03)
+    frame, _ = render_face(dim)
+    changed = []
+    for _ in range(ADAPT_EVERY):
+        res, _, _, (crop, grey, _) = _find(f, dim, frame=frame)
+        before = ([p.copy() for p in f._adapted_iris], [p.copy() for p in f._adapted_eye], f._gain_slow.copy())
+        assert f.adapt(crop, grey, res)
+        now = (f._adapted_iris, f._adapted_eye, f._gain_slow)
+        changed.append([not all(np.array_equal(a, b) for a, b in zip(x, y)) if isinstance(x, list) else not np.array_equal(x, y)
+                        for x, y in zip(before, now)])
+    assert all(sum(c) <= 1 for c in changed)
+    assert [any(c[k] for c in changed) for k in range(3)] == [True, True, True]
+
+
 def test_model_round_trips_through_json(finder):
     m = finder.model
     d = json.loads(json.dumps(m.to_dict()))
