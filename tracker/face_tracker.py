@@ -341,7 +341,7 @@ class FaceTracker:
             d = found[1] - found[0]
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: open eyes must agree with them
-            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
+            tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
             if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
                 doubt[int(np.argmin([o.score for o in obs]))] = True
                 strong = False
