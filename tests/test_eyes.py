@@ -167,6 +167,26 @@ def test_the_light_is_followed_by_adaptation():
     assert f._gain is None
 
 
+def test_adaptation_spreads_its_updates_over_frames():
+    """Each confident frame updates at most one of the iris pictures, the eye pictures and
+    the light; within ADAPT_EVERY confident frames all three have been updated once."""
+    from tracker.eyes import ADAPT_EVERY
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    dim = BASE.replace(light=(0.8, 0.82, 0.85), gaze_x=0.03)
+    frame, _ = render_face(dim)
+    changed = []
+    for _ in range(ADAPT_EVERY):
+        res, _, _, (crop, grey, _) = _find(f, dim, frame=frame)
+        before = ([p.copy() for p in f._adapted_iris], [p.copy() for p in f._adapted_eye], f._gain_slow.copy())
+        assert f.adapt(crop, grey, res)
+        now = (f._adapted_iris, f._adapted_eye, f._gain_slow)
+        changed.append([not all(np.array_equal(a, b) for a, b in zip(x, y)) if isinstance(x, list) else not np.array_equal(x, y)
+                        for x, y in zip(before, now)])
+    assert all(sum(c) <= 1 for c in changed)
+    assert [any(c[k] for c in changed) for k in range(3)] == [True, True, True]
+
+
 def test_model_round_trips_through_json(finder):
     m = finder.model
     d = json.loads(json.dumps(m.to_dict()))
@@ -252,6 +272,53 @@ def test_skin_model_ramps_from_skin_to_interior():
     assert e[0] == 0.0 and e[1] == 1.0 and e[2] == 1.0
     col = np.array([[[140, 172, 218]], [[230, 235, 240]]], np.float32)
     assert sm.profile(col) == pytest.approx(list(e[:2]))
+
+
+def _skin(mean=(60, 90, 140), n=400, seed=1):
+    return np.random.default_rng(seed).normal(mean, 3, (n, 3))
+
+
+@given(k=st.floats(1.0, 1.45), gain=st.floats(0.8, 1.2))
+@settings(max_examples=40, deadline=None)
+def test_brighter_skin_is_still_skin_and_the_white_is_not(k, gain):
+    """More light on the skin (the same colour, brighter: a lit lid, a highlight) stays skin;
+    a white as bright is interior, and so is the skin's colour made darker."""
+    base = np.array([60, 90, 140], np.float32)
+    sm = SkinModel.fit({"skin": _skin(base)}, np.array([[20.0, 20, 20]]))
+    e = sm.interior(np.array([base * k, [170, 175, 180], base * 0.5], np.float32))
+    assert e[0] < 0.05 and e[1] == 1.0 and e[2] == 1.0
+    g = np.full(3, gain, np.float32)
+    assert sm.interior((base * k / gain)[None].astype(np.float32), g)[0] < 0.05  # the gain takes the light off first
+
+
+def test_levels_and_dark_rule_set_after_fitting_take_effect():
+    """set_levels and set_dark change what the membership computes (it is precomputed)."""
+    rng = np.random.default_rng(2)
+    shaded = np.array([60.0, 90, 140]) * rng.uniform(0.6, 1.1, (400, 1)) + rng.normal(0, 2, (400, 3))
+    sm = SkinModel.fit({"skin": shaded}, np.array([[10.0, 10, 10]]))
+    mid = np.array([[18, 27, 42]], np.float32)  # the skin's colour in deep shadow, far darker than any sample
+    before = float(sm.interior(mid)[0])
+    sm.set_dark([shaded], np.full((20, 3), 10.0))
+    assert sm.dark > 0 and float(sm.interior(mid)[0]) > before
+    assert float(sm.interior(np.array([[12, 12, 12]], np.float32))[0]) == 1.0
+    lo = sm.lo
+    sm.set_levels([np.full((10, 3), (30.0, 30, 30))])
+    assert sm.lo != lo and SkinModel.from_dict(sm.to_dict()).interior(mid)[0] == pytest.approx(sm.interior(mid)[0], abs=1e-5)
+
+
+def test_dark_rule_survives_lashes_in_the_band_above_the_eye():
+    """A band over the eye that holds lashes and the lid crease (a tenth of it as dark as the
+    iris) does not switch off "much darker than any skin"; a band that is mostly that dark does."""
+    iris = np.full((20, 3), 12.0)
+    skin = [_skin((60, 90, 140))]
+    band = np.concatenate([_skin((40, 60, 95), 90), np.full((10, 3), 12.0)])
+    sm = SkinModel.fit({"skin": skin[0]}, iris)
+    sm.set_dark(skin, iris, [band])
+    assert sm.dark > 12.0
+    dark_band = np.concatenate([_skin((40, 60, 95), 40), np.full((60, 3), 14.0)])
+    sm2 = SkinModel.fit({"skin": skin[0]}, iris)
+    sm2.set_dark(skin, iris, [dark_band])
+    assert sm2.dark < 0
 
 
 @given(st.lists(st.floats(0.0, 1.0), min_size=0, max_size=30))

@@ -110,6 +110,19 @@ def test_face_detector_boxes_hold_the_eyes():
     assert np.abs(eyes - truth).max() < 0.15 * 80
 
 
+@pytest.mark.parametrize("expected_ipd", [64.0, 80.0, 100.0])
+def test_face_detector_bands_together_cover_the_full_search(expected_ipd):
+    """A lost face is looked for one band of sizes per frame: the bands in turn find it, from
+    the colour frame or from a grey copy the tracker already made."""
+    frame, _ = render_face(BASE)
+    found = [b for k in range(3) for b in detect_faces(frame, expected_ipd, 1.6, band=(k, 3))]
+    truth = np.array([clicks_for(BASE)["left_pupil"], clicks_for(BASE)["right_pupil"]])
+    assert any(np.abs(eyes_in_box(b) - truth).max() < 0.15 * 80 for b in found)
+    g = cv2.resize(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+    found = [b for k in range(3) for b in detect_faces(frame, expected_ipd, 1.6, band=(k, 3), grey=(g, 0.5))]
+    assert any(np.abs(eyes_in_box(b) - truth).max() < 0.15 * 80 for b in found)
+
+
 @pytest.fixture(scope="module")
 def cal():
     frame, _ = render_face(BASE)
@@ -162,3 +175,18 @@ def test_slide_out_and_back_is_found_again_within_five_frames():
     assert first_ok - back <= 5
     away = [i for i, (_, t) in enumerate(frames) if t.status == LOST]
     assert sum(statuses[i] == OK for i in away) <= 1
+
+
+def test_flow_follows_corners_near_the_frame_edge_and_far_apart():
+    """The flow looks only near its corners: corners spread over the whole frame, some at its
+    edge, still give the rigid motion."""
+    img = _textured(4)
+    h, w = img.shape[:2]
+    face = np.array([[2, 2], [w - 3, 2], [w - 3, h - 3], [2, h - 3]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(60.0)
+    assert hm.seed(img, face) >= 30
+    m = np.float64([[1, 0, 5.0], [0, 1, -4.0]])
+    motion = hm.step(cv2.warpAffine(img, m, (w, h), borderMode=cv2.BORDER_REFLECT), face)
+    assert motion is not None
+    assert np.allclose(motion.matrix[:, 2], (5.0, -4.0), atol=0.3)

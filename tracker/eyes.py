@@ -13,13 +13,17 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   like that disc on both sides at once, lose. The best pair is refined at full resolution
   (darkness × correlation, parabola through the peak).
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
-  Gaussian in YCrCb learned below, above and between the eyes at calibration) or much
-  darker than any of it: sclera, iris, pupil and lashes. The upper and lower lid
-  distances are the soft lengths of the interior runs up and down a strip of columns
-  through the iris; the ramp from skin to interior is centred half-way to the iris's and
-  the sclera's own colours, so a blurred edge is found where it is and colour that bleeds
-  past a lid (compressed video) does not count. The calibrated lash line is taken off the
-  upper run (the run ends on the lashes' top; the lid's margin is their bottom).
+  Gaussian in YCrCb learned below, above and between the eyes at calibration; the skin's
+  own colour up to half again as bright — a lit lid, a highlight, more light — still counts
+  as skin): sclera, iris, pupil and lashes. The upper and lower lid distances are the soft
+  lengths of the interior runs up and down a strip of columns through the iris; the ramp
+  from skin to interior is centred half-way to the iris's and the sclera's own colours, so
+  a blurred edge is found where it is and colour that bleeds past a lid (compressed video)
+  does not count. The calibrated lash line is taken off the upper run (the run ends on the
+  lashes' top; the lid's margin is their bottom). Whether the eye is open is read from the
+  same runs with what is much darker than any skin counted as interior too: a dark iris
+  shows by that rule even where its colour is close to the skin's, but the lash line and a
+  shadowed crease are as dark, so the rule says that the iris shows, not where the lids are.
 * **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
   the eye point moves from the iris to the middle of what is visible of the eye (the slit
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
@@ -96,6 +100,9 @@ darker than any skin" to count as interior."""
 BANDS = {"below": (0.15, 0.3), "above": (0.14, 0.3), "half": 0.15}
 """Skin sample bands at calibration: below and above each iris (distances from it) and
 their half-width."""
+BRIGHTER = 0.5
+"""Skin colour up to this fraction brighter than the skin's mean (same hue and saturation) is
+still skin."""
 SKIN_SELECT = 2.0
 """Mahalanobis units beyond the interior ramp's start that still count as skin when the
 light is measured."""
@@ -170,19 +177,26 @@ def subpixel_cut(grey: np.ndarray, cx: float, cy: float, hw: int, hh: int) -> np
 
 def disc_boxes(radius: float) -> tuple[tuple[int, int], ...]:
     """Sizes ``(w, h)`` of centred boxes whose average weighs about like a disc of ``radius``:
-    a wide and a tall box and a square (box filters cost the same at any size)."""
+    a wide and a tall box and a square."""
     a = max(int(round(radius)), 1)
     b = max(int(round(0.5 * radius)), 0)
     c = max(int(round(0.75 * radius)), 1)
     return ((2 * a + 1, 2 * b + 1), (2 * b + 1, 2 * a + 1), (2 * c + 1, 2 * c + 1))
 
 
+def disc_kernel(boxes: tuple[tuple[int, int], ...]) -> np.ndarray:
+    """The average of the centred ``boxes`` as one square float32 kernel (sums to 1), for
+    ``cv2.filter2D``: one filter instead of a box filter per box."""
+    a = max(max(w, h) for w, h in boxes) // 2
+    k = np.zeros((2 * a + 1, 2 * a + 1), np.float32)
+    for w, h in boxes:
+        k[a - h // 2 : a + h // 2 + 1, a - w // 2 : a + w // 2 + 1] += 1.0 / (w * h * len(boxes))
+    return k
+
+
 def disc_mean(img: np.ndarray, boxes: tuple[tuple[int, int], ...]) -> np.ndarray:
-    """Mean of ``img`` over a disc (see :func:`disc_boxes`) at every pixel."""
-    out = cv2.boxFilter(img, -1, boxes[0])
-    for b in boxes[1:]:
-        out += cv2.boxFilter(img, -1, b)
-    return out * (1.0 / len(boxes))
+    """Mean of ``img`` (float32) over a disc (see :func:`disc_boxes`) at every pixel."""
+    return cv2.filter2D(img, -1, disc_kernel(boxes))
 
 
 def cut(img: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
@@ -197,7 +211,14 @@ def cut(img: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
             np.ascontiguousarray(part), b - y0, max(y0 + h - H, 0), a - x0, max(x0 + w - W, 0), cv2.BORDER_REPLICATE
         )
         return part.astype(np.float32, copy=False)
-    return np.asarray(img[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
+    return np.ascontiguousarray(img[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
+
+
+def windows(img: np.ndarray, rows: int, cols: int, ph: int, pw: int) -> np.ndarray:
+    """Every ``(ph, pw)`` patch of the C-contiguous float32 ``img`` whose top-left corner is
+    within ``rows × cols`` of its own, as a ``(rows, cols, ph, pw)`` view (no copy)."""
+    s0, s1 = img.strides
+    return np.ndarray((rows, cols, ph, pw), np.float32, img, 0, (s0, s1, s0, s1))
 
 
 def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) -> float:
@@ -266,40 +287,91 @@ class SkinModel:
         self.mean = np.asarray(self.mean, dtype=np.float64).reshape(3)
         self.cov = np.asarray(self.cov, dtype=np.float64).reshape(3, 3)
         try:
-            L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
+            self._L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
         except np.linalg.LinAlgError:
             raise EyeModelError("eye model: the skin covariance is not positive definite") from None
-        W = np.concatenate([L.T @ _YCC, _YCC[:1]])  # rows: whitened coordinates, luminance
-        c = np.append(L.T @ self.mean, 0.0)
-        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (4, 4) for cv2.transform
-        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0]], np.float32)
+        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0, 0.0]], np.float32)
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """The per-pixel transform and ramp scale for the current levels and dark rule (again
+        whenever :meth:`set_levels` or :meth:`set_dark` change them)."""
+        L = self._L
+        # rows: whitened coordinates; the fourth is the dark ramp (1/2 at ``dark``, rising as
+        # the luminance falls) so that one transform gives everything the membership needs
+        # and the fifth how far along the skin's own colour a pixel lies beyond the mean (0 at
+        # the mean, 1 at twice its brightness): see _distance
+        ramp = -_YCC[:1] / self.dark_ramp
+        wm = L.T @ self.mean
+        self._wm2 = max(float(wm @ wm), 1e-9)
+        Wz = L.T @ _YCC
+        W = np.concatenate([Wz, ramp, (wm @ Wz)[None, :] / self._wm2])
+        c = np.concatenate([wm, [-(self.dark / self.dark_ramp + 0.5), 1.0]])
+        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (5, 4) for cv2.transform
+        self._scale = 1.0 / (self.hi - self.lo)
+        self._gain_key: np.ndarray | None = None
+        self._gain_M = self._M
 
     def _transform(self, bgr: np.ndarray, gain: np.ndarray | None) -> np.ndarray:
-        """Whitened coordinates and luminance ``(n, 1, 4)`` of BGR pixels (``gain`` applied)."""
-        M = self._M if gain is None else self._M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
-        return cv2.transform(np.asarray(bgr, dtype=np.float32).reshape(-1, 1, 3), M)
+        """Whitened coordinates and the dark ramp ``(n, 1, 4)`` of BGR pixels (``gain`` applied)."""
+        if gain is None:
+            M = self._M
+        elif gain is self._gain_key:
+            M = self._gain_M
+        else:
+            M = self._M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
+            self._gain_key, self._gain_M = gain, M
+        b = bgr if isinstance(bgr, np.ndarray) and bgr.dtype == np.float32 else np.asarray(bgr, dtype=np.float32)
+        return cv2.transform(b.reshape(-1, 1, 3), M)
 
-    def _membership(self, z: np.ndarray) -> np.ndarray:
-        d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
-        e = (d - self.lo) * (1.0 / (self.hi - self.lo))
-        if self.dark > 0:
-            e = np.maximum(e, (self.dark - z[:, 0, 3]) * (1.0 / self.dark_ramp) + 0.5)
+    def _distance(self, z: np.ndarray) -> np.ndarray:
+        """Mahalanobis distance ``(n,)`` from the skin of the pixels transformed to ``z``,
+        measured from the nearest of the skin colours from its mean to :data:`BRIGHTER` times
+        brighter (the same hue and saturation, more light): a lit lid, a highlight or a
+        brighter light keep the skin's colour, while the eye's interior is darker (iris,
+        pupil, lashes) or paler (the white)."""
+        d2 = cv2.transform(z * z, self._sum3).ravel()
+        u = z[:, 0, 4]
+        t = np.minimum(np.maximum(u, 0.0), BRIGHTER)
+        u = u * 2.0
+        u -= t
+        t *= u
+        t *= self._wm2
+        d2 -= t  # |z − t·wm|² = |z|² − t (2u − t) |wm|²
+        np.maximum(d2, 0.0, out=d2)
+        return np.sqrt(d2, out=d2)
+
+    def _membership(self, z: np.ndarray, dark: bool = True) -> np.ndarray:
+        d = self._distance(z)
+        e = d - self.lo
+        e *= self._scale
+        if dark and self.dark > 0:
+            np.maximum(e, z[:, 0, 3], out=e)
         np.maximum(e, 0.0, out=e)
         return np.minimum(e, 1.0, out=e)
 
     def distance(self, bgr: np.ndarray) -> np.ndarray:
         """Mahalanobis distance of each pixel (``(..., 3)`` BGR) from the skin, ``(n,)``."""
-        z = self._transform(bgr, None)
-        return cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+        return self._distance(self._transform(bgr, None))
 
     def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
         """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
         ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration)."""
         return self._membership(self._transform(bgr, gain)).reshape(np.shape(bgr)[:-1])
 
-    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
-        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs)."""
-        return self._membership(self._transform(column, gain)).tolist()
+    def profile(self, column: np.ndarray, gain: np.ndarray | None = None, dark: bool = True) -> list[float]:
+        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs);
+        ``dark=False`` leaves the dark rule out (colour only)."""
+        return self._membership(self._transform(column, gain), dark).tolist()
+
+    def profiles(self, column: np.ndarray, gain: np.ndarray | None = None) -> tuple[list[float], list[float]]:
+        """:meth:`profile` of a column by colour only and with the dark rule, in one pass."""
+        z = self._transform(column, gain)
+        e = self._membership(z, False)
+        if self.dark <= 0:
+            v = e.tolist()
+            return v, v
+        return e.tolist(), np.maximum(e, np.minimum(z[:, 0, 3], 1.0)).tolist()
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
@@ -332,15 +404,26 @@ class SkinModel:
         if ds:
             mid = float(np.clip(0.5 * min(ds), NOT_SKIN_LO + 1.5, LEVEL_MAX))
             self.lo, self.hi = mid - 1.5, mid + 1.5
+            self._prepare()
 
-    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
+    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray, doubtful: list[np.ndarray] = ()) -> None:
         """Count as interior what is much darker than any skin: half-way between the iris's
-        middle and the darkest skin (10th percentile of each group), when the iris is at most
-        :data:`DARK_RATIO` as bright."""
+        middle and the darkest skin, when the iris is at most :data:`DARK_RATIO` as bright.
+
+        The darkest skin is the 10th percentile of each ``skin`` group and the median of each
+        ``doubtful`` one: a band over the eye that is mostly a shadowed lid keeps its shadow
+        on the skin side, but the lashes and crease a tenth of it may hold (darker than the
+        skin, and as dark as a brown iris) do not switch the rule off."""
+        lum = [np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0] for g in list(skin) + list(doubtful)]
+        q = [10.0] * len(skin) + [50.0] * len(doubtful)
+        levels = [float(np.percentile(y, p)) for y, p in zip(lum, q) if len(y)]
+        if not levels:
+            return
         yi = float(np.median(np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC[0]))
-        ys = min(float(np.percentile(np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0], 10)) for g in skin if len(g))
+        ys = min(levels)
         if yi <= DARK_RATIO * ys:
             self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), max(0.25 * (ys - yi), 1.0)
+            self._prepare()
 
     def to_dict(self) -> dict:
         return {
@@ -594,9 +677,11 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_heights.append(float(height))
 
     groups, middle, ring, sclera = _colour_samples(crop, pupils, radius, brow_heights, wi)
-    skin = SkinModel.fit(groups, middle, doubtful=("above the eyes",))
+    doubtful = ("above the eyes",)
+    skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])
-    skin.set_dark(list(groups.values()), middle)  # darker than every skin sample, even a shadowed lid
+    # darker than every skin sample, even a shadowed lid
+    skin.set_dark([g for k, g in groups.items() if k not in doubtful], middle, [groups[k] for k in doubtful])
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
@@ -646,26 +731,32 @@ class EyeFinder:
         self._calib_eye = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.eye_pictures]
         self._adapted_iris = [p.copy() for p in self._calib_iris]
         self._adapted_eye = [p.copy() for p in self._calib_eye]
-        self._set_pictures()
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
         self._adapt_count = 0
+        self._half: tuple[np.ndarray | None, int, int] = (None, 0, 0)
         rm = 0.5 * (self.radius[0] + self.radius[1])
-        self._boxes_half = disc_boxes(0.375 * rm)
-        self._boxes = [disc_boxes(0.75 * r) for r in self.radius]
-        # the ring as a few sample points: offset (half px) and outward direction / count / 3
+        # disc darkness as one filter each: half resolution (both eyes), full resolution per eye
+        self._disc_half = disc_kernel(disc_boxes(0.375 * rm))
+        self._disc_neg = [-disc_kernel(disc_boxes(0.75 * r)) for r in self.radius]
+        # the ring as a few sample points (offset in half px, outward direction / count / 3),
+        # gathered by two sparse kernels over the x and y gradients
         ang = np.arange(RING_POINTS) * (2.0 * math.pi / RING_POINTS)
-        self._ring_points = [
-            (int(round(0.5 * rm * math.cos(a))), int(round(0.5 * rm * math.sin(a))),
-             math.cos(a) / (3.0 * RING_POINTS), math.sin(a) / (3.0 * RING_POINTS))
-            for a in ang
-        ]
+        pts = [(int(round(0.5 * rm * math.cos(a))), int(round(0.5 * rm * math.sin(a))),
+                math.cos(a) / (3.0 * RING_POINTS), math.sin(a) / (3.0 * RING_POINTS)) for a in ang]
+        q = max(max(abs(dx), abs(dy)) for dx, dy, _, _ in pts)
+        self._ring_x = np.zeros((2 * q + 1, 2 * q + 1), np.float32)
+        self._ring_y = np.zeros((2 * q + 1, 2 * q + 1), np.float32)
+        for dx, dy, cx, cy in pts:
+            self._ring_x[q + dy, q + dx] += cx
+            self._ring_y[q + dy, q + dx] += cy
         self.pad = max(
-            _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
+            _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._calib_iris)
         )
         u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (prior[0] * wi))
         v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
         self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
+        self._maps = np.empty((2,) + self._prior.shape, np.float32)  # both eyes' coarse maps, reused
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
@@ -674,9 +765,16 @@ class EyeFinder:
         self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
         self.brow_hi = [h + BROW_UP * wi for h in model.brow_heights]
         self._brow_hw = brow_half_width(wi)
-        self._brow_z = [np.asarray(p, dtype=np.float32).reshape(-1, 1) for p in model.brow_profiles]
+        self._brow_t = []  # the brow cross-sections, zero mean and unit norm (the correlation's numerator)
+        for prof in model.brow_profiles:
+            t = np.asarray(prof, dtype=np.float32).ravel()
+            t = t - t.mean()
+            self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
+        self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
+        self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
+        self._set_pictures()
         # the crop this needs (face coordinates)
         half_w = 0.5 * wi + max(self.sx + self.pad, SOCKET_HW * wi + SOCKET_SEARCH[0] * wi + self.sx, 0.25 * wi + self.sx) + 2
         top = max(
@@ -687,13 +785,76 @@ class EyeFinder:
         top, bottom = max(top, self.sy + self.pad + 2), max(bottom, self.sy + self.pad + 2)
         self.rect = (int(math.floor(-half_w)), int(math.floor(-top)), int(math.ceil(2 * half_w)), int(math.ceil(top + bottom)))
 
-    def _set_pictures(self) -> None:
-        """The pictures in use: the adapted ones with :data:`ADAPT_FLOOR` of the calibration's."""
+    def _set_pictures(self, iris: bool = True, eye: bool = True) -> None:
+        """The pictures in use (the iris pictures, the eye pictures or both): the adapted ones
+        with :data:`ADAPT_FLOOR` of the calibration's."""
         f = ADAPT_FLOOR
-        self._iris = [f * c + (1.0 - f) * a for c, a in zip(self._calib_iris, self._adapted_iris)]
-        self._eye = [f * c + (1.0 - f) * a for c, a in zip(self._calib_eye, self._adapted_eye)]
-        self._iris_half = [cv2.pyrDown(t) for t in self._iris]
-        self._eye_half = [cv2.pyrDown(t) for t in self._eye]
+        if iris:
+            self._iris = [f * c + (1.0 - f) * a for c, a in zip(self._calib_iris, self._adapted_iris)]
+            self._iris_half = [cv2.pyrDown(t) for t in self._iris]
+            self._iris_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris]
+            self._iris_half_hw = [(t.shape[0] // 2, t.shape[1] // 2) for t in self._iris_half]
+            if hasattr(self, "_fine_K4"):
+                self._fine_pictures()
+            else:
+                self._fine_matrices()
+        if eye:
+            self._eye = [f * c + (1.0 - f) * a for c, a in zip(self._calib_eye, self._adapted_eye)]
+            self._eye_half = [cv2.pyrDown(t) for t in self._eye]
+            self._eye_matrices()
+
+    def _fine_matrices(self) -> None:
+        """For the full-resolution refinement, per eye: a patch size that holds the iris
+        picture and the disc, and the columns whose dot products with a patch give the
+        correlation's numerator (the picture, zero mean and unit norm), the disc mean and the
+        patch's sum under the picture; the picture's mask and 1 / its pixel count. Only the
+        numerator's column changes when the pictures adapt (:meth:`_fine_pictures`)."""
+        hh = max(max(th, self._disc_neg[i].shape[0] // 2) for i, (th, _) in enumerate(self._iris_hw))
+        hw = max(max(tw, self._disc_neg[i].shape[1] // 2) for i, (_, tw) in enumerate(self._iris_hw))
+        self._fine_half = (hh, hw)
+        A = (2 * hh + 1) * (2 * hw + 1)
+        K = np.zeros((2, 2 * hh + 1, 2 * hw + 1, 3), np.float32)
+        for i in range(2):
+            th, tw = self._iris_hw[i]
+            d = -self._disc_neg[i]
+            b0, b1 = d.shape[0] // 2, d.shape[1] // 2
+            K[i, hh - b0 : hh + b0 + 1, hw - b1 : hw + b1 + 1, 1] = d
+            K[i, hh - th : hh + th + 1, hw - tw : hw + tw + 1, 2] = 1.0
+        self._fine_K = K.reshape(2, A, 3)
+        self._fine_K4 = K  # the same memory, patch-shaped
+        self._fine_mask = np.ascontiguousarray(self._fine_K[:, :, 2:])
+        self._fine_all = bool(np.all(self._fine_mask == 1.0))  # the picture fills the patch
+        self._fine_inv_n = np.array([[1.0 / ((2 * th + 1) * (2 * tw + 1))] for th, tw in self._iris_hw], np.float32)
+        n = 2 * FINE + 1
+        self._fine_buf = np.empty((2, n * n, A), np.float32)
+        self._fine_pictures()
+
+    def _fine_pictures(self) -> None:
+        """The numerator columns of :meth:`_fine_matrices` from the iris pictures in use."""
+        hh, hw = self._fine_half
+        for i, t in enumerate(self._iris):
+            th, tw = self._iris_hw[i]
+            z = t - float(t.mean())
+            z *= 1.0 / max(math.sqrt(float((z * z).sum())), 1e-6)
+            self._fine_K4[i, hh - th : hh + th + 1, hw - tw : hw + tw + 1, 0] = z
+
+    def _eye_matrices(self) -> None:
+        """For the eye picture's score, per eye: the window (half px) around the eye point that
+        is looked for in the half-size eye picture, and every same-size patch of the picture
+        with zero mean and unit norm as the rows of one matrix (their correlations with the
+        window are one product)."""
+        sx, sy = self._socket_search
+        self._eye_win, self._eye_q = [], []
+        for t in self._eye_half:
+            th, tw = t.shape[0] // 2, t.shape[1] // 2
+            w, h = tw + sx + 1, th + sy + 1  # half px (the window in full px is twice that)
+            self._eye_win.append((w, h))
+            if h > t.shape[0] or w > t.shape[1]:
+                self._eye_q.append(None)  # cannot happen at sane sizes; matchTemplate then
+                continue
+            P = windows(np.ascontiguousarray(t), t.shape[0] - h + 1, t.shape[1] - w + 1, h, w).reshape(-1, h * w)
+            P = P - P.mean(axis=1, keepdims=True)
+            self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32))
 
     # ------------------------------------------------------------------ irises
     def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
@@ -701,87 +862,117 @@ class EyeFinder:
         each map's (0, 0): disc darkness against the strip's median grey × (1 + ring votes) ×
         (1 + correlation with the eye's iris picture) × the prior around the prediction."""
         p = self.pad
-        cs = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres]
-        x0, y0 = min(c[0] for c in cs) - self.sx - p, min(c[1] for c in cs) - self.sy - p
-        x1, y1 = max(c[0] for c in cs) + self.sx + p, max(c[1] for c in cs) + self.sy + p
+        (ax, ay), (bx, by) = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres.tolist()]
+        cs = ((ax, ay), (bx, by))
+        x0, y0 = min(ax, bx) - self.sx - p, min(ay, by) - self.sy - p
+        x1, y1 = max(ax, bx) + self.sx + p, max(ay, by) + self.sy + p
         strip = cut(grey, x0, y0, x1 - x0 + 2, y1 - y0 + 2)
         half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        self._half = (half, x0, y0)  # the eye picture's score looks here too
         ph = p // 2
         sub = half[::2, ::2].ravel()
         k = sub.size // 2
-        level = max(float(np.partition(sub, k)[k]), 8.0)
-        dark = np.maximum(level - disc_mean(half, self._boxes_half), 0.0) * (1.0 / level)
+        sub.partition(k)
+        level = max(float(sub[k]), 8.0)
+        # 1 − disc mean / level, at least 0
+        dark = cv2.filter2D(half, -1, self._disc_half * (-1.0 / level), delta=1.0)
+        np.maximum(dark, 0.0, out=dark)
         if self.dark_power != 1.0:
-            dark = dark ** self.dark_power
+            np.power(dark, self.dark_power, out=dark)
         # ring votes: unit gradients (weighted by strength against the median, at most 3×)
         gx = cv2.Sobel(half, cv2.CV_32F, 1, 0, ksize=3)
         gy = cv2.Sobel(half, cv2.CV_32F, 0, 1, ksize=3)
         mag = cv2.magnitude(gx, gy)
-        m = mag.size // 2
-        t = max(float(np.partition(mag.ravel(), m)[m]), 1.0)
-        wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
-        votes = self._ring_votes(gx * wgt, gy * wgt, ph)
-        maps, origins = [], []
+        m = mag.ravel().copy()
+        k = m.size // 2
+        m.partition(k)
+        # min(|g| / median, 3) / |g|, i.e. min(1 / median, 3 / |g|)
+        mag += 1e-3
+        wgt = np.divide(3.0, mag, out=mag)
+        np.minimum(wgt, 1.0 / max(float(m[k]), 1.0), out=wgt)
+        gx *= wgt
+        gy *= wgt
+        sc = self._ring_votes(gx, gy, ph)
+        sc += 1.0
+        sc *= dark[ph : dark.shape[0] - ph, ph : dark.shape[1] - ph]
         sxh, syh = self.sx // 2, self.sy // 2
         ws, hs = 2 * sxh + 1, 2 * syh + 1
+        maps = self._maps
+        origins = []
         for i, (cx, cy) in enumerate(cs):
             u0, v0 = (cx - x0) // 2 - sxh - ph, (cy - y0) // 2 - syh - ph  # window in the inner part
-            tpl = self._iris_half[i]
-            th, tw = tpl.shape[0] // 2, tpl.shape[1] // 2
-            ncc = cv2.matchTemplate(half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw], tpl, cv2.TM_CCOEFF_NORMED)
-            sc = dark[ph + v0 : ph + v0 + hs, ph + u0 : ph + u0 + ws] * (1.0 + votes[v0 : v0 + hs, u0 : u0 + ws])
-            maps.append(sc * (1.0 + np.maximum(ncc, 0.0)) * self._prior)
+            th, tw = self._iris_half_hw[i]
+            cv2.matchTemplate(half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw],
+                              self._iris_half[i], cv2.TM_CCOEFF_NORMED, result=maps[i])
             # half px k is the mean of the strip's full px 2k and 2k+1
-            origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
-        return maps, origins
+            origins.append(((u0, v0), (x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5)))
+        np.maximum(maps, 0.0, out=maps)
+        maps += 1.0
+        maps *= self._prior
+        for i, ((u0, v0), _) in enumerate(origins):
+            maps[i] *= sc[v0 : v0 + hs, u0 : u0 + ws]
+        return maps, [o for _, o in origins]
 
     def _ring_votes(self, gx: np.ndarray, gy: np.ndarray, p: int) -> np.ndarray:
         """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
         gradients at the ring's sample points point away from it (about 0..1)."""
-        H, W = gx.shape
-        out = np.zeros((H - 2 * p, W - 2 * p), np.float32)
-        for dx, dy, cx, cy in self._ring_points:
-            out += cx * gx[p + dy : H - p + dy, p + dx : W - p + dx]
-            out += cy * gy[p + dy : H - p + dy, p + dx : W - p + dx]
-        return np.maximum(out, 0.0)
+        v = cv2.filter2D(gx, -1, self._ring_x)
+        v += cv2.filter2D(gy, -1, self._ring_y)
+        v = v[p : v.shape[0] - p, p : v.shape[1] - p]
+        return np.maximum(v, 0.0, out=v)
 
-    def _fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
-        """Sub-pixel iris centre near full-res ``(x, y)``: disc darkness × (1 + correlation with
-        the iris picture) within :data:`FINE` px, a parabola through the best; also the
-        correlation there."""
-        t = self._iris[i]
-        th, tw = t.shape[0] // 2, t.shape[1] // 2
-        b = max(max(bx, by) for bx, by in self._boxes[i]) // 2
-        m = max(th, tw, b)
+    def _fine(self, grey: np.ndarray, peaks) -> list[tuple[float, float, float]]:
+        """Sub-pixel iris centres near the full-res ``peaks`` ((x, y) ints, both eyes): disc
+        darkness × (1 + correlation with the iris picture) within :data:`FINE` px, a parabola
+        through the best; also the correlation there. Every patch of both windows is one row
+        of a product with :meth:`_fine_matrices`' columns."""
         n = 2 * FINE + 1
-        win = cut(grey, x - FINE - m, y - FINE - m, n + 2 * m, n + 2 * m)
-        ncc = cv2.matchTemplate(win[m - th : m + n + th, m - tw : m + n + tw], t, cv2.TM_CCOEFF_NORMED)
-        D = disc_mean(win, self._boxes[i])[m : m + n, m : m + n]
-        level = max(float(np.max(win[m : m + n, m : m + n])), 8.0)
-        s = np.maximum(level - D, 0.0)
-        if self.dark_power != 1.0:
-            s = s ** self.dark_power
-        s = s * (1.0 + np.maximum(ncc, 0.0))
-        _, _, _, (kx, ky) = cv2.minMaxLoc(s)
-        fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < n - 1 else 0.0
-        fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < n - 1 else 0.0
-        return x - FINE + kx + fx, y - FINE + ky + fy, float(ncc[ky, kx])
+        hh, hw = self._fine_half
+        V = self._fine_buf
+        level = np.empty((2, 1), np.float32)
+        for i, (x, y) in enumerate(peaks):
+            win = cut(grey, x - FINE - hw, y - FINE - hh, n + 2 * hw, n + 2 * hh)
+            V[i].reshape(n, n, 2 * hh + 1, 2 * hw + 1)[...] = windows(win, n, n, 2 * hh + 1, 2 * hw + 1)
+            level[i, 0] = max(float(win[hh : hh + n, hw : hw + n].max()), 8.0)
+        R = np.matmul(V, self._fine_K)  # (2, n², 3): numerator, disc mean, sum
+        s2 = np.einsum("eij,eij->ei", V, V) if self._fine_all else np.matmul(V * V, self._fine_mask)[..., 0]
+        s1 = R[..., 2]
+        s2 -= s1 * s1 * self._fine_inv_n
+        np.maximum(s2, 1e-3, out=s2)
+        ncc = R[..., 0] / np.sqrt(s2)  # the picture's normalised correlation (a flat window: 0)
+        if self.dark_power == 0.0:
+            s = np.maximum(ncc, 0.0) + 1.0
+        else:
+            s = level - R[..., 1]
+            np.maximum(s, 0.0, out=s)
+            if self.dark_power != 1.0:
+                s **= self.dark_power
+            s *= np.maximum(ncc, 0.0) + 1.0
+        out = []
+        for i, (x, y) in enumerate(peaks):
+            k = int(s[i].argmax())
+            ky, kx = divmod(k, n)
+            si = s[i].tolist()
+            fx = parabola_offset(si[k - 1], si[k], si[k + 1]) if 0 < kx < n - 1 else 0.0
+            fy = parabola_offset(si[k - n], si[k], si[k + n]) if 0 < ky < n - 1 else 0.0
+            out.append((x - FINE + kx + fx, y - FINE + ky + fy, float(ncc[i, k])))
+        return out
 
     def locate_irises(self, grey: np.ndarray, centres) -> list[tuple[float, float, float]]:
         """Both iris centres (crop px, sub-pixel) and their iris-picture correlations near the
         predicted eye ``centres`` (2, 2): the best pair of the two coarse maps, each eye free
         to move by the slack against the other, each then refined at full resolution."""
         maps, origins = self._coarse_maps(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
-        J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
+        J = cv2.dilate(maps[0], self._dilate)
+        J += cv2.dilate(maps[1], self._dilate)
         _, _, _, (jx, jy) = cv2.minMaxLoc(J)
         sx, sy = self.slack
-        out = []
-        for i, (m, (ox, oy)) in enumerate(zip(maps, origins)):
-            ya, xa = max(jy - sy, 0), max(jx - sx, 0)
-            sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
-            _, _, _, (kx, ky) = cv2.minMaxLoc(sub)
-            out.append(self._fine(grey, i, int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
-        return out
+        ya, xa = max(jy - sy, 0), max(jx - sx, 0)
+        peaks = []
+        for m, (ox, oy) in zip(maps, origins):
+            _, _, _, (kx, ky) = cv2.minMaxLoc(m[ya : jy + sy + 1, xa : jx + sx + 1])
+            peaks.append((int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
+        return self._fine(grey, peaks)
 
     # ------------------------------------------------------------------ lids
     def _strip(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
@@ -793,14 +984,41 @@ class EyeFinder:
         y0 = max(yi - R, 0)
         return crop[y0 : min(yi + R + 1, h), xi - hw : xi + hw + 1], yi - y0
 
-    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
-        """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
-        of the interior runs up and down the strip through ``at``, each row classified by its
-        mean colour (the columns average the noise away), the lash line off the upper one."""
+    def _column(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
+        """Mean colour of each row of eye ``i``'s lid strip through ``at`` ``(n, 1, 3)`` float32
+        (the columns average the noise away) and the row of ``at``."""
         strip, c = self._strip(crop, i, at)
-        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F), gain)
+        return cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F), c
+
+    def _lid_runs(self, e: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
+        """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s)."""
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+
+    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
+             dark: bool = True) -> tuple[float, float]:
+        """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
+        of the interior runs up and down the strip through ``at``, each row classified by its
+        mean colour, the lash line off the upper one. With ``dark`` (the default, how the
+        calibrated gap is measured) what is much darker than any skin is interior too."""
+        col, c = self._column(crop, i, at)
+        return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at)
+
+    def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float, float]]:
+        """For both eyes (at ``ats[0]``, ``ats[1]``), their colours classified together: the
+        :meth:`lids` by colour only — where the skin ends — and the gap with the dark rule,
+        which says whether the eye is open: a dark iris is much darker than any skin, but so
+        are the lash line and a shadowed crease beside the lids, so the rule tells that the
+        iris shows, not where the lids are."""
+        (c0, k0), (c1, k1) = self._column(crop, 0, ats[0]), self._column(crop, 1, ats[1])
+        e, ed = self.skin.profiles(np.concatenate((c0, c1)), gain)
+        n = len(c0)
+        out = []
+        for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
+            up, down = self._lid_runs(e[a:b], k, i, ats[i])
+            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i]) if ed is not e else (up, down)
+            out.append((up, down, gu + gd))
+        return out
 
     def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> float:
         """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
@@ -822,49 +1040,114 @@ class EyeFinder:
         return float(max(up - (c - (lo + j + 0.5)), 0.0)) if steps[j] >= LASH_CONTRAST else 0.0
 
     def _slit(self, crop: np.ndarray, at: tuple[float, float], gain) -> tuple[float, float]:
-        """Centroid of the interior around ``at`` (a closed eye: the slit between the lids), twice."""
+        """Centroid of the interior around ``at`` (a closed eye: the slit between the lids), twice;
+        every other pixel is classified, once, as far as the second look can reach."""
         h, w = crop.shape[:2]
-        hx, hy = int(round(SLIT_HW * self.wi)), int(round(SLIT_HH * self.wi))
+        hx, hy = self._slit_half
+        xi, yi = int(round(at[0])), int(round(at[1]))
+        # the grid of samples starts where the first look's window does
+        X0, Y0 = xi - hx - 2 * ((hx + 1) // 2), yi - hy - 2 * ((hy + 1) // 2)
+        X0, Y0 = (X0 if X0 >= 0 else X0 % 2), (Y0 if Y0 >= 0 else Y0 % 2)
+        E = self.skin.interior(crop[Y0 : min(yi + 2 * hy + 2, h) : 2, X0 : min(xi + 2 * hx + 2, w) : 2], gain)
         x, y = at
         for _ in range(2):
             xi, yi = int(round(x)), int(round(y))
-            x0, x1, y0, y1 = max(xi - hx, 0), min(xi + hx + 1, w), max(yi - hy, 0), min(yi + hy + 1, h)
-            e = self.skin.interior(crop[y0:y1:2, x0:x1:2], gain)  # every other pixel is plenty
-            tot = float(e.sum())
+            j0, j1 = max(-(-(xi - hx - X0) // 2), 0), min(-(-(xi + hx + 1 - X0) // 2), E.shape[1])
+            i0, i1 = max(-(-(yi - hy - Y0) // 2), 0), min(-(-(yi + hy + 1 - Y0) // 2), E.shape[0])
+            if i1 <= i0 or j1 <= j0:
+                break
+            mo = cv2.moments(E[i0:i1, j0:j1])
+            tot = mo["m00"]
             if tot < 0.25:
                 break
-            x = x0 + 2.0 * float(e.sum(axis=0) @ np.arange(e.shape[1])) / tot
-            y = y0 + 2.0 * float(e.sum(axis=1) @ np.arange(e.shape[0])) / tot
+            x = X0 + 2.0 * (j0 + mo["m10"] / tot)
+            y = Y0 + 2.0 * (i0 + mo["m01"] / tot)
         return x, y
 
     # ------------------------------------------------------------------ brow, score, light
-    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
-        """Brow height above ``at`` (crop px) and its correlation: the calibrated cross-section
-        slid along a strip of columns above ``at``, refined by a parabola."""
-        px, py = at
-        t = self._brow_z[i]
-        n = len(t)
+    def _brow_window(self, at: tuple[float, float], i: int) -> tuple[int, int]:
+        """First row and row count of the strip eye ``i``'s brow is looked for in above ``at``."""
         c = self.model.brow_centres[i]
-        top = int(math.floor(py - self.brow_hi[i] - c)) - 1
-        bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
-        if bot - top < n + 2:
-            return self.model.brow_heights[i], 0.0
-        prof = strip_profile(grey, px, top, bot - top, self._brow_hw)
-        score = cv2.matchTemplate(prof.reshape(-1, 1), t, cv2.TM_CCOEFF_NORMED).ravel()
-        _, _, _, (_, k) = cv2.minMaxLoc(score.reshape(-1, 1))
+        top = int(math.floor(at[1] - self.brow_hi[i] - c)) - 1
+        return top, int(math.ceil(at[1] - self.brow_lo[i] - c)) + len(self._brow_t[i]) + 1 - top
+
+    def _brows(self, grey: np.ndarray, ats) -> list[tuple[float, float]]:
+        """Brow heights above ``ats`` (both eyes, crop px) and their correlations: each eye's
+        calibrated cross-section slid along a strip of columns above it (normalised correlation,
+        both strips' window sums in one go), refined by a parabola."""
+        profs, tops = [], []
+        for i, at in enumerate(ats):
+            top, rows = self._brow_window(at, i)
+            if rows < len(self._brow_t[i]) + 2:
+                return [self._brow(grey, a, k) for k, a in enumerate(ats)]
+            profs.append(strip_profile(grey, at[0], top, rows, self._brow_hw))
+            tops.append(top)
+        n = len(self._brow_t[0])
+        if len(self._brow_t[1]) != n:
+            return [self._brow(grey, a, k) for k, a in enumerate(ats)]
+        both = np.concatenate(profs)
+        s1 = np.correlate(both, self._brow_ones[0], "valid")
+        s2 = np.correlate(both * both, self._brow_ones[0], "valid")
+        s1 *= s1
+        s1 *= 1.0 / n
+        s2 -= s1
+        np.maximum(s2, 1e-3, out=s2)
+        den = np.sqrt(s2, out=s2)  # |p − p̄| at every offset of the joined strips
+        out, start = [], 0
+        for i, (prof, top) in enumerate(zip(profs, tops)):
+            num = np.correlate(prof, self._brow_t[i], "valid")
+            num /= den[start : start + len(num)]
+            start += len(prof)
+            out.append(self._brow_peak(num, top, ats[i][1], i))
+        return out
+
+    def _brow_peak(self, score: np.ndarray, top: int, py: float, i: int) -> tuple[float, float]:
+        k = int(score.argmax())
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
-        return float(py - (top + k + d + c)), float(score[k])
+        return float(py - (top + k + d + self.model.brow_centres[i])), min(float(score[k]), 1.0)
+
+    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
+        """:meth:`_brows` of one eye."""
+        top, rows = self._brow_window(at, i)
+        t = self._brow_t[i]
+        n = len(t)
+        if rows < n + 2:
+            return self.model.brow_heights[i], 0.0
+        prof = strip_profile(grey, at[0], top, rows, self._brow_hw)
+        # Σ (p − p̄)(t − t̄) / (|p − p̄| |t − t̄|) at every offset; a flat stretch scores 0
+        num = np.correlate(prof, t, "valid")
+        s1 = np.correlate(prof, self._brow_ones[i], "valid")
+        s2 = np.correlate(prof * prof, self._brow_ones[i], "valid")
+        s1 *= s1
+        s1 *= 1.0 / n
+        s2 -= s1
+        np.maximum(s2, 1e-3, out=s2)
+        num /= np.sqrt(s2, out=s2)
+        return self._brow_peak(num, top, at[1], i)
 
     def _eye_match(self, grey: np.ndarray, at: tuple[float, float], i: int) -> float:
-        """Best correlation (0..1) of the eye picture around ``at`` at half resolution: as far
-        sideways as a gaze moves the iris in the eye, a little up and down."""
-        t = self._eye_half[i]
-        th, tw = t.shape[0] // 2, t.shape[1] // 2
-        sx, sy = self._socket_search
+        """Best correlation (0..1) of the eye around ``at`` (a window of about 0.5 × 0.25 work
+        ipd at half resolution) with the same-size parts of the calibrated eye picture within
+        a few px of its middle (gaze moves the iris in the eye; lids and corners stay)."""
+        w, h = self._eye_win[i]
         x, y = 2 * int(round(at[0] / 2)), 2 * int(round(at[1] / 2))
-        w, h = 2 * (tw + sx) + 2, 2 * (th + sy) + 2
-        half = cv2.resize(cut(grey, x - w // 2, y - h // 2, w, h), (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-        _, best, _, _ = cv2.minMaxLoc(cv2.matchTemplate(half, t, cv2.TM_CCOEFF_NORMED))
+        fx, fy = x - w, y - h  # the window's corner, full px
+        half, hx0, hy0 = self._half
+        u, v = (fx - hx0) // 2, (fy - hy0) // 2
+        if half is not None and 0 <= u and u + w <= half.shape[1] and 0 <= v and v + h <= half.shape[0]:
+            win = half[v : v + h, u : u + w]  # the iris search's half-size strip holds it
+        else:
+            win = cv2.resize(cut(grey, fx, fy, 2 * w, 2 * h), (w, h), interpolation=cv2.INTER_AREA)
+        q = self._eye_q[i]
+        if q is None:
+            _, best, _, _ = cv2.minMaxLoc(cv2.matchTemplate(np.ascontiguousarray(win), self._eye_half[i], cv2.TM_CCOEFF_NORMED))
+            return min(max(best, 0.0), 1.0)
+        z = win.ravel()  # a copy when the window is a part of the strip
+        s1, s2 = float(z.sum()), float(z @ z)
+        norm = math.sqrt(max(s2 - s1 * s1 / z.size, 0.0))
+        if norm < 1e-3:
+            return 0.0
+        best = float((q @ z).max()) / norm
         return min(max(best, 0.0), 1.0)
 
     def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
@@ -882,7 +1165,8 @@ class EyeFinder:
         near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
         if near.sum() < max(16, 0.1 * len(px)):
             return None
-        return np.median(px[near], axis=0).astype(np.float64)
+        sel = px[near]
+        return np.partition(sel, len(sel) // 2, axis=0)[len(sel) // 2].astype(np.float64)  # the median
 
     def measure_gain(self, crop: np.ndarray, centres) -> np.ndarray | None:
         """This frame's per-channel gain from the skin around the eyes (:meth:`skin_colour`,
@@ -890,36 +1174,39 @@ class EyeFinder:
         now = self.skin_colour(crop, centres, self._gain)
         if now is None:
             return None
-        return np.clip(self.model.skin_bgr / np.maximum(now, 1.0), GAIN_LIMITS[0], GAIN_LIMITS[1])
+        lo, hi = GAIN_LIMITS
+        return np.array([min(max(r / max(c, 1.0), lo), hi) for r, c in zip(self.model.skin_bgr.tolist(), now.tolist())])
 
     # ------------------------------------------------------------------ main entry
     def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
         """Both eyes in a face crop (uint8 BGR and its grey, uint8 or float32) around the
         predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
-        if not np.all(np.isfinite(centres)):
+        if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
         found = self.locate_irises(crop_grey, centres)
         gain = self._gain
-        eyes = []
+        lids = self._both_lids(crop_bgr, found, gain)
+        lo, hi = CLOSING
+        pts = []
         for i in range(2):
             iris = found[i][:2]
-            up, down = self.lids(crop_bgr, i, iris, gain)
-            lo, hi = CLOSING
-            w = min(max(((up + down) / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
+            gap = lids[i][2]
+            w = min(max((gap / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
             pt = iris
             if w < 1.0:
                 sx, sy = self._slit(crop_bgr, iris, gain)
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
-                up, down = self.lids(crop_bgr, i, pt, gain)
-            is_open = w >= 0.5
-            match = max(found[i][2], 0.0)
-            score = math.sqrt(self._eye_match(crop_grey, pt, i) * match)
-            brow, brow_match = self._brow(crop_grey, pt, i)
+                lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
+            pts.append((pt, w))
+        brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+        eyes = []
+        for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
+            x, y, match = found[i]
             eyes.append(EyeObservation(
-                x=float(pt[0]), y=float(pt[1]), score=score, open=bool(is_open), upper=float(up), lower=float(down),
-                brow=brow, iris=(float(iris[0]), float(iris[1])), radius=self.radius[i], iris_match=float(found[i][2]),
-                brow_match=brow_match,
+                x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
+                open=w >= 0.5, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
+                radius=self.radius[i], iris_match=float(match), brow_match=brow_match,
             ))
         return EyeResult((eyes[0], eyes[1]))
 
@@ -937,23 +1224,28 @@ class EyeFinder:
         if not all(e.open and e.score >= ADAPT_MIN_SCORE for e in result.eyes):
             return False
         self._adapt_count += 1
-        if self._adapt_count % ADAPT_EVERY:
+        phase = self._adapt_count % ADAPT_EVERY
+        if phase > 2:
             return True
-        # every ADAPT_EVERY-th confident frame counts for all of them (the cost is shared)
+        # every ADAPT_EVERY-th confident frame counts for all of them; the three updates (iris
+        # pictures, eye pictures, light) fall on different frames so no frame pays for all
         rate = min((ADAPT_RATE if rate is None else float(rate)) * ADAPT_EVERY, 1.0)
-        grey = np.asarray(crop_grey, dtype=np.float32)
+        if phase == 2:
+            centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
+            g = self.measure_gain(crop_bgr, centres)
+            if g is not None:
+                self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
+                # shading and expressions move it by several per cent; only a change of the
+                # light itself (beyond the dead zone) is applied
+                self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+            return True
+        pics, calib = (self._adapted_iris, self._calib_iris) if phase == 0 else (self._adapted_eye, self._calib_eye)
+        grey = crop_grey if crop_grey.dtype in (np.uint8, np.float32) else np.asarray(crop_grey, dtype=np.float32)
         for i, e in enumerate(result.eyes):
-            for pics, calib in ((self._adapted_iris, self._calib_iris), (self._adapted_eye, self._calib_eye)):
-                h, w = calib[i].shape[0] // 2, calib[i].shape[1] // 2
-                pics[i] = (1.0 - rate) * pics[i] + rate * subpixel_cut(grey, e.x, e.y, w, h)
-        self._set_pictures()
-        centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
-        g = self.measure_gain(crop_bgr, centres)
-        if g is not None:
-            self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
-            # shading and expressions move it by several per cent; only a change of the
-            # light itself (beyond the dead zone) is applied
-            self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+            h, w = calib[i].shape
+            now = cv2.getRectSubPix(grey, (w, h), (float(e.x), float(e.y)), patchType=cv2.CV_32F)
+            pics[i] = cv2.addWeighted(pics[i], 1.0 - rate, now, rate, 0.0)
+        self._set_pictures(iris=phase == 0, eye=phase == 1)
         return True
 
     def reset_adaptation(self) -> None:

@@ -21,6 +21,8 @@ DETECT_FACE_PX = 56.0
 """Width (px) a face of the calibrated size has in the image the detector runs on."""
 DEFAULT_EYES = ((0.32, 0.395), (0.685, 0.395))
 """Eye centres as fractions of a frontal-face box, for when the calibration frame gave none."""
+DETECT_STEP = 1.12
+"""Scale step between the sizes the face detector tries."""
 FACE_PER_IPD = 2.8
 """A frontal-face box's side, in inter-pupil distances (2.5–3.1 on real faces for the bundled cascade)."""
 
@@ -35,12 +37,19 @@ def face_cascade() -> cv2.CascadeClassifier | None:
     return None if c.empty() else c
 
 
-def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.8) -> list[tuple[float, float, float, float]]:
+def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.8,
+                 band: tuple[int, int] | None = None,
+                 grey: tuple[np.ndarray, float] | None = None) -> list[tuple[float, float, float, float]]:
     """Frontal face boxes ``(x, y, w, h)`` in frame px, largest first.
 
     With ``ipd_px`` (the face's expected inter-pupil distance) the search is limited to faces
     within ``spread``× of that size and runs on a copy scaled to make such a face about
     :data:`DETECT_FACE_PX` wide; without it every size is searched on a 160-px-high copy.
+    ``band`` ``(k, n)`` (with ``ipd_px``) searches only the k-th of n equal parts (in scale) of
+    that range of sizes, a little overlapping: n frames in turn cover it all at a third of
+    the cost each for n = 3 (a lost face is looked for every frame). ``grey`` ``(image, scale)``
+    is the frame in grey already scaled by ``scale`` (the tracker keeps one): the detector's
+    copy is made from it when it is at least as large.
     """
     casc = face_cascade()
     if casc is None:
@@ -52,12 +61,21 @@ def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.
     else:
         s = min(1.0, 160.0 / h)
     size = (max(int(round(w * s)), 24), max(int(round(h * s)), 24))
-    small = cv2.resize(frame_bgr, size, interpolation=cv2.INTER_AREA) if s < 1.0 else frame_bgr
-    grey = cv2.equalizeHist(cv2.cvtColor(small, cv2.COLOR_BGR2GRAY))
+    if grey is not None and grey[1] >= s:
+        g = grey[0] if grey[0].shape[1] == size[0] else cv2.resize(grey[0], size, interpolation=cv2.INTER_AREA)
+    else:
+        small = cv2.resize(frame_bgr, size, interpolation=cv2.INTER_AREA) if s < 1.0 else frame_bgr
+        g = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+    grey = cv2.equalizeHist(g)
     if ipd_px:
         f = FACE_PER_IPD * ipd_px * s
-        lo, hi = max(int(f / spread), 20), max(int(f * spread), 21)
-        boxes = casc.detectMultiScale(grey, 1.12, 2, minSize=(lo, lo), maxSize=(hi, hi))
+        a, b = f / spread, f * spread
+        if band is not None and band[1] > 1:
+            k, n = band[0] % band[1], band[1]
+            r = b / a
+            a, b = a * r ** (k / n), a * r ** ((k + 1) / n) * DETECT_STEP
+        lo, hi = max(int(a), 20), max(int(b), 21)
+        boxes = casc.detectMultiScale(grey, DETECT_STEP, 2, minSize=(lo, lo), maxSize=(hi, hi))
     else:
         boxes = casc.detectMultiScale(grey, 1.1, 3, minSize=(20, 20))
     out = [(x / s, y / s, bw / s, bh / s) for x, y, bw, bh in (tuple(float(v) for v in b) for b in boxes)]
@@ -98,22 +116,21 @@ PATCH_RECT = (-1.0, -0.6, 2.0, 1.35)
 """The face picture's extent in inter-pupil distances (x0, y0, w, h): brows, eyes and nose, no mouth."""
 
 
-def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], np.ndarray, np.ndarray]:
+def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], tuple[float, float], tuple[float, float]]:
     """The affine from the scaled grey image to the face picture (grown by ``margin`` px on
     every side), the picture's size, and the picture's x and down axes in frame px per picture px."""
-    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2) * scale
-    (lx, ly), (rx, ry) = p
+    (lx, ly), (rx, ry) = ((float(x) * scale, float(y) * scale) for x, y in np.asarray(pupils, dtype=np.float64).reshape(2, 2).tolist())
     ipd = max(math.hypot(rx - lx, ry - ly), 1e-6)
     k = PATCH_IPD / ipd
     c, s = (rx - lx) / ipd, (ry - ly) / ipd  # unit eye line (x right, y down)
     mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
     x0, y0, w, h = (v * PATCH_IPD for v in PATCH_RECT)
     # picture px = R·k·(grey px − mid) − origin, R turning the eye line onto +x
-    m = np.array([[k * c, k * s, 0.0], [-k * s, k * c, 0.0]])
-    m[:, 2] = -m[:, :2] @ np.array([mx, my]) - np.array([x0 - margin, y0 - margin])
+    a, b = k * c, k * s
+    m = np.array([[a, b, -(a * mx + b * my) - (x0 - margin)], [-b, a, -(a * my - b * mx) - (y0 - margin)]])
     size = (int(round(w)) + 2 * int(margin), int(round(h)) + 2 * int(margin))
     per = 1.0 / (k * scale)
-    return m, size, np.array([c, s]) * per, np.array([-s, c]) * per
+    return m, size, (c * per, s * per), (-s * per, c * per)
 
 
 def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray:
@@ -145,7 +162,7 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
     dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
     dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
     du, dv = i + dx - margin, j + dy - margin
-    return du * ax + dv * ay, float(best)
+    return np.array([du * ax[0] + dv * ay[0], du * ax[1] + dv * ay[1]]), float(best)
 
 
 def _vertex(a: float, b: float, c: float) -> float:

@@ -144,6 +144,7 @@ FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrate
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
 FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
 FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
+REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye finder goes back to the calibration
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
@@ -340,7 +341,7 @@ class FaceTracker:
             d = found[1] - found[0]
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: open eyes must agree with them
-            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
+            tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
             if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
                 doubt[int(np.argmin([o.score for o in obs]))] = True
                 strong = False
@@ -531,7 +532,9 @@ class FaceTracker:
             return found
         ipd = float(math.hypot(*(self.anchors[1] - self.anchors[0])))
         spread = 1.6 if self.lost_frames < 30 else 2.5
-        for box in detect_faces(frame, ipd, spread)[:3]:
+        # one third of the sizes per frame: a lost frame costs a third of a full search
+        for box in detect_faces(frame, ipd, spread, band=(self.lost_frames, REACQUIRE_BANDS),
+                                grey=(self._grey, self.motion.scale))[:3]:
             found = self._check_eyes(frame, eyes_in_box(box, self._box_eyes))
             if found is not None and self._looks_like_face(found):
                 return found
