@@ -39,25 +39,24 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, N_RAYS, MouthModel, band_columns, cheek_run, corner_distance, lens_outline, line_columns, line_geometry, mouth_body,
+    BAND, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outline, line_columns, line_geometry, mouth_body,
     profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
-STRETCH = np.round(np.arange(0.5, 1.71, 0.1), 2)
-"""Lip thickness scales (× the calibration's) the vertical match tries."""
-ROBUST = 9.0
-"""Largest squared feature distance one template row can cost (an outlier row: a highlight, teeth)."""
+ROW_CAP = 6.0
+"""Most one row of the profile can cost in any part (an outlier: a highlight, a crease, teeth)."""
 GAP_PRICE = 3.0
 """Cost of one row between the lips that does not look like the inside of a mouth (a tongue)."""
-STRETCH_PRICE = 12.0
-"""Cost of stretching a lip by ``k``: ``STRETCH_PRICE · ln(k)²`` (k = 1.5 ≈ two bad rows)."""
-RELATIVE = 0.12
-"""A template row's tolerance per feature: a just visible difference, or this share of the feature's
-range over the templates (strong lipstick varies more in absolute terms than pale lips)."""
-ALIGN = 0.75
-"""Pixels a template row may be off on an edge and still count as matching."""
+LENGTH_PRICE = 12.0
+"""Cost of a lip ``k`` times as thick as calibrated: ``LENGTH_PRICE · ln(k)²`` (k = 1.5 or 0.67: two rows)."""
+COUPLE = 30.0
+"""Cost of the two lips stretching differently, ``COUPLE · (ln k_up − ln k_down)²``: lips thin
+together in a smile or pressed together and swell together in a pout, so a lip hard to see follows
+the other."""
+THICKNESS = (0.35, 2.0)
+"""Thicknesses (× the calibration's) a lip may have."""
 REACH = (-0.35, 0.55)
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 
@@ -127,27 +126,6 @@ def _parabola(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if den > 1e-9 else 0.0
 
 
-class _Side:
-    """One lip's template, prepared for matching: for every stretch and template row, the frame row
-    offset from the inner edge (outwards) split into integer part and fraction."""
-
-    def __init__(self, tmpl: np.ndarray, thick: float, scale: float, unit: np.ndarray):
-        j = np.arange(len(tmpl), dtype=np.float64)
-        k = STRETCH[:, None]
-        off = scale * np.where(j[None, :] < thick, j[None, :] * k, thick * k + (j[None, :] - thick))  # (K, J)
-        self.tmpl = tmpl.astype(np.float32)
-        # each row's tolerance: ``unit`` (per feature), or what the template changes over ALIGN px
-        # on an edge (a fraction of a pixel off there is not a different mouth)
-        grad = np.gradient(tmpl.astype(np.float64), axis=0) / max(scale, 1e-6)
-        self.inv_var = (1.0 / (unit**2 + (ALIGN * grad) ** 2)).astype(np.float32)
-        self.thick = thick * scale
-        self.off = off
-        self.i = np.floor(off).astype(np.int32)
-        self.t = (off - self.i).astype(np.float32)[..., None]
-        self.prior = (STRETCH_PRICE * np.log(STRETCH) ** 2).astype(np.float32)
-        self.rows = len(tmpl)
-
-
 class MouthFinder:
     """Find one performer's mouth in mouth crops (see the module docstring).
 
@@ -163,10 +141,17 @@ class MouthFinder:
         self.height0 = (model.lip_upper + model.lip_lower) * k
         self.line0 = model.line * k
         self.half = max(BAND * wi, 1.5)
-        both = np.concatenate([model.tmpl_up, model.tmpl_down])
-        unit = np.maximum(RELATIVE * (both.max(axis=0) - both.min(axis=0)), 1.0)
-        self.up = _Side(model.tmpl_up, model.thick_up, k, unit)
-        self.down = _Side(model.tmpl_down, model.thick_down, k, unit)
+        cls = np.asarray(model.classes, dtype=np.float32)
+        self._mu = cls[:, 0]
+        self._inv = (1.0 / (3.0 * cls[:, 1] ** 2)).astype(np.float32)
+        self.t_up, self.t_dn = model.thick_up * k, model.thick_down * k
+        self.skin_w = max(int(round(SKIN_ROWS * wi)), 3)
+        self._len = []
+        for t in (self.t_up, self.t_dn):
+            ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(THICKNESS[1] * t)) + 1)
+            self._len.append((ln, (LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
+        lu, ld = self._len[0][2], self._len[1][2]
+        self._couple = COUPLE * (lu[:, None] - ld[None, :]) ** 2
         self.a1, self.a2 = line_geometry(wi)
         self.strip_half = int(math.ceil(0.32 * wi)) + self.a2 + 2
         self.sigma_line = max(0.015 * wi, 1.0)
@@ -176,8 +161,7 @@ class MouthFinder:
         self.body = mouth_body(wi)
         self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
-        self.lip_l = float(np.minimum(model.tmpl_up[: max(int(model.thick_up), 1), 0].min(),
-                                      model.tmpl_down[: max(int(model.thick_down), 1), 0].min()))
+        self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
         self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
 
     # ------------------------------------------------------------------ light
@@ -209,56 +193,75 @@ class MouthFinder:
         dark = np.clip((np.float32(0.85 * self.lip_l) - f[:, 0]) / np.float32(max(0.2 * self.lip_l, 1e-3)), 0.0, 1.0)
         return f, np.maximum(inside, dark)
 
-    def _side_costs(self, f: np.ndarray, ys: np.ndarray, side: _Side, sign: int) -> tuple[np.ndarray, np.ndarray]:
-        """For each candidate inner-edge row ``ys``: the template's best cost over the stretches, and
-        that stretch's index. ``sign`` −1: the template runs up from the row; +1: down."""
-        n = len(f)
-        if sign < 0:
-            i0 = ys[:, None, None] - side.i[None] - 1
-            t = 1.0 - side.t
-        else:
-            i0 = ys[:, None, None] + side.i[None]
-            t = side.t
-        i0 = np.clip(i0, 0, n - 2)
-        p = f[i0] * (1.0 - t) + f[i0 + 1] * t  # (Y, K, J, 3)
-        p -= side.tmpl
-        d = np.einsum("ykjc,ykjc,jc->ykj", p, p, side.inv_var)
-        np.minimum(d, np.float32(ROBUST), out=d)
-        c = d.sum(axis=2) + side.prior
-        best = np.argmin(c, axis=1)
-        return c[np.arange(len(ys)), best], best
+    def row_costs(self, f: np.ndarray) -> np.ndarray:
+        """What each row of a profile costs (4, rows) as the skin above, the upper lip, the lower lip
+        and the skin below: its mean squared feature distance from the part's median in the part's
+        spread (for skin, the nearer of the skin next to the lip and the skin round the mouth), at
+        most :data:`ROW_CAP`."""
+        d = f[None, :, :] - self._mu[:, None, :]
+        e = np.einsum("prc,prc,pc->pr", d, d, self._inv)
+        np.minimum(e[0], e[4], out=e[0])  # skin next to the lips, or like the skin round the mouth
+        np.minimum(e[3], e[4], out=e[3])
+        return np.minimum(e[:4], np.float32(ROW_CAP))
 
-    def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, span: tuple[int, int] | None = None,
-                 previous=None):
-        """Match the lip templates to a profile (:meth:`profile`) with the gap expected around row
-        ``y_line``, its edges within ``span`` (rows relative to it; default :data:`REACH`):
-        ``(gap_top, gap_bottom, top, bottom, (k_up, k_down), (fit_up, fit_down))`` — the inner and the
-        outer lip edges (rows, sub-pixel), the stretches and each lip's mean cost per template row."""
+    def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
+        """Split a profile (:meth:`profile`) into skin, upper lip, gap, lower lip, skin, with the gap's
+        middle expected around row ``y_line`` (give or take ``spread`` wi) and its edges within
+        :data:`REACH` of it: ``(gap_top, gap_bottom, top, bottom, (k_up, k_down), fit)`` — the inner
+        and the outer lip edges (rows, sub-pixel), each lip's thickness against the calibration's and
+        the mean cost per row of the lips and the skin next to them.
+
+        Each lip is a run of rows like it, as thick as calibrated give or take (:data:`LENGTH_PRICE`,
+        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it; the
+        rows between the lips cost nothing where they look like the inside of a mouth and
+        :data:`GAP_PRICE` where they do not."""
         n = len(f)
-        lo, hi = span if span is not None else self.reach
-        ys = np.arange(max(int(y_line) + lo, 1), min(int(y_line) + hi + 1, n - 1))
-        if len(ys) < 3:
+        e = self.row_costs(f).astype(np.float64)
+        cum = np.zeros((4, n + 1))
+        np.cumsum(e, axis=1, out=cum[:, 1:])
+        cg = np.zeros(n + 1)
+        np.cumsum(GAP_PRICE * (1.0 - inside), out=cg[1:])
+        lo, hi = self.reach
+        w = self.skin_w
+        # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
+        # the lower lip (b3 = b2: lips closed, no gap row)
+        bs = np.arange(max(int(y_line) + lo, 2), min(int(y_line) + hi + 1, n - 2))
+        if len(bs) < 3:
             return None
-        cu, ku = self._side_costs(f, ys, self.up, -1)
-        cl, kl = self._side_costs(f, ys, self.down, +1)
-        gap = np.float32(GAP_PRICE) * (1.0 - inside[ys])
-        cum = np.concatenate([[0.0], np.cumsum(gap, dtype=np.float64)])
-        # rows strictly between the two inner edges are the gap
-        m = len(ys)
-        between = cum[None, :m] - cum[1 : m + 1, None]
-        mid = 0.5 * (ys[:, None] + ys[None, :]) - y_line
-        tot = cu[:, None] + cl[None, :] + np.maximum(between, 0.0) + 3.0 * (mid / (0.25 * self.wi)) ** 2
+        (lu, pu, _), (ld, pd, _) = self._len
+        b1 = bs[:, None] - lu[None, :]
+        b1c = np.clip(b1, 0, n)
+        sa0 = np.clip(b1 - w, 0, n)
+        cu = (cum[1][bs][:, None] - cum[1][b1c]) + (cum[0][b1c] - cum[0][sa0]) + pu[None, :]
+        cu += ROW_CAP * ((sa0 - (b1 - w)) + (b1c - b1))  # rows above the crop: as bad as can be
+        b4 = bs[:, None] + ld[None, :]
+        b4c = np.clip(b4, 0, n)
+        sb1 = np.clip(b4 + w, 0, n)
+        cl = (cum[2][b4c] - cum[2][bs][:, None]) + (cum[3][sb1] - cum[3][b4c]) + pd[None, :]
+        cl += ROW_CAP * (((b4 + w) - sb1) + (b4 - b4c))
+        U, L = cu.min(axis=1), cl.min(axis=1)
+        gap = cg[bs][None, :] - cg[bs][:, None]  # rows b2 .. b3-1
+        mid = 0.5 * (bs[:, None] + bs[None, :]) - 0.5 - y_line
+        tot = U[:, None] + L[None, :] + gap + 3.0 * (mid / (spread * self.wi)) ** 2
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
-            tot += 2.0 * ((ys[None, :] - ys[:, None] - g0) / (0.15 * self.wi)) ** 2
+            tot += 2.0 * ((bs[None, :] - bs[:, None] - g0) / (0.15 * self.wi)) ** 2
+        m = len(bs)
         tot[np.tril_indices(m, -1)] = np.inf
         a, b = np.unravel_index(int(np.argmin(tot)), tot.shape)
-        ya = float(ys[a]) + (_parabola(tot[a - 1, b], tot[a, b], tot[a + 1, b]) if 0 < a < m - 1 and a + 1 <= b else 0.0)
-        yb = float(ys[b]) + (_parabola(tot[a, b - 1], tot[a, b], tot[a, b + 1]) if 0 < b < m - 1 and b - 1 >= a else 0.0)
-        k_up, k_dn = float(STRETCH[ku[a]]), float(STRETCH[kl[b]])
-        top = ya - k_up * self.up.thick
-        bottom = yb + k_dn * self.down.thick
-        return ya, yb, top, bottom, (k_up, k_dn), (float(cu[a]) / self.up.rows, float(cl[b]) / self.down.rows)
+        # the two lips' thicknesses together at the best pair of inner edges
+        joint = cu[a][:, None] + cl[b][None, :] + self._couple
+        p, q = np.unravel_index(int(np.argmin(joint)), joint.shape)
+        fu = _parabola(joint[p - 1, q], joint[p, q], joint[p + 1, q]) if 0 < p < len(lu) - 1 else 0.0
+        fd = _parabola(joint[p, q - 1], joint[p, q], joint[p, q + 1]) if 0 < q < len(ld) - 1 else 0.0
+        fa = _parabola(tot[a - 1, b], tot[a, b], tot[a + 1, b]) if 0 < a and a + 1 <= b and np.isfinite(tot[a - 1, b]) else 0.0
+        fb = _parabola(tot[a, b - 1], tot[a, b], tot[a, b + 1]) if b + 1 < m and b - 1 >= a else 0.0
+        gap_top, gap_bottom = bs[a] - 0.5 + fa, bs[b] - 0.5 + fb
+        len_u, len_d = lu[p] + fu, ld[q] + fd
+        rows = len_u + len_d + 2 * w
+        fit = float(joint[p, q] - pu[p] - pd[q] - self._couple[p, q]) / rows
+        return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
+                (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
 
     # ------------------------------------------------------------------ the corners
     def corners(self, crop: np.ndarray, x: float, y_line: float, gains: np.ndarray | None = None):
@@ -309,13 +312,12 @@ class MouthFinder:
             return None
         mid = 0.5 * (v[0] + v[1])
         left, right, strength = self.corners(crop, px, mid, gains)
-        cx = 0.5 * (left[0] + right[0])
-        if abs(cx - px) > 0.03 * self.wi:
-            f, inside = self.profile(crop, cx, gains)
-            s = int(math.ceil(0.12 * self.wi))
-            v2 = self.vertical(f, inside, mid, span=(int(v[0] - mid) - s, int(v[1] - mid) + s + 1), previous=previous)
-            if v2 is not None:
-                v = v2
+        # again through the corners' midpoint, the gap near their line (where the calibration had it)
+        cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
+        f, inside = self.profile(crop, cx, gains)
+        v2 = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        if v2 is not None:
+            v = v2
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         cy = 0.5 * (left[1] + right[1])
         width = math.hypot(right[0] - left[0], right[1] - left[1])

@@ -17,9 +17,10 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
 * the **corners**: the mouth line traced from the click outwards along its darkest row, and on
   each side where its columns (the bands above, on and below it) stop differing from the cheek
   further out (:func:`corner_distance`);
-* **templates** — this face's own profiles through the centre: the rows from each lip's inner
-  edge out to the skin beyond it (:data:`SKIN_ROWS`); the finder matches them to every frame,
-  stretching each lip; and what the **cheek** beside each corner looks like along the line;
+* what the **rows** of the profile through the centre look like — the skin above the upper lip
+  (:data:`SKIN_ROWS`), the upper lip, the lower lip, the skin below — for the finder to split
+  every frame's profile into the same five parts; and what the **cheek** beside each corner looks
+  like along the line;
 * one **lip axis** per lip (Fisher's linear discriminant of that lip's pixels against the skin
   next to it, kept orthogonal to the skin's colour) — how clearly the lips differ in colour
   (``separation``, the ``cue``) — and what the **inside** of a mouth looks like next to this
@@ -147,9 +148,10 @@ class MouthModel:
     thicknesses there (inner to outer edge); ``half_left`` / ``half_right`` the corners' distances
     from the centre along the line.
 
-    ``tmpl_up`` / ``tmpl_down`` (rows, 3) are the vertical templates — the profile through the
-    centre from each lip's inner edge outwards, row 0 at the inner edge, in
-    :func:`profile_features`; ``cheek_left`` / ``cheek_right`` (2, 9) the cheek beside each corner
+    ``classes`` (5, 2, 3) describe the rows of the vertical profile through the centre, from the
+    top: the skin above the upper lip, the upper lip, the lower lip, the skin below it — each the
+    median and the spread of its rows' :func:`profile_features` — and the skin round the mouth
+    (which a bulging chin or a lit philtrum looks like better than the skin next to the lips did); ``cheek_left`` / ``cheek_right`` (2, 9) the cheek beside each corner
     along the line (median and spread of :func:`line_columns`' features). ``axis_up`` /
     ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c`` of the upper / lower lip (0 on the skin
     next to it, 1 on the lip); ``separation`` is their smaller d′, ``cue`` ``"colour"`` (≥
@@ -172,8 +174,7 @@ class MouthModel:
     thick_down: float
     half_left: float
     half_right: float
-    tmpl_up: np.ndarray
-    tmpl_down: np.ndarray
+    classes: np.ndarray
     cheek_left: np.ndarray
     cheek_right: np.ndarray
     axis_up: np.ndarray
@@ -191,7 +192,7 @@ class MouthModel:
             self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat).view(np.uint8)
 
     # ------------------------------------------------------------------ persistence
-    _ARRAYS = ("outline", "tmpl_up", "tmpl_down", "cheek_left", "cheek_right")
+    _ARRAYS = ("outline", "classes", "cheek_left", "cheek_right")
     _FLOATS = ("work_ipd", "width", "lip_upper", "lip_lower", "area", "gap", "line", "thick_up", "thick_down",
                "half_left", "half_right", "skin_level", "skin_sat", "dark", "separation")
 
@@ -226,12 +227,10 @@ class MouthModel:
             raise ValueError(f"mouth table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
         try:
             kw = {k: float(d[k]) for k in cls._FLOATS}
-            shapes = {"outline": 2, "tmpl_up": 3, "tmpl_down": 3, "cheek_left": 9, "cheek_right": 9}
-            for k, c in shapes.items():
-                a = np.asarray(d[k], dtype=np.float64).reshape(-1, c)
+            shapes = {"outline": (-1, 2), "classes": (5, 2, 3), "cheek_left": (2, 9), "cheek_right": (2, 9)}
+            for k, shape in shapes.items():
+                a = np.asarray(d[k], dtype=np.float64).reshape(shape)
                 kw[k] = a if k == "outline" else a.astype(np.float32)
-                if k != "outline" and len(a) < 2:
-                    raise ValueError(f"{k} has {len(a)} rows")
             return cls(
                 centre=(float(d["centre"][0]), float(d["centre"][1])),
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
@@ -387,7 +386,8 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) ->
     The darkest row within −0.12…+0.15 wi of the click is in the gap between the lips or in the open
     mouth; the gap spreads up and down over rows nearly as dark (15 % of the way from that row to the
     profile's median: a dark lip is not that dark) or teeth (``inside_rows``: the share of teeth-like
-    pixels), at most 0.35 wi each way; below, past a tongue
+    pixels), across a row or two of neither (the blurred edge between them), at most 0.35 wi each
+    way; below, past a tongue
     on the lower teeth: lip-like rows followed by more teeth within 0.15 wi are inside too."""
     H = len(lum_rows)
     ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
@@ -396,13 +396,22 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) ->
     level = lum_rows[y_min] + 0.15 * (float(np.median(lum_rows[ra:rb])) - lum_rows[y_min])
     skip = (lum_rows < level) | (inside_rows > 0.5)
     limit = int(round(0.35 * wi))
-    top = y_min
-    while top - 1 >= 0 and y_min - (top - 1) <= limit and skip[top - 1]:
-        top -= 1
+    bridge = max(int(round(0.025 * wi)), 1)
+
+    def walk(y: int, step: int) -> int:
+        """From ``y`` over gap rows, across up to ``bridge`` rows that are not (a blurred edge
+        between the dark inside and teeth)."""
+        while True:
+            nxt = [y + step * j for j in range(1, bridge + 2) if 0 <= y + step * j < H and abs(y + step * j - y_min) <= limit]
+            hit = next((v for v in nxt if skip[v]), None)
+            if hit is None:
+                return y
+            y = hit
+
+    top = walk(y_min, -1)
     bottom = y_min
     while True:
-        while bottom + 1 < H and bottom + 1 - y_min <= limit and skip[bottom + 1]:
-            bottom += 1
+        bottom = walk(bottom, +1)
         reach = range(bottom + 2, min(bottom + int(round(0.15 * wi)), H - 1))
         teeth = [v for v in reach if inside_rows[v] > 0.5 and inside_rows[v + 1] > 0.5]
         if not teeth or teeth[0] - y_min > limit:
@@ -502,6 +511,35 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
     return x, float(gain[k])
 
 
+def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
+                 skin: np.ndarray) -> np.ndarray:
+    """Median and spread (5, 2, 3) of the profile's rows in each part — skin above (:data:`SKIN_ROWS`
+    above the outer edge), upper lip, lower lip, skin below — and of ``skin`` (features of the skin
+    round the mouth, pixel by pixel: its spread is halved for a profile's band means). The spread is
+    at least a just visible difference, and 12 % of how far the lip's median is from its skin's
+    (strong lipstick varies more in absolute terms than pale lips)."""
+    n = len(f)
+    skin = max(SKIN_ROWS * wi, 3.0)
+
+    def rows(a: float, b: float) -> np.ndarray:
+        i0, i1 = int(math.ceil(a)), int(math.floor(b))
+        i0, i1 = min(max(i0, 0), n - 1), min(max(i1, 0), n - 1)
+        return f[i0 : max(i1, i0) + 1]
+
+    parts = [rows(y_top - skin, y_top - 0.5), rows(y_top + 0.5, top - 0.5 if bottom > top else top),
+             rows(bottom + 0.5 if bottom > top else bottom + 1, y_bottom - 0.5), rows(y_bottom + 0.5, y_bottom + skin)]
+    med = [np.median(p, axis=0) for p in parts]
+    out = np.empty((5, 2, 3), np.float32)
+    for i, p in enumerate(parts):
+        lip_skin = abs(med[1] - med[0]) if i < 2 else abs(med[2] - med[3])
+        out[i, 0] = med[i]
+        out[i, 1] = np.maximum(np.maximum(1.4826 * np.median(np.abs(p - med[i]), axis=0), 1.0), 0.12 * lip_skin)
+    ms = np.median(skin, axis=0)
+    out[4, 0] = ms
+    out[4, 1] = np.maximum(0.5 * 1.4826 * np.median(np.abs(skin - ms), axis=0), 1.0)
+    return out
+
+
 def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], work_ipd: float,
                 skin_samples: np.ndarray | None = None, _trace: dict | None = None) -> MouthModel:
     """Learn a :class:`MouthModel` from the calibration frame's mouth crop (see the module docstring).
@@ -528,15 +566,21 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
     teeth0 = _inside(0.0, skin_level, skin_sat).view(np.uint8).take(idx)
 
-    # the vertical profile through the click: the gap, then each lip's outer edge
-    b0, b1 = band_columns(cx, max(BAND * wi, 1.5), W)
-    rows_bgr = crop[:, b0:b1].astype(np.float32).mean(axis=1)
-    lum_rows = cv2.GaussianBlur(luminance(rows_bgr).reshape(-1, 1), (1, 0), 0.8).ravel()
-    teeth_rows = teeth0[:, b0:b1].mean(axis=1)
-    top, bottom, y_min = _gap(lum_rows, teeth_rows, cy, wi)
-    f_rows = profile_features(cv2.GaussianBlur(rows_bgr.reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3), skin_level)
-    y_top = _outer_edge(f_rows, top, -1, 0.1, 0.3, wi)
-    y_bottom = _outer_edge(f_rows, bottom, +1, 0.16, 0.4, wi)
+    band = max(BAND * wi, 1.5)
+
+    def column(x: float, y: float):
+        """The gap and the outer lip edges on the profile through column ``x`` near row ``y``, and
+        that profile's features and luminance."""
+        b0, b1 = band_columns(x, band, W)
+        rows_bgr = cv2.GaussianBlur(crop[:, b0:b1].astype(np.float32).mean(axis=1).reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
+        lum_rows = luminance(rows_bgr)
+        top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi)
+        f_rows = profile_features(rows_bgr, skin_level)
+        return (top, bottom, y_min, _outer_edge(f_rows, top, -1, 0.1, 0.3, wi), _outer_edge(f_rows, bottom, +1, 0.16, 0.4, wi),
+                lum_rows)
+
+    # the gap through the click
+    top, bottom, y_min, y_top, y_bottom, lum_rows = column(cx, cy)
 
     # the line through the middle of the gap, traced out to both sides; the corners on it
     y_line = 0.5 * (top + bottom)
@@ -566,14 +610,29 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
     width = math.hypot(right[0] - left[0], right[1] - left[1])
 
-    # the templates: the profile through the centre from each lip's inner edge outwards, and the
-    # columns around each corner along the line
-    b0, b1 = band_columns(centre[0], max(BAND * wi, 1.5), W)
+    # the gap and the lips' thickness through the centre, and a little to either side (a Cupid's
+    # bow, a highlight or a crease on one column does not decide it)
+    ys_l, ys_r = sides["left"][0], sides["right"][0]
+
+    def line_row(x: float) -> float:
+        k = int(round(x - x0))
+        ys, k = (ys_r, k) if k >= 0 else (ys_l, -k)
+        return float(ys[min(k, len(ys) - 1)])
+
+    if seen:
+        cols3 = [column(x, line_row(x)) for x in (centre[0], centre[0] - 0.12 * wi, centre[0] + 0.12 * wi)]
+        top, bottom, y_min = cols3[0][:3]
+        thick_up = float(np.median([c[0] - c[3] for c in cols3]))
+        thick_down = float(np.median([c[4] - c[1] for c in cols3]))
+    else:
+        thick_up, thick_down = top - y_top, y_bottom - bottom
+    thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
+    y_top, y_bottom = top - thick_up, bottom + thick_down
+
+    # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
+    b0, b1 = band_columns(centre[0], band, W)
     f_centre = profile_features(crop[:, b0:b1].astype(np.float32).mean(axis=1), skin_level)
-    thick_up, thick_down = max(top - y_top, 1.0), max(y_bottom - bottom, 1.0)
-    skin_rows = max(SKIN_ROWS * wi, 3.0)
-    tmpl_up = sample_rows(f_centre, top - np.arange(int(math.ceil(thick_up + skin_rows)), dtype=np.float32))
-    tmpl_down = sample_rows(f_centre, bottom + np.arange(int(math.ceil(thick_down + skin_rows)), dtype=np.float32))
+    classes = _row_classes(f_centre, y_top, top, bottom, y_bottom, wi, profile_features(skin.astype(np.float32), skin_level))
     typical = np.stack([np.zeros(9), np.full(9, 10.0)])  # no cheek seen: nothing is much unlike it
     cheeks = {name: np.stack(sides[name][4]) if sides[name][4] is not None else typical for name in ("left", "right")}
 
@@ -610,7 +669,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         outline=outline - np.array(centre), gap=float(bottom - top), line=float(y_line - centre[1]),
         thick_up=float(thick_up), thick_down=float(thick_down),
         half_left=float(centre[0] - left[0]), half_right=float(right[0] - centre[0]),
-        tmpl_up=tmpl_up.astype(np.float32), tmpl_down=tmpl_down.astype(np.float32),
+        classes=classes,
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
         cue=cue, crop_median=crop_median,
