@@ -273,8 +273,8 @@ def learned_masks(cal, frame_bgr: np.ndarray) -> dict[str, np.ndarray]:
     found: dict[str, object] = {}
     cls = getattr(cal, "classifiers", None)
     if isinstance(cls, dict):
-        found.update(cls)
-    for name in dir(cal):
+        found.update(cls)  # the tracker says which classes it uses: only those
+    for name in ([] if found else dir(cal)):
         if name.startswith("_") or name in found:
             continue
         try:
@@ -291,7 +291,7 @@ def learned_masks(cal, frame_bgr: np.ndarray) -> dict[str, np.ndarray]:
         except Exception:
             continue
         if m.shape[:2] == frame_bgr.shape[:2]:
-            out[name.replace("_classifier", "").replace("_model", "").replace("_", " ")] = m
+            out[name.replace("_classifier", "").replace("_model", "").replace("_", " ")] = m.astype(bool)
     return out
 
 
@@ -521,8 +521,10 @@ class CalibrationWindow(QDialog):
         self.info.setText(
             warn + note
             + (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
-            + "Inside the boxes the tracker searches, coloured pixels are what each colour classifier "
-            "accepts: the pupils, the lips and the eye whites should light up, little else."
+            + "Inside the boxes the tracker searches, coloured pixels are what each colour class "
+            "takes in: the lips, the inside of the eyes (white, iris, lashes) and the mouth's dark gap "
+            "should light up, little else. The tracker also uses shape and motion, so a loose mask is "
+            "not fatal — but a mask that misses the lips or the eyes means: click again."
         )
 
     def _set_mask_views(self, names: list[str]) -> None:

@@ -17,6 +17,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("app.demo_cmd", "play the bundled performance through the default character"),
     "render": ("app.render_cmd", "render a video or track headless to MP4 / GIF / PNGs"),
     "edit": ("app.editor_cmd", "open the art-set editor"),
+    "sheet": ("app.sheet_cmd", "draw an art set's contact sheet with its rendered blends"),
     "send": ("app.net_cmd", "track a camera or video and send 10-byte packets over UDP"),
     "receive": ("app.net_cmd", "receive packets over UDP and draw the character"),
 }

@@ -55,7 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser, command: str) -> None:
         src.add_argument("--video", metavar="FILE", help="track a video file")
         src.add_argument("--params", metavar="TRACK", help="replay a track: CSV, packet stream (.ifs) or FAP (.fap)")
         init = parser.add_mutually_exclusive_group()
-        init.add_argument("--init", metavar="CLICKS.json", help="calibration clicks (see DESIGN.md)")
+        init.add_argument("--init", metavar="CLICKS.json", help="calibration clicks: JSON {\"frame\": N, \"left_pupil\": [x, y], \"right_pupil\": [x, y], \"left_brow\": ..., \"right_brow\": ..., \"mouth\": ...} in pixels of that frame (left = image-left)")
         init.add_argument("--auto", action="store_true", help="find the face automatically")
         parser.add_argument("--compress", action="store_true", help="lossless temporal compression (about 30-40 instead of 80 bits a frame)")
         parser.add_argument("--key-interval", type=int, default=30, metavar="N",

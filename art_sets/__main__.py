@@ -1,8 +1,10 @@
 """``python -m art_sets check DIR`` validates an art set; ``sheet DIR --out PNG`` draws its contact sheet.
 
 ``check`` prints one line per problem (``FILE: message``) and exits 1, or ``OK: ...`` and exits 0.
+``sheet`` shows the drawings, their control lines and layers, the heads and the body; the
+rendered blends are added by ``python -m app sheet`` (this package knows no renderer).
 ``list`` prints the bundled and user art sets. Expected errors print ``inkface: <message>``
-on stderr and exit 2.
+on stderr and exit 2. The format is described in ``art_sets/FORMAT.md``.
 """
 
 from __future__ import annotations
@@ -10,15 +12,6 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-
-
-def _morph_fn():
-    """``morph.beier_neely.polymorph_exact`` when the morph package provides it, else None."""
-    try:
-        from morph.beier_neely import polymorph_exact
-    except Exception:  # morph missing or broken: the sheet is still useful without morphs
-        return None
-    return polymorph_exact
 
 
 def _resolve(target: str) -> Path:
@@ -42,9 +35,21 @@ def cmd_check(args) -> int:
     assert art is not None
     print(f"OK: {art.name} ({folder}): {len(art.eyes.drawings)} eyes, {len(art.mouth.drawings)} mouths, "
           f"{len(art.heads)} heads, {len(art.eyes.drawings[0].lines)}+{len(art.mouth.drawings[0].lines)} control lines")
+    if _layers_note(art):
+        print(f"note: {_layers_note(art)}")
     for r in recommendations(folder):
         print(f"note: {r}")
     return 0
+
+
+def _layers_note(art) -> str:
+    """``layers of eyes: a, b; of mouth: c, d; a body`` for a format-2 set, else ``""``."""
+    from art_sets.model import layer_names
+
+    bits = [f"layers of {p.name}: {', '.join(layer_names(p))}" for p in (art.eyes, art.mouth) if layer_names(p)]
+    if art.body is not None:
+        bits.append(f"a body (follows the head by {art.body.follow:g}, rolls by {art.body.roll:g})")
+    return "; ".join(bits)
 
 
 def cmd_sheet(args) -> int:
@@ -52,10 +57,7 @@ def cmd_sheet(args) -> int:
     from art_sets.sheet import render_sheet
 
     art = load_artset(_resolve(args.dir), strict=False)  # a sheet helps most while lines are still wrong
-    fn = None if args.no_morph else _morph_fn()
-    if fn is None and not args.no_morph:
-        print("note: morph.beier_neely.polymorph_exact not available; sheet without morphs", file=sys.stderr)
-    img = render_sheet(art, fn)
+    img = render_sheet(art)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     img.convert("RGB").save(out)
@@ -81,10 +83,10 @@ def main(argv: list[str] | None = None) -> int:
     c = sub.add_parser("check", help="validate an art-set folder")
     c.add_argument("dir", help="art-set folder, its artset.json, or a bundled name")
     c.set_defaults(fn=cmd_check)
-    s = sub.add_parser("sheet", help="render a contact sheet PNG")
+    s = sub.add_parser("sheet", help="render a contact sheet PNG (with the rendered blends: python -m app sheet)")
     s.add_argument("dir")
     s.add_argument("--out", required=True, help="output PNG")
-    s.add_argument("--no-morph", action="store_true", help="skip the halfway morphs")
+    s.add_argument("--no-morph", action="store_true", help=argparse.SUPPRESS)  # blends moved to `python -m app sheet`
     s.set_defaults(fn=cmd_sheet)
     ls = sub.add_parser("list", help="list bundled and user art sets")
     ls.set_defaults(fn=cmd_list)

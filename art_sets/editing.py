@@ -113,13 +113,21 @@ def fit_drawing(drawing: Drawing, size: tuple[int, int], mode: str = "resize") -
         raise EditError(f"fit mode must be one of {FIT_MODES}, got {mode!r}")
     w, h = int(size[0]), int(size[1])
     ow, oh = drawing.size
-    lines = np.asarray(drawing.lines, np.float64).reshape(-1, 4)
-    if mode == "resize":
-        image = resize_image(drawing.image, (w, h))
-        lines = lines * np.array([w / ow, h / oh, w / ow, h / oh])
-    else:
-        image, (dx, dy) = crop_image(drawing.image, (w, h))
-        lines = lines + np.array([dx, dy, dx, dy], np.float64)
+
+    def fit(image, lines):
+        lines = np.asarray(lines, np.float64).reshape(-1, 4)
+        if mode == "resize":
+            return resize_image(image, (w, h)), lines * np.array([w / ow, h / oh, w / ow, h / oh])
+        image, (dx, dy) = crop_image(image, (w, h))
+        return image, lines + np.array([dx, dy, dx, dy], np.float64)
+
+    if drawing.layers:  # every layer, and the lines of those that have their own
+        layers = []
+        for ly in drawing.layers:
+            img, own = fit(ly.image, ly.lines if ly.lines is not None else np.zeros((0, 4)))
+            layers.append(replace(ly, image=img, lines=own if ly.lines is not None else None))
+        return replace(Drawing.from_layers(drawing.name, layers, fit(drawing.image, drawing.lines)[1]), file=drawing.file)
+    image, lines = fit(drawing.image, drawing.lines)
     return replace(drawing, image=image, lines=lines)
 
 
@@ -372,6 +380,9 @@ def replace_drawing_image(artset: ArtSet, part: str, index: int, image: np.ndarr
     """Swap a drawing's pixels (fitted to the box), keeping its lines."""
     p = artset.parts[part]
     d = p.drawings[index]
+    if d.layers:
+        raise EditError(f"{part} drawing {d.name!r} is drawn in layers ({', '.join(ly.name for ly in d.layers)}); "
+                        f"replace its layer files instead (see art_sets/FORMAT.md)")
     nd = Drawing(d.name, as_rgba(image), np.zeros((0, 4)), d.file)
     if nd.size != p.size:
         nd = fit_drawing(nd, p.size, fit)

@@ -1,7 +1,8 @@
 """Reading and writing art-set folders (``artset.json`` + PNGs).
 
-The manifest format is described in DESIGN.md ("Art sets"). Images are RGBA with straight
-alpha, loaded with Pillow. Every image's header is checked (size, pixel count) before any
+The manifest format is described for artists in ``art_sets/FORMAT.md``. Images are RGBA with
+straight alpha, loaded with Pillow. Format 1 is read exactly as it always was (a ``body`` key
+there is just an extra key); format 2 adds layered drawings and the body. Every image's header is checked (size, pixel count) before any
 pixels are decoded, so a decompression bomb is refused without being loaded. Image paths are
 relative to the folder and may never leave it (no absolute paths, no ``..``, no symlink out).
 
@@ -24,7 +25,8 @@ import numpy as np
 from PIL import Image
 
 from art_sets import atomic_file, safe_json
-from art_sets.model import FORMAT_VERSION, PART_NAMES, ArtSet, Drawing, Part
+from art_sets.model import (FORMAT_VERSION, MAX_BODY_ROLL, PART_NAMES, READ_FORMATS, ArtSet, Body, Drawing, Layer,
+                            Part, flatten)
 
 MANIFEST = "artset.json"
 MIN_DRAWINGS = 3  # a part needs a triangle of drawings for the barycentric morph
@@ -45,11 +47,19 @@ MAX_DRAWINGS = 16
 """Drawings per part."""
 MAX_LINES = 12
 """Control lines per drawing."""
+MAX_LAYERS = 8
+"""Layers per drawing (format 2)."""
+MAX_LAYER_LINES = 48
+"""Control lines of one layered drawing, or of one layer's own (format 2)."""
+MAX_LINE_WORK = MAX_DRAWINGS * (MAX_DRAWINGS - 1) * MAX_LINES
+"""Of a layered part: drawings × (drawings − 1) × lines, summed over its distinct sets of control
+lines — what building its morph tables costs, held to what the single-picture limits allow."""
 MAX_PATH_CHARS = 1024
 """Longest image path in a manifest (and 255 characters for one name in it)."""
 MAX_TEXT = 4096
 """Longest name, author or drawing name."""
 _KNOWN_KEYS = {"format", "name", "author", "canvas", "pivot", "heads", "parts"}
+_KNOWN_KEYS_2 = _KNOWN_KEYS | {"body"}
 
 
 class ArtSetError(Exception):
@@ -81,6 +91,7 @@ class _Scan:
         self.problems: list[Problem] = []
         self.manifest_file = str(folder / MANIFEST)
         self.alpha_seen: dict[str, bool] = {}
+        self.format = 1
         self.swept: set[Path] = set()
 
     def add(self, file: str, message: str) -> None:
@@ -181,9 +192,11 @@ class _Scan:
         if missing:
             self.add(self.manifest_file, f"missing key(s): {', '.join(missing)}")
             return None
-        if data["format"] != FORMAT_VERSION or isinstance(data["format"], bool):
-            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads format {FORMAT_VERSION})")
+        if data["format"] not in READ_FORMATS or isinstance(data["format"], bool) or not isinstance(data["format"], int):
+            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads formats "
+                                         f"{', '.join(map(str, READ_FORMATS))})")
             return None
+        self.format = int(data["format"])
         name = data["name"]
         if not isinstance(name, str) or not name.strip() or len(name) > MAX_TEXT:
             self.add(self.manifest_file, f"name must be a non-empty string of at most {MAX_TEXT} characters")
@@ -206,9 +219,38 @@ class _Scan:
         parts = self.read_parts(data["parts"], canvas)
         if parts is None:
             return None
-        extra = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
+        known = _KNOWN_KEYS_2 if self.format >= 2 else _KNOWN_KEYS
+        body = self.read_body(data["body"], canvas) if self.format >= 2 and "body" in data else None
+        extra = {k: v for k, v in data.items() if k not in known}
         return ArtSet(name=name, canvas=canvas, pivot=pivot, heads=heads, parts=parts, author=author,
-                      head_files=head_files, path=self.folder, extra=extra)
+                      head_files=head_files, path=self.folder, extra=extra, body=body)
+
+    def read_body(self, raw, canvas) -> Body | None:
+        """The optional ``body``: ``{"image": PATH, "follow": 0..1, "roll": 0..1, "pivot": [x, y]}``."""
+        if not isinstance(raw, dict) or "image" not in raw:
+            self.add(self.manifest_file, "body must be an object with 'image' (and optionally 'follow', 'roll', 'pivot')")
+            return None
+        bad = False
+        vals = {}
+        for key, default, hi in (("follow", Body.follow, 1.0), ("roll", Body.roll, MAX_BODY_ROLL)):
+            v = raw.get(key, default)
+            if not _is_num(v) or not 0 <= v <= hi:
+                self.add(self.manifest_file, f"body.{key} must be a number from 0 to {hi:g}, got {safe_json.show(v)}")
+                bad = True
+            vals[key] = float(v) if _is_num(v) else default
+        pivot = None
+        if raw.get("pivot") is not None:
+            pivot = _num_pair(raw["pivot"])
+            if pivot is None:
+                self.add(self.manifest_file, f"body.pivot must be [x, y] numbers, got {safe_json.show(raw['pivot'])}")
+                bad = True
+        img = self.image(raw["image"], "body")
+        if img is None or bad:
+            return None
+        if (img.shape[1], img.shape[0]) != canvas:
+            self.add(str(self.folder / raw["image"]), f"body is {img.shape[1]}x{img.shape[0]}, the canvas is {canvas[0]}x{canvas[1]}")
+            return None
+        return Body(image=img, file=raw["image"], follow=vals["follow"], roll=vals["roll"], pivot=pivot)
 
     def read_heads(self, raw, canvas) -> tuple[list[np.ndarray], list[str]]:
         heads, files = [], []
@@ -276,23 +318,22 @@ class _Scan:
         count_ref: tuple[int, str] | None = None
         for i, d in enumerate(raw_d):
             dw = f"{where}.drawings[{i}]"
+            if self.format >= 2 and isinstance(d, dict) and "layers" in d:
+                if "image" in d:
+                    self.add(self.manifest_file, f"{dw}: has both 'image' and 'layers'; a drawing is one or the other")
+                    continue
+                drawing = self.read_layered(pname, dw, d, box, seen)
+                if drawing is not None:
+                    drawings.append(drawing)
+                continue
             if not isinstance(d, dict) or not {"name", "image", "lines"} <= set(d):
-                self.add(self.manifest_file, f"{dw}: needs 'name', 'image' and 'lines'")
+                need = "'name', 'lines' and 'image' (or 'layers')" if self.format >= 2 else "'name', 'image' and 'lines'"
+                self.add(self.manifest_file, f"{dw}: needs {need}")
                 continue
-            dname = d["name"]
-            if not isinstance(dname, str) or not dname or len(dname) > MAX_TEXT:
-                self.add(self.manifest_file, f"{dw}: name must be a non-empty string of at most {MAX_TEXT} characters")
+            named = self.named_lines(where, dw, d, seen, MAX_LINES, "the lines-per-drawing limit")
+            if named is None:
                 continue
-            if dname in seen:
-                self.add(self.manifest_file, f"{where}: two drawings are called {dname!r}")
-            seen.add(dname)
-            if isinstance(d["lines"], list) and len(d["lines"]) > MAX_LINES:
-                self.add(self.manifest_file, f"{dw} ({dname}): {len(d['lines'])} control lines; at most {MAX_LINES} are allowed (the lines-per-drawing limit)")
-                continue
-            lines = _lines(d["lines"])
-            if lines is None:
-                self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] numbers of at most {MAX_COORD:g}")
-                continue
+            dname, lines = named
             img = self.image(d["image"], f"{dw} ({dname})", MAX_DRAWING_PIXELS)
             if img is None:
                 continue
@@ -305,18 +346,145 @@ class _Scan:
                     count_ref = (len(lines), dname)
                 elif len(lines) != count_ref[0]:
                     self.add(self.manifest_file, f"{where}: drawing {dname!r} has {len(lines)} control lines, {count_ref[1]!r} has {count_ref[0]}")
-                if len(lines):
-                    xs, ys = lines[:, [0, 2]], lines[:, [1, 3]]
-                    bad = np.nonzero((xs < 0).any(1) | (xs > w).any(1) | (ys < 0).any(1) | (ys > h).any(1))[0]
-                    if len(bad):
-                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, bad))} lie outside its {w}x{h} image")
-                    short = np.nonzero(np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) < MIN_LINE_LENGTH)[0]
-                    if len(short):
-                        self.add(self.manifest_file, f"{where}: drawing {dname!r} line(s) {', '.join(map(str, short))} are shorter than {MIN_LINE_LENGTH:g} px")
+                self.check_lines(where, f"drawing {dname!r}", lines, w, h)
             drawings.append(Drawing(name=dname, image=img, lines=lines, file=d["image"]))
-        if self.strict and count_ref is not None and count_ref[0] == 0:
+        if any(d.layers for d in drawings):
+            self.check_layer_structure(where, drawings)
+        elif self.strict and count_ref is not None and count_ref[0] == 0:
             self.add(self.manifest_file, f"{where}: drawings have no control lines; a morph needs at least one")
         return Part(name=pname, box=box, drawings=drawings)
+
+    def check_lines(self, where: str, what: str, lines: np.ndarray, w: int, h: int) -> None:
+        """Lines inside the ``w``×``h`` image and at least ``MIN_LINE_LENGTH`` long."""
+        if not len(lines):
+            return
+        xs, ys = lines[:, [0, 2]], lines[:, [1, 3]]
+        bad = np.nonzero((xs < 0).any(1) | (xs > w).any(1) | (ys < 0).any(1) | (ys > h).any(1))[0]
+        if len(bad):
+            self.add(self.manifest_file, f"{where}: {what} line(s) {', '.join(map(str, bad))} lie outside its {w}x{h} image")
+        short = np.nonzero(np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) < MIN_LINE_LENGTH)[0]
+        if len(short):
+            self.add(self.manifest_file, f"{where}: {what} line(s) {', '.join(map(str, short))} are shorter than {MIN_LINE_LENGTH:g} px")
+
+    def named_lines(self, where: str, dw: str, d: dict, seen: set[str], max_lines: int, limit: str
+                    ) -> tuple[str, np.ndarray] | None:
+        """A drawing's name (unique in its part) and control lines, or None with the problem recorded."""
+        dname = d["name"]
+        if not isinstance(dname, str) or not dname or len(dname) > MAX_TEXT:
+            self.add(self.manifest_file, f"{dw}: name must be a non-empty string of at most {MAX_TEXT} characters")
+            return None
+        if dname in seen:
+            self.add(self.manifest_file, f"{where}: two drawings are called {dname!r}")
+        seen.add(dname)
+        if isinstance(d["lines"], list) and len(d["lines"]) > max_lines:
+            self.add(self.manifest_file, f"{dw} ({dname}): {len(d['lines'])} control lines; at most {max_lines} are allowed ({limit})")
+            return None
+        lines = _lines(d["lines"])
+        if lines is None:
+            self.add(self.manifest_file, f"{dw} ({dname}): lines must be a list of [x0, y0, x1, y1] numbers of at most {MAX_COORD:g}")
+            return None
+        return dname, lines
+
+    def read_layered(self, pname: str, dw: str, d: dict, box, seen: set[str]) -> Drawing | None:
+        """A format-2 drawing made of layers (bottom first), each ``{"name", "image"[, "lines"]}``."""
+        where = f"parts.{pname}"
+        if not {"name", "lines"} <= set(d):
+            self.add(self.manifest_file, f"{dw}: needs 'name', 'lines' and 'layers'")
+            return None
+        named = self.named_lines(where, dw, d, seen, MAX_LAYER_LINES, "the lines-per-layered-drawing limit")
+        if named is None:
+            return None
+        dname, lines = named
+        raw_l = d["layers"]
+        if not isinstance(raw_l, list) or not raw_l:
+            self.add(self.manifest_file, f"{dw} ({dname}): layers must be a non-empty list")
+            return None
+        if len(raw_l) > MAX_LAYERS:
+            self.add(self.manifest_file, f"{dw} ({dname}): {len(raw_l)} layers; at most {MAX_LAYERS} are allowed (the layers limit)")
+            return None
+        layers: list[Layer] = []
+        names: set[str] = set()
+        ok = True
+        for k, ly in enumerate(raw_l):
+            lw = f"{dw} ({dname}).layers[{k}]"
+            if not isinstance(ly, dict) or not {"name", "image"} <= set(ly):
+                self.add(self.manifest_file, f"{lw}: needs 'name' and 'image' (and optionally 'lines')")
+                ok = False
+                continue
+            lname = ly["name"]
+            if not isinstance(lname, str) or not lname.strip() or len(lname) > MAX_TEXT:
+                self.add(self.manifest_file, f"{lw}: name must be a non-empty string of at most {MAX_TEXT} characters")
+                ok = False
+                continue
+            if lname in names:
+                self.add(self.manifest_file, f"{dw} ({dname}): two layers are called {lname!r}")
+            names.add(lname)
+            own = None
+            if ly.get("lines") is not None:
+                own = _lines(ly["lines"]) if not (isinstance(ly["lines"], list) and len(ly["lines"]) > MAX_LAYER_LINES) else None
+                if own is None:
+                    self.add(self.manifest_file, f"{lw} ({lname}): lines must be a list of at most {MAX_LAYER_LINES} "
+                                                 f"[x0, y0, x1, y1] numbers of at most {MAX_COORD:g}")
+                    ok = False
+                    continue
+            img = self.image(ly["image"], f"{lw} ({lname})", MAX_DRAWING_PIXELS)
+            if img is None:
+                ok = False
+                continue
+            h, w = img.shape[:2]
+            if (w, h) != (box[2], box[3]):
+                self.add(str(self.folder / ly["image"]),
+                         f"{pname} drawing {dname!r} layer {lname!r} is {w}x{h}, the {pname} box is {box[2]}x{box[3]}")
+                ok = False
+                continue
+            if self.strict and own is not None:
+                self.check_lines(where, f"drawing {dname!r} layer {lname!r}", own, w, h)
+            layers.append(Layer(name=lname, image=img, lines=own, file=ly["image"]))
+        if not ok:
+            return None
+        if self.strict:
+            self.check_lines(where, f"drawing {dname!r}", lines, box[2], box[3])
+        return Drawing.from_layers(dname, layers, lines)
+
+    def check_layer_structure(self, where: str, drawings: list[Drawing]) -> None:
+        """Every drawing of a layered part has the same layers, in the same order, each with its
+        own lines everywhere (the same number) or nowhere; every layer has lines to move with."""
+        ref = next(d for d in drawings if d.layers)
+        names = [ly.name for ly in ref.layers]
+        for d in drawings:
+            if not d.layers:
+                self.add(self.manifest_file, f"{where}: drawing {d.name!r} is a single picture but {ref.name!r} has layers "
+                                             f"({', '.join(names)}); give every drawing of a part the same layers")
+                return
+            if [ly.name for ly in d.layers] != names:
+                self.add(self.manifest_file, f"{where}: drawing {d.name!r} has layers {[ly.name for ly in d.layers]}, "
+                                             f"{ref.name!r} has {names}; every drawing needs the same layers in the same order")
+                return
+        line_sets = {tuple(len(d.layer_lines(k)) for d in drawings) + ((k if drawings[0].layers[k].lines is not None else -1),)
+                     for k in range(len(names))}
+        work = sum(len(drawings) * (len(drawings) - 1) * max(key[:-1]) for key in line_sets)
+        if work > MAX_LINE_WORK:
+            self.add(self.manifest_file, f"{where}: {len(drawings)} drawings × their control lines ({work} line pairs) is more than "
+                                         f"the {MAX_LINE_WORK} the morph tables may take (the line-work limit); fewer drawings, "
+                                         f"lines or layers with their own lines")
+        if not self.strict:
+            return
+        for k, lname in enumerate(names):
+            counts = {d.name: len(d.layer_lines(k)) for d in drawings}
+            owns = {d.name: d.layers[k].lines is not None for d in drawings}
+            if len(set(owns.values())) > 1:
+                have = [n for n, o in owns.items() if o]
+                self.add(self.manifest_file, f"{where}: layer {lname!r} has its own control lines in {', '.join(map(repr, have))} "
+                                             f"but not in every drawing; give it lines everywhere or nowhere")
+                continue
+            if len(set(counts.values())) > 1:
+                n0, c0 = next(iter(counts.items()))
+                odd = next(n for n, c in counts.items() if c != c0)
+                whose = f"layer {lname!r}" if owns[n0] else "the drawing"
+                self.add(self.manifest_file, f"{where}: {whose} control lines: {odd!r} has {counts[odd]}, {n0!r} has {c0}")
+                continue
+            if next(iter(counts.values())) == 0:
+                self.add(self.manifest_file, f"{where}: layer {lname!r} has no control lines to move with; a morph needs at least one")
 
 
 def scan(path: str | os.PathLike, strict_geometry: bool = True) -> tuple[ArtSet | None, list[Problem]]:
@@ -357,24 +525,44 @@ def write_png(path: str | os.PathLike, img: np.ndarray) -> None:
     atomic_file.write_bytes(Path(path), _png_bytes(img))
 
 
+def _lines_json(lines) -> list:
+    return [[float(v) for v in row] for row in np.asarray(lines, dtype=np.float64).reshape(-1, 4)]
+
+
+def _drawing_json(pname: str, d: Drawing) -> dict:
+    if not d.layers:
+        return {"name": d.name, "image": _drawing_file(pname, d), "lines": _lines_json(d.lines)}
+    layers = []
+    for ly in d.layers:
+        entry = {"name": ly.name, "image": _layer_file(pname, d, ly)}
+        if ly.lines is not None:
+            entry["lines"] = _lines_json(ly.lines)
+        layers.append(entry)
+    return {"name": d.name, "lines": _lines_json(d.lines), "layers": layers}
+
+
 def manifest_dict(art: ArtSet) -> dict:
-    """The JSON manifest for ``art`` (image paths as in ``head_files`` / ``Drawing.file``)."""
+    """The JSON manifest for ``art`` (image paths as in ``head_files`` / ``Drawing.file`` /
+    ``Layer.file`` / ``Body.file``). Format 1 unless the set has layers or a body."""
     head_files = _head_files(art)
+    v2 = art.layered or art.body is not None
     parts = {}
     for pname in PART_NAMES:
         p = art.parts[pname]
-        parts[pname] = {
-            "box": [int(v) for v in p.box],
-            "drawings": [{"name": d.name, "image": _drawing_file(pname, d),
-                          "lines": [[float(v) for v in row] for row in np.asarray(d.lines, dtype=np.float64).reshape(-1, 4)]}
-                         for d in p.drawings],
-        }
-    out = {"format": FORMAT_VERSION, "name": art.name, "author": art.author,
+        parts[pname] = {"box": [int(v) for v in p.box], "drawings": [_drawing_json(pname, d) for d in p.drawings]}
+    out = {"format": FORMAT_VERSION if v2 else 1, "name": art.name, "author": art.author,
            "canvas": [int(art.canvas[0]), int(art.canvas[1])],
            "pivot": [float(art.pivot[0]), float(art.pivot[1])],
-           "heads": head_files, "parts": parts}
+           "heads": head_files}
+    if art.body is not None:
+        b = art.body
+        out["body"] = {"image": b.file or "body.png", "follow": float(b.follow), "roll": float(b.roll)}
+        if b.pivot is not None:
+            out["body"]["pivot"] = [float(b.pivot[0]), float(b.pivot[1])]
+    out["parts"] = parts
+    known = _KNOWN_KEYS_2 if v2 else _KNOWN_KEYS
     for k, v in art.extra.items():
-        if k not in _KNOWN_KEYS:
+        if k not in known:
             out[k] = v
     return out
 
@@ -389,6 +577,10 @@ def _drawing_file(pname: str, d: Drawing) -> str:
     return d.file or f"{pname}/{d.name}.png"
 
 
+def _layer_file(pname: str, d: Drawing, ly: Layer) -> str:
+    return ly.file or f"{pname}/{d.name}/{ly.name}.png"
+
+
 def _image_slots(art: ArtSet) -> list[tuple[str, np.ndarray, Callable[[str], None]]]:
     """Every image ``art`` saves: its path in the manifest, its pixels, and how to rename it."""
     files = _head_files(art)
@@ -400,10 +592,31 @@ def _image_slots(art: ArtSet) -> list[tuple[str, np.ndarray, Callable[[str], Non
     def drawing(d: Drawing) -> Callable[[str], None]:
         return lambda name: setattr(d, "file", name)
 
+    def layer(ly: Layer) -> Callable[[str], None]:
+        return lambda name: setattr(ly, "file", name)
+
     slots = [(files[i], img, head(i)) for i, img in enumerate(art.heads)]
     for pname in PART_NAMES:
-        slots += [(_drawing_file(pname, d), d.image, drawing(d)) for d in art.parts[pname].drawings]
-    return slots
+        for d in art.parts[pname].drawings:
+            if not d.layers:
+                slots.append((_drawing_file(pname, d), d.image, drawing(d)))
+                continue
+            for ly in d.layers:
+                ly.file = _layer_file(pname, d, ly)
+                slots.append((ly.file, ly.image, layer(ly)))
+    if art.body is not None:
+        art.body.file = art.body.file or "body.png"
+        slots.append((art.body.file, art.body.image, lambda name: setattr(art.body, "file", name)))
+    # a layer that is the same in several drawings names one file: one slot, renaming them all
+    merged: dict[str, tuple[np.ndarray, list]] = {}
+    for rel, img, rename in slots:
+        if rel in merged:
+            if not (merged[rel][0] is img or np.array_equal(merged[rel][0], img)):
+                raise ArtSetError(f"{rel}: two different images would be written to this file")
+            merged[rel][1].append(rename)
+        else:
+            merged[rel] = (img, [rename])
+    return [(rel, img, (lambda name, fs=fs: [f(name) for f in fs])) for rel, (img, fs) in merged.items()]
 
 
 def _files_named_by(folder: Path) -> list[str]:

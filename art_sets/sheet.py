@@ -1,22 +1,21 @@
-"""Contact sheets: every drawing with its numbered control lines, the heads, and halfway morphs.
+"""Contact sheets: every drawing with its numbered control lines, its layers, the heads and the body.
 
-The morph is passed in (``morph_fn(images, lines_list, weights) -> premultiplied RGBA``,
-e.g. ``morph.beier_neely.polymorph_exact``) so this package stays free of ``morph``;
-without it the sheet shows drawings and heads only.
+This package draws no morphs (it knows the format, not the renderer): blends are passed in as
+ready images (``blends``: blocks of ``(title, [(label, straight RGBA array), ...])``), e.g. by
+``python -m app sheet``, which renders them with ``morph``.
 """
 
 from __future__ import annotations
 
-from itertools import combinations
-from typing import Callable
+from typing import Sequence
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from art_sets.library import compose_still
-from art_sets.model import ArtSet, Part
+from art_sets.model import ArtSet, Part, layer_names
 
-MorphFn = Callable[[list, list, list], np.ndarray]
+Block = tuple[str, Sequence[tuple[str, "np.ndarray | Image.Image"]]]
 
 BG = (236, 234, 228, 255)
 LINE = (214, 30, 160, 255)
@@ -33,31 +32,6 @@ def _font(size: int):
         return ImageFont.load_default(size)
     except TypeError:  # Pillow < 10.1
         return ImageFont.load_default()
-
-
-def to_straight(pm: np.ndarray) -> np.ndarray:
-    """Premultiplied RGBA uint8 -> straight RGBA uint8."""
-    a = pm[..., 3:4].astype(np.float32)
-    rgb = np.where(a > 0, pm[..., :3].astype(np.float32) * 255.0 / np.maximum(a, 1), 0)
-    return np.concatenate([np.clip(rgb + 0.5, 0, 255).astype(np.uint8), pm[..., 3:4]], -1)
-
-
-def cross_dissolve(a: np.ndarray, b: np.ndarray, t: float = 0.5) -> np.ndarray:
-    """Straight RGBA blend ``(1-t)·a + t·b`` computed on premultiplied colour."""
-    fa, fb = a.astype(np.float32) / 255, b.astype(np.float32) / 255
-    pa = np.concatenate([fa[..., :3] * fa[..., 3:], fa[..., 3:]], -1)
-    pb = np.concatenate([fb[..., :3] * fb[..., 3:], fb[..., 3:]], -1)
-    m = (1 - t) * pa + t * pb
-    al = m[..., 3:]
-    rgb = np.where(al > 1e-6, m[..., :3] / np.maximum(al, 1e-6), 0)
-    return (np.clip(np.concatenate([rgb, al], -1), 0, 1) * 255 + 0.5).astype(np.uint8)
-
-
-def halfway(part: Part, i: int, j: int, morph_fn: MorphFn) -> np.ndarray:
-    """The halfway morph of drawings i and j of ``part`` as straight RGBA."""
-    d0, d1 = part.drawings[i], part.drawings[j]
-    pm = morph_fn([d0.image, d1.image], [d0.lines, d1.lines], [0.5, 0.5])
-    return to_straight(np.asarray(pm, np.uint8))
 
 
 def annotate(img: np.ndarray, lines: np.ndarray, scale: float = 1.0) -> Image.Image:
@@ -87,35 +61,47 @@ def _over_grey(img: np.ndarray) -> Image.Image:
     return bg
 
 
-def render_sheet(art: ArtSet, morph_fn: MorphFn | None = None, max_width: int = 1800) -> Image.Image:
-    """The contact sheet of ``art`` as a Pillow RGBA image."""
+def _layer_cells(part: Part) -> list[tuple[str, Image.Image]]:
+    """Each drawing's layers side by side over grey (what is see-through shows), lines where a layer has its own."""
+    cells = []
+    for d in part.drawings:
+        tiles = []
+        for ly in d.layers:
+            tile = _over_grey(ly.image)
+            if ly.lines is not None:
+                tile = annotate(np.asarray(tile), ly.lines)
+            tiles.append(tile)
+        strip = Image.new("RGBA", (sum(t.width for t in tiles) + 4 * (len(tiles) - 1), tiles[0].height), BG)
+        x = 0
+        for t in tiles:
+            strip.paste(t, (x, 0))
+            x += t.width + 4
+        cells.append((f"{d.name}: " + " · ".join(ly.name for ly in d.layers), strip))
+    return cells
+
+
+def render_sheet(art: ArtSet, blends: Sequence[Block] | None = None, max_width: int = 1800) -> Image.Image:
+    """The contact sheet of ``art`` as a Pillow RGBA image; ``blends`` adds blocks of rendered images."""
     title_font, font = _font(26), _font(14)
     blocks: list[tuple[str, list[tuple[str, Image.Image]]]] = []
     faces = [("head %d" % (k + 1), _over_grey(h)) for k, h in enumerate(art.heads)]
     names = art.mouth.names()
-    faces.append(("face (open, %s)" % names[0], _over_grey(compose_still(art, 0, 0))))
+    faces.append(("face (%s, %s)" % (art.eyes.names()[0], names[0]), _over_grey(compose_still(art, 0, 0))))
+    if art.body is not None:
+        faces.append((f"body (follows {art.body.follow:g}, rolls {art.body.roll:g})", _over_grey(art.body.image)))
     faces = [(t, im.resize((256, 256), Image.LANCZOS)) for t, im in faces]
-    blocks.append(("heads (grey shows the feathered holes)", faces))
+    blocks.append(("heads (grey shows the feathered holes)" + (" and body" if art.body is not None else ""), faces))
     for part in (art.eyes, art.mouth):
         counts = sorted({len(d.lines) for d in part.drawings})
         what = f"{counts[0]} control lines each" if len(counts) == 1 else f"UNEQUAL control-line counts {counts}"
         blocks.append((f"{part.name}: {len(part.drawings)} drawings, {what}",
                        [(f"{d.name} ({len(d.lines)})", annotate(d.image, d.lines)) for d in part.drawings]))
-    if morph_fn is not None:
-        for part in (art.eyes, art.mouth):
-            if len({len(d.lines) for d in part.drawings}) != 1 or len(part.drawings[0].lines) == 0:
-                blocks.append((f"{part.name}: no morphs (the drawings' control lines do not correspond)", []))
-                continue
-            cells = []
-            for i, j in combinations(range(len(part.drawings)), 2):
-                a, b = part.drawings[i], part.drawings[j]
-                mimg = Image.fromarray(halfway(part, i, j, morph_fn), "RGBA")
-                dimg = Image.fromarray(cross_dissolve(a.image, b.image), "RGBA")
-                pair = Image.new("RGBA", (mimg.width, mimg.height * 2 + 4), BG)
-                pair.paste(mimg, (0, 0))
-                pair.paste(dimg, (0, mimg.height + 4))
-                cells.append((f"{a.name} ↔ {b.name}", pair))
-            blocks.append((f"{part.name}: halfway morph (top) vs cross-dissolve (bottom)", cells))
+        if layer_names(part) and all(d.layers for d in part.drawings):
+            blocks.append((f"{part.name}: layers, bottom first (grey is see-through; lines where a layer has its own)",
+                           _layer_cells(part)))
+    for title, cells in blends or ():
+        blocks.append((title, [(label, im if isinstance(im, Image.Image) else Image.fromarray(np.asarray(im), "RGBA"))
+                               for label, im in cells]))
     # layout
     pad, label_h = 14, 20
     rows: list[tuple[str, list[list[tuple[str, Image.Image]]]]] = []

@@ -1,16 +1,21 @@
-"""Bundled characters: ghosting of halfway morphs vs cross-dissolves, and loading time.
+"""Bundled characters: ghosting of the renderer's blends against cross-dissolves, and loading time.
 
-Ghosting measure ("stray half-strength ink"): a cross-dissolve of two drawings whose features
-sit in different places shows each line twice at about half strength; a feature-aligned morph
-moves the lines to one place, where they stay at full strength. For each pair of drawings of a
-part we take the background colour (the median pixel of the first drawing), measure every
-pixel's colour distance from it relative to full-strength ink (the 98th percentile over both
-drawings), and count pixels at 20–70 % strength that are more than 2 px from any full-strength
-(≥ 70 %) pixel: the anti-aliased rims of real strokes, and the slight softening a warp's
-resampling gives them, sit right next to full-strength ink and are not counted; a faint
-doubled line is. We report the EXCESS over the mean count of the two source drawings (pencil
-drawings have faint strokes of their own). Lower is cleaner; 0 means no more stray grey than
-the drawings themselves.
+Ghosting measure ("stray half-strength ink"): a cross-dissolve of drawings whose features sit in
+different places shows each line several times at partial strength; a feature-aligned morph
+moves the lines to one place, where they stay at full strength. For each blend of a part's
+drawings we take the background colour (the median pixel of the first drawing), measure every
+pixel's colour distance from it relative to full-strength ink (the 98th percentile over the
+blended drawings), and count pixels at 20–70 % strength that are more than 2 px from any
+full-strength (≥ 70 %) pixel: the anti-aliased rims of real strokes, and the slight softening a
+warp's resampling gives them, sit right next to full-strength ink and are not counted; a faint
+doubled line, a half-transparent lid over an eyeball, is. We report the EXCESS over the mean
+count of the blended drawings themselves (pencil drawings have faint strokes of their own).
+Lower is cleaner; 0 means no more stray grey than the drawings themselves.
+
+Blends: every pair of drawings at the halfway point, and random three-way blends (weights inside
+the triangle, each ≥ 0.1). "layered" is what the renderer draws (``CharacterRenderer``, layers
+morphed and stacked); "one picture" morphs the same drawings flattened to single pictures with
+the drawing's control lines, as format 1 would; "dissolve" is the plain cross-dissolve.
 """
 
 from __future__ import annotations
@@ -22,7 +27,6 @@ import numpy as np
 
 from art_sets.io import load_artset
 from art_sets.library import list_bundled
-from art_sets.sheet import cross_dissolve, to_straight
 from benchmarks.harness import TIMING_COLUMNS, Table, benchmark, machine, time_call
 
 LOW, HIGH, RIM = 0.20, 0.70, 2
@@ -45,13 +49,58 @@ def stray_half_strength(rgb: np.ndarray, bg: np.ndarray, full: float) -> int:
     return int(np.count_nonzero(mid & ~_dilate(s >= HIGH, RIM)))
 
 
-def ghosting(a: np.ndarray, b: np.ndarray, halfway: np.ndarray) -> int:
-    """Excess stray half-strength pixels of ``halfway`` (straight RGBA) over drawings ``a`` and ``b``."""
-    bg = np.median(a[..., :3].reshape(-1, 3), axis=0).astype(np.float32)
-    dist = [np.linalg.norm(x[..., :3].astype(np.float32) - bg, axis=2) for x in (a, b)]
+def ghosting(sources, blend: np.ndarray) -> int:
+    """Excess stray half-strength pixels of ``blend`` (straight RGBA) over the ``sources`` it blends."""
+    bg = np.median(sources[0][..., :3].reshape(-1, 3), axis=0).astype(np.float32)
+    dist = [np.linalg.norm(x[..., :3].astype(np.float32) - bg, axis=2) for x in sources]
     full = float(np.percentile(np.concatenate([d.ravel() for d in dist]), 98))
-    base = (stray_half_strength(a[..., :3], bg, full) + stray_half_strength(b[..., :3], bg, full)) / 2
-    return int(round(stray_half_strength(halfway[..., :3], bg, full) - base))
+    base = np.mean([stray_half_strength(x[..., :3], bg, full) for x in sources])
+    return int(round(stray_half_strength(blend[..., :3], bg, full) - base))
+
+
+def _triples(n: int, count: int, rng: np.random.Generator) -> list[tuple[tuple[int, ...], tuple[float, ...]]]:
+    out = []
+    for _ in range(count):
+        idx = tuple(int(i) for i in rng.choice(n, size=3, replace=False))
+        w = 0.1 + 0.7 * rng.dirichlet(np.ones(3))
+        out.append((idx, tuple(float(x) for x in w / w.sum())))
+    return out
+
+
+def ghosting_rows(art, renderer, quick: bool = False, seed: int = 0) -> list[dict]:
+    """Per part and kind of blend: the ghosting of the renderer, of one-picture morphs, of dissolves."""
+    from morph.compositor import to_straight
+    from morph.contact import dissolve
+    from morph.polymorph import PartMorpher
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    for part in (art.eyes, art.mouth):
+        n = min(3, len(part.drawings)) if quick else len(part.drawings)
+        images = [d.image for d in part.drawings]
+        layered = any(d.layers for d in part.drawings)
+        flat = PartMorpher(images, [d.lines for d in part.drawings]) if layered else None
+        blends = [("halfway pairs", ((i, j), (0.5, 0.5))) for i, j in combinations(range(n), 2)]
+        blends += [("random three-way", t) for t in _triples(n, 4 if quick else 12, rng)]
+        for kind in ("halfway pairs", "random three-way"):
+            got = {"layered": [], "one picture": [], "dissolve": []}
+            worst = ("", -10**9)
+            for k, (idx, w) in [b for b in blends if b[0] == kind]:
+                src = [images[i] for i in idx]
+                lay = ghosting(src, to_straight(renderer.render_part(part.name, (idx, w))))
+                got["layered"].append(lay)
+                got["dissolve"].append(ghosting(src, dissolve(src, w)))
+                if flat is not None:
+                    got["one picture"].append(ghosting(src, to_straight(flat.render(idx, w))))
+                if lay > worst[1]:
+                    worst = ("–".join(part.drawings[i].name for i in idx), lay)
+            rows.append(dict(part=part.name, kind=kind, blends=len(got["layered"]), worst=worst, **got))
+    return rows
+
+
+def _ratio(a: list, b: list) -> str:
+    sb = sum(b)
+    return f"{sum(a) / sb:.2f}" if sb > 0 else "–"
 
 
 @benchmark("art_sets")
@@ -59,51 +108,31 @@ def run(ctx):
     sets = list_bundled()
     tables = []
     load = Table("Bundled characters: loading time", ["character", "files MB", "what"] + TIMING_COLUMNS)
-    try:
-        from morph.renderer import CharacterRenderer
-    except Exception:  # morph not available: loading only
-        CharacterRenderer = None
+    from morph.renderer import CharacterRenderer
+
     for name, path in sets:
         mb = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
         load.add(name, f"{mb:.2f}", "load_artset (JSON + PNG decode)", *time_call(lambda: load_artset(path), ctx.runs(7, 2), warmup=1).cells())
-        if CharacterRenderer is not None:
-            load.add(name, f"{mb:.2f}", "+ CharacterRenderer (all α tables)",
-                     *time_call(lambda: CharacterRenderer(load_artset(path)), ctx.runs(3, 1), warmup=0).cells())
-    load.note = f"{machine()}. Wall-clock; α tables = 11 steps per ordered pair of drawings, 30×30 mesh."
+        load.add(name, f"{mb:.2f}", "+ CharacterRenderer (all α tables)",
+                 *time_call(lambda: CharacterRenderer(load_artset(path)), ctx.runs(3, 1), warmup=0).cells())
+    load.note = f"{machine()}. Wall-clock; α tables = 11 steps per ordered pair of drawings and per set of control lines, 30×30 mesh."
     tables.append(load)
 
-    try:
-        from morph.beier_neely import polymorph_exact
-    except Exception:
-        polymorph_exact = None
-    if polymorph_exact is None:
-        t = Table("Ghosting: halfway morph vs cross-dissolve", ["note"])
-        t.add("morph.beier_neely.polymorph_exact not available")
-        return tables + [t]
-    g = Table("Ghosting: excess stray half-strength pixels, halfway morph vs halfway cross-dissolve",
-              ["character", "part", "pairs", "morph median px", "dissolve median px", "morph / dissolve",
-               "pairs morph cleaner", "worst pair (morph px)"])
+    g = Table("Ghosting: excess stray half-strength pixels of the renderer's blends (median per blend; ratios of the totals)",
+              ["character", "part", "blends", "n", "layered px", "one picture px", "dissolve px",
+               "layered / dissolve", "one picture / dissolve", "worst (layered px)"])
     chosen = sets[:1] if ctx.quick else sets
     for name, path in chosen:
         art = load_artset(path)
-        for part in (art.eyes, art.mouth):
-            idx = range(min(3, len(part.drawings))) if ctx.quick else range(len(part.drawings))
-            m_scores, d_scores, worst = [], [], ("", -10**9)
-            for i, j in combinations(idx, 2):
-                a, b = part.drawings[i], part.drawings[j]
-                mh = to_straight(polymorph_exact([a.image, b.image], [a.lines, b.lines], [0.5, 0.5]))
-                dh = cross_dissolve(a.image, b.image)
-                ms, ds = ghosting(a.image, b.image, mh), ghosting(a.image, b.image, dh)
-                m_scores.append(ms)
-                d_scores.append(ds)
-                if ms > worst[1]:
-                    worst = (f"{a.name}–{b.name}", ms)
-            mm, dm = statistics.median(m_scores), statistics.median(d_scores)
-            cleaner = sum(m < d for m, d in zip(m_scores, d_scores))
-            ratio = f"{mm / dm:.2f}" if dm > 0 else "–"
-            g.add(name, part.name, str(len(m_scores)), f"{mm:.0f}", f"{dm:.0f}", ratio, f"{cleaner}/{len(m_scores)}",
-                  f"{worst[0]} ({worst[1]})")
+        r = CharacterRenderer(art)
+        for row in ghosting_rows(art, r, ctx.quick):
+            one = row["one picture"]
+            g.add(name, row["part"], row["kind"], str(row["blends"]), f"{statistics.median(row['layered']):.0f}",
+                  f"{statistics.median(one):.0f}" if one else "–", f"{statistics.median(row['dissolve']):.0f}",
+                  _ratio(row["layered"], row["dissolve"]), _ratio(one, row["dissolve"]) if one else "–",
+                  f"{row['worst'][0]} ({row['worst'][1]})")
     g.note = (__doc__.split("\n\n", 1)[1].replace("\n", " ").strip()
-              + (" Quick mode: first character, first 3 drawings per part." if ctx.quick else ""))
+              + " Goal with layers: layered / dissolve ≤ 0.1."
+              + (" Quick mode: first character, first 3 drawings per part, 4 three-way blends." if ctx.quick else ""))
     tables.append(g)
     return tables

@@ -11,6 +11,12 @@ stays zero. That is about the content's area instead of the moved bounding box. 
 equals the same pixels of a full-canvas warp except where OpenCV's fixed-point sampling grid,
 anchored at the sub-rectangle's origin, rounds a sample to the neighbouring 1/32 px: at hard edges
 a few levels, mostly none.
+
+An optional *body* (neck, shoulders, collar: a canvas-sized image) is drawn under the moved
+head. It follows the head's translation only by a fraction and rolls by a fraction of the head's
+roll (about its own pivot), so a tilt turns the head on a body that stays; where the body meets
+the canvas edge it is continued by its mirror image there, so moving it never opens a gap (and
+stripes or paper texture do not smear into streaks, as repeating the edge pixels would).
 """
 
 from __future__ import annotations
@@ -24,6 +30,20 @@ import numpy as np
 from morph.beier_neely import premultiply
 
 Box = tuple[int, int, int, int]
+
+
+def over_u8(top: np.ndarray, under: np.ndarray, out: np.ndarray, inv: np.ndarray | None = None) -> np.ndarray:
+    """Premultiplied ``top`` over ``under`` (uint8, same shape) into ``out``: ``top + under·(1 − α_top)``.
+
+    ``inv`` is an optional C-contiguous scratch of the same shape (OpenCV writes a strided view ten
+    times slower). Colour stays <= alpha (both terms do)."""
+    a = np.ascontiguousarray(top[:, :, 3])
+    if inv is not None and not inv.flags.c_contiguous:
+        inv = None
+    inv = cv2.merge((a, a, a, a), dst=inv)
+    cv2.bitwise_not(inv, dst=inv)  # 255 − α
+    inv = cv2.multiply(under, inv, dst=inv, scale=1.0 / 255.0)
+    return cv2.add(top, inv, dst=out)
 
 
 def _rect_intersection(a: Box, b: Box) -> Box | None:
@@ -52,6 +72,11 @@ class Compositor:
 
     ``band_rows`` is the height of the output bands the warp is cut into (32 measured fastest
     on 512×512 canvases: fewer warp calls against fewer wasted pixels).
+
+    ``body`` (straight RGBA of the canvas size, or None) is drawn under the head, moved by
+    ``body_follow`` × the head's translation and rolled by ``body_roll`` × its roll about
+    ``body_pivot`` (default ``pivot``); a body that does not roll moves by whole pixels. With a body the heads hold only the head, so
+    ``keep_in_frame`` keeps all of it (not just what lies above the pivot) on the canvas.
     """
 
     def __init__(
@@ -66,6 +91,10 @@ class Compositor:
         keep_in_frame: bool = False,
         margin: float | None = None,
         band_rows: int = 32,
+        body: np.ndarray | None = None,
+        body_follow: float = 0.0,
+        body_roll: float = 0.0,
+        body_pivot: tuple[float, float] | None = None,
     ):
         self.w, self.h = int(canvas[0]), int(canvas[1])
         self.pivot = (float(pivot[0]), float(pivot[1]))
@@ -99,7 +128,8 @@ class Compositor:
         self._set_bands(band_rows)
         self.keep_in_frame = bool(keep_in_frame)
         self.margin = 0.0 if margin is None else float(margin)
-        self._head_hull = self._content_hull(above_pivot=True)
+        self._set_body(body, body_follow, body_roll, body_pivot)
+        self._head_hull = self._content_hull(above_pivot=self.body is None)
         self._head_hull_xy = (self._head_hull[:, 0].copy(), self._head_hull[:, 1].copy())
         # One flat canvas: outside the boxes it equals the current head, so a frame rewrites
         # only the boxes, and the whole canvas when the shimmer changes the head. (One buffer
@@ -108,6 +138,32 @@ class Compositor:
         self._flat = self.heads[0].copy()
         self._flat_head = 0
         self._overlaps = self._any_overlap()
+
+    def _set_body(self, body, follow: float, roll: float, pivot) -> None:
+        """Premultiply the body; find its content box and which canvas edges it runs off."""
+        self.body = None
+        self.body_follow, self.body_roll = float(follow), float(roll)
+        self.body_pivot = self.pivot if pivot is None else (float(pivot[0]), float(pivot[1]))
+        if body is None:
+            return
+        body = np.asarray(body)
+        if body.shape != (self.h, self.w, 4) or body.dtype != np.uint8:
+            raise ValueError(f"body is {body.dtype} {body.shape}; expected uint8 {(self.h, self.w, 4)}")
+        self.body = np.ascontiguousarray(premultiply(body))
+        pts = cv2.findNonZero((self.body[:, :, 3] > 0).astype(np.uint8))
+        if pts is None:
+            self.body = None
+            return
+        x, y, bw, bh = cv2.boundingRect(pts)
+        self._body_box = (x, y, x + bw, y + bh)
+        self._body_edges = (x == 0, y == 0, x + bw == self.w, y + bh == self.h)  # left, top, right, bottom
+        self._body_buf = np.empty((self.h, self.w, 4), np.uint8)
+        self._body_inv = np.empty(self.h * self.w * 4, np.uint8)  # scratch for over_u8, reshaped to each rectangle
+        # A body that does not roll moves by whole pixels: a slice of the body mirrored out to
+        # _BODY_PAD on every side (what the bilinear warp's mirrored border would give), no warp.
+        self._body_pad = None
+        if self.body_roll == 0.0:
+            self._body_pad = np.pad(self.body, ((_BODY_PAD, _BODY_PAD), (_BODY_PAD, _BODY_PAD), (0, 0)), mode="reflect")
 
     def _content_hull(self, above_pivot: bool = False) -> np.ndarray:
         """Convex hull ``(k, 2)`` of every pixel that can be non-transparent (heads ∪ boxes).
@@ -196,6 +252,22 @@ class Compositor:
     def matrix(self, pose: Sequence[float]) -> np.ndarray:
         """The 2×3 affine map canvas → output for ``pose`` (after ``gain`` and, if on, the
         keep-in-frame limit)."""
+        a, b, tx, ty, dx, dy, _ = self._pose_terms(pose)
+        return np.array([[a, b, tx + dx], [-b, a, ty + dy]])
+
+    def body_matrix(self, pose: Sequence[float]) -> np.ndarray:
+        """The 2×3 affine map of the body for ``pose``: ``body_follow`` × the head's (limited)
+        translation, ``body_roll`` × its roll about ``body_pivot``."""
+        *_, dx, dy, roll = self._pose_terms(pose)
+        rad = roll * self.body_roll * (math.pi / 180)
+        a, b = math.cos(rad), math.sin(rad)
+        cx, cy = self.body_pivot
+        tx, ty = (1 - a) * cx - b * cy, b * cx + (1 - a) * cy
+        return np.array([[a, b, tx + self.body_follow * dx], [-b, a, ty + self.body_follow * dy]])
+
+    def _pose_terms(self, pose: Sequence[float]) -> tuple[float, float, float, float, float, float, float]:
+        """``(cos, sin, tx, ty, dx, dy, roll)``: the rotation about the pivot and the translation
+        after ``gain`` and the keep-in-frame limit."""
         dx, dy, roll = (float(v) * self.gain for v in pose)
         if not all(math.isfinite(v) for v in (dx, dy, roll)):
             raise ValueError(f"pose must be three finite numbers (dx, dy, roll_deg), got {tuple(pose)}")
@@ -210,7 +282,7 @@ class Compositor:
             py = hx * -b + hy * a
             dx = _soft_clamp(dx, -self.margin - (px.min() + tx), self.w + self.margin - (px.max() + tx))
             dy = _soft_clamp(dy, -self.margin - (py.min() + ty), self.h + self.margin - (py.max() + ty))
-        return np.array([[a, b, tx + dx], [-b, a, ty + dy]])
+        return a, b, tx, ty, dx, dy, roll
 
     def flat(self, parts: Mapping[str, np.ndarray], frame_no: int = 0) -> np.ndarray:
         """The untransformed character: parts under the head (an internal buffer, reused)."""
@@ -281,9 +353,48 @@ class Compositor:
             raise ValueError(f"pose must be (dx, dy, roll_deg), got {tuple(pose)}")
         m = self.matrix(pose)
         (a, b, tx), (c, d, ty) = m.tolist()
+        self._head_bands = None  # where the head can be in this frame: the whole canvas unless warped in bands
         if a == 1.0 and b == 0.0 and c == 0.0 and d == 1.0 and tx.is_integer() and ty.is_integer():
-            return self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
-        return self._warp_content(flat, m)
+            out = self._shift(flat, int(tx), int(ty))  # what bilinear sampling gives, as a copy
+        else:
+            out = self._warp_content(flat, m)
+        if self.body is not None:
+            self._under_body(out, self.body_matrix(pose))
+        return out
+
+    def _under_body(self, out: np.ndarray, m: np.ndarray) -> None:
+        """Lay the body moved by ``m`` under the head frame ``out`` (in place), only in the
+        rectangle the moved body covers (to the canvas edge on the sides where it runs off).
+
+        A body that does not roll is moved by the nearest whole pixels (a slice, no resampling)."""
+        if self._body_pad is not None:
+            sx = min(max(int(round(m[0, 2])), -_BODY_PAD), _BODY_PAD)
+            sy = min(max(int(round(m[1, 2])), -_BODY_PAD), _BODY_PAD)
+            x0, y0, x1, y1 = self._body_box
+            left, top, right, bottom = self._body_edges
+            rx0, ry0 = (0 if left else max(0, x0 + sx)), (0 if top else max(0, y0 + sy))
+            rx1, ry1 = (self.w if right else min(self.w, x1 + sx)), (self.h if bottom else min(self.h, y1 + sy))
+            if rx1 <= rx0 or ry1 <= ry0:
+                return
+            p = _BODY_PAD
+            self._lay_under(out, self._body_pad[ry0 - sy + p:ry1 - sy + p, rx0 - sx + p:rx1 - sx + p], (rx0, ry0, rx1, ry1))
+            return
+        x0, y0, x1, y1 = self._body_box
+        corners = np.array([[x0 - 0.5, y0 - 0.5, 1], [x1 - 0.5, y0 - 0.5, 1], [x0 - 0.5, y1 - 0.5, 1], [x1 - 0.5, y1 - 0.5, 1]])
+        moved = corners @ m.T
+        left, top, right, bottom = self._body_edges
+        rx0 = 0 if left else max(0, math.floor(moved[:, 0].min() - _REACH))
+        ry0 = 0 if top else max(0, math.floor(moved[:, 1].min() - _REACH))
+        rx1 = self.w if right else min(self.w, math.ceil(moved[:, 0].max() + _REACH) + 1)
+        ry1 = self.h if bottom else min(self.h, math.ceil(moved[:, 1].max() + _REACH) + 1)
+        if rx1 <= rx0 or ry1 <= ry0:
+            return
+        local = m.copy()
+        local[0, 2] -= rx0
+        local[1, 2] -= ry0
+        region = self._body_buf[ry0:ry1, rx0:rx1]
+        cv2.warpAffine(self.body, local, (rx1 - rx0, ry1 - ry0), region, cv2.INTER_LINEAR, cv2.BORDER_REFLECT_101)
+        self._lay_under(out, region, (rx0, ry0, rx1, ry1))
 
     def _shift(self, flat: np.ndarray, dx: int, dy: int) -> np.ndarray:
         """``flat`` moved by whole pixels (transparent where nothing moves in), a new array."""
@@ -339,11 +450,38 @@ class Compositor:
         local = m.copy()
         tx, ty = m[0, 2], m[1, 2]
         warp, linear, zero_border = cv2.warpAffine, cv2.INTER_LINEAR, cv2.BORDER_CONSTANT
-        for y0, y1, x0, x1 in self._bands(m):
+        self._head_bands = bands = self._bands(m)
+        for y0, y1, x0, x1 in bands:
             local[0, 2] = tx - x0
             local[1, 2] = ty - y0
             warp(flat, local, (x1 - x0, y1 - y0), out[y0:y1, x0:x1], linear, zero_border)
         return out
+
+    def _inv_scratch(self, shape) -> np.ndarray:
+        return self._body_inv[: shape[0] * shape[1] * 4].reshape(shape[0], shape[1], 4)
+
+    def _lay_under(self, out: np.ndarray, body: np.ndarray, rect: tuple[int, int, int, int]) -> None:
+        """``out[rect]`` = the head frame over ``body`` (a view of ``rect``'s size): "over" in the one
+        rectangle that holds every warp band of the head meeting ``rect``, a plain copy of the body
+        around it (where the head's warp left zeros)."""
+        rx0, ry0, rx1, ry1 = rect
+        hit = [(y0, y1, x0, x1) for y0, y1, x0, x1 in (self._head_bands or [])
+               if y1 > ry0 and y0 < ry1 and x1 > rx0 and x0 < rx1]
+        if self._head_bands is None:
+            hx0, hy0, hx1, hy1 = rect
+        elif not hit:
+            out[ry0:ry1, rx0:rx1] = body
+            return
+        else:
+            hy0, hy1 = max(ry0, hit[0][0]), min(ry1, hit[-1][1])
+            hx0, hx1 = max(rx0, min(h[2] for h in hit)), min(rx1, max(h[3] for h in hit))
+        b = lambda y0, y1, x0, x1: body[y0 - ry0:y1 - ry0, x0 - rx0:x1 - rx0]
+        out[ry0:hy0, rx0:rx1] = b(ry0, hy0, rx0, rx1)
+        out[hy1:ry1, rx0:rx1] = b(hy1, ry1, rx0, rx1)
+        out[hy0:hy1, rx0:hx0] = b(hy0, hy1, rx0, hx0)
+        out[hy0:hy1, hx1:rx1] = b(hy0, hy1, hx1, rx1)
+        head = out[hy0:hy1, hx0:hx1]
+        over_u8(head, b(hy0, hy1, hx0, hx1), head, self._inv_scratch(head.shape))
 
 
 # Output pixels farther than this (px) from every moved content pixel centre stay transparent:
@@ -351,6 +489,9 @@ class Compositor:
 _REACH = 1.5
 # Every 4th contour pixel: a quarter of the per-frame points for about 3 px more reach.
 _OUTLINE_STEP = 4
+# Pixels of mirrored body kept on every side for a body that moves by whole pixels: more than it
+# follows a head kept in frame (0.3 × a canvas's width is 154 px on a 512 canvas).
+_BODY_PAD = 192
 
 
 def _soft_clamp(x: float, lo: float, hi: float) -> float:

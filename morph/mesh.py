@@ -59,19 +59,24 @@ class MeshGrid:
         # ... and of the y pass: output rows [y0, y1) from vertex rows [j0, j0 + band], (y1−y0, band+1).
         self._row_bands = self._bands_of(self.h, band_cells)
 
-    def _bands_of(self, n_pixels: int, band_cells: int) -> list[tuple[int, int, int, np.ndarray]]:
+    def _bands_of(self, n_pixels: int, band_cells: int, lo: int = 0, hi: int | None = None
+                  ) -> list[tuple[int, int, int, np.ndarray]]:
         """``(p0, p1, j0, weights (p1−p0, band+1))``: pixels ``[p0, p1)`` of a side of
-        ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells)."""
+        ``n_pixels`` interpolate only vertices ``j0 .. j0+band`` (groups of ``band_cells`` cells).
+
+        With ``lo``/``hi`` only pixels ``[lo, hi)`` are covered and ``p0, p1`` count from ``lo``."""
+        hi = n_pixels if hi is None else hi  # (lo, hi): a sub-range, e.g. for a window of the image
         band = max(1, min(int(band_cells), self.cells))
         full = interpolation_matrix(n_pixels, self.cells)
         cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
+        inside = (np.arange(n_pixels) >= lo) & (np.arange(n_pixels) < hi)
         out = []
         for c0 in range(0, self.cells, band):
             c1 = min(c0 + band, self.cells)  # cells [c0, c1) use vertices c0..c1
-            ps = np.nonzero((cell >= c0) & (cell < c1))[0]
+            ps = np.nonzero((cell >= c0) & (cell < c1) & inside)[0]
             if len(ps):
                 p0, p1 = int(ps[0]), int(ps[-1]) + 1
-                out.append((p0, p1, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
+                out.append((p0 - lo, p1 - lo, c0, np.ascontiguousarray(full[p0:p1, c0:c1 + 1])))
         return out
 
     @property
@@ -120,6 +125,48 @@ class MeshGrid:
         for y0, y1, j0, wts in self._row_bands:
             np.matmul(wts, cols[:, j0:j0 + wts.shape[1], :], out=dense[:, y0:y1, :])
         dense = dense.reshape(k, 2, self.h, self.w)
+        return dense[:, 0], dense[:, 1]
+
+    def cell_spans(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per mesh cell, the pixel columns ``[x0, x1)`` (first array, ``(cells, 2)``) and rows
+        ``[y0, y1)`` (second) whose values interpolate that cell's four vertices."""
+        out = []
+        for n_pixels in (self.w, self.h):
+            cell = np.minimum(np.floor(np.arange(n_pixels) * self.cells / (n_pixels - 1)).astype(np.int64), self.cells - 1)
+            spans = np.zeros((self.cells, 2), np.int64)
+            for c in range(self.cells):
+                ps = np.nonzero(cell == c)[0]
+                spans[c] = (ps[0], ps[-1] + 1) if len(ps) else (0, 0)
+            out.append(spans)
+        return out[0], out[1]
+
+    def upsample_rect(self, planes: np.ndarray, rect: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`upsample_planes`, for the pixels ``[x0, x1) × [y0, y1)`` only: maps
+        ``(k, y1−y0, x1−x0)`` (the same values as the full maps there, up to float rounding).
+
+        Only the vertex rows and columns around the rectangle are used. The result lives in
+        buffers of this grid that the next call overwrites.
+        """
+        x0, y0, x1, y1 = (int(v) for v in rect)
+        k, n = planes.shape[0], self.cells + 1
+        rows = [(max(p0, y0), min(p1, y1), j0, wts[max(p0, y0) - p0:min(p1, y1) - p0])
+                for p0, p1, j0, wts in self._row_bands if p0 < y1 and p1 > y0]
+        cols = [(max(p0, x0), min(p1, x1), j0, wts[:, max(p0, x0) - p0:min(p1, x1) - p0])
+                for p0, p1, j0, wts in self._col_bands if p0 < x1 and p1 > x0]
+        v0 = rows[0][2]
+        v1 = rows[-1][2] + rows[-1][3].shape[1]
+        comps = np.ascontiguousarray(planes, dtype=np.float32).reshape(k * 2, n, n)[:, v0:v1]
+        rw, rh = x1 - x0, y1 - y0
+        size_c, size_d = 2 * k * (v1 - v0) * rw, 2 * k * rh * rw
+        if getattr(self, "_flat", None) is None or self._flat.size < size_c + size_d:
+            self._flat = np.empty(2 * 3 * (n * self.w + self.h * self.w), np.float32)
+        col = self._flat[:size_c].reshape(2 * k, v1 - v0, rw)
+        dense = self._flat[size_c:size_c + size_d].reshape(2 * k, rh, rw)
+        for q0, q1, j0, wts in cols:
+            np.matmul(comps[:, :, j0:j0 + wts.shape[0]], wts, out=col[:, :, q0 - x0:q1 - x0])
+        for q0, q1, j0, wts in rows:
+            np.matmul(wts, col[:, j0 - v0:j0 - v0 + wts.shape[1], :], out=dense[:, q0 - y0:q1 - y0, :])
+        dense = dense.reshape(k, 2, rh, rw)
         return dense[:, 0], dense[:, 1]
 
 

@@ -1,7 +1,9 @@
 """``CharacterRenderer``: one art set, morph weights in, a premultiplied RGBA frame out.
 
-Loading builds a ``PartMorpher`` per part (the α tables: the slow part, done once) and a
-``Compositor``. ``render`` then costs two mesh polymorphs, the head composite and one affine warp.
+Loading builds a ``PartMorpher`` per part (the α tables: the slow part, done once), or a
+``LayeredMorpher`` for a part drawn in layers, and a ``Compositor`` (with the body, when the set
+has one). ``render`` then costs two mesh polymorphs (one per moving layer of a layered part), the
+head composite and one affine warp (two with a body).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from typing import Sequence
 import numpy as np
 
 from morph.compositor import Compositor
+from morph.layers import LayeredMorpher
 from morph.polymorph import PartMorpher
 from morph.style import ExpressionStyle
 
@@ -45,16 +48,20 @@ class CharacterRenderer:
         self.artset = artset
         self.detail = bool(detail)
         self.style = style or ExpressionStyle()
-        self.morphers: dict[str, PartMorpher] = {}
+        self.morphers: dict[str, PartMorpher | LayeredMorpher] = {}
         self.rest: dict[str, int] = {}
         for name, part in artset.parts.items():
             if not part.drawings:
                 raise ValueError(f"art set {artset.name!r}: part {name!r} has no drawings")
             try:
-                self.morphers[name] = PartMorpher(
-                    [d.image for d in part.drawings], [d.lines for d in part.drawings], alpha_steps=alpha_steps,
-                    exact_three_way=exact_three_way,
-                )
+                if any(d.layers for d in part.drawings):
+                    self.morphers[name] = LayeredMorpher(part.drawings, alpha_steps=alpha_steps,
+                                                         exact_three_way=exact_three_way)
+                else:
+                    self.morphers[name] = PartMorpher(
+                        [d.image for d in part.drawings], [d.lines for d in part.drawings], alpha_steps=alpha_steps,
+                        exact_three_way=exact_three_way,
+                    )
             except ValueError as e:
                 raise ValueError(f"art set {artset.name!r}, part {name!r}: {e}") from None
             if self.morphers[name].size != part.size:
@@ -64,9 +71,14 @@ class CharacterRenderer:
             names = part.names()
             self.rest[name] = next((names.index(n) for n in _REST_NAMES.get(name, ()) if n in names), 0)
         self._part_buffers = {n: np.empty_like(m.pm[0]) for n, m in self.morphers.items()}
+        body = getattr(artset, "body", None)
         self.compositor = Compositor(
             artset.canvas, artset.pivot, artset.heads, {n: p.box for n, p in artset.parts.items()},
             gain=gain, shimmer_every=shimmer_every, keep_in_frame=keep_in_frame,
+            body=None if body is None else body.image,
+            body_follow=0.0 if body is None else body.follow,
+            body_roll=0.0 if body is None else body.roll,
+            body_pivot=None if body is None else body.pivot,
         )
 
     @property

@@ -60,9 +60,27 @@ def first_bundled() -> Path:
     return sets[0][1]
 
 
+def format1_copy(src: Path, dst: Path) -> Path:
+    """The art set at ``src`` saved as a format-1 set: every drawing flattened to one picture with
+    the first of its lines, no body."""
+    from art_sets.io import MAX_LINES
+
+    art = load_artset(src).single_pictures()
+    for part in art.parts.values():
+        for d in part.drawings:
+            d.lines = d.lines[:MAX_LINES]  # a format-1 drawing may have at most MAX_LINES
+    return save_artset(art, dst)
+
+
 @pytest.fixture
 def bundled_copy(tmp_path) -> Path:
-    dst = tmp_path / "copy"
+    """A real character as a format-1 set (the validator tests below edit its format-1 manifest)."""
+    return format1_copy(first_bundled(), tmp_path / "copy")
+
+
+@pytest.fixture
+def layered_copy(tmp_path) -> Path:
+    dst = tmp_path / "layered"
     shutil.copytree(first_bundled(), dst)
     return dst
 
@@ -250,7 +268,7 @@ def test_missing_part(bundled_copy):
     assert "missing part 'mouth'" in messages(bundled_copy)
 
 
-@pytest.mark.parametrize("fmt", [2, 0, "1", True, None])
+@pytest.mark.parametrize("fmt", [3, 0, "1", True, None, 1.5])
 def test_wrong_format_version(bundled_copy, fmt):
     edit_manifest(bundled_copy, lambda d: d.__setitem__("format", fmt))
     assert "not supported" in messages(bundled_copy)
@@ -354,20 +372,16 @@ def test_cli_sheet_without_morph(tiny, tmp_path):
     assert Image.open(out).size[0] > 100
 
 
-def test_sheet_with_a_morph_function(tiny):
-    from art_sets.sheet import cross_dissolve, render_sheet
-
-    calls = []
-
-    def fake_morph(images, lines, weights):
-        calls.append(len(images))
-        s = cross_dissolve(images[0], images[1], weights[1]).astype(np.float32)
-        return np.concatenate([s[..., :3] * s[..., 3:] / 255, s[..., 3:]], -1).round().astype(np.uint8)
+def test_sheet_adds_the_blends_it_is_given(tiny):
+    from art_sets.sheet import render_sheet
 
     art = load_artset(tiny)
-    with_m = render_sheet(art, fake_morph)
-    without = render_sheet(art, None)
-    assert len(calls) == 3 + 3 and with_m.height > without.height
+    cell = np.zeros((40, 60, 4), np.uint8)
+    cell[..., 0], cell[..., 3] = 200, 255
+    with_b = render_sheet(art, [("some blends", [("a", cell), ("b", cell)])])
+    without = render_sheet(art)
+    assert with_b.height > without.height
+    assert (np.asarray(with_b)[..., 0] == 200).sum() >= 2 * 40 * 60
 
 
 def test_scan_returns_partial_results(bundled_copy):

@@ -32,6 +32,8 @@ from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
+from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils
+from tracker.eyes import calibration_crop as eye_calibration_crop
 from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
@@ -41,7 +43,7 @@ CLASSIFIERS = ("pupil", "lip", "eye")
 """Order of the colour tables in the table image."""
 WORK_IPD_MAX = 80.0
 """Largest inter-pupil distance (px) the finders work at; bigger faces are scaled down."""
-SNAP_REACH = 0.05
+SNAP_REACH = 0.12
 """Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
 
 
@@ -164,9 +166,23 @@ class Calibration:
     that tells this face from anything else; None in files from before it existed."""
     face_box_eyes: tuple[tuple[float, float], tuple[float, float]] | None = None
     """Where the pupils sat inside the face detector's box on the calibration frame (fractions)."""
+    eye_model: EyeModel | None = None
+    """This performer's eyes for :class:`tracker.eyes.EyeFinder`; None in older files, which
+    track with the eye-picture, lid-walk and brow finders of ``pupils``, ``lids`` and ``brows``."""
     mouth_model: MouthModel | None = None
     """This performer's lips, gap and inside (:mod:`tracker.mouth_model`); None in older files,
     which track with the plain lip-blob finder of :mod:`tracker.mouth`."""
+
+    @property
+    def classifiers(self) -> dict[str, object]:
+        """The colour classes the tracker tells apart, each with ``mask(bgr) -> bool array``
+        (for showing what calibration learned): the eye's inside, the lips and the mouth's
+        inside for a calibration with eye and mouth models, else the first tracker's pupil,
+        lip and eye colours."""
+        if self.eye_model is None or self.mouth_model is None:
+            return {"pupil": self.pupil, "lip": self.lip, "eye": self.eye}
+        return {"eye": _EyeInsideMask(self.eye_model), "lip": _LipMask(self.mouth_model),
+                "mouth inside": _MouthInsideMask(self.mouth_model)}
 
     # -------------------------------------------------------------- persistence
     def to_dict(self, stem: str) -> dict:
@@ -200,6 +216,8 @@ class Calibration:
             "mouth_ref": list(self.mouth_ref) if self.mouth_ref is not None else None,
             "face_patch": f"{stem}.face.png" if self.face_patch is not None else None,
             "mouth_model": self.mouth_model.to_dict() if self.mouth_model is not None else None,
+            "eye_model": self.eye_model.to_dict() if self.eye_model is not None else None,
+            "eye_model_pictures": {k: f"{stem}.{k}.png" for k in EyeModel.IMAGE_NAMES} if self.eye_model is not None else None,
             "face_box_eyes_flat": [float(v) for p in self.face_box_eyes for v in p] if self.face_box_eyes is not None else None,
         }
 
@@ -227,6 +245,12 @@ class Calibration:
             if not ok:
                 raise CalibrationError(f"{path}: could not encode the face picture")
             d["face_patch"] = gen.put(d["face_patch"], buf.tobytes())
+        if self.eye_model is not None:
+            for k, img in self.eye_model.images().items():
+                ok, buf = cv2.imencode(".png", img)
+                if not ok:
+                    raise CalibrationError(f"{path}: could not encode the eye model's {k} picture")
+                d["eye_model_pictures"][k] = gen.put(d["eye_model_pictures"][k], buf.tobytes())
         gen.commit((json.dumps(d, indent=1) + "\n").encode("utf-8"))
 
     @classmethod
@@ -284,6 +308,7 @@ class Calibration:
             face_patch=face_patch,
             face_box_eyes=None if box_eyes is None else ((box_eyes[0], box_eyes[1]), (box_eyes[2], box_eyes[3])),
             mouth_model=_mouth_model(path, d.get("mouth_model")),
+            eye_model=_eye_model(path, d.get("eye_model"), d.get("eye_model_pictures")),
         )
         return cal
 
@@ -291,6 +316,10 @@ class Calibration:
 # ---------------------------------------------------------------------------------------------
 # calibrate
 
+
+# grey-level spread (0–255) below which an eye picture is a flat wall, not an eye: real eyes on the
+# clips measure 17–62 (5–30 on darkened, noisy copies), a flat background under codec noise 1–2
+MIN_EYE_CONTRAST = 3.0
 
 def _odd(v: float, lo: int = 3) -> int:
     n = max(int(round(v)), lo)
@@ -390,13 +419,15 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         raise CalibrationError(str(e)) from None
     grey_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     ipd0 = clicks.ipd()
-    lp, rl = _refine_pupil(grey_full, clicks.left_pupil, ipd0)
-    rp, rr = _refine_pupil(grey_full, clicks.right_pupil, ipd0)
+    # the iris centres near the clicks (the clicks stay when nothing iris-like is there)
+    lp, rp = refine_pupils(grey_full, clicks.left_pupil, clicks.right_pupil)
     # a careful click is trusted over a snap that wandered (onto lashes, a lid crease, make-up)
     if math.dist(lp, clicks.left_pupil) > SNAP_REACH * ipd0:
         lp = clicks.left_pupil
     if math.dist(rp, clicks.right_pupil) > SNAP_REACH * ipd0:
         rp = clicks.right_pupil
+    _, rl = _refine_pupil(grey_full, lp, ipd0)
+    _, rr = _refine_pupil(grey_full, rp, ipd0)
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
     work_ipd = min(ipd, WORK_IPD_MAX)
     ff = FaceFrame.from_pupils(lp, rp, work_ipd)
@@ -440,6 +471,11 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
         t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
         temps.append(np.rint(t).astype(np.float32))
+    for t, side, c in zip(temps, ("left", "right"), (clicks.left_pupil, clicks.right_pupil)):
+        if float(t.std()) < MIN_EYE_CONTRAST:
+            raise CalibrationError(
+                f"clicks: nothing eye-like at the {side} pupil click ({c[0]:g}, {c[1]:g}): the picture there is flat"
+            )
 
     # --- samples
     def region(fx, fy, hw, hh):
@@ -479,6 +515,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         iris_level = lo_m
         if hi_m - lo_m > 40:
             white_threshold = 0.5 * (lo_m + hi_m)
+
+    # --- the eyes: irises, lids, brows, the whole eye's picture (:mod:`tracker.eyes`)
+    erect = eye_calibration_crop(wi)
+    ecrop = ff.crop(frame_bgr, erect)
+    egrey = cv2.cvtColor(ecrop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    eo = np.array(erect[:2], dtype=np.float64)
+    try:
+        learned = learn_eyes(ecrop, egrey, np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - eo, brows_f - eo, wi)
+        # the pictures are kept as 8-bit PNGs: round now, so a loaded calibration tracks like this one
+        eye_model = EyeModel.from_dict(learned.to_dict(), learned.images())
+    except EyeModelError as e:
+        raise CalibrationError(f"calibration: {e}") from None
 
     # --- the mouth: this performer's lips, gap and inside (never refuses a face; says which cue it uses)
     mrect = mouth_rect(mouth_f, wi)
@@ -553,6 +601,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         white_threshold=white_threshold,
         iris_level=iris_level,
         mouth_model=mouth_model,
+        eye_model=eye_model,
     )
     # the face as a whole, to tell it from anything else and to find it again
     from tracker.face_finder import face_patch, learn_eyes_in_box
@@ -597,6 +646,8 @@ def files_named_by(path: Path) -> list[str]:
     if isinstance(spec, dict):
         names.append(spec.get("image"))
     names.append(d.get("face_patch"))
+    if isinstance(d.get("eye_model_pictures"), dict):
+        names.extend(d["eye_model_pictures"].values())
     return [n for n in names if isinstance(n, str) and _plain_name(n)]
 
 
@@ -686,6 +737,57 @@ def _read_png(p: Path, flags: int, max_side: int) -> np.ndarray | None:
     if size is None or not (1 <= size[0] <= max_side and 1 <= size[1] <= max_side):
         return None
     return cv2.imread(str(p), flags)
+
+
+class _EyeInsideMask:
+    """What the eye finder counts as the inside of an eye (white, iris, lashes): not this skin."""
+
+    def __init__(self, model: EyeModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        return self.model.skin.interior(np.asarray(bgr)) >= 0.5
+
+
+class _LipMask:
+    """Pixels either lip's colour axis puts nearer the lip than the skin beside it."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        f = np.asarray(bgr, dtype=np.float32)
+        out = np.zeros(f.shape[:2], bool)
+        for a in (self.model.axis_up, self.model.axis_down):
+            v = cv2.transform(f, np.asarray(a[:3], dtype=np.float32).reshape(1, 3)) + np.float32(a[3])
+            out |= v.reshape(f.shape[:2]) >= 0.5
+        return out
+
+
+class _MouthInsideMask:
+    """The dark gap, inside and teeth as the mouth model sees them."""
+
+    def __init__(self, model: MouthModel):
+        self.model = model
+
+    def mask(self, bgr: np.ndarray) -> np.ndarray:
+        from tracker.colour_model import lut_index
+
+        return self.model.inside_table.take(lut_index(np.ascontiguousarray(bgr))).astype(bool)
+
+
+def _eye_model(path: Path, d, names) -> EyeModel | None:
+    if d is None:
+        return None
+    if not isinstance(names, dict):
+        raise CalibrationError(f"{path}: eye_model_pictures must name the eye model's pictures")
+    pics = {k: _load_picture(path, names.get(k), f"eye model {k} picture") for k in EyeModel.IMAGE_NAMES}
+    try:
+        return EyeModel.from_dict(d, pics)
+    except EyeModelError as e:
+        raise CalibrationError(f"{path}: {e}") from None
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        raise CalibrationError(f"{path}: malformed eye model ({type(e).__name__}: {e})") from None
 
 
 def _mouth_model(path: Path, d) -> MouthModel | None:

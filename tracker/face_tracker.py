@@ -1,21 +1,30 @@
 """The face tracker: one frame in, ten numbers (and an overlay) out.
 
-Per frame (Buck et al. §2, made roll- and scale-invariant):
+Per frame (Buck et al. §2, made roll-, scale- and motion-robust):
 
-1. predict both pupils from the last two good frames (constant velocity, damped);
-2. cut two small upright crops in the predicted face frame (:class:`FaceFrame`) with one
-   ``cv2.warpAffine`` each — eyes and brows, mouth — so a rolled or leaning head looks
-   like the calibration frame to every finder;
-3. pupils: colour tags + eye-picture correlation (:mod:`tracker.pupils`); an eye whose
-   picture does not match is closed and its pupil is predicted from the other eye or the
-   motion so far;
-4. lids and brows along the crop's up axis through each pupil;
-5. mouth: lip score by table lookup → blob → radial polygon → snake (:mod:`tracker.mouth`);
-6. map everything back to frame pixels and fill :class:`~tracker.params.FaceParams`.
+1. **the head as a rigid thing**: sparse optical flow on corners of the face
+   (:mod:`tracker.head_motion`) moves the head's pose from the last frame to this one, and the
+   calibrated face picture (:mod:`tracker.face_finder`) found near there pins its position;
+   under that pose the calibrated pupils are the eyes' rigid centres ("anchors");
+2. two upright crops in the face frame of the anchors (:class:`FaceFrame`), eyes and brows,
+   and mouth, so a rolled, leaning or moving head looks like the calibration frame to every
+   finder;
+3. **eyes** (:mod:`tracker.eyes`): iris centres as dark discs matching the calibrated iris
+   pictures, lids from how far the eye's interior reaches, brows by their calibrated
+   cross-section; an eye far from its anchor (past a gaze's reach) or unlike the calibrated
+   eye is doubtful and is predicted from the anchor instead;
+4. **mouth** (:mod:`tracker.mouth_finder`): lip colour and the mouth's gap and inside → blob
+   → radial polygon → snake, with a score that says whether it is this person's mouth;
+5. **know when you are wrong**: the face picture, the flow, the eyes' geometry against the
+   head's pose and the mouth's size and place decide ``ok``, ``eyes_closed``, ``mouth_lost``
+   or ``lost``; a lost face holds the last values and is looked for again — where it was,
+   then in the boxes of the bundled face detector, then by its lip colour;
+6. the pose follows the measured pupils slowly (roll and scale faster than position: the gaze
+   moves the irises, not the head), and the eye finder adapts its pictures and light from
+   confident frames.
 
-When neither eye matches and no lip blob is found the face is ``lost``: the last good
-values are held and every following frame is searched whole (lip blobs at low resolution,
-then the eye pictures above each candidate) until the face is back.
+Calibrations from before the eye and mouth models run the first tracker's finders through
+:mod:`tracker.legacy`.
 """
 
 from __future__ import annotations
@@ -26,17 +35,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.brows import BrowFinder
-from tracker.calibration import Calibration, FaceFrame
+from tracker.calibration import Calibration, FaceFrame, mouth_rect
+from tracker.eyes import EyeFinder, EyeResult
 from tracker.face_finder import DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
-from tracker.lids import LidFinder
-from tracker.calibration import mouth_rect
-from tracker.mouth import MouthFinder as LipBlobFinder
+from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
 from tracker.mouth_finder import MouthFinder
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
-from tracker.pupils import PupilFinder
 
 
 @dataclass
@@ -127,24 +133,18 @@ class TrackResult:
     debug: dict = field(default_factory=dict)
 
 
-# Region sizes, as fractions of the working inter-pupil distance.
-SEARCH_X, SEARCH_Y = 0.16, 0.11  # pupil search half-window while tracking
-REACQUIRE_SEARCH = 0.3  # pupil search half-window when checking a re-acquisition candidate
-LID_UP, LID_DOWN = 0.26, 0.22  # how far the lid walks go
-BROW_LO, BROW_HI = 0.55, 1.6  # brow search range, × calibrated brow height
-MOUTH_HALF_W = 0.75  # × calibrated mouth width, each side of the predicted centre
-MOUTH_UP, MOUTH_DOWN = 0.32, 0.62  # above / below the predicted centre
-BALANCE_EVERY = 4  # frames between colour-balance updates (lighting drifts slowly)
+# Sizes and rates, as fractions of the working inter-pupil distance unless said.
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
-GAZE_MAX = GAZE_X
+EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
+EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
 JAW_MAX = (0.25, 0.4)  # farthest the mouth centre may sit from its rigid place (x, y)
 FOLLOW_SHIFT = 0.05  # per frame pull of the rigid pose's position towards the measured pupils
 FOLLOW_TURN = 0.1  # ... of its roll and scale (the gaze does not change those)
-STRONG_EYES = 0.2  # eye-picture correlation above the calibrated threshold that outvotes the flow
 FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrated face"
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
 FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
 FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
+RESET_ADAPTATION = 30  # lost frames after which the eye finder goes back to the calibration
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
@@ -154,7 +154,7 @@ class FaceTracker:
 
     Frames must be ``uint8 (H, W, 3)`` BGR; sizes may differ from the calibration frame.
     The head's rigid pose is a similarity ``pose`` (2×3) from calibration-frame px to this
-    frame's px: the calibrated pupils under it are the eyes' rigid centres ("anchors").
+    frame's px: the calibrated pupils under it are the eyes' rigid centres (``anchors``).
     """
 
     def __init__(self, calibration: Calibration, damping: float = 0.8):
@@ -162,41 +162,11 @@ class FaceTracker:
         self.cal = cal
         self.wi = wi = cal.work_ipd
         self.damping = float(damping)
-        near = max(int(round(0.08 * wi)), 2)
-        self.pupil_finders = [PupilFinder(t, cal.pupil, cal.pupil_threshold, near=near) for t in cal.eye_templates]
-        th, tw = cal.eye_templates[0].shape
-        self.sx, self.sy = max(int(round(SEARCH_X * wi)), 3), max(int(round(SEARCH_Y * wi)), 2)
-        self.brow_finders = [
-            BrowFinder(p, c, BROW_LO * h, BROW_HI * h) for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights)
-        ]
-        self.lid_finder = LidFinder(
-            cal.eye, cal.pupil, LID_UP * wi, LID_DOWN * wi, cal.pupil_radius,
-            white=cal.white_threshold, half_width=max(1, int(round(0.025 * wi))), iris=cal.iris_level,
-        )
-        # the mouth model's finder; calibrations from before it have the plain lip-blob finder
-        self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LipBlobFinder()
-        brow_top = max(BROW_HI * h + (len(p) - c) + 2 for p, c, h in zip(cal.brow_profiles, cal.brow_centres, cal.brow_heights))
-        gx = int(math.ceil(GAZE_MAX * wi * 0.5))
-
-        def rect(sx: int, sy: int) -> tuple[int, int, int, int]:
-            mx = sx + tw // 2 + 2 + gx
-            top = max(brow_top, sy + th // 2 + 2, LID_UP * wi + 2) + (sy - self.sy) + gx
-            bottom = max(sy + th // 2 + 2, LID_DOWN * wi + 2) + gx
-            return (int(math.floor(-0.5 * wi - mx)), int(math.floor(-top)), int(math.ceil(wi + 2 * mx)), int(math.ceil(top + bottom)))
-
-        self.eye_rect = rect(self.sx, self.sy)
-        rs = max(int(round(REACQUIRE_SEARCH * wi)), 3)
-        self.wide_search = (rs, rs)
-        self.eye_rect_wide = rect(rs, rs)
-        mw = max(cal.mouth_width, 0.3 * wi)
-        self.mouth_size = (
-            int(math.ceil(2 * MOUTH_HALF_W * mw + 0.1 * wi)),
-            int(math.ceil((MOUTH_UP + MOUTH_DOWN) * wi)),
-        )
-        self.lip_axis = np.asarray(cal.lip_axis, dtype=np.float32).reshape(1, 3)
+        self.eye_finder = EyeFinder(cal.eye_model, wi) if cal.eye_model is not None else LegacyEyes(cal, wi)
+        self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LegacyMouth(cal, wi)
+        self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
-        self._min_lip_area = max(int(0.12 * cal.mouth_area), 6)
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -204,7 +174,7 @@ class FaceTracker:
         ff0 = FaceFrame.from_pupils(tuple(self._cal_pupils[0]), tuple(self._cal_pupils[1]), wi)
         self._cal_mouth = ff0.to_image(np.array([cal.mouth_offset]))[0]
         self._outline = np.array(FACE_OUTLINE, dtype=np.float64)
-        self._box_eyes = getattr(cal, "face_box_eyes", None) or DEFAULT_EYES
+        self._box_eyes = cal.face_box_eyes or DEFAULT_EYES
         self.motion = HeadMotion()
         self.motion.set_scale(cal.ipd)
         self.reset()
@@ -216,69 +186,13 @@ class FaceTracker:
         self.velocity = np.zeros((2, 2))
         self.anchors = self._cal_pupils.copy()
         self.pupils = self._cal_pupils.copy()
-        self.gaze = np.zeros((2, 2))  # iris − anchor, face px, per eye
+        self.gaze = np.zeros((2, 2))  # eye point − anchor, face px, per eye
         self.jaw = np.zeros(2)  # mouth centre − its rigid place, face px
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
         self.motion.reset()
-        self._gains: dict = {}
-        self._good_gains: dict = {}
-        self._balance_age: dict = {}
-
-    # -------------------------------------------------------------- colour constancy
-    @staticmethod
-    def _level(crop: np.ndarray) -> np.ndarray:
-        """Median B, G, R of a crop (subsampled): mostly skin, whatever the expression."""
-        s = np.ascontiguousarray(crop[::3, ::3]).reshape(-1, 3)
-        k = len(s) // 2
-        return np.partition(s, k, axis=0)[k].astype(np.float64)
-
-    def _balance(self, crop: np.ndarray, which: str) -> np.ndarray:
-        """Undo a global gain / colour cast relative to the calibration frame.
-
-        The calibrated classifiers were learned under the calibration frame's light; a
-        per-channel gain that brings the crop's median colour back to the calibrated one
-        keeps them valid under slow lighting drift or auto exposure. ``which`` is "eye" or
-        "mouth"; the gain is re-measured every :data:`BALANCE_EVERY` frames.
-        """
-        ref = self.cal.eye_ref if which == "eye" else self.cal.mouth_ref
-        if ref is None:
-            return crop
-        key = which
-        n = self._balance_age.get(key, 0)
-        if n == 0 or key not in self._gains:
-            g = np.asarray(ref) / np.maximum(self._level(crop), 1.0)
-            g = np.minimum(np.maximum(g, 0.5), 2.0)
-            self._gains[key] = None if np.all(np.abs(g - 1.0) < 0.03) else np.diag(g).astype(np.float32)
-        self._balance_age[key] = (n + 1) % BALANCE_EVERY
-        m = self._gains[key]
-        return crop if m is None else cv2.transform(crop, m)
-
-    def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
-        """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
-        e, m = getattr(self, "_last_eye_crop", None), getattr(self, "_last_mouth_crop", None)
-        if e is None or m is None:
-            return None, None
-        return tuple(float(v) for v in self._level(e)), tuple(float(v) for v in self._level(m))
-
-    def _same_colour(self, crop: np.ndarray, ref) -> bool:
-        """Whether a (balanced) crop's median chromaticity is near the calibrated one."""
-        if ref is None:
-            return True
-        a = self._level(crop).astype(np.float64)
-        b = np.asarray(ref, dtype=np.float64)
-        ca, cb = a / max(a.sum(), 1.0), b / max(b.sum(), 1.0)
-        return float(np.abs(ca - cb).max()) < 0.04
-
-    def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
-        """A mouth of about the calibrated size, corners level, near where the head puts it."""
-        w = self.cal.mouth_width
-        if not (0.4 * w <= m.width <= 1.9 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width):
-            return False
-        dx = m.centre[0] + origin[0] - predicted[0]
-        dy = m.centre[1] + origin[1] - predicted[1]
-        return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
+        self.eye_finder.reset_adaptation()
 
     # -------------------------------------------------------------- helpers
     def _buffer(self, name: str, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
@@ -312,25 +226,47 @@ class FaceTracker:
         mid = 0.5 * (left + right)
         return mid + ipd * (self._outline[:, :1] * u + self._outline[:, 1:] * d)
 
-    def _eyes(self, frame: np.ndarray, ff: FaceFrame, search: tuple[int, int], rect: tuple[int, int, int, int], gaze=None):
-        """Crop the eye region and find both pupils; returns (crop, grey, results, origin)."""
-        w, h = rect[2], rect[3]
-        crop = self._balance(ff.crop(frame, rect, self._buffer("eye", (h, w, 3))), "eye")
+    def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
+        """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
+        out = []
+        for crop in (getattr(self, "_last_eye_crop", None), getattr(self, "_last_mouth_crop", None)):
+            if crop is None:
+                return None, None
+            s = np.ascontiguousarray(crop[::3, ::3]).reshape(-1, 3)
+            out.append(tuple(float(v) for v in np.partition(s, len(s) // 2, axis=0)[len(s) // 2]))
+        return out[0], out[1]
+
+    def _eyes(self, frame: np.ndarray, ff: FaceFrame, centres_face: np.ndarray) -> tuple[np.ndarray, np.ndarray, EyeResult, tuple[int, int]]:
+        """Crop the eye region and find both eyes near ``centres_face``; (crop, grey, result, origin)."""
+        x0, y0, w, h = self.eye_rect
+        crop = ff.crop(frame, self.eye_rect, self._buffer("eye", (h, w, 3)))
         self._last_eye_crop = crop
-        grey = self._buffer("eye grey", (h, w), np.float32)
-        np.copyto(grey, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY))
-        ox, oy = rect[0], rect[1]
-        g = self.gaze if gaze is None else gaze
-        preds = [(-0.5 * self.wi + g[0][0] - ox, g[0][1] - oy), (0.5 * self.wi + g[1][0] - ox, g[1][1] - oy)]
-        res = [f.find(crop, grey, p, search, previous=p) for f, p in zip(self.pupil_finders, preds)]
-        return crop, grey, res, (ox, oy)
+        grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY, dst=self._buffer("eye grey", (h, w)))
+        res = self.eye_finder.find(crop, grey, np.asarray(centres_face, dtype=np.float64) - (x0, y0))
+        return crop, grey, res, (x0, y0)
 
     def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
         """Hold the last values and search for the face from the next frame; ``why`` goes to the debug values."""
         self.lost = True
-        self._gains = dict(self._good_gains)
         p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
         return TrackResult(p, Overlay(status=LOST, rois=list(rois)), {"reacquired": False, "lost": why})
+
+    def presence(self, anchors: np.ndarray) -> float | None:
+        """How much the face picture at these eye anchors looks like the calibrated one
+        (normalised correlation, −1..1), or None for a calibration without a face picture."""
+        ref = self.cal.face_patch
+        if ref is None:
+            return None
+        return patch_similarity(face_patch(self._grey, self.motion.scale, anchors), ref)
+
+    def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
+        """A mouth of about the calibrated size, corners level, near where the head puts it."""
+        w = self.cal.mouth_width
+        if not (0.4 * w <= m.width <= 1.9 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width):
+            return False
+        dx = m.centre[0] + origin[0] - predicted[0]
+        dy = m.centre[1] + origin[1] - predicted[1]
+        return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
@@ -344,6 +280,8 @@ class FaceTracker:
             found = self._reacquire(frame_bgr)
             if found is None:
                 self.lost_frames += 1
+                if self.lost_frames == RESET_ADAPTATION:
+                    self.eye_finder.reset_adaptation()
                 return self._lost_result(index, time, "not found")
             self.pose = similarity_from_pairs(self._cal_pupils, found)
             self.anchors = found
@@ -362,102 +300,111 @@ class FaceTracker:
             self.pose = similarity_from_pairs(self._cal_pupils, self.anchors + self.damping * self.velocity)
         return self._track(frame_bgr, index, time, flow is not None)
 
+    def _pin(self, anchors: np.ndarray, flow_ok: bool) -> tuple[np.ndarray, float | None]:
+        """Pull the anchors onto the face picture's match near them; (anchors, presence)."""
+        if self.cal.face_patch is None:
+            return anchors, None
+        shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
+                                      FACE_REACH if flow_ok else 2 * FACE_REACH)
+        if presence >= FACE_PRESENT:
+            if flow_ok:
+                # a turned head changes the picture: the weaker the match, the less it pulls
+                trust = min(max((presence - FACE_PRESENT) / (0.9 - FACE_PRESENT), 0.0), 1.0)
+                anchors = anchors + FACE_FOLLOW * trust * shift
+            elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
+                anchors = anchors + shift  # no flow to trust: the picture says where the head went
+            self.pose = similarity_from_pairs(self._cal_pupils, anchors)
+        return anchors, presence
+
+    def _judge_eyes(self, res: EyeResult, found: np.ndarray, flow_ok: bool, face_there: bool) -> tuple[list[bool], bool]:
+        """Which eyes are doubtful (not on this person's eye, or where no gaze can put it), and
+        whether both are sure enough to turn the head's pose.
+
+        A shut eye does not look like the calibrated open one, so its low score is not doubt
+        when the face itself is there (``face_there``: its picture matched, or the flow follows it).
+        """
+        wi = self.wi
+        preds = self._pupils_face
+        obs = res.eyes
+        doubt = [o.score < EYE_DOUBT and (o.open or not face_there) for o in obs]
+        strong = all(o.open and o.score >= EYE_STRONG for o in obs)
+        if strong:  # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
+            g = 0.5 * (found[0] + found[1] - preds[0] - preds[1]) / wi
+            strong = (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 <= 1.0
+        for i in range(2):
+            if not doubt[i] and not strong:
+                gx, gy = (found[i] - preds[i]) / wi
+                if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
+                    doubt[i] = True
+        if not any(doubt) and obs[0].open and obs[1].open:
+            d = found[1] - found[0]
+            ratio = math.hypot(*d) / wi
+            # with the flow the head's roll and scale are known: open eyes must agree with them
+            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
+            if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
+                doubt[int(np.argmin([o.score for o in obs]))] = True
+                strong = False
+        return doubt, strong
+
     def _track(self, frame: np.ndarray, index: int, time: float, flow_ok: bool) -> TrackResult:
         wi = self.wi
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
         if not np.all((anchors > -0.1 * wi) & (anchors < np.array([W, H]) + 0.1 * wi)):
             return self._lost_result(index, time, "left the frame")
-        presence = None
-        if self.cal.face_patch is not None:
-            # the face picture pins the head's position (the flow drifts, the pupils follow the gaze)
-            shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
-                                          FACE_REACH if flow_ok else 2 * FACE_REACH)
-            if presence >= FACE_PRESENT:
-                if flow_ok:
-                    # a turned head changes the picture: the weaker the match, the less it pulls
-                    trust = min(max((presence - FACE_PRESENT) / (0.9 - FACE_PRESENT), 0.0), 1.0)
-                    anchors = anchors + FACE_FOLLOW * trust * shift
-                elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
-                    anchors = anchors + shift  # no flow to trust: the picture says where the head went
-                self.pose = similarity_from_pairs(self._cal_pupils, anchors)
+        anchors, presence = self._pin(anchors, flow_ok)
         ff = self._frame(anchors)
-        crop, grey, res, (ox, oy) = self._eyes(frame, ff, (self.sx, self.sy), self.eye_rect)
-        closed = [r is None or r.closed for r in res]
-        found = np.array([[r.x + ox, r.y + oy] if r is not None else [np.nan, np.nan] for r in res])
-        preds_f = self._pupils_face
-        scores = [r.score if r is not None else -1.0 for r in res]
-        # two clear eye pictures outvote the flow's roll and scale (it drifts on plain skin);
-        # a doubtful one must agree with the head's pose
-        strong = not any(closed) and min(scores) >= self.cal.pupil_threshold + STRONG_EYES
-        if strong:
-            g = 0.5 * (found[0] + found[1] - preds_f[0] - preds_f[1]) / wi
-            if (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 > 1.0:
-                strong = False
-        for i in range(2):  # an iris far from its eye's rigid centre is something else
-            if not closed[i] and not strong:
-                gx, gy = (found[i] - preds_f[i]) / wi
-                if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
-                    closed[i] = True
-        if not any(closed):
-            d = found[1] - found[0]
-            ratio = math.hypot(*d) / wi
-            # with the flow the head's roll and scale are known: the pupils must agree with them
-            tol_r, tol_y = (0.1, 0.08) if flow_ok and not strong else (0.25, 0.35)
-            if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
-                worse = int(np.argmin(scores))
-                closed[worse] = True
-                strong = False
+        crop, grey, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face)
+        obs = res.eyes
+        found = np.array([[o.x + ox, o.y + oy] for o in obs])
+        face_there = presence >= FACE_PRESENT if presence is not None else flow_ok
+        doubt, strong = self._judge_eyes(res, found, flow_ok, face_there)
+        closed = [not o.open for o in obs]
         pup_f = found.copy()
         for i in range(2):
-            if closed[i]:
-                pup_f[i] = preds_f[i] + self.gaze[i]
+            if doubt[i]:
+                pup_f[i] = self._pupils_face[i] + self.gaze[i]
+            elif closed[i]:  # a shut eye: the slit's height, across where the iris last looked
+                pup_f[i, 0] = self._pupils_face[i, 0] + self.gaze[i, 0]
 
         rigid_mouth = ff.to_face(apply(self.pose, self._cal_mouth[None]))[0]
         predicted_mouth = rigid_mouth + self.jaw
-        mouth_res, mouth_origin, mouth_rect = self._mouth(frame, ff, predicted_mouth)
+        mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth)
         if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
             mouth_res = None
-        n_open = 2 - int(closed[0]) - int(closed[1])
+        n_seen = 2 - int(doubt[0]) - int(doubt[1])
         why = ""
         if presence is not None and presence < FACE_ABSENT:
             why = "not this face"  # something else is where the face was (a hand, the background)
-        elif n_open == 2:
+        elif n_seen == 2:
             pass
         elif presence is not None and presence >= FACE_PRESENT:
-            pass  # it looks like this face where the head is: eyes shut, mouth hidden
+            pass  # it looks like this face where the head is: eyes unsure, mouth hidden
         elif flow_ok and presence is None:
             pass
-        elif mouth_res is None:
-            why = "no eyes, no mouth"  # one eye-like patch alone is too little (edges can look like one)
-        elif not (n_open == 1 or (flow_ok and self._same_colour(crop, self.cal.eye_ref))):
-            # a wink or closed eyes: the mouth looks like this mouth; with no eye at all the
-            # head must still be followed and the eye region have the calibrated face's colour
-            why = "no eyes"
+        elif mouth_res is None or n_seen == 0:
+            why = "no eyes, no mouth" if mouth_res is None else "no eyes"
         if why:
             self.lost_frames = 1
-            return self._lost_result(index, time, why, [self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect)])
+            return self._lost_result(index, time, why, [self._rect_polygon(ff, self.eye_rect), self._rect_polygon(ff, mouth_rect_)])
 
-        # lids and brows in the eye crop, along its up axis through each pupil
         k = ff.scale
         lid_up, lid_down, brow_h = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
-        pup_list = pup_f.tolist()  # plain floats: cheaper scalar arithmetic from here on
-        for i in range(2):
-            pc = (pup_list[i][0] - ox, pup_list[i][1] - oy)
-            up, down = self.lid_finder.find(crop, grey, pc)
-            if closed[i]:
-                up, down = min(up, 0.04 * wi), min(down, 0.04 * wi)
-            hb, _ = self.brow_finders[i].find(grey, pc)
-            lid_up[i], lid_down[i] = up, down
-            brow_h[i] = hb if math.isfinite(hb) else self.cal.brow_heights[i]
-        (plx, ply), (prx, pry) = pup_list
+        for i, o in enumerate(obs):
+            if doubt[i]:  # not seen: hold what the cartoon shows
+                lid_up[i] = lid_down[i] = 0.5 * (self.last.eye_open_l if i == 0 else self.last.eye_open_r) * k
+                brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
+            else:
+                lid_up[i], lid_down[i] = max(o.upper, 0.0), max(o.lower, 0.0)
+                brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
+        (plx, ply), (prx, pry) = pup_f.tolist()
         pts = [
             pup_f,
             [[plx, ply - brow_h[0]], [prx, pry - brow_h[1]]],
             [[plx, ply - lid_up[0]], [plx, ply + lid_down[0]], [prx, pry - lid_up[1]], [prx, pry + lid_down[1]]],
+            self._eye_corners,
+            self._rect_corners(mouth_rect_),
         ]
-        pts.append(self._eye_corners)
-        pts.append(self._rect_corners(mouth_rect))
         if mouth_res is not None:
             mo = np.array(mouth_origin, dtype=np.float64)
             mcx, mcy = mouth_res.centre[0] + mouth_origin[0], mouth_res.centre[1] + mouth_origin[1]
@@ -487,43 +434,45 @@ class FaceTracker:
             ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
-            ov.mouth_cue = getattr(mouth_res, "cue", "") or ("lip colour" if self.cal.mouth_model is None else "")
-            jaw = np.array([mcx, mcy]) - rigid_mouth
-            self.jaw = np.clip(jaw, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
+            ov.mouth_cue = mouth_res.cue
+            self.jaw = np.clip(np.array([mcx, mcy]) - rigid_mouth, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
             self.jaw *= 0.8
-        if closed[0] and closed[1]:
+        if closed[0] and closed[1] and not (doubt[0] and doubt[1]):
             status = EYES_CLOSED
-        conf = min(max(0.5 * (max(scores[0], 0.0) + max(scores[1], 0.0)), 0.0), 1.0)
-        if mouth_res is None:
-            conf *= 0.5
+        scores = [o.score for o in obs]
+        conf = min(max(0.5 * (scores[0] + scores[1]), 0.0), 1.0) * (0.5 if mouth_res is None else 1.0)
         params = FaceParams.from_values(vals, frame=index, time=time, status=status, confidence=conf)
         ov.status = status
-        self._follow(anchors, pupils_img, closed, found, flow_ok, flow_ok and presence is not None and presence >= FACE_PRESENT, strong)
+        usable = [not doubt[i] and not closed[i] for i in range(2)]
+        self._follow(anchors, pupils_img, usable, found, flow_ok, flow_ok and presence is not None and presence >= FACE_PRESENT,
+                     strong)
+        if status == OK and all(usable):
+            self.eye_finder.adapt(crop, grey, res)
         self.pupils = pupils_img
         self.last = params
-        self._good_gains = dict(self._gains)
         if not self.motion.active:
             self.motion.seed(frame, self.face_outline(), grey=self._grey)
-        debug = {"scores": scores, "closed": closed, "lid_up": [u / k for u in lid_up], "lid_down": [d / k for d in lid_down],
-                 "flow": flow_ok, "presence": presence}
+        debug = {"scores": scores, "closed": closed, "doubtful": doubt, "lid_up": [u / k for u in lid_up],
+                 "lid_down": [d / k for d in lid_down], "flow": flow_ok, "presence": presence}
         return TrackResult(params, ov, debug)
 
-    def _follow(self, anchors: np.ndarray, pupils_img: np.ndarray, closed: list, found_face: np.ndarray, flow_ok: bool,
+    def _follow(self, anchors: np.ndarray, pupils_img: np.ndarray, usable: list, found_face: np.ndarray, flow_ok: bool,
                 pinned: bool, strong: bool = False) -> None:
         """Pull the rigid pose towards the measured pupils (drift and gaze are slow, the flow fast).
 
-        ``pinned``: the face picture fixed the position this frame, so the pupils pull less;
-        ``strong``: both eye pictures matched clearly, so they turn the pose faster.
+        ``usable``: the eyes seen open and sure this frame; ``pinned``: the face picture fixed
+        the position this frame, so the pupils pull less; ``strong``: both eyes matched clearly,
+        so they turn the pose faster.
         """
         for i in range(2):
-            if not closed[i]:
+            if usable[i]:
                 self.gaze[i] = found_face[i] - self._pupils_face[i]
             else:
                 self.gaze[i] *= 0.9
-        if closed[0] or closed[1]:
+        if not (usable[0] and usable[1]):
             new = anchors
         elif not flow_ok and not pinned:
             new = pupils_img
@@ -537,66 +486,45 @@ class FaceTracker:
         self.anchors = new
         self.pose = similarity_from_pairs(self._cal_pupils, new)
 
-    def presence(self, anchors: np.ndarray) -> float | None:
-        """How much the face picture at these eye anchors looks like the calibrated one
-        (normalised correlation, −1..1), or None for a calibration without a face picture."""
-        ref = self.cal.face_patch
-        if ref is None:
-            return None
-        return patch_similarity(face_patch(self._grey, self.motion.scale, anchors), ref)
-
     def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray):
         """Crop around the predicted mouth centre (face coordinates) and run the mouth finder."""
-        if self.cal.mouth_model is not None:
-            rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
-            crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
-            self._last_mouth_crop = crop
-            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
-            if res is not None and res.score < MOUTH_SCORE_OK:
-                res = None
-            return res, (rect[0], rect[1]), rect
-        mw, mh = self.mouth_size
-        cx, cy = float(centre[0]), float(centre[1])
-        rect = (int(round(cx - mw / 2)), int(round(cy - MOUTH_UP * self.wi)), mw, mh)
-        crop = self._balance(ff.crop(frame, rect, self._buffer("mouth", (mh, mw, 3))), "mouth")
+        rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
+        crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
         self._last_mouth_crop = crop
-        score = self.cal.lip.prob_u8(crop)
-        crop32 = self._buffer("mouth float", crop.shape, np.float32)
-        np.copyto(crop32, crop)
-        value = cv2.transform(crop32, self.lip_axis)
-        seed = (cx - rect[0], cy - rect[1])
-        res = self.mouth_finder.find(score, value=value, seed=seed, min_area=self._min_lip_area, lip_level=1.0)
-        if res is not None:
-            if res.width < 0.2 * self.cal.mouth_width or res.width > 2.2 * self.cal.mouth_width:
-                res = None
+        res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
+        if res is not None and res.score < MOUTH_SCORE_OK:
+            res = None
         return res, (rect[0], rect[1]), rect
 
     # -------------------------------------------------------------- re-acquisition
     def _check_eyes(self, frame: np.ndarray, guess: np.ndarray) -> np.ndarray | None:
-        """Pupils (frame px) if both eye pictures match near the guessed eye centres."""
+        """Pupils (frame px) if both eyes are found, open and sure, near the guessed centres."""
         H, W = frame.shape[:2]
         pupils = np.asarray(guess, dtype=np.float64)
         if not (np.all(pupils >= 0) and np.all(pupils[:, 0] < W) and np.all(pupils[:, 1] < H)):
             return None
-        thr = self.cal.pupil_threshold
-        zero = np.zeros((2, 2))
-        for search, rect, need in ((self.wide_search, self.eye_rect_wide, thr - 0.05), ((self.sx, self.sy), self.eye_rect, thr + 0.1)):
+        for _ in range(2):  # a second pass in the frame the first pass's pupils define
             ff = self._frame(pupils)
-            _, _, res, (ox, oy) = self._eyes(frame, ff, search, rect, gaze=zero)
-            if any(r is None or r.score < need for r in res):
+            _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face)
+            if not all(o.open and o.score >= EYE_STRONG for o in res.eyes):
                 return None
-            found = np.array([[r.x + ox, r.y + oy] for r in res])
+            found = np.array([[o.x + ox, o.y + oy] for o in res.eyes])
             dd = found[1] - found[0]
             if not (0.75 < math.hypot(*dd) / self.wi < 1.3) or abs(dd[1]) > 0.4 * self.wi:
                 return None
-            pupils = ff.to_image(found)  # second pass: in the frame these pupils define
+            pupils = ff.to_image(found)
         return pupils
+
+    def _looks_like_face(self, pupils: np.ndarray) -> bool:
+        p = self.presence(pupils)
+        return p is None or p >= FACE_PRESENT
 
     def _reacquire(self, frame: np.ndarray) -> np.ndarray | None:
         """Find the face again: the two pupils (frame px) or None.
 
         First where it was last seen (it may only have been covered), then in every box the
-        face detector proposes, at the eye places this performer had in such a box.
+        face detector proposes, at the eye places this performer had in such a box, then
+        (the detector wants an upright, frontal face) by its lip colour.
         """
         found = self._check_eyes(frame, self.anchors)
         if found is not None and self._looks_like_face(found):
@@ -607,16 +535,11 @@ class FaceTracker:
             found = self._check_eyes(frame, eyes_in_box(box, self._box_eyes))
             if found is not None and self._looks_like_face(found):
                 return found
-        # the detector wants an upright, frontal face: a rolled or unusual one is looked for by its lips
         return self._reacquire_by_lips(frame)
 
-    def _looks_like_face(self, pupils: np.ndarray) -> bool:
-        p = self.presence(pupils)
-        return p is None or p >= FACE_PRESENT
-
     def _check_face(self, frame: np.ndarray, mouth: np.ndarray, mo: np.ndarray, ipd: float, ang: float) -> np.ndarray | None:
-        """Pupils (frame px) if the eye pictures match where a face with its mouth at
-        ``mouth``, inter-pupil distance ``ipd`` and roll ``ang`` (radians) has its eyes."""
+        """Pupils (frame px) if the eyes are found where a face with its mouth at ``mouth``,
+        inter-pupil distance ``ipd`` and roll ``ang`` (radians) has them."""
         u = np.array([math.cos(ang), -math.sin(ang)])
         d = np.array([math.sin(ang), math.cos(ang)])
         mid = mouth - ipd * (mo[0] * u + mo[1] * d)
@@ -627,15 +550,11 @@ class FaceTracker:
 
         Lip blobs are found at low resolution with the calibrated lip classifier; for each
         plausible blob the eyes are looked for where the calibration geometry puts them
-        (at the last roll and upright), and accepted when both eye pictures match.
+        (at the last roll and upright).
         """
         cal = self.cal
-        H, W = frame.shape[:2]
         f = max(1, int(cal.ipd // 20))
-        small = frame[::f, ::f]
-        gain = self._gains.get("mouth")  # the light as last seen on the mouth
-        if gain is not None:
-            small = cv2.transform(np.ascontiguousarray(small), gain)
+        small = np.ascontiguousarray(frame[::f, ::f])
         tags = (cal.lip.prob_u8(small) >= 128).astype(np.uint8)
         n, lab, stats, cents = cv2.connectedComponentsWithStats(tags, connectivity=4)
         if n <= 1:

@@ -26,7 +26,7 @@ FLOW_IPD = 56.0
 MAX_POINTS = 48
 RESEED_EVERY = 12
 """Frames between topping up the tracked corners (they drift off features and die)."""
-_LK = dict(winSize=(13, 13), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 12, 0.03))
+_LK = dict(winSize=(9, 9), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03))
 
 
 @dataclass

@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the ``track`` command's arguments to ``parser``."""
     parser.add_argument("video", metavar="VIDEO", help="video file to track")
     start = parser.add_mutually_exclusive_group(required=True)
-    start.add_argument("--init", metavar="CLICKS.json", help="the five calibration clicks (DESIGN.md format)")
+    start.add_argument("--init", metavar="CLICKS.json", help="the five calibration clicks: JSON {\"frame\": N, \"left_pupil\": [x, y], \"right_pupil\": [x, y], \"left_brow\": ..., \"right_brow\": ..., \"mouth\": ...} in pixels of that frame (left = image-left)")
     start.add_argument("--auto", action="store_true", help="find the face with the bundled face detectors")
     parser.add_argument("--csv", metavar="OUT.csv", required=True, help="where to write the track")
     parser.add_argument("--calibration", metavar="CAL.json", help="also save the calibration here (JSON + PNGs)")

@@ -97,6 +97,10 @@ def _plain_names(art: ArtSet) -> None:
     for p in art.parts.values():
         for d in p.drawings:
             d.file = base_name(d.file) if d.file else d.file
+            for ly in d.layers:
+                ly.file = base_name(ly.file) if ly.file else ly.file
+    if art.body is not None and art.body.file:
+        art.body.file = base_name(art.body.file)
 
 
 _SIZE_PROBLEM = re.compile(r"is \d+x\d+, the .* is \d+x\d+$")

@@ -46,11 +46,13 @@ class MorphEngine:
         self._building: threading.Thread | None = None
         self._built: tuple | None = None  # (src, morpher or exception) from the worker
         try:
+            from morph.layers import LayeredMorpher
             from morph.polymorph import PartMorpher
 
             self._PartMorpher = PartMorpher
+            self._LayeredMorpher = LayeredMorpher
         except Exception:
-            self._PartMorpher = None
+            self._PartMorpher = self._LayeredMorpher = None
         try:
             from morph.beier_neely import polymorph_exact
 
@@ -73,13 +75,19 @@ class MorphEngine:
     def _same(self, src) -> bool:
         return self._src is not None and self._src_matches(self._src, src)
 
-    def _build_in_background(self, src, images, lines) -> None:
+    def _make(self, images, lines, drawings):
+        """A morpher of the shown drawings: their layers morphed and stacked when they have layers."""
+        if drawings is not None:
+            return self._LayeredMorpher(drawings, alpha_steps=11)
+        return self._PartMorpher(images, lines, alpha_steps=11)
+
+    def _build_in_background(self, src, images, lines, drawings=None) -> None:
         if self.busy:
             return  # the caller polls; the newest request is started when this one ends
 
         def work():
             try:
-                result = self._PartMorpher(images, lines, alpha_steps=11)
+                result = self._make(images, lines, drawings)
             except Exception as e:  # reported by render()
                 result = e
             with self._lock:
@@ -111,6 +119,9 @@ class MorphEngine:
             self.note = "line counts differ: showing a cross-dissolve"
             return ed.cross_dissolve(images, w), False
         if self._PartMorpher is not None:
+            shown = [part.drawings[i] for i in uniq]
+            names = {tuple(ly.name for ly in d.layers) for d in shown}
+            drawings = shown if len(names) == 1 and next(iter(names)) else None
             src = (list(images), list(raw_lines))
             with self._lock:
                 built, self._built = self._built, None
@@ -121,9 +132,9 @@ class MorphEngine:
                     raise built[1]
                 if not self._same(src):
                     if not wait:
-                        self._build_in_background(src, images, lines)
+                        self._build_in_background(src, images, lines, drawings)
                         return None
-                    self._morpher, self._src = self._PartMorpher(images, lines, alpha_steps=11), src
+                    self._morpher, self._src = self._make(images, lines, drawings), src
                 self.note = ""
                 return self._morpher.render(list(range(len(uniq))), w), True
             except Exception as e:  # a bug in morph must not close the editor

@@ -36,30 +36,28 @@ class Blue(Character):
         s.hatch(poly, angle, spacing, 1.2, color, rng, opacity=opacity, grain=0.8, clip_blur=clip_blur)
 
     # --- eyes ----------------------------------------------------------------------------------
-    def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+    def draw_eyeball(self, s: Surface, g: EyeGeom, socket, rng) -> None:
+        iris = ellipse(g.iris_c, g.iris_r, g.iris_r)
+        s.fill(iris, LIGHT, opacity=0.6, clip=socket, grain=0.7)
+        for a in np.linspace(0, 2 * np.pi, 22, endpoint=False):
+            d = np.array([np.cos(a), np.sin(a)])
+            s.stroke([g.iris_c + d * g.iris_r * 0.5, g.iris_c + d * g.iris_r * 0.95], 1.0, BLUE, rng=rng,
+                     opacity=0.6, grain=0.6, clip=socket, taper=(0.2, 0.5))
+        s.stroke(closed(iris), 1.6, BLUE, rng=rng, clip=socket, grain=0.6, taper=(0, 0), opacity=0.85)
+        s.fill(ellipse(g.iris_c, g.iris_r * 0.45, g.iris_r * 0.45), DARK, clip=socket, grain=0.5)
+        s.fill(ellipse(g.iris_c + (-0.35 * g.iris_r, -0.35 * g.iris_r), g.iris_r * 0.18, g.iris_r * 0.18), PAPER, clip=socket)
+
+    def draw_lower_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        self.pen(s, sub_curve(g.lower, 0.1, 0.95), 1.5, rng, passes=1, opacity=0.7)
+
+    def draw_upper_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
-        if not g.closed:
-            opening = g.opening()
-            clip = s.mask(opening)
-            iris = ellipse(g.iris_c, g.iris_r, g.iris_r)
-            s.fill(iris, LIGHT, opacity=0.6, clip=clip, grain=0.7)
-            for a in np.linspace(0, 2 * np.pi, 22, endpoint=False):
-                d = np.array([np.cos(a), np.sin(a)])
-                s.stroke([g.iris_c + d * g.iris_r * 0.5, g.iris_c + d * g.iris_r * 0.95], 1.0, BLUE, rng=rng,
-                         opacity=0.6, grain=0.6, clip=clip, taper=(0.2, 0.5))
-            s.stroke(closed(iris), 1.6, BLUE, rng=rng, clip=clip, grain=0.6, taper=(0, 0), opacity=0.85)
-            s.fill(ellipse(g.iris_c, g.iris_r * 0.45, g.iris_r * 0.45), DARK, clip=clip, grain=0.5)
-            s.fill(ellipse(g.iris_c + (-0.35 * g.iris_r, -0.35 * g.iris_r), g.iris_r * 0.18, g.iris_r * 0.18), PAPER, clip=clip)
-            self.pen(s, g.upper, 4.6, rng, taper=(0.1, 0.15))
-            self.pen(s, sub_curve(g.lower, 0.1, 0.95), 1.5, rng, passes=1, opacity=0.7)
-            self.pen(s, sub_curve(g.upper - (0, 0.3 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)
-        else:
-            self.pen(s, g.upper, 3.0, rng)
-            self.pen(s, sub_curve(g.upper - (0, 0.35 * hw), 0.25, 0.8), 1.2, rng, passes=1, opacity=0.45)
+        self.pen(s, g.upper, 4.6, rng, taper=(0.1, 0.15))
+        self.pen(s, sub_curve(g.upper - (0, 0.24 * hw), 0.2, 0.8), 1.2, rng, passes=1, opacity=0.45)  # the lid's crease
         for u in (0.72, 0.84, 0.95):  # lashes at the outer corner
             p = point_at(g.upper, u)
-            d = np.array([-g.sgn * 0.16 * hw, -0.2 * hw if not g.closed else 0.18 * hw])
-            s.stroke([p, p + d], 1.6, BLUE, rng=rng, grain=0.6, taper=(0.0, 0.9), opacity=0.85)
+            s.stroke([p, p + (-g.sgn * 0.16 * hw, -0.2 * hw)], 1.6, BLUE, rng=rng, grain=0.6, taper=(0.0, 0.9), opacity=0.85)
+
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
         # brow: a band of short diagonal strokes
@@ -72,38 +70,70 @@ class Blue(Character):
         self.pen(s, g.brow, 1.4, rng, passes=1, opacity=0.6)
 
     # --- mouth ---------------------------------------------------------------------------------
-    def draw_mouth(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
-        if g.open > 2:
-            interior = g.interior()
-            clip = s.mask(interior)
-            s.fill(interior, BLUE, opacity=0.55, grain=0.7)
-            self.scribble_fill(s, interior, rng, color=DARK, angle=35, spacing=2.2, opacity=0.5)
-            if p.tongue:
-                c = point_at(g.inner_dn, 0.5)
-                s.fill(ellipse(c + (0, -0.05 * sc), 0.5 * (g.right[0] - g.left[0]) / 2 + 4, 0.3 * g.open + 3), PAPER, clip=clip, opacity=0.75)
-                s.stroke(closed(ellipse(c + (0, -0.05 * sc), 0.5 * (g.right[0] - g.left[0]) / 2 + 4, 0.3 * g.open + 3)), 1.2,
-                         BLUE, rng=rng, clip=clip, grain=0.6, taper=(0, 0))
-            for amount, edge0, sgn in ((p.teeth_up, g.inner_up, 1), (p.teeth_dn, g.inner_dn, -1)):
-                if amount > 0:
-                    edge = edge0 + (0, sgn * amount * g.open)
-                    s.fill(np.concatenate([edge0 - (0, sgn * 2), edge[::-1]]), PAPER, clip=clip)
-                    s.stroke(edge, 1.0, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.45)
-                    for u in np.linspace(0.2, 0.8, 6):
-                        a = point_at(edge0, u)
-                        s.stroke([a, point_at(edge, u)], 0.9, BLUE, rng=rng, clip=clip, grain=0.6, opacity=0.5, taper=(0, 0.5))
-            self.pen(s, g.inner_up, 3.4, rng, taper=(0.08, 0.08))
-            self.pen(s, g.inner_dn, 2.8, rng, taper=(0.08, 0.08))
-        else:
-            self.pen(s, g.seam, 3.6, rng, taper=(0.15, 0.15))
+    def draw_inside(self, s: Surface, rest: MouthGeom, rng) -> None:
+        sc, (cx, cy) = rest.scale, rest.seam[len(rest.seam) // 2]
+        x0, y0, w, h = self.mouth_box
+        box = np.array([(x0, y0), (x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h)], np.float64)
+        s.fill(box, BLUE, opacity=0.55, grain=0.7)
+        self.scribble_fill(s, box, rng, color=DARK, angle=35, spacing=2.2, opacity=0.5)
+        hw = self.teeth_hw * sc
+        x = np.linspace(cx - hw, cx + hw, 60)
+        edge = np.stack([x, cy - 0.06 * sc - 0.3 * sc * ((x - cx) / hw) ** 2], 1)
+        root = edge - (0, 0.7 * sc)
+        s.fill(np.concatenate([edge, root[::-1]]), PAPER)
+        s.stroke(edge, 1.0, BLUE, rng=rng, grain=0.6, opacity=0.45)
+        for u in np.linspace(0.2, 0.8, 9):
+            s.stroke([point_at(edge, u), point_at(root, u)], 0.9, BLUE, rng=rng, grain=0.6, opacity=0.5, taper=(0, 0.5))
+
+    def draw_lower_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        c = point_at(g.inner_dn, 0.5)
+        tongue = ellipse(c + (0, -0.14 * sc), 0.34 * sc, 0.22 * sc)
+        s.fill(tongue, PAPER, opacity=0.85)
+        s.stroke(closed(tongue), 1.2, BLUE, rng=rng, grain=0.6, taper=(0, 0))
+        edge0 = sub_curve(g.inner_dn, 0.18, 0.82)
+        edge = edge0 - (0, 0.14 * sc)
+        s.fill(np.concatenate([edge0 + (0, 2.0), edge[::-1]]), PAPER)
+        s.stroke(edge, 1.0, BLUE, rng=rng, grain=0.6, opacity=0.45)
+        for u in np.linspace(0.2, 0.8, 6):
+            s.stroke([point_at(edge0, u), point_at(edge, u)], 0.9, BLUE, rng=rng, grain=0.6, opacity=0.5, taper=(0, 0.5))
+        self.pen(s, g.inner_dn, 2.8, rng, taper=(0.08, 0.08))
         self.pen(s, sub_curve(g.outer_dn, 0.32, 0.68), 1.5, rng, passes=1, opacity=0.7)
-        lower = np.concatenate([sub_curve(g.outer_dn, 0.3, 0.7), sub_curve(g.outer_dn, 0.3, 0.7)[::-1] - (0, 0.12 * sc)])
-        s.hatch(lower, 80, 2.4, 1.0, LIGHT, rng, opacity=0.5, grain=0.7)
-        if abs(p.smile) > 0.2:
-            for end, sgn in ((g.left, -1), (g.right, 1)):
-                d = np.sign(p.smile)
-                self.pen(s, bez(end + (sgn * 0.02 * sc, d * 0.14 * sc), end + (sgn * 0.13 * sc, 0), end + (sgn * 0.07 * sc, -d * 0.16 * sc)),
-                         1.6, rng, passes=1)
+        for u in np.linspace(0.3, 0.7, 14):  # hatched lower lip: strokes placed along the lip, so they line up under the morph
+            p = point_at(g.outer_dn, u)
+            s.stroke([p + (0.02 * sc, -0.12 * sc), p + (-0.01 * sc, 0.0)], 1.0, LIGHT, rng=rng, opacity=0.5, grain=0.7, taper=(0, 0))
+
+    def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        self.pen(s, g.inner_up, 3.4, rng, taper=(0.08, 0.08))
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases (the same shape in every mouth, so they line up)
+            self.pen(s, bez(end + (sgn * 0.02 * sc, 0.1 * sc), end + (sgn * 0.13 * sc, 0),
+                            end + (sgn * 0.07 * sc, -0.1 * sc)), 1.6, rng, passes=1)
+
+    # --- body ----------------------------------------------------------------------------------
+    def draw_body(self, s: Surface, rng) -> None:
+        cx = 256.0
+        jit = lambda sd=1.0: rng.normal(0, sd, 2)
+        neck = np.array([(196, 380), (188, 560), (324, 560), (316, 380)])
+        s.fill(neck, PAPER)
+        self.pen(s, [(200, 400), (192, 520)], 2.2, rng)
+        self.pen(s, [(312, 400), (320, 520)], 2.2, rng)
+        s.hatch(np.array([(196, 420), (316, 420), (318, 470), (194, 470)]), 60, 3.2, 1.2, BLUE, rng, opacity=0.55, grain=0.8, clip_blur=6)
+        # a hatched jumper with a ribbed roll neck, running off the canvas
+        jumper = np.array([(-130, 640), (-130, 540), (-20, 500), (100, 474), (208, 456), (304, 456), (412, 474), (532, 500),
+                           (642, 540), (642, 640)]) + jit()
+        s.fill(jumper, PAPER)
+        s.hatch(jumper, 70, 4.2, 1.2, LIGHT, rng, opacity=0.55, grain=0.8)
+        s.hatch(jumper, 110, 7.0, 1.0, BLUE, rng, opacity=0.3, grain=0.8)
+        self.pen(s, jumper[1:-1], 2.4, rng, taper=(0.05, 0.05))
+        roll = np.array([(186, 440), (326, 440), (334, 486), (178, 486)]) + jit(0.5)
+        s.fill(roll, PAPER)
+        for x in np.arange(190, 326, 7.0):
+            s.stroke([(x, 444 + rng.normal(0, 1)), (x - 1 + rng.normal(0, 1), 482)], 1.3, BLUE, rng=rng, grain=0.7, opacity=0.7,
+                     taper=(0.2, 0.2))
+        self.pen(s, closed(roll), 2.2, rng, taper=(0, 0))
+        for sgn in (-1, 1):  # folds at the shoulders
+            self.pen(s, bez((cx + sgn * 150, 478), (cx + sgn * 170, 520), (cx + sgn * 166, 600)), 1.6, rng, passes=1, opacity=0.7)
 
     # --- head ----------------------------------------------------------------------------------
     def draw_head(self, s: Surface, rng, k: int) -> None:
@@ -111,25 +141,8 @@ class Blue(Character):
         jit = lambda sd=1.0: rng.normal(0, sd, 2)
         face = head_outline(cx, 262, 178, 214, chin=0.22) + jit()
         hair, strands = messy_hair(rng)
-        neck = np.array([(196, 420), (188, 512), (324, 512), (316, 420)])
-        for poly in [neck, face] + [ellipse((cx + sg * 178, 262), 24, 36) for sg in (-1, 1)]:
+        for poly in [face] + [ellipse((cx + sg * 178, 262), 24, 36) for sg in (-1, 1)]:
             s.fill(poly, PAPER)
-        # neck and its hatched shadow under the jaw
-        self.pen(s, [(200, 420), (192, 512)], 2.2, rng)
-        self.pen(s, [(312, 420), (320, 512)], 2.2, rng)
-        s.hatch(np.array([(196, 430), (316, 430), (318, 470), (194, 470)]), 60, 3.2, 1.2, BLUE, rng, opacity=0.55, grain=0.8, clip_blur=6)
-        # a hatched jumper with a ribbed roll neck, behind the chin
-        jumper = np.array([(30, 512), (64, 484), (160, 462), (208, 452), (304, 452), (352, 462), (448, 484), (482, 512)]) + jit()
-        s.fill(jumper, PAPER)
-        s.hatch(jumper, 70, 4.2, 1.2, LIGHT, rng, opacity=0.55, grain=0.8)
-        s.hatch(jumper, 110, 7.0, 1.0, BLUE, rng, opacity=0.3, grain=0.8)
-        self.pen(s, jumper, 2.4, rng, taper=(0.05, 0.05))
-        roll = np.array([(186, 438), (326, 438), (334, 480), (178, 480)]) + jit(0.5)
-        s.fill(roll, PAPER)
-        for x in np.arange(190, 326, 7.0):
-            s.stroke([(x, 442 + rng.normal(0, 1)), (x - 1 + rng.normal(0, 1), 476)], 1.3, BLUE, rng=rng, grain=0.7, opacity=0.7,
-                     taper=(0.2, 0.2))
-        self.pen(s, closed(roll), 2.2, rng, taper=(0, 0))
         for sgn in (-1, 1):
             ear = ellipse((cx + sgn * 178, 262), 24, 36) + jit()
             self.pen(s, closed(ear)[::-1] if sgn > 0 else closed(ear), 2.2, rng)
@@ -157,7 +170,6 @@ class Blue(Character):
                      rng, passes=1, taper=(0.5, 0.3), tip=0.05, opacity=0.9 if i < len(strands) else 0.6)
         # a few light construction lines, as if left from the sketch
         self.pen(s, bez((cx - 170, 100), (cx, 60), (cx + 170, 100)), 1.0, rng, passes=1, color=LIGHT, opacity=0.4)
-        self.pen(s, [(cx, 460), (cx + 2, 492)], 1.0, rng, passes=1, color=LIGHT, opacity=0.4)
 
 
 def messy_hair(rng) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, float]]]:
@@ -190,5 +202,6 @@ def character() -> Blue:
     return Blue(slug="bleu", name="Bleu", style="blue",
                 description="A blue-pencil sketch on cream paper: grainy strokes, hatching, construction lines (the paper's 'Blue').",
                 seed=37, skin=PAPER, paper_amount=0.018, grain=1.0, eye_hw=38.0,
-                eye_centers=((194.0, 228.0), (318.0, 228.0)), eyes_box=(104, 150, 304, 132), eye_kw={"brow_gap": 0.85},
-                mouth_box=(168, 312, 176, 118), mouth_center=(256.0, 354.0), mouth_scale=47.0)
+                eye_centers=((194.0, 228.0), (318.0, 228.0)), eyes_box=(104, 150, 304, 132), eye_kw={"brow_gap": 0.85, "brow_clear": 0.52},
+                mouth_box=(168, 312, 176, 118), mouth_center=(256.0, 354.0), mouth_scale=47.0, mouth_dark=PAPER,
+                lid_band=0.3, scale=0.8, lift=52.0, pivot=(256.0, 420.0))

@@ -2,9 +2,11 @@
 
 A :class:`Surface` is a rectangle of a character's canvas (the whole head, or one part's box),
 painted at ``ss``× resolution and downsampled with Lanczos at the end. All drawing calls take
-**canvas** coordinates, so a part drawn on its own surface lines up pixel for pixel with the
-head, and canvas-level textures (paper, pencil grain) match across the seams of the feathered
-holes. Colours are RGB floats in 0..1; paint is accumulated premultiplied.
+**design** coordinates, which a :class:`Placement` (scale and offset, the same for every surface
+of a character) maps to the canvas, so a part drawn on its own surface lines up pixel for pixel
+with the head, and canvas-level textures (paper, pencil grain) match across the seams of the
+feathered holes. Widths, radii and blurs are in design pixels too. Colours are RGB floats in
+0..1; paint is accumulated premultiplied.
 
 Strokes are tapered polylines with pressure (width) variation, optional wobble (a loose,
 wavy line), jitter, pencil grain and feathering; fills are polygons with optional clipping.
@@ -43,6 +45,29 @@ def fractal_noise(shape: tuple[int, int], cells: list[float], rng: np.random.Gen
     return acc / (acc.std() + 1e-6)
 
 
+@dataclass(frozen=True)
+class Placement:
+    """Design coordinates → canvas pixels: ``canvas = offset + scale · design``."""
+
+    scale: float = 1.0
+    offset: tuple[float, float] = (0.0, 0.0)
+
+    def __call__(self, pts) -> np.ndarray:
+        """Points ``(..., 2)`` in design coordinates, in canvas pixels."""
+        return np.asarray(pts, np.float64) * self.scale + np.asarray(self.offset, np.float64)
+
+    def lines(self, lines) -> np.ndarray:
+        """Control lines ``(n, 4)`` in design coordinates, in canvas pixels."""
+        return self(np.asarray(lines, np.float64).reshape(-1, 2, 2)).reshape(-1, 4)
+
+    def box(self, box) -> tuple[int, int, int, int]:
+        """A design ``(x, y, w, h)`` box as the whole canvas pixels it covers (rounded)."""
+        x0, y0 = self((box[0], box[1]))
+        x1, y1 = self((box[0] + box[2], box[1] + box[3]))
+        x0, y0, x1, y1 = (int(round(v)) for v in (x0, y0, x1, y1))
+        return x0, y0, x1 - x0, y1 - y0
+
+
 @dataclass
 class Textures:
     """Canvas-level textures, so every surface of a character samples the same paper.
@@ -75,11 +100,19 @@ class Surface:
     """A supersampled RGBA painting surface covering ``size`` canvas pixels at ``origin``."""
 
     def __init__(self, origin: tuple[int, int], size: tuple[int, int], textures: Textures,
-                 background: Color | None = None):
+                 background: Color | None = None, place: Placement = Placement(), wobble_ref: float | None = None):
+        """``origin`` and ``size`` in canvas pixels; drawing calls in design coordinates (``place``).
+
+        ``wobble_ref`` (design px): when set, every stroke's wobble has ``wobble_ref / wobble_len``
+        waves whatever its length, so the same stroke drawn longer or shorter in another drawing
+        of a part wobbles alike and lines up under the morph."""
+        self.wobble_ref = wobble_ref
         self.ox, self.oy = origin
         self.w, self.h = size
         self.tex = textures
         self.ss = textures.ss
+        self.place = place
+        self.k = self.ss * place.scale  # surface pixels per design pixel
         self.W, self.H = self.w * self.ss, self.h * self.ss
         self.rgb = np.zeros((self.H, self.W, 3), np.float32)
         self.a = np.zeros((self.H, self.W), np.float32)
@@ -90,7 +123,7 @@ class Surface:
     # --- coordinates and masks ------------------------------------------------------------
     def px(self, pts) -> np.ndarray:
         """Canvas points -> supersampled surface pixels."""
-        p = np.asarray(pts, np.float64).reshape(-1, 2)
+        p = self.place(np.asarray(pts, np.float64).reshape(-1, 2))
         return (p - (self.ox, self.oy)) * self.ss
 
     def _bbox(self, p: np.ndarray, pad: float) -> tuple[int, int, int, int] | None:
@@ -103,11 +136,11 @@ class Surface:
         return x0, y0, x1, y1
 
     def mask(self, poly, blur: float = 0.0) -> np.ndarray:
-        """Full-surface float mask (0..1) of a canvas polygon, optionally feathered (canvas px)."""
+        """Full-surface float mask (0..1) of a polygon, optionally feathered (design px)."""
         m = Image.new("L", (self.W, self.H), 0)
         ImageDraw.Draw(m).polygon([tuple(q) for q in self.px(poly)], fill=255)
         if blur > 0:
-            m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
+            m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
         return np.asarray(m, np.float32) / 255.0
 
     def _grain(self, bb) -> np.ndarray:
@@ -147,7 +180,7 @@ class Surface:
     def fill(self, poly, color: Color, opacity: float = 1.0, blur: float = 0.0,
              clip: np.ndarray | None = None, grain: float = 0.0) -> None:
         p = self.px(poly)
-        pad = 3 * blur * self.ss + 2
+        pad = 3 * blur * self.k + 2
         bb = self._bbox(p, pad)
         if bb is None:
             return
@@ -155,7 +188,7 @@ class Surface:
         m = Image.new("L", (x1 - x0, y1 - y0), 0)
         ImageDraw.Draw(m).polygon([(q[0] - x0, q[1] - y0) for q in p], fill=255)
         if blur > 0:
-            m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
+            m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
         self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
 
     def stroke(self, pts, width: float, color: Color, *, rng: np.random.Generator | None = None,
@@ -187,8 +220,9 @@ class Surface:
         n = np.stack([-t[:, 1], t[:, 0]], 1)
         if wobble > 0:
             off = np.zeros(len(p))
+            base = wobble_len if self.wobble_ref is None else L * wobble_len / self.wobble_ref
             for k in range(3):
-                wl = wobble_len * (0.55 + 0.9 * rng.random()) / (1 + k)
+                wl = base * (0.55 + 0.9 * rng.random()) / (1 + k)
                 off += wobble / (1 + k) ** 2 * np.sin(2 * np.pi * s / wl + rng.uniform(0, 2 * np.pi))
             p = p + n * off[:, None]
         u = s / L
@@ -202,8 +236,8 @@ class Surface:
             prof = prof * (1 + pressure * np.sin(2 * np.pi * s / wl + rng.uniform(0, 6.3)))
         half = np.maximum(width * prof / 2, 0.12)
         q = self.px(p)
-        hq = half * self.ss
-        bb = self._bbox(q, hq.max() + 3 * blur * self.ss + 2)
+        hq = half * self.k
+        bb = self._bbox(q, hq.max() + 3 * blur * self.k + 2)
         if bb is None:
             return
         x0, y0, x1, y1 = bb
@@ -222,7 +256,7 @@ class Surface:
             r = hq[i]
             d.ellipse([q[i, 0] - r, q[i, 1] - r, q[i, 0] + r, q[i, 1] + r], fill=255)
         if blur > 0:
-            m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
+            m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
         self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
 
     def hatch(self, region, angle: float, spacing: float, width: float, color: Color, rng: np.random.Generator,
@@ -246,8 +280,8 @@ class Surface:
         if jitter > 0:
             p = p + rng.normal(0, jitter, 2)
         q = self.px(p)
-        r = max(width * self.ss / 2, 0.5)
-        bb = self._bbox(q, r + 3 * blur * self.ss + 2)
+        r = max(width * self.k / 2, 0.5)
+        bb = self._bbox(q, r + 3 * blur * self.k + 2)
         if bb is None:
             return
         x0, y0, x1, y1 = bb
@@ -258,7 +292,7 @@ class Surface:
         for v in (q[0], q[-1]):
             d.ellipse([v[0] - r, v[1] - r, v[0] + r, v[1] + r], fill=255)
         if blur > 0:
-            m = m.filter(ImageFilter.GaussianBlur(blur * self.ss))
+            m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
         self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
 
     def dot(self, c, r: float, color: Color, opacity: float = 1.0, blur: float = 0.0,
@@ -272,10 +306,14 @@ class Surface:
 
     # --- output -------------------------------------------------------------------------------
     def to_rgba(self, paper: bool = True) -> np.ndarray:
-        """Downsample (Lanczos on premultiplied channels) to straight RGBA uint8 (h, w, 4)."""
+        """Downsample (area average of the ``ss``×``ss`` samples, premultiplied) to straight RGBA uint8 (h, w, 4).
+
+        An area average never rings: a filter with negative lobes (Lanczos) leaves a faint light or
+        dark line along the edge of a layer where it turns see-through, which shows once layers
+        are stacked."""
         chans = []
         for c in [self.rgb[..., 0], self.rgb[..., 1], self.rgb[..., 2], self.a]:
-            im = Image.fromarray(np.ascontiguousarray(c), "F").resize((self.w, self.h), Image.LANCZOS)
+            im = Image.fromarray(np.ascontiguousarray(c), "F").resize((self.w, self.h), Image.BOX)
             chans.append(np.asarray(im, np.float32))
         rgb = np.stack(chans[:3], -1)
         a = np.clip(chans[3], 0, 1)

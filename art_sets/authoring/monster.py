@@ -29,12 +29,14 @@ TOOTH_SHADE = hex_rgb("#d8ccb0")
 MONSTER_MOUTHS = {
     "neutral": MouthPose(hw=1.0, smile=0.04, tu=0.12, tl=0.16),
     "smile": MouthPose(hw=1.12, smile=0.34, tu=0.12, tl=0.16),
-    "ah": MouthPose(hw=0.86, smile=0.0, open=0.9, up_ratio=0.3, tongue=True, teeth_up=1, teeth_dn=1),
-    "oo": MouthPose(hw=0.46, open=0.5, round=1.0, tu=0.2, tl=0.22, up_ratio=0.42, teeth_up=1, teeth_dn=1),
-    "grin": MouthPose(hw=1.2, smile=0.32, open=0.62, up_ratio=0.4, teeth_up=1, teeth_dn=1, tongue=True),
+    "ah": MouthPose(hw=0.86, smile=0.0, open=0.9, up_ratio=0.3),
+    "oo": MouthPose(hw=0.5, open=0.5, round=1.0, tu=0.14, tl=0.18, up_ratio=0.42),
+    "grin": MouthPose(hw=1.2, smile=0.32, open=0.62, up_ratio=0.45),
     "frown": MouthPose(hw=0.98, smile=-0.26, tu=0.12, tl=0.16),
-    "ee": MouthPose(hw=1.12, smile=0.06, open=0.34, up_ratio=0.5, teeth_up=1, teeth_dn=1),
+    "ee": MouthPose(hw=1.12, smile=0.06, open=0.34, up_ratio=0.5),
 }
+SHIRT = hex_rgb("#7a4fa0")
+SHIRT_SHADE = hex_rgb("#5d3a80")
 
 MONSTER_EYES = dict(DEFAULT_EYES)
 MONSTER_EYES.update({
@@ -56,30 +58,25 @@ class Monster(Character):
         s.stroke(pts, w, color, rng=rng, **opts)
 
     # --- eyes -----------------------------------------------------------------------------------
-    def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+    def draw_eyeball(self, s: Surface, g: EyeGeom, socket, rng) -> None:
         hw = g.hw
-        # heavy upper lid: a shaded band above the lid line
+        s.paint(socket, EYE)
+        s.fill(ellipse(g.iris_c, 0.95 * hw, 0.9 * hw), EYE_RIM, opacity=0.55, clip=socket, blur=4)
+        s.fill(ellipse(g.iris_c, 0.58 * hw, 0.58 * hw), EYE, opacity=0.9, clip=socket, blur=3)
+        s.fill(ellipse(g.iris_c, 0.12 * hw, 0.44 * hw), INK, clip=socket)
+        s.fill(ellipse(g.iris_c + (-0.28 * hw, -0.22 * hw), 0.1 * hw, 0.1 * hw), (1, 1, 1), clip=socket)
+
+    def draw_lower_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        self.pen(s, g.lower, 3.2, rng, taper=(0.05, 0.05), pressure=0.1)
+
+    def draw_upper_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        hw = g.hw
+        # heavy upper lid: a shaded band above the lid line, a soft shadow cast below it
         t = np.linspace(0, 1, len(g.upper))
-        if not g.closed:
-            lid_top = g.upper - np.stack([0 * t, 0.22 * hw * np.sin(np.pi * t) ** 0.6 + 1.0], 1)
-            s.fill(np.concatenate([lid_top, g.upper[::-1]]), SHADE)
-            opening = g.opening()
-            clip = s.mask(opening)
-            s.fill(opening, EYE)
-            s.fill(ellipse(g.iris_c, 0.95 * hw, 0.9 * hw), EYE_RIM, opacity=0.55, clip=clip, blur=4)
-            s.fill(ellipse(g.iris_c, 0.58 * hw, 0.58 * hw), EYE, opacity=0.9, clip=clip, blur=3)
-            s.fill(ellipse(g.iris_c, 0.12 * hw, 0.44 * hw), INK, clip=clip)
-            s.fill(ellipse(g.iris_c + (-0.28 * hw, -0.22 * hw), 0.1 * hw, 0.1 * hw), (1, 1, 1), clip=clip)
-            s.fill(np.concatenate([g.upper, (g.upper + (0, 0.18 * hw))[::-1]]), DEEP, opacity=0.35, clip=clip, blur=1.5)
-            self.pen(s, closed(opening), 3.2, rng, taper=(0, 0), pressure=0.1)
-            self.pen(s, g.upper, 5.5, rng, taper=(0.1, 0.1))
-        else:  # a heavy, bulging closed lid
-            base = g.inner + (g.outer - g.inner) * t[:, None]
-            dome = base - np.stack([0 * t, 0.45 * hw * np.sin(np.pi * t ** 0.8) ** 0.75], 1)
-            s.fill(np.concatenate([dome, g.upper[::-1]]), SHADE)
-            s.fill(np.concatenate([dome, (dome + (0, 0.14 * hw))[::-1]]), MUZZLE, opacity=0.35, blur=1.5)
-            self.pen(s, dome, 2.6, rng, color=DEEP, taper=(0.2, 0.2))
-            self.pen(s, g.upper, 5.5, rng, taper=(0.15, 0.15))
+        lid_top = g.upper - np.stack([0 * t, 0.22 * hw * np.sin(np.pi * t) ** 0.6 + 1.0], 1)
+        s.fill(np.concatenate([lid_top, g.upper[::-1]]), SHADE)
+        s.fill(np.concatenate([g.upper, (g.upper + (0, 0.16 * hw))[::-1]]), DEEP, opacity=0.3, blur=1.5)
+        self.pen(s, g.upper, 5.5, rng, taper=(0.1, 0.1))
 
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
@@ -93,43 +90,67 @@ class Monster(Character):
         self.pen(s, closed(ridge), 3.0, rng, taper=(0, 0))
 
     # --- mouth ----------------------------------------------------------------------------------
-    def draw_mouth(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
-        # lips: a darker band all round
-        s.fill(g.lips(), SHADE)
-        if g.open > 2:
-            interior = g.interior()
-            clip = s.mask(interior)
-            s.fill(interior, MOUTH)
-            if p.tongue:
-                c = point_at(g.inner_dn, 0.5)
-                s.fill(ellipse(c + (0, -0.12 * sc), 0.42 * (g.right[0] - g.left[0]) / 2 + 6, 0.34 * g.open + 4), TONGUE, clip=clip)
-                self.pen(s, [c + (0, -0.3 * g.open), c + (0, -0.05 * g.open)], 2.0, rng, color=MOUTH, clip=clip)
-            self.teeth_row(s, g.inner_up, +1, g, clip, rng)
-            self.teeth_row(s, g.inner_dn, -1, g, clip, rng)
-            self.pen(s, closed(interior), 4.0, rng, taper=(0, 0))
-        else:
-            self.pen(s, g.seam, 5.0, rng, taper=(0.12, 0.12), tip=0.5)
-            for u, h in ((0.24, 0.34), (0.76, 0.34)):
-                self.fang(s, point_at(g.seam, u), -1, h * sc, 0.11 * sc, rng)
-        self.pen(s, closed(g.lips()), 2.4, rng, taper=(0, 0), color=DEEP, opacity=0.9)
+    def draw_inside(self, s: Surface, rest: MouthGeom, rng) -> None:
+        sc, (cx, cy) = rest.scale, rest.seam[len(rest.seam) // 2]
+        hw = self.teeth_hw * sc
+        x = np.linspace(cx - hw, cx + hw, 60)
+        gum = np.stack([x, cy - 0.3 * sc - 0.3 * sc * ((x - cx) / hw) ** 2], 1)
+        s.fill(np.concatenate([gum, (gum - (0, 0.5 * sc))[::-1]]), DEEP)
+        self.teeth_row(s, gum, +1, sc, 0.1, 0.9, 9, rng)
 
-    def teeth_row(self, s: Surface, edge: np.ndarray, direction: int, g: MouthGeom, clip, rng) -> None:
+    def draw_lower_lip(self, s: Surface, g: MouthGeom, rng) -> None:
         sc = g.scale
-        n = max(3, int(round((g.right[0] - g.left[0]) / (0.3 * sc))))
-        us = np.linspace(0.1, 0.9, n)
-        for i, u in enumerate(us):
+        c = point_at(g.inner_dn, 0.5)
+        s.fill(ellipse(c + (0, -0.14 * sc), 0.36 * sc, 0.24 * sc), TONGUE)
+        self.pen(s, [c + (0, -0.34 * sc), c + (0, -0.16 * sc)], 2.0, rng, color=MOUTH)
+        self.teeth_row(s, g.inner_dn + (0, 2.0), -1, sc, 0.16, 0.84, 6, rng)
+        s.fill(np.concatenate([g.inner_dn, g.outer_dn[::-1]]), SHADE)
+        self.pen(s, g.inner_dn, 4.0, rng, taper=(0.05, 0.05))
+        self.pen(s, g.outer_dn, 2.4, rng, taper=(0.2, 0.2), color=DEEP, opacity=0.9)
+
+    def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        s.fill(np.concatenate([g.outer_up, g.inner_up[::-1]]), SHADE)
+        self.pen(s, g.outer_up, 2.4, rng, taper=(0.2, 0.2), color=DEEP, opacity=0.9)
+        self.pen(s, g.inner_up, 5.0, rng, taper=(0.08, 0.08), tip=0.5)
+
+    def draw_tusks(self, s: Surface, g: MouthGeom, rng) -> None:
+        for u in (0.24, 0.76):  # two tusks stand on the lower lip, in front of the upper one
+            self.fang(s, point_at(g.inner_dn, u) + (0, 1.5), -1, self.tusks * g.scale, 0.11 * g.scale, rng)
+
+    def teeth_row(self, s: Surface, edge: np.ndarray, direction: int, sc: float, u0: float, u1: float, n: int, rng) -> None:
+        """``n`` fangs along ``edge`` between fractions ``u0`` and ``u1``, pointing down (+1) or up (−1)."""
+        for i, u in enumerate(np.linspace(u0, u1, n)):
             big = i in (0, n - 1)
-            h = (0.42 if big else 0.22) * sc * (1 if direction > 0 else 0.85)
-            h = min(h, 0.55 * g.open + 2)
-            self.fang(s, point_at(edge, u), direction, h, (0.12 if big else 0.09) * sc, rng, clip=clip)
+            h = (0.34 if big else 0.2) * sc * (1 if direction > 0 else 0.85)
+            self.fang(s, point_at(edge, u), direction, h, (0.1 if big else 0.08) * sc, rng)
 
     def fang(self, s: Surface, base: np.ndarray, direction: int, h: float, half: float, rng, clip=None) -> None:
-        tip = base + (rng.normal(0, 0.4), direction * h)
+        tip = base + (rng.normal(0, 0.4), direction * h)  # a triangle from ``base``, pointing down (+1) or up (−1)
         tri = np.array([base + (-half, -direction * 2), base + (half, -direction * 2), tip])
         s.fill(tri, TOOTH, clip=clip)
         s.fill(np.array([base + (half * 0.2, 0), base + (half, -direction * 2), tip]), TOOTH_SHADE, clip=clip, opacity=0.6)
         self.pen(s, [tri[0], tri[2], tri[1]], 1.8, rng, taper=(0.1, 0.1), clip=clip, pressure=0.0, wobble=0.0)
+
+    # --- body ----------------------------------------------------------------------------------
+    def draw_body(self, s: Surface, rng) -> None:
+        cx = 256.0
+        neck = np.array([(176, 380), (160, 600), (352, 600), (336, 380)])
+        s.fill(neck, SHADE)
+        s.fill(np.array([(170, 440), (342, 440), (348, 500), (164, 500)]), DEEP, opacity=0.45, blur=8)
+        self.pen(s, [(176, 420), (162, 600)], 4.0, rng, taper=(0, 0))
+        self.pen(s, [(336, 420), (350, 600)], 4.0, rng, taper=(0, 0))
+        # a hoodie over big shoulders, running off the canvas
+        hoodie = np.concatenate([[(-150, 720), (-150, 580)], bez((-150, 580), (-60, 500), (90, 478), (170, 480), n=30),
+                                 bez((170, 480), (cx, 540), (342, 480), n=20),
+                                 bez((342, 480), (422, 478), (572, 500), (662, 580), n=30), [(662, 720)]])
+        s.fill(hoodie, SHIRT)
+        s.fill(np.concatenate([bez((-150, 620), (0, 540), (120, 530), n=20), bez((120, 530), (60, 640), (-150, 700), n=20)]),
+               SHIRT_SHADE, opacity=0.8)
+        self.pen(s, hoodie[2:-1], 4.2, rng, taper=(0, 0))
+        for sgn in (-1, 1):  # hood strings
+            self.pen(s, [(cx + sgn * 40, 512), (cx + sgn * 46, 600)], 3.0, rng, color=HORN, taper=(0, 0))
+            s.fill(ellipse((cx + sgn * 46, 604), 6, 8), HORN)
 
     # --- head ----------------------------------------------------------------------------------
     def draw_head(self, s: Surface, rng, k: int) -> None:
@@ -156,11 +177,6 @@ class Monster(Character):
             s.fill(np.concatenate([bez((cx + sgn * 204, 214), (cx + sgn * 240, 200), (cx + sgn * 236, 236), n=12),
                                    bez((cx + sgn * 236, 236), (cx + sgn * 226, 262), (cx + sgn * 204, 278), n=12)]), SHADE)
             self.pen(s, ear, 4.2, rng, taper=(0.05, 0.05))
-        # neck
-        neck = np.array([(176, 430), (160, 512), (352, 512), (336, 430)]) + j()
-        s.fill(neck, SHADE)
-        self.pen(s, [(176, 430), (160, 512)], 4.0, rng, taper=(0, 0))
-        self.pen(s, [(336, 430), (352, 512)], 4.0, rng, taper=(0, 0))
         face = head_outline(cx, 270, 206, 196, chin=-0.08, jowl=0.25) + j()
         s.fill(face, SKIN)
         # cel shade on the image-right side and under the jaw
@@ -188,4 +204,5 @@ def character() -> Monster:
                    description="A green horned creature with fangs: thick brush ink, flat cel shading (the paper's 'Monster').",
                    seed=44, skin=SKIN, mouth_skin=MUZZLE, eye_hw=38.0, eye_centers=((194.0, 216.0), (318.0, 216.0)),
                    eyes_box=(100, 146, 312, 132), mouth_box=(136, 304, 240, 126), mouth_center=(256.0, 350.0),
-                   mouth_scale=66.0, paper_amount=0.012, eye_kw={"brow_gap": 0.8, "brow_len": 1.05})
+                   mouth_scale=66.0, paper_amount=0.012, eye_kw={"brow_gap": 0.8, "brow_len": 1.05, "brow_clear": 0.45},
+                   mouth_dark=MOUTH, lid_band=0.27, teeth_hw=1.15, tusks=0.34, scale=0.72, lift=80.0, pivot=(256.0, 400.0))

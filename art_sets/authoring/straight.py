@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from art_sets.authoring.face import Character, EyeGeom, EyePose, MouthGeom, closed, head_outline
-from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, sub_curve
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, offset, point_at, sub_curve
 
 INK = hex_rgb("#1d1a22")
 SKIN = hex_rgb("#f6d6bd")
@@ -32,31 +32,24 @@ class Straight(Character):
         opts.update(kw)
         s.stroke(pts, w, color, rng=rng, **opts)
 
-    # --- parts ---------------------------------------------------------------------------------
-    def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+    # --- eyes --------------------------------------------------------------------------------
+    def draw_eyeball(self, s: Surface, g: EyeGeom, socket, rng) -> None:
+        s.paint(socket, WHITE)
+        s.fill(ellipse(g.iris_c, g.iris_r, g.iris_r), IRIS, clip=socket)
+        s.stroke(ellipse(g.iris_c, g.iris_r * 0.97, g.iris_r * 0.97, n=90), 1.6, INK, rng=rng, taper=(0, 0), clip=socket)
+        s.fill(ellipse(g.iris_c, g.iris_r * 0.5, g.iris_r * 0.5), INK, clip=socket)
+        hl = g.iris_c + (-0.35 * g.iris_r, -0.4 * g.iris_r)
+        s.fill(ellipse(hl, g.iris_r * 0.22, g.iris_r * 0.22), WHITE, clip=socket)
+
+    def draw_lower_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        self.pen(s, sub_curve(g.lower, 0.18, 0.92), 1.7, rng, taper=(0.4, 0.4))
+
+    def draw_upper_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         hw = g.hw
-        if not g.closed:
-            opening = g.opening()
-            clip = s.mask(opening)
-            s.fill(opening, WHITE)
-            s.fill(ellipse(g.iris_c, g.iris_r, g.iris_r), IRIS, clip=clip)
-            s.stroke(ellipse(g.iris_c, g.iris_r * 0.97, g.iris_r * 0.97, n=90), 1.6, INK, rng=rng, taper=(0, 0), clip=clip)
-            s.fill(ellipse(g.iris_c, g.iris_r * 0.5, g.iris_r * 0.5), INK, clip=clip)
-            hl = g.iris_c + (-0.35 * g.iris_r, -0.4 * g.iris_r)
-            s.fill(ellipse(hl, g.iris_r * 0.22, g.iris_r * 0.22), WHITE, clip=clip)
-            # lash line: heavy upper lid with a flick at the outer corner
-            self.pen(s, g.upper, 4.2, rng, taper=(0.12, 0.05), tip=0.3)
-            flick = np.array([g.outer, g.outer + (-g.sgn * 0.28 * hw, -0.22 * hw)])
-            self.pen(s, bez(flick[0], flick[0] + (-g.sgn * 0.15 * hw, -0.02 * hw), flick[1]), 3.2, rng, taper=(0.0, 0.8), tip=0.1)
-            self.pen(s, sub_curve(g.lower, 0.18, 0.92), 1.7, rng, taper=(0.4, 0.4))
-            if pose.up > 0.6:
-                self.pen(s, sub_curve(g.upper - (0, 0.32 * hw), 0.25, 0.85), 1.4, rng, taper=(0.5, 0.5))
-        else:
-            self.pen(s, g.upper, 4.0, rng, taper=(0.15, 0.1), tip=0.3)
-            for u in (0.55, 0.75, 0.92):
-                p = sub_curve(g.upper, u, u, 2)[0]
-                d = np.array([-g.sgn * 0.12 * hw, 0.22 * hw]) * (0.6 + u)
-                self.pen(s, [p, p + d], 2.2, rng, taper=(0.0, 0.9))
+        # lash line: heavy upper lid with a flick at the outer corner
+        self.pen(s, g.upper, 4.2, rng, taper=(0.12, 0.05), tip=0.3)
+        flick = np.array([g.outer, g.outer + (-g.sgn * 0.28 * hw, -0.22 * hw)])
+        self.pen(s, bez(flick[0], flick[0] + (-g.sgn * 0.15 * hw, -0.02 * hw), flick[1]), 3.2, rng, taper=(0.0, 0.8), tip=0.1)
 
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         upper = offset(g.brow, -2.6)
@@ -69,37 +62,59 @@ class Straight(Character):
         s.fill(shape, HAIR)
         self.pen(s, closed(shape), 1.3, rng, taper=(0, 0))
 
-    def draw_mouth(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
-        if g.open > 2:
-            interior = g.interior()
-            clip = s.mask(interior)
-            s.fill(interior, MOUTH)
-            if p.tongue:
-                c = sub_curve(g.inner_dn, 0.5, 0.5, 2)[0]
-                s.fill(ellipse(c + (0, -0.08 * sc), 0.55 * (g.right[0] - g.left[0]) / 2, 0.3 * g.open), TONGUE, clip=clip)
-            self.teeth(s, g, clip, rng)
-            s.fill(_band(g.outer_dn, g.inner_dn), LIP, opacity=0.55)
-            self.pen(s, closed(interior), 2.8, rng, taper=(0, 0))
-        else:
-            self.pen(s, g.seam, 3.2, rng, taper=(0.2, 0.2), tip=0.35)
-            s.fill(_band(g.outer_dn, g.seam + (0, 1.5)), LIP, opacity=0.35)
-        self.pen(s, sub_curve(g.outer_dn, 0.36, 0.64), 1.8, rng, taper=(0.5, 0.5))
-        if p.smile > 0.2:
-            for end, sgn in ((g.left, -1), (g.right, 1)):
-                tick = bez(end + (sgn * 0.05 * sc, 0.12 * sc), end + (sgn * 0.14 * sc, -0.02 * sc), end + (sgn * 0.1 * sc, -0.16 * sc))
-                self.pen(s, tick, 2.0, rng, taper=(0.4, 0.6))
+    # --- mouth ---------------------------------------------------------------------------------
+    def draw_inside(self, s: Surface, rest: MouthGeom, rng) -> None:
+        sc, cx = rest.scale, float(rest.seam[len(rest.seam) // 2, 0])
+        hw = self.teeth_hw * sc
+        x = np.linspace(cx - hw, cx + hw, 60)
+        u = (x - cx) / hw
+        edge = np.stack([x, rest.seam[len(rest.seam) // 2, 1] - 0.08 * sc - 0.3 * sc * u ** 2], 1)
+        s.fill(np.concatenate([edge, [(cx + hw, edge[-1, 1] - 0.6 * sc), (cx - hw, edge[0, 1] - 0.6 * sc)]]), WHITE)
+        self.pen(s, edge, 1.2, rng, taper=(0.2, 0.2), color=SKIN_SHADE)
 
-    def teeth(self, s: Surface, g: MouthGeom, clip, rng) -> None:
-        p = g.pose
-        if p.teeth_up > 0:
-            edge = g.inner_up + (0, p.teeth_up * g.open + 0.5)
-            s.fill(np.concatenate([g.inner_up - (0, 2), edge[::-1]]), WHITE, clip=clip)
-            self.pen(s, edge, 1.2, rng, taper=(0.2, 0.2), color=SKIN_SHADE, clip=clip)
-        if p.teeth_dn > 0:
-            edge = g.inner_dn - (0, p.teeth_dn * g.open * 0.8 + 0.5)
-            s.fill(np.concatenate([edge, (g.inner_dn + (0, 2))[::-1]]), WHITE, clip=clip)
-            self.pen(s, edge, 1.2, rng, taper=(0.2, 0.2), color=SKIN_SHADE, clip=clip)
+    def draw_lower_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        # lower teeth and tongue stand on the lip's inner edge; the upper lip hides them when closed
+        mid = point_at(g.inner_dn, 0.5)
+        s.fill(ellipse(mid + (0, -0.16 * sc), 0.36 * sc, 0.22 * sc), TONGUE)
+        self.pen(s, bez(mid + (0, -0.33 * sc), mid + (0.02 * sc, -0.26 * sc), mid + (0, -0.2 * sc)), 1.2, rng,
+                 color=MOUTH, taper=(0.3, 0.5))
+        teeth = sub_curve(g.inner_dn, 0.16, 0.84)
+        s.fill(np.concatenate([teeth + (0, 1.0), (teeth - (0, 0.16 * sc))[::-1]]), WHITE)
+        self.pen(s, teeth - (0, 0.16 * sc), 1.2, rng, taper=(0.2, 0.2), color=SKIN_SHADE)
+        s.fill(_band(g.outer_dn, g.inner_dn), LIP, opacity=0.5)
+        self.pen(s, g.inner_dn, 1.8, rng, taper=(0.08, 0.08), tip=0.5)
+        self.pen(s, sub_curve(g.outer_dn, 0.36, 0.64), 1.8, rng, taper=(0.5, 0.5))
+
+    def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        self.pen(s, g.inner_up, 2.6, rng, taper=(0.1, 0.1), tip=0.4)
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner accents (the same shape in every mouth, so they line up)
+            tick = bez(end + (sgn * 0.05 * sc, 0.1 * sc), end + (sgn * 0.13 * sc, -0.02 * sc),
+                       end + (sgn * 0.1 * sc, -0.1 * sc))
+            self.pen(s, tick, 1.6, rng, taper=(0.4, 0.6))
+
+    # --- body ---------------------------------------------------------------------------------
+    def draw_body(self, s: Surface, rng) -> None:
+        j = lambda sd=0.7: rng.normal(0, sd, 2)
+        neck = np.array([(210, 360), (204, 560), (308, 560), (302, 360)]) + j()
+        s.fill(neck, SKIN)
+        s.fill(np.array([(206, 420), (306, 420), (300, 466), (212, 466)]), SKIN_SHADE, blur=8)
+        self.pen(s, [(209, 380), (204, 560)], 3.0, rng, taper=(0, 0))
+        self.pen(s, [(303, 380), (308, 560)], 3.0, rng, taper=(0, 0))
+        # shirt with a rounded collar, running off the canvas at the bottom and sides
+        shirt = np.array([(-120, 640), (-120, 536), (-20, 498), (70, 478), (150, 462), (212, 456), (256, 480), (300, 456),
+                          (362, 462), (442, 478), (532, 498), (632, 536), (632, 640)]) + j()
+        s.fill(shirt, SHIRT)
+        self.pen(s, shirt[1:-1], 3.0, rng, taper=(0, 0))
+        for sgn in (-1, 1):
+            collar = np.concatenate([bez((256, 482), (256 + sgn * 20, 470), (256 + sgn * 46, 456), (256 + sgn * 60, 456), n=20),
+                                     bez((256 + sgn * 60, 456), (256 + sgn * 80, 476), (256 + sgn * 70, 500), (256 + sgn * 30, 504), n=20),
+                                     bez((256 + sgn * 30, 504), (256 + sgn * 8, 500), (256, 482), n=10)]) + j(0.4)
+            s.fill(collar, WHITE)
+            self.pen(s, closed(collar), 2.6, rng, taper=(0, 0))
+        for sgn in (-1, 1):  # a fold where the sleeve meets the shoulder
+            self.pen(s, bez((256 + sgn * 170, 470), (256 + sgn * 190, 500), (256 + sgn * 186, 560)), 2.2, rng, taper=(0.3, 0.6))
 
     # --- head -----------------------------------------------------------------------------------
     def draw_head(self, s: Surface, rng, k: int) -> None:
@@ -115,22 +130,7 @@ class Straight(Character):
         ]) + j()
         s.fill(back, HAIR)
         self.pen(s, closed(back), 3.0, rng, taper=(0, 0))
-        # neck and ears
-        neck = np.array([(206, 420), (202, 512), (310, 512), (306, 420)]) + j()
-        s.fill(neck, SKIN)
-        s.fill(np.array([(206, 430), (306, 430), (300, 470), (212, 470)]), SKIN_SHADE, blur=8)
-        self.pen(s, [(206, 420), (203, 512)], 3.0, rng, taper=(0, 0.3))
-        self.pen(s, [(306, 420), (309, 512)], 3.0, rng, taper=(0, 0.3))
-        # shirt with a rounded collar, in front of the neck, behind the chin
-        shirt = np.array([(40, 512), (70, 486), (150, 466), (212, 458), (256, 480), (300, 458), (362, 466), (442, 486), (472, 512)]) + j()
-        s.fill(shirt, SHIRT)
-        self.pen(s, shirt, 3.0, rng, taper=(0, 0))
-        for sgn in (-1, 1):
-            collar = np.concatenate([bez((256, 482), (256 + sgn * 20, 470), (256 + sgn * 46, 456), (256 + sgn * 60, 456), n=20),
-                                     bez((256 + sgn * 60, 456), (256 + sgn * 80, 476), (256 + sgn * 70, 500), (256 + sgn * 30, 504), n=20),
-                                     bez((256 + sgn * 30, 504), (256 + sgn * 8, 500), (256, 482), n=10)]) + j(0.4)
-            s.fill(collar, WHITE)
-            self.pen(s, closed(collar), 2.6, rng, taper=(0, 0))
+        # ears
         for sgn in (-1, 1):
             ear = ellipse((cx + sgn * 178, 262), 22, 34) + j()
             s.fill(ear, SKIN)
@@ -173,6 +173,8 @@ def _band(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
 
 def character() -> Straight:
     return Straight(slug="ivy", name="Ivy", style="straight",
-                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN, paper_amount=0.006, eye_hw=40.0, eye_centers=((192.0, 232.0), (320.0, 232.0)),
+                    description="Clean, even black ink over flat colour (the paper's 'Straight' style).", seed=11, skin=SKIN,
+                    paper_amount=0.006, eye_hw=40.0, eye_centers=((192.0, 232.0), (320.0, 232.0)),
                     eyes_box=(100, 150, 312, 132), eye_kw={"brow_gap": 0.85, "iris": 0.56},
-                    mouth_box=(172, 310, 168, 124), mouth_center=(256.0, 354.0), mouth_scale=44.0)
+                    mouth_box=(172, 310, 168, 124), mouth_center=(256.0, 354.0), mouth_scale=44.0, mouth_dark=MOUTH,
+                    scale=0.84, lift=44.0, pivot=(256.0, 420.0))

@@ -30,8 +30,10 @@ WAVY_EYES = {
 WAVY_MOUTHS = dict(DEFAULT_MOUTHS)
 WAVY_MOUTHS.update({
     "smile": MouthPose(hw=1.2, smile=0.42, tl=0.2),
-    "grin": MouthPose(hw=1.3, smile=0.4, open=0.6, up_ratio=0.36, teeth_up=0.45, teeth_dn=0.35, tongue=True),
+    "grin": MouthPose(hw=1.3, smile=0.4, open=0.6, up_ratio=0.45),
 })
+SHIRT = hex_rgb("#7da66a")
+SHIRT_WASH = hex_rgb("#5e8a52")
 
 
 @dataclass
@@ -56,20 +58,18 @@ class Wavy(Character):
                  taper=(0, 0), wobble=0.8, clip=kw.get("clip"))
 
     # --- eyes ----------------------------------------------------------------------------------
-    def draw_eye(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
-        hw = g.hw
-        if not g.closed:
-            self.pen(s, sub_curve(g.lower + (0, 0.2 * hw + 1), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)  # baggy lids
-            opening = g.opening()
-            clip = s.mask(opening)
-            self.wash(s, opening, WHITE, rng, opacity=1.0)
-            s.fill(ellipse(g.iris_c, g.iris_r, g.iris_r * 1.05), INK, clip=clip)
-            s.fill(ellipse(g.iris_c + (-0.3 * g.iris_r, -0.35 * g.iris_r), 0.28 * g.iris_r, 0.28 * g.iris_r), WHITE, clip=clip)
-            self.pen(s, g.upper, 3.6, rng, taper=(0.15, 0.2))
-            self.pen(s, g.lower, 2.0, rng)
-        else:
-            self.pen(s, g.upper, 3.4, rng)
-            self.pen(s, sub_curve(g.upper - (0, 0.22 * hw), 0.25, 0.8), 1.6, rng, passes=1, opacity=0.7)
+    def draw_eyeball(self, s: Surface, g: EyeGeom, socket, rng) -> None:
+        s.paint(socket, WHITE)
+        s.fill(ellipse(g.iris_c, g.iris_r, g.iris_r * 1.05), INK, clip=socket)
+        s.fill(ellipse(g.iris_c + (-0.3 * g.iris_r, -0.35 * g.iris_r), 0.28 * g.iris_r, 0.28 * g.iris_r), WHITE, clip=socket)
+
+    def draw_lower_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        self.pen(s, sub_curve(g.lower + (0, 0.2 * g.hw + 1), 0.2, 0.85), 1.6, rng, passes=1, opacity=0.6)  # baggy lids
+        self.pen(s, g.lower, 2.0, rng)
+
+    def draw_upper_lid(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
+        self.pen(s, g.upper, 3.6, rng, taper=(0.15, 0.2))
+
     def draw_brow(self, s: Surface, g: EyeGeom, pose: EyePose, rng) -> None:
         # a brow made of a few short scratchy strokes
         for k in range(4):
@@ -78,35 +78,51 @@ class Wavy(Character):
             self.pen(s, seg + rng.normal(0, 0.8, 2), 6.0 - 0.6 * k, rng, passes=1, taper=(0.3, 0.5))
 
     # --- mouth ---------------------------------------------------------------------------------
-    def draw_mouth(self, s: Surface, g: MouthGeom, rng) -> None:
-        p, sc = g.pose, g.scale
-        if g.open > 2:
-            interior = g.interior()
-            clip = s.mask(interior)
-            s.fill(interior, MOUTH)
-            if p.tongue:
-                c = point_at(g.inner_dn, 0.5)
-                self.wash(s, ellipse(c + (0, -0.05 * sc), 0.5 * (g.right[0] - g.left[0]) / 2 + 4, 0.32 * g.open + 3), TONGUE, rng, clip=clip)
-            if p.teeth_up > 0:
-                edge = g.inner_up + (0, p.teeth_up * g.open)
-                s.fill(np.concatenate([g.inner_up - (0, 2), edge[::-1]]), WHITE, clip=clip)
-                self.pen(s, sub_curve(edge, 0.1, 0.9), 1.2, rng, passes=1, clip=clip, opacity=0.6)
-            if p.teeth_dn > 0:
-                edge = g.inner_dn - (0, p.teeth_dn * g.open)
-                s.fill(np.concatenate([edge, (g.inner_dn + (0, 2))[::-1]]), WHITE, clip=clip)
-                self.pen(s, sub_curve(edge, 0.15, 0.85), 1.2, rng, passes=1, clip=clip, opacity=0.6)
-            self.pen(s, g.inner_up, 3.2, rng, taper=(0.1, 0.1))
-            self.pen(s, g.inner_dn, 2.8, rng, taper=(0.1, 0.1))
-        else:
-            self.pen(s, g.seam, 3.4, rng, taper=(0.15, 0.15))
+    def draw_inside(self, s: Surface, rest: MouthGeom, rng) -> None:
+        sc, (cx, cy) = rest.scale, rest.seam[len(rest.seam) // 2]
+        hw = self.teeth_hw * sc
+        x = np.linspace(cx - hw, cx + hw, 60)
+        edge = np.stack([x, cy - 0.06 * sc - 0.3 * sc * ((x - cx) / hw) ** 2], 1)
+        s.fill(np.concatenate([edge, (edge - (0, 0.7 * sc))[::-1]]), WHITE)
+        self.pen(s, sub_curve(edge, 0.1, 0.9), 1.2, rng, passes=1, opacity=0.6)
+
+    def draw_lower_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        c = point_at(g.inner_dn, 0.5)
+        self.wash(s, ellipse(c + (0, -0.14 * sc), 0.34 * sc, 0.22 * sc), TONGUE, rng)
+        teeth = sub_curve(g.inner_dn, 0.18, 0.82)
+        s.fill(np.concatenate([teeth + (0, 1.0), (teeth - (0, 0.14 * sc))[::-1]]), WHITE)
+        self.pen(s, sub_curve(teeth - (0, 0.14 * sc), 0.15, 0.85), 1.2, rng, passes=1, opacity=0.6)
+        self.pen(s, g.inner_dn, 2.8, rng, taper=(0.1, 0.1))
         self.pen(s, sub_curve(g.outer_dn, 0.3, 0.7), 2.0, rng, passes=1)
         self.wash(s, np.concatenate([sub_curve(g.outer_dn, 0.25, 0.75), sub_curve(g.outer_dn, 0.25, 0.75)[::-1] - (0, 0.12 * sc)]),
                   WASH, rng, opacity=0.5)
-        if abs(p.smile) > 0.2:
-            for end, sgn in ((g.left, -1), (g.right, 1)):
-                d = np.sign(p.smile)
-                tick = bez(end + (sgn * 0.02 * sc, d * 0.14 * sc), end + (sgn * 0.14 * sc, 0), end + (sgn * 0.08 * sc, -d * 0.18 * sc))
-                self.pen(s, tick, 2.2, rng, passes=1, taper=(0.4, 0.5))
+
+    def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
+        sc = g.scale
+        self.pen(s, g.inner_up, 3.2, rng, taper=(0.1, 0.1))
+        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases (the same shape in every mouth, so they line up)
+            tick = bez(end + (sgn * 0.02 * sc, 0.1 * sc), end + (sgn * 0.14 * sc, 0),
+                       end + (sgn * 0.08 * sc, -0.1 * sc))
+            self.pen(s, tick, 2.2, rng, passes=1, taper=(0.4, 0.5))
+
+    # --- body ----------------------------------------------------------------------------------
+    def draw_body(self, s: Surface, rng) -> None:
+        cx = 256.0
+        neck = np.array([(cx - 70, 380), (cx - 76, 600), (cx + 76, 600), (cx + 70, 380)])
+        self.wash(s, neck, SKIN, rng, opacity=1.0)
+        s.fill(np.array([(cx - 70, 470), (cx + 70, 470), (cx + 66, 530), (cx - 66, 530)]), WASH, opacity=0.5, blur=10)
+        self.pen(s, [(cx - 70, 420), (cx - 75, 600)], 3.0, rng)
+        self.pen(s, [(cx + 70, 420), (cx + 75, 600)], 3.0, rng)
+        # a baggy T-shirt: a wash that misses the line, and a wobbly round neckline
+        shirt = np.concatenate([[(-140, 700), (-140, 600)], bez((-140, 600), (-40, 540), (120, 530), (cx - 78, 536), n=30),
+                                bez((cx - 78, 536), (cx, 580), (cx + 78, 536), n=20),
+                                bez((cx + 78, 536), (392, 530), (552, 540), (652, 600), n=30), [(652, 700)]])
+        self.wash(s, shirt, SHIRT, rng, opacity=1.0)
+        for y in (600, 640, 680):  # stripes
+            self.pen(s, bez((-140, y + 10), (cx, y - 20), (652, y + 10)), 5.0, rng, color=SHIRT_WASH, passes=1, opacity=0.6)
+        self.pen(s, shirt[2:-1], 3.4, rng)
+        self.pen(s, bez((cx - 84, 540), (cx, 592), (cx + 84, 540)), 2.4, rng, passes=1)
 
     # --- head ----------------------------------------------------------------------------------
     def draw_head(self, s: Surface, rng, k: int) -> None:
@@ -168,4 +184,5 @@ def character() -> Wavy:
                 description="A loose, wobbly sepia line over off-register watercolour washes (the paper's 'Wavy').",
                 seed=23, skin=SKIN, paper_amount=0.02, eye_hw=38.0, eye_centers=((200.0, 216.0), (312.0, 216.0)),
                 eyes_box=(128, 136, 256, 134), mouth_box=(150, 330, 212, 122), mouth_center=(256.0, 380.0),
-                mouth_scale=54.0, eye_kw={"iris": 0.3, "brow_gap": 0.95})
+                mouth_scale=54.0, eye_kw={"iris": 0.3, "brow_gap": 0.95}, mouth_dark=MOUTH,
+                scale=0.78, lift=44.0, pivot=(256.0, 440.0))

@@ -1,0 +1,270 @@
+"""The eye finder (tracker.eyes) on synthetic faces with exact truth."""
+
+import json
+import math
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tracker.calibration import FaceFrame
+from tracker.eyes import (
+    EyeFinder,
+    EyeModel,
+    EyeModelError,
+    SkinModel,
+    _run,
+    calibration_crop,
+    iris_radius,
+    learn_eyes,
+    refine_pupils,
+)
+from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
+
+BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+
+
+def _learn(state=BASE, style=None):
+    frame, _ = render_face(state, style)
+    lm = face_landmarks(state)
+    wi = min(state.ipd, 80.0)
+    ff = FaceFrame.from_pupils(tuple(lm["left_pupil"]), tuple(lm["right_pupil"]), wi)
+    rect = calibration_crop(wi)
+    crop = ff.crop(frame, rect)
+    o = np.array(rect[:2], dtype=np.float64)
+    pupils = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
+    brows = ff.to_face(np.array([lm["left_brow"], lm["right_brow"]])) - o
+    model = learn_eyes(crop, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), pupils, brows, wi)
+    return model, wi
+
+
+def _find(finder, state, style=None, offset=(0.0, 0.0), roll_error=0.0, frame=None):
+    """Run the finder on a render of ``state`` with the crop frame put on the true eye centres
+    moved by ``offset`` (× work ipd) and turned by ``roll_error`` degrees; truth in crop px."""
+    if frame is None:
+        frame, _ = render_face(state, style)
+    lm = face_landmarks(state)
+    wi = finder.wi
+    # the eye centres (without gaze): where the head puts the eyes
+    g = np.array([state.gaze_x, state.gaze_y]) * state.ipd
+    th = math.radians(state.roll_deg)
+    R = np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
+    lc, rc = lm["left_pupil"] - R @ g, lm["right_pupil"] - R @ g
+    ff = FaceFrame.from_pupils(tuple(lc), tuple(rc), wi)
+    mid = ff.to_image(np.array([[offset[0] * wi, offset[1] * wi]]))[0]
+    ff = FaceFrame((float(mid[0]), float(mid[1])), ff.angle + math.radians(roll_error), ff.scale)
+    x0, y0, w, h = finder.rect
+    crop = ff.crop(frame, finder.rect)
+    grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
+    centres = np.array([[-0.5 * wi - x0, -y0], [0.5 * wi - x0, -y0]])
+    res = finder.find(crop, grey, centres)
+    o = np.array([x0, y0], dtype=np.float64)
+    keys = ("pupil", "lid_upper", "lid_lower", "brow")
+    truth = {s: {k: ff.to_face(lm[f"{s}_{k}"][None])[0] - o for k in keys} for s in ("left", "right")}
+    return res, truth, ff, (crop, grey, centres)
+
+
+@pytest.fixture(scope="module")
+def finder():
+    model, wi = _learn()
+    return EyeFinder(model, wi)
+
+
+def _check(res, truth, pupil=0.6, lid=1.5, brow=1.5):
+    for e, side in zip(res.eyes, ("left", "right")):
+        t = truth[side]
+        assert math.hypot(e.x - t["pupil"][0], e.y - t["pupil"][1]) <= pupil, (side, (e.x, e.y), t["pupil"])
+        assert abs(e.upper - (t["pupil"][1] - t["lid_upper"][1])) <= lid, (side, e.upper, t)
+        assert abs(e.lower - (t["lid_lower"][1] - t["pupil"][1])) <= lid, (side, e.lower, t)
+        assert abs(e.brow - (t["pupil"][1] - t["brow"][1])) <= brow, (side, e.brow, t)
+
+
+@pytest.mark.parametrize("expr", ["neutral", "brows_up", "brows_angry", "wide", "smile", "sad"])
+def test_expressions_are_measured(finder, expr):
+    res, truth, _, _ = _find(finder, BASE.with_expression(expr))
+    _check(res, truth)
+    assert all(e.open for e in res.eyes)
+
+
+def test_a_squint_moves_the_eye_point_towards_the_middle_of_the_slit(finder):
+    """Half-closed (lid gap 45 % of calibration): the point is on its way from the iris to the
+    middle of what shows between the lids; the lids themselves stay right."""
+    res, truth, _, _ = _find(finder, BASE.with_expression("squint"))
+    for e, side in zip(res.eyes, ("left", "right")):
+        t = truth[side]
+        assert t["lid_upper"][1] < e.y < t["lid_lower"][1]
+        assert abs(e.x - t["pupil"][0]) < 0.5 and abs(e.y - t["pupil"][1]) < 2.0
+        assert abs((e.y - e.upper) - t["lid_upper"][1]) < 1.5 and abs((e.y + e.lower) - t["lid_lower"][1]) < 1.5
+
+
+@pytest.mark.parametrize("offset", [(0.12, 0.0), (-0.12, 0.04), (0.05, -0.08), (-0.18, -0.03)])
+def test_a_badly_predicted_crop_still_finds_the_eyes(finder, offset):
+    res, truth, _, _ = _find(finder, BASE, offset=offset, roll_error=2.0)
+    _check(res, truth, pupil=0.8)
+
+
+def test_gaze_moves_the_iris_inside_the_eye(finder):
+    st_ = BASE.replace(gaze_x=0.08, gaze_y=0.02)
+    res, truth, _, _ = _find(finder, st_)
+    _check(res, truth, lid=2.5)
+
+
+def test_closed_eyes_put_the_eye_point_on_the_slit(finder):
+    res, truth, _, _ = _find(finder, BASE.with_expression("eyes_closed"))
+    for e, side in zip(res.eyes, ("left", "right")):
+        assert not e.open
+        t = truth[side]
+        # the lids meet on the pupil's line in the synthetic performer
+        assert abs(e.y - t["pupil"][1]) < 2.0 and abs(e.x - t["pupil"][0]) < 0.1 * finder.wi
+        assert e.upper + e.lower < 3.0
+
+
+def test_a_wink_closes_one_eye(finder):
+    res, _, _, _ = _find(finder, BASE.with_expression("wink_l"))
+    assert [e.open for e in res.eyes] == [False, True]
+
+
+def test_the_score_prefers_the_eyes_to_other_places(finder):
+    res, _, _, _ = _find(finder, BASE)
+    on = res.score
+    assert on > 0.8
+    for off in ((0.0, 0.65), (0.0, -0.5), (1.0, 0.0), (0.0, 1.0)):
+        r, _, _, _ = _find(finder, BASE, offset=off)
+        assert r.score < on - 0.2, off
+
+
+@pytest.mark.parametrize("style", ["dark_skin", "noisy", "blue_eyes", "pale_lips"])
+def test_other_performers(style):
+    model, wi = _learn(style=STYLES[style])
+    f = EyeFinder(model, wi)
+    for expr in ("neutral", "brows_up", "smile"):
+        res, truth, _, _ = _find(f, BASE.with_expression(expr), STYLES[style])
+        _check(res, truth, pupil=1.0, lid=2.0)
+
+
+def test_a_small_face_and_strong_roll():
+    small = BASE.replace(ipd=44.0, roll_deg=25.0)
+    model, wi = _learn(small)
+    assert wi == 44.0
+    f = EyeFinder(model, wi)
+    res, truth, _, _ = _find(f, small.with_expression("brows_up").replace(roll_deg=-20.0))
+    _check(res, truth, pupil=0.6, lid=1.5, brow=1.5)
+
+
+def test_the_light_is_followed_by_adaptation():
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    dim = BASE.replace(light=(0.7, 0.72, 0.75))
+    frame, _ = render_face(dim)
+    for _ in range(60):  # a couple of seconds of confident frames
+        res, truth, _, (crop, grey, _) = _find(f, dim, frame=frame)
+        f.adapt(crop, grey, res)
+    res, truth, _, _ = _find(f, dim, frame=frame)
+    _check(res, truth, lid=1.5)
+    f.reset_adaptation()
+    assert f._gain is None
+
+
+def test_model_round_trips_through_json(finder):
+    m = finder.model
+    d = json.loads(json.dumps(m.to_dict()))
+    imgs = m.images()
+    assert set(imgs) == set(EyeModel.IMAGE_NAMES) and all(v.dtype == np.uint8 for v in imgs.values())
+    # PNG round trip of the pictures
+    imgs = {k: cv2.imdecode(cv2.imencode(".png", v)[1], cv2.IMREAD_GRAYSCALE) for k, v in imgs.items()}
+    m2 = EyeModel.from_dict(d, imgs)
+    f2 = EyeFinder(m2, m2.work_ipd)
+    assert f2.rect == finder.rect
+    res1, _, _, _ = _find(finder, BASE.with_expression("smile"))
+    res2, _, _, _ = _find(f2, BASE.with_expression("smile"))
+    for a, b in zip(res1.eyes, res2.eyes):
+        assert abs(a.x - b.x) < 0.1 and abs(a.y - b.y) < 0.1 and abs(a.upper - b.upper) < 0.3 and abs(a.brow - b.brow) < 0.3
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        lambda d, i: d.update(format=99),
+        lambda d, i: d.pop("lid_open"),
+        lambda d, i: d.update(radius=[1.0]),
+        lambda d, i: i.pop("eye_l"),
+        lambda d, i: i.update(iris_l=np.zeros((4, 6), np.uint8)),
+        lambda d, i: d["skin"].update(levels=[3.0, 2.0]),
+        lambda d, i: d["skin"].update(cov=[[1, 2, 0], [2, 1, 0], [0, 0, 1]]),
+    ],
+)
+def test_malformed_models_give_one_line_errors(finder, change):
+    d = json.loads(json.dumps(finder.model.to_dict()))
+    imgs = dict(finder.model.images())
+    change(d, imgs)
+    with pytest.raises(EyeModelError) as e:
+        EyeModel.from_dict(d, imgs)
+    assert "\n" not in str(e.value)
+
+
+def test_learning_refuses_only_garbage():
+    with pytest.raises(EyeModelError):
+        learn_eyes(np.zeros((50, 50), np.uint8), np.zeros((50, 50), np.uint8), [[10, 10], [40, 10]], [[10, 0], [40, 0]], 30)
+    with pytest.raises(EyeModelError):  # an eye at the crop's edge
+        crop = np.full((60, 120, 3), 128, np.uint8)
+        learn_eyes(crop, crop[..., 0], [[2, 30], [60, 30]], [[2, 10], [60, 10]], 58)
+    # a flat grey face is not refused: nothing is iris-like, but it is a usable (if useless) model
+    crop = np.full((136, 168, 3), (120, 150, 190), np.uint8)
+    crop += np.random.default_rng(0).integers(0, 6, crop.shape, dtype=np.uint8)
+    m = learn_eyes(crop, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), [[44, 96], [124, 96]], [[44, 64], [124, 64]], 80.0)
+    assert all(r > 0 for r in m.radius)
+
+
+def test_refine_pupils_snaps_clicks_to_the_irises():
+    frame, _ = render_face(BASE)
+    lm = face_landmarks(BASE)
+    l, r = refine_pupils(frame, tuple(lm["left_pupil"] + (3, -2)), tuple(lm["right_pupil"] + (-2, 3)))
+    assert np.hypot(*(np.array(l) - lm["left_pupil"])) < 0.5
+    assert np.hypot(*(np.array(r) - lm["right_pupil"])) < 0.5
+
+
+def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
+    flat = np.full((200, 300, 3), 140, np.uint8)
+    assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))
+
+
+def test_iris_radius_of_a_drawn_disc():
+    img = np.full((60, 100), 200, np.float32)
+    cv2.circle(img, (50, 30), 8, 40, -1, cv2.LINE_AA)
+    assert abs(iris_radius(img, (50.0, 30.0), 80.0) - 8.0) < 0.8
+
+
+def test_ring_votes_peak_at_a_dark_discs_centre(finder):
+    img = np.full((41, 61), 200, np.float32)
+    cv2.circle(img, (30, 20), int(round(0.5 * np.mean(finder.radius))), 30, -1, cv2.LINE_AA)
+    gx, gy = cv2.Sobel(img, cv2.CV_32F, 1, 0), cv2.Sobel(img, cv2.CV_32F, 0, 1)
+    w = 1.0 / (cv2.magnitude(gx, gy) + 1e-3)
+    v = finder._ring_votes(gx * w, gy * w, 8)
+    assert np.unravel_index(np.argmax(v), v.shape) == (20 - 8, 30 - 8)
+
+
+def test_skin_model_ramps_from_skin_to_interior():
+    skin = np.random.default_rng(1).normal((140, 172, 218), 3, (400, 3))
+    sm = SkinModel.fit({"skin": skin}, np.array([[20.0, 20, 20]]))
+    e = sm.interior(np.array([[140, 172, 218], [230, 235, 240], [20, 20, 20]], np.float32))
+    assert e[0] == 0.0 and e[1] == 1.0 and e[2] == 1.0
+    col = np.array([[[140, 172, 218]], [[230, 235, 240]]], np.float32)
+    assert sm.profile(col) == pytest.approx(list(e[:2]))
+
+
+@given(st.lists(st.floats(0.0, 1.0), min_size=0, max_size=30))
+def test_run_length_is_bounded_and_stops_at_a_gap(e):
+    r = _run(np.array(e, np.float32))
+    assert 0.0 <= r <= max(len(e) - 0.5, 0.0) + 1e-6
+    if len(e) >= 3 and e[1] < 0.5 and e[2] < 0.5:
+        assert r == pytest.approx(0.5 * e[0])
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dx=st.floats(-0.16, 0.16), dy=st.floats(-0.08, 0.08), gaze=st.floats(-0.05, 0.05))
+def test_pupils_found_wherever_the_prediction_lands(finder, dx, dy, gaze):
+    res, truth, _, _ = _find(finder, BASE.replace(gaze_x=gaze), offset=(dx, dy))
+    for e, side in zip(res.eyes, ("left", "right")):
+        assert math.hypot(e.x - truth[side]["pupil"][0], e.y - truth[side]["pupil"][1]) < 1.0

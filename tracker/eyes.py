@@ -1,0 +1,1042 @@
+"""The eye finder for real faces: iris centre, lids and brow of both eyes in an upright face crop.
+
+Works in the face frame of :class:`tracker.calibration.FaceFrame` (x along the eye line
+towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per eye:
+
+* **iris** — a dark disc of the calibrated radius. Candidates are scored at half
+  resolution by the darkness of a disc against the window's median grey, the soft Hough
+  vote of the grey gradients on a ring of that radius (a rim that points away from one
+  centre) and the normalised correlation with the calibrated iris picture (the iris and
+  the white beside it). Both eyes are searched together: gaze and a badly predicted crop
+  shift both irises alike, so the pair maximises the sum of both maps with a little slack
+  between the eyes, and eye corners, lash lines, brows or nostrils, which do not look
+  like that disc on both sides at once, lose. The best pair is refined at full resolution
+  (darkness × correlation, parabola through the peak).
+* **lids** — the eye's *interior* is what is far from this person's skin colour (a
+  Gaussian in YCrCb learned below, above and between the eyes at calibration) or much
+  darker than any of it: sclera, iris, pupil and lashes. The upper and lower lid
+  distances are the soft lengths of the interior runs up and down a strip of columns
+  through the iris; the ramp from skin to interior is centred half-way to the iris's and
+  the sclera's own colours, so a blurred edge is found where it is and colour that bleeds
+  past a lid (compressed video) does not count. The calibrated lash line is taken off the
+  upper run (the run ends on the lashes' top; the lid's margin is their bottom).
+* **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
+  the eye point moves from the iris to the middle of what is visible of the eye (the slit
+  between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
+  brow are then measured from there.
+* **brow** — the calibrated vertical cross-section of the brow slid along a strip of
+  columns above the eye point (normalised correlation, parabola refined).
+* **score** — "this is this person's eye": the geometric mean of the iris picture's
+  correlation at the iris and the best correlation of the calibrated eye picture (iris,
+  white, lids, corners) around it.
+
+All lengths are crop pixels; lid and brow distances are along up (−y) from the eye point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from tracker.brows import brow_centre, column_profile
+from tracker.pupils import parabola_offset
+
+FORMAT = 1
+
+# geometry, as fractions of the work ipd unless noted
+SEARCH_X, SEARCH_Y = 0.22, 0.12
+"""Half-size of the window the iris centre is searched in, around the predicted eye centre."""
+PRIOR = (0.2, 0.1)
+"""Spread (x, y) of the mild Gaussian preference for irises near the predicted eye centre."""
+PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
+"""How far one eye's iris may move against the other's when both are searched together
+(a crop predicted a few degrees or per cent off)."""
+FINE = 3
+RING_POINTS = 12
+"""Sample points on the ring the radial votes are gathered from."""
+"""Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
+LID_RANGE = 0.3
+"""How far the lid runs go up and down from the eye point."""
+LID_HW = 0.3
+"""Half-width of the lid strip, × the iris radius."""
+LASH_STEP = 0.05
+"""How far under the top of the upper run the lash line's bottom is looked for at calibration."""
+LASH_CONTRAST = 25.0
+"""Grey levels from the lash line to the white under it that make a lid margin."""
+CLOSING = (0.3, 0.7)
+"""Lid gaps (fractions of the calibrated one) over which the eye point moves from the middle
+of the slit (closed) to the iris (open); the eye counts as open above the middle."""
+SLIT_HW, SLIT_HH = 0.22, 0.1
+"""Half-size of the window a closed eye's slit is looked for in."""
+SOCKET_HW, SOCKET_HH = 0.3, 0.17
+"""Half-size of the stored eye picture used for the score."""
+SOCKET_SEARCH = (0.17, 0.05)
+"""How far (x, y) around the iris the eye picture is searched (gaze moves the iris in the eye)."""
+BROW_DOWN, BROW_UP = 0.15, 0.3
+"""Brow search range: this far below / above its calibrated height."""
+BROW_HW = 0.03
+"""Half-width of the strip of columns the brow's cross-section averages."""
+RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
+"""Plausible iris radii and the one used when none is measurable."""
+
+# colours
+NOT_SKIN_LO, NOT_SKIN_HI = 2.0, 5.0
+"""Mahalanobis distances from the skin colour where the interior ramp starts / ends, before
+:meth:`SkinModel.set_levels` moves it half-way to the interior's colours."""
+LEVEL_MAX = 10.0
+"""Highest centre of the interior ramp (Mahalanobis units)."""
+SKIN_FLOOR = (2.0, 1.0, 1.0)
+"""Spread (std, grey levels) added to the skin's Y, Cr, Cb: noise, shading."""
+DARK_RATIO = 0.6
+"""The iris's middle must be at most this fraction as bright as the darkest skin for "much
+darker than any skin" to count as interior."""
+BANDS = {"below": (0.15, 0.3), "above": (0.14, 0.3), "half": 0.15}
+"""Skin sample bands at calibration: below and above each iris (distances from it) and
+their half-width."""
+SKIN_SELECT = 2.0
+"""Mahalanobis units beyond the interior ramp's start that still count as skin when the
+light is measured."""
+
+# adaptation
+ADAPT_RATE = 0.05
+"""Weight of one confident frame in the adapted pictures."""
+ADAPT_EVERY = 4
+"""Only every this many confident frames are looked at (with that many times the rate)."""
+ADAPT_FLOOR = 0.5
+"""Share of the calibration pictures that always stays in the pictures used."""
+ADAPT_MIN_SCORE = 0.6
+"""Both eyes open and scoring at least this before a frame adapts the pictures."""
+GAIN_LIMITS = (0.5, 2.0)
+"""Range of the light's per-channel gain against calibration."""
+GAIN_DEAD_ZONE = 0.03
+"""A slow gain within this of 1 is not applied (shading and expressions, not the light)."""
+
+_YCC = np.array(
+    [[0.114, 0.587, 0.299], [-0.081312, -0.418688, 0.5], [0.5, -0.331264, -0.168736]], dtype=np.float64
+)
+"""YCrCb from BGR (OpenCV's conversion without its offsets, which cancel here)."""
+
+
+class EyeModelError(ValueError):
+    """The calibration crop cannot give an eye model, or a stored one is malformed (one line)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# small helpers
+
+
+def _even(v: float, lo: int = 2) -> int:
+    """``v`` rounded to an even integer, at least ``lo`` (a picture of side 4k+1 halves to 2k+1)."""
+    return max(2 * int(round(v / 2.0)), lo)
+
+
+def _even_picture(p: np.ndarray) -> np.ndarray:
+    """``p`` (odd sides) trimmed a pixel each side where a half-size is odd, so it halves to a
+    centred picture."""
+    h, w = p.shape[0] // 2, p.shape[1] // 2
+    return np.ascontiguousarray(p[h % 2 : p.shape[0] - h % 2, w % 2 : p.shape[1] - w % 2], dtype=np.float32)
+
+
+def iris_picture_size(r: float) -> tuple[int, int]:
+    """Half-width and half-height (even) of the iris picture for radius ``r``: the iris and the
+    white beside it."""
+    return _even(1.5 * r), _even(0.8 * r)
+
+
+def strip_profile(grey: np.ndarray, x: float, top: int, n: int, half_width: int) -> np.ndarray:
+    """Mean grey of rows ``top .. top+n-1`` over the columns within ``half_width`` of ``x``
+    (sub-pixel, bilinear; the border repeats outside the image), float32 ``(n,)``."""
+    g = grey if grey.dtype in (np.uint8, np.float32) else np.asarray(grey, dtype=np.float32)
+    patch = cv2.getRectSubPix(g, (2 * half_width + 1, n), (float(x), top + 0.5 * (n - 1)), patchType=cv2.CV_32F)
+    return cv2.reduce(patch, 1, cv2.REDUCE_AVG).ravel()
+
+
+def brow_half_width(work_ipd: float) -> int:
+    """Half-width (px) of the strip of columns the brow's cross-section averages."""
+    return max(int(round(BROW_HW * work_ipd)), 2)
+
+
+def subpixel_cut(grey: np.ndarray, cx: float, cy: float, hw: int, hh: int) -> np.ndarray:
+    """The ``(2hh+1, 2hw+1)`` patch of ``grey`` centred exactly on ``(cx, cy)`` (bilinear, float32)."""
+    M = np.float32([[1, 0, cx - hw], [0, 1, cy - hh]])
+    return cv2.warpAffine(
+        np.asarray(grey, dtype=np.float32), M, (2 * hw + 1, 2 * hh + 1),
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE,
+    )
+
+
+def disc_boxes(radius: float) -> tuple[tuple[int, int], ...]:
+    """Sizes ``(w, h)`` of centred boxes whose average weighs about like a disc of ``radius``:
+    a wide and a tall box and a square (box filters cost the same at any size)."""
+    a = max(int(round(radius)), 1)
+    b = max(int(round(0.5 * radius)), 0)
+    c = max(int(round(0.75 * radius)), 1)
+    return ((2 * a + 1, 2 * b + 1), (2 * b + 1, 2 * a + 1), (2 * c + 1, 2 * c + 1))
+
+
+def disc_mean(img: np.ndarray, boxes: tuple[tuple[int, int], ...]) -> np.ndarray:
+    """Mean of ``img`` over a disc (see :func:`disc_boxes`) at every pixel."""
+    out = cv2.boxFilter(img, -1, boxes[0])
+    for b in boxes[1:]:
+        out += cv2.boxFilter(img, -1, b)
+    return out * (1.0 / len(boxes))
+
+
+def cut(img: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
+    """``img[y0:y0+h, x0:x0+w]`` as float32, its border repeated where the box reaches outside."""
+    H, W = img.shape[:2]
+    if x0 < 0 or y0 < 0 or x0 + w > W or y0 + h > H:
+        a, b = max(x0, 0), max(y0, 0)
+        part = img[b : min(y0 + h, H), a : min(x0 + w, W)]
+        if part.size == 0:
+            return np.zeros((h, w) + img.shape[2:], np.float32)
+        part = cv2.copyMakeBorder(
+            np.ascontiguousarray(part), b - y0, max(y0 + h - H, 0), a - x0, max(x0 + w - W, 0), cv2.BORDER_REPLICATE
+        )
+        return part.astype(np.float32, copy=False)
+    return np.asarray(img[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
+
+
+def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) -> float:
+    """Iris radius (px) from the strongest dark-to-light steps left and right of ``centre``.
+
+    The limbus is the largest rise of brightness going outwards along the rows through the
+    centre (a catch-light only makes falls); the two sides are averaged, or the nearer is
+    taken when they disagree. Falls back to :data:`RADIUS_DEFAULT` × ``work_ipd``.
+    """
+    wi = work_ipd
+    h, w = grey.shape
+    x, y = int(round(centre[0])), int(round(centre[1]))
+    lo, hi = max(int(math.floor(RADIUS_LO * wi)), 2), int(math.ceil(RADIUS_HI * wi)) + 1
+    if not (hi + 1 <= x < w - hi - 1 and 2 <= y < h - 2):
+        return RADIUS_DEFAULT * wi
+    row = grey[y - 2 : y + 3].astype(np.float32).mean(0)
+    d = np.diff(np.convolve(row, [0.25, 0.5, 0.25], mode="same"))  # d[k]: step from k to k+1
+    found = []
+    for s in (d[x + lo : x + hi], -d[x - hi : x - lo][::-1]):
+        k = int(np.argmax(s))
+        if s[k] <= 4.0:
+            continue
+        off = parabola_offset(s[k - 1], s[k], s[k + 1]) if 0 < k < len(s) - 1 else 0.0
+        found.append(lo + k + off + 0.5)
+    if not found:
+        return RADIUS_DEFAULT * wi
+    r = float(np.mean(found)) if len(found) == 1 or abs(found[0] - found[1]) < 0.3 * max(found) else min(found)
+    return float(np.clip(r, RADIUS_LO * wi, RADIUS_HI * wi))
+
+
+def _run(e) -> float:
+    """Soft length of the interior run starting in the middle of ``e[0]``: half of sample 0,
+    then whole samples by their membership until two in a row are mostly not interior."""
+    v = e.tolist() if isinstance(e, np.ndarray) else list(e)
+    if not v:
+        return 0.0
+    total = 0.5 * v[0]
+    for j in range(1, len(v)):
+        if v[j] < 0.5 and (j + 1 == len(v) or v[j + 1] < 0.5):
+            break
+        total += v[j]
+    return total
+
+
+# ---------------------------------------------------------------------------------------------
+# colours: what is the eye's interior
+
+
+@dataclass
+class SkinModel:
+    """The skin around the eyes as a Gaussian in YCrCb (grey levels), and what is *not* skin.
+
+    :meth:`interior` ramps each pixel's Mahalanobis distance from the skin from ``lo`` (skin)
+    to ``hi`` (surely not skin); with ``dark`` > 0 a pixel darker than ``dark`` (grey levels,
+    ramp ``dark_ramp``) is interior too (a dark iris, the pupil, lashes).
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+    lo: float = NOT_SKIN_LO
+    hi: float = NOT_SKIN_HI
+    dark: float = -1.0
+    dark_ramp: float = 1.0
+
+    def __post_init__(self) -> None:
+        self.mean = np.asarray(self.mean, dtype=np.float64).reshape(3)
+        self.cov = np.asarray(self.cov, dtype=np.float64).reshape(3, 3)
+        try:
+            L = np.linalg.cholesky(np.linalg.inv(self.cov))  # z = L^T (ycc - mean) is whitened
+        except np.linalg.LinAlgError:
+            raise EyeModelError("eye model: the skin covariance is not positive definite") from None
+        W = np.concatenate([L.T @ _YCC, _YCC[:1]])  # rows: whitened coordinates, luminance
+        c = np.append(L.T @ self.mean, 0.0)
+        self._M = np.concatenate([W, -c[:, None]], axis=1).astype(np.float32)  # (4, 4) for cv2.transform
+        self._sum3 = np.array([[1.0, 1.0, 1.0, 0.0]], np.float32)
+
+    def _transform(self, bgr: np.ndarray, gain: np.ndarray | None) -> np.ndarray:
+        """Whitened coordinates and luminance ``(n, 1, 4)`` of BGR pixels (``gain`` applied)."""
+        M = self._M if gain is None else self._M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
+        return cv2.transform(np.asarray(bgr, dtype=np.float32).reshape(-1, 1, 3), M)
+
+    def _membership(self, z: np.ndarray) -> np.ndarray:
+        d = cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+        e = (d - self.lo) * (1.0 / (self.hi - self.lo))
+        if self.dark > 0:
+            e = np.maximum(e, (self.dark - z[:, 0, 3]) * (1.0 / self.dark_ramp) + 0.5)
+        np.maximum(e, 0.0, out=e)
+        return np.minimum(e, 1.0, out=e)
+
+    def distance(self, bgr: np.ndarray) -> np.ndarray:
+        """Mahalanobis distance of each pixel (``(..., 3)`` BGR) from the skin, ``(n,)``."""
+        z = self._transform(bgr, None)
+        return cv2.sqrt(cv2.transform(z * z, self._sum3)).ravel()
+
+    def interior(self, bgr: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
+        """Interior membership 0..1 (float32, leading shape of ``bgr``) of each pixel;
+        ``gain`` (3,) multiplies the pixels' BGR first (the light relative to calibration)."""
+        return self._membership(self._transform(bgr, gain)).reshape(np.shape(bgr)[:-1])
+
+    def profile(self, column: np.ndarray, gain: np.ndarray | None = None) -> list[float]:
+        """:meth:`interior` of a column of colours ``(n, 1, 3)`` float32, as a list (the lid runs)."""
+        return self._membership(self._transform(column, gain)).tolist()
+
+    @classmethod
+    def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
+        """The skin from named groups of BGR samples, pooled; a ``doubtful`` group whose own
+        Gaussian would call the ``iris`` pixels (BGR) skin caught lashes or the iris and is
+        left out."""
+        floor = np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2)
+        inner = np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC.T
+        kept = []
+        for name, px in groups.items():
+            ycc = np.asarray(px, dtype=np.float64).reshape(-1, 3) @ _YCC.T
+            if len(ycc) < 6:
+                continue
+            if name in doubtful and len(inner):
+                dv = inner - ycc.mean(0)
+                ic = np.linalg.inv(np.cov(ycc.T) + floor)
+                if np.median(np.sqrt(np.einsum("ni,ij,nj->n", dv, ic, dv))) < NOT_SKIN_HI + 1.0:
+                    continue
+            kept.append(ycc)
+        if not kept:
+            raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
+        ycc = np.concatenate(kept)
+        return cls(ycc.mean(0), np.cov(ycc.T) + floor)
+
+    def set_levels(self, parts: list[np.ndarray]) -> None:
+        """Centre the interior ramp half-way between the skin and the nearer of the interior's
+        ``parts`` (BGR samples: the iris ring, the sclera): a blurred lid edge crosses half-way
+        exactly at the edge, and colour that bleeds past it stays on the skin side."""
+        ds = [float(np.median(self.distance(p))) for p in parts if len(p) >= 3]
+        if ds:
+            mid = float(np.clip(0.5 * min(ds), NOT_SKIN_LO + 1.5, LEVEL_MAX))
+            self.lo, self.hi = mid - 1.5, mid + 1.5
+
+    def set_dark(self, skin: list[np.ndarray], iris: np.ndarray) -> None:
+        """Count as interior what is much darker than any skin: half-way between the iris's
+        middle and the darkest skin (10th percentile of each group), when the iris is at most
+        :data:`DARK_RATIO` as bright."""
+        yi = float(np.median(np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC[0]))
+        ys = min(float(np.percentile(np.asarray(g, dtype=np.float64).reshape(-1, 3) @ _YCC[0], 10)) for g in skin if len(g))
+        if yi <= DARK_RATIO * ys:
+            self.dark, self.dark_ramp = yi + 0.5 * (ys - yi), max(0.25 * (ys - yi), 1.0)
+
+    def to_dict(self) -> dict:
+        return {
+            "mean": self.mean.round(4).tolist(), "cov": self.cov.round(4).tolist(),
+            "levels": [self.lo, self.hi], "dark": [self.dark, self.dark_ramp],
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SkinModel":
+        lo, hi = (float(v) for v in d["levels"])
+        dark, ramp = (float(v) for v in d["dark"])
+        if not hi > lo or not ramp > 0:
+            raise EyeModelError("eye model: skin levels must rise")
+        return cls(np.asarray(d["mean"]), np.asarray(d["cov"]), lo, hi, dark, ramp)
+
+
+# ---------------------------------------------------------------------------------------------
+# the model
+
+
+@dataclass
+class EyeModel:
+    """What the eye finder learned from the calibration crop (crop px at ``work_ipd``).
+
+    Per eye (lists of two, image-left first): ``radius`` the iris radius; ``iris_pictures``
+    grey picture of the iris and the white beside it (iris at its centre, sides 4k+1);
+    ``eye_pictures`` grey picture of the whole eye (the score); ``brow_profiles`` /
+    ``brow_centres`` / ``brow_heights`` the brow's cross-section through the iris, the index
+    of its middle line and its height above the iris; ``lid_open`` the calibrated lid gap;
+    ``lash`` the thickness of the upper lash line where it lies on the white or a light iris.
+    ``skin`` what is skin around the eyes; ``skin_bgr`` the median BGR of the skin around
+    them (the light is followed on it, see :meth:`EyeFinder.skin_colour`).
+    """
+
+    work_ipd: float
+    radius: list[float]
+    iris_pictures: list[np.ndarray]
+    eye_pictures: list[np.ndarray]
+    brow_profiles: list[np.ndarray]
+    brow_centres: list[float]
+    brow_heights: list[float]
+    lid_open: list[float]
+    skin: SkinModel
+    skin_bgr: np.ndarray
+    lash: list[float] = field(default_factory=lambda: [0.0, 0.0])
+
+    IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
+    """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
+
+    def images(self) -> dict[str, np.ndarray]:
+        """The pictures to save beside the calibration (uint8 grey), by name."""
+        pics = self.iris_pictures + self.eye_pictures
+        return {k: np.clip(np.rint(p), 0, 255).astype(np.uint8) for k, p in zip(self.IMAGE_NAMES, pics)}
+
+    def to_dict(self) -> dict:
+        """A JSON-able description (the pictures are in :meth:`images`)."""
+        return {
+            "format": FORMAT,
+            "work_ipd": self.work_ipd,
+            "radius": [float(v) for v in self.radius],
+            "images": list(self.IMAGE_NAMES),
+            "brow_profiles": [np.asarray(p, dtype=float).round(3).tolist() for p in self.brow_profiles],
+            "brow_centres": [float(v) for v in self.brow_centres],
+            "brow_heights": [float(v) for v in self.brow_heights],
+            "lid_open": [float(v) for v in self.lid_open],
+            "lash": [float(v) for v in self.lash],
+            "skin": self.skin.to_dict(),
+            "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict, images: dict[str, np.ndarray]) -> "EyeModel":
+        """Rebuild from :meth:`to_dict` and the pictures of :meth:`images`; :class:`EyeModelError`
+        (one line) if anything is missing or malformed."""
+        try:
+            if not isinstance(d, dict) or d.get("format") != FORMAT:
+                raise EyeModelError(f"eye model: unknown format {d.get('format') if isinstance(d, dict) else d!r}")
+            pics = []
+            for k in cls.IMAGE_NAMES:
+                p = images.get(k)
+                if p is None:
+                    raise EyeModelError(f"eye model: picture {k!r} is missing")
+                p = np.asarray(p, dtype=np.float32)
+                if p.ndim != 2 or p.shape[0] % 2 == 0 or p.shape[1] % 2 == 0 or min(p.shape) < 3:
+                    raise EyeModelError(f"eye model: picture {k!r} must be grey with odd sides, not {p.shape}")
+                pics.append(p)
+            m = cls(
+                work_ipd=float(d["work_ipd"]),
+                radius=[float(v) for v in d["radius"]],
+                iris_pictures=pics[:2],
+                eye_pictures=pics[2:],
+                brow_profiles=[np.asarray(p, dtype=np.float32).reshape(-1) for p in d["brow_profiles"]],
+                brow_centres=[float(v) for v in d["brow_centres"]],
+                brow_heights=[float(v) for v in d["brow_heights"]],
+                lid_open=[float(v) for v in d["lid_open"]],
+                lash=[float(v) for v in d["lash"]],
+                skin=SkinModel.from_dict(d["skin"]),
+                skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
+            )
+        except EyeModelError:
+            raise
+        except (KeyError, TypeError, ValueError, AttributeError) as e:
+            raise EyeModelError(f"eye model: malformed ({type(e).__name__}: {e})") from None
+        lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash)
+        if any(len(v) != 2 for v in lists) or not m.work_ipd > 0 or not all(r > 0 for r in m.radius):
+            raise EyeModelError("eye model: every per-eye entry needs two values and the sizes must be positive")
+        return m
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass
+class EyeObservation:
+    """One eye in one frame (crop px).
+
+    ``x, y`` the eye point: the iris centre when the eye is open, the middle of the slit
+    between the lids when it is closed; ``score`` 0..1 how much this looks like the
+    calibrated eye; ``open`` whether the iris shows; ``upper`` / ``lower`` the lids'
+    distances above / below the eye point; ``brow`` the brow's middle line above the eye
+    point; ``iris`` where the iris search ended (also when closed) and ``radius`` its radius;
+    ``iris_match`` the iris picture's correlation there, ``brow_match`` the brow's.
+    """
+
+    x: float
+    y: float
+    score: float
+    open: bool
+    upper: float
+    lower: float
+    brow: float
+    iris: tuple[float, float]
+    radius: float
+    iris_match: float = 0.0
+    brow_match: float = 0.0
+
+    def points(self) -> dict[str, tuple[float, float]]:
+        """Overlay points (crop px): the eye point, both lids and the brow on the line through it."""
+        return {
+            "eye": (self.x, self.y),
+            "upper_lid": (self.x, self.y - self.upper),
+            "lower_lid": (self.x, self.y + self.lower),
+            "brow": (self.x, self.y - self.brow),
+        }
+
+
+@dataclass
+class EyeResult:
+    """Both eyes, image-left first."""
+
+    eyes: tuple[EyeObservation, EyeObservation]
+
+    @property
+    def score(self) -> float:
+        """The lower of the two eye scores."""
+        return min(e.score for e in self.eyes)
+
+
+# ---------------------------------------------------------------------------------------------
+# learning
+
+
+def calibration_crop(work_ipd: float) -> tuple[int, int, int, int]:
+    """A face-frame rectangle ``(x0, y0, w, h)`` (eye centres at ``(±work_ipd/2, 0)``) that holds
+    everything :func:`learn_eyes` looks at while the brows are within one work ipd above the
+    eyes; any larger crop works as well."""
+    wi = work_ipd
+    return (int(math.floor(-1.05 * wi)), int(math.floor(-1.2 * wi)), int(math.ceil(2.1 * wi)), int(math.ceil(1.7 * wi)))
+
+
+def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float):
+    """BGR samples of the calibration crop: skin groups (a band below each eye, a band above
+    it up to the brow's lower edge, the bridge between the eyes), the irises' middles (no
+    skin may claim them), a ring of each iris around the pupil and the sclera beside it."""
+    h, w = crop.shape[:2]
+    grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    below, above, middle, ring, sclera = [], [], [], [], []
+    hx = max(int(round(BANDS["half"] * wi)), 2)
+    for (px, py), r, hb in zip(pupils, radius, brow_heights):
+        xi, yi = int(round(px)), int(round(py))
+        x0, x1 = max(xi - hx, 0), min(xi + hx + 1, w)
+        b0, b1 = int(round(py + BANDS["below"][0] * wi)), int(round(py + BANDS["below"][1] * wi)) + 1
+        below.append(crop[max(b0, 0) : min(b1, h), x0:x1].reshape(-1, 3))
+        a1 = int(round(py - BANDS["above"][0] * wi))
+        a0 = min(int(round(py - min(BANDS["above"][1] * wi, hb - 0.08 * wi))), a1 - 2)
+        above.append(crop[max(a0, 0) : max(a1, 0), x0:x1].reshape(-1, 3))
+        k = max(int(round(0.4 * r)), 1)
+        middle.append(crop[yi - k : yi + k + 1, xi - k : xi + k + 1].reshape(-1, 3))
+        yy, xx = np.mgrid[yi - k : yi + k + 1, xi - int(r) : xi + int(r) + 1]
+        rr = np.hypot(xx - px, yy - py)
+        on = (rr >= 0.55 * r) & (rr <= 0.85 * r)
+        ring.append(crop[yy[on], xx[on]])
+        sy = max(int(round(0.2 * r)), 1)
+        sa, sb = int(round(1.4 * r)), int(round(1.4 * r + 0.08 * wi))
+        level = float(grey[yi - k : yi + k + 1, xi - k : xi + k + 1].mean()) + 20.0
+        for c0, c1 in ((xi - sb, xi - sa), (xi + sa, xi + sb)):
+            c0, c1 = max(c0, 0), min(c1 + 1, w)
+            pix = crop[yi - sy : yi + sy + 1, c0:c1].reshape(-1, 3)
+            sclera.append(pix[grey[yi - sy : yi + sy + 1, c0:c1].ravel() > level])
+    mx, my = 0.5 * (pupils[0] + pupils[1])
+    bx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
+    bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - bx, 0) : int(round(mx)) + bx + 1].reshape(-1, 3)
+    skin = {"below the eyes": np.concatenate(below), "above the eyes": np.concatenate(above), "between the eyes": bridge}
+    return skin, np.concatenate(middle), np.concatenate(ring), np.concatenate(sclera)
+
+
+def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_crop, work_ipd: float) -> EyeModel:
+    """Learn an :class:`EyeModel` from the calibration frame's face crop.
+
+    ``pupils_crop`` (2, 2) the refined iris centres and ``brows_crop`` (2, 2) the brow clicks,
+    crop px, image-left first; the crop (uint8 BGR and its grey) is in the face frame of
+    ``work_ipd`` and should hold :func:`calibration_crop`. Raises :class:`EyeModelError` (one
+    line) only for unusable input: not a BGR crop, eyes at its edge, no skin around them.
+    """
+    crop = np.asarray(crop_bgr)
+    if crop.ndim != 3 or crop.shape[2] != 3 or crop.dtype != np.uint8:
+        raise EyeModelError("eye model: the calibration crop must be uint8 BGR")
+    grey = np.asarray(crop_grey, dtype=np.float32)
+    if grey.shape != crop.shape[:2]:
+        raise EyeModelError("eye model: the grey crop must match the colour crop")
+    wi = float(work_ipd)
+    if not (4.0 <= wi <= 400.0):
+        raise EyeModelError(f"eye model: work ipd {wi:g} px is not usable")
+    pupils = np.asarray(pupils_crop, dtype=np.float64).reshape(2, 2)
+    brows = np.asarray(brows_crop, dtype=np.float64).reshape(2, 2)
+    h, w = grey.shape
+    mx, my = int(math.ceil((SOCKET_HW + 0.05) * wi)), int(math.ceil((LID_RANGE + 0.05) * wi))
+    for p in pupils:
+        if not (mx <= p[0] < w - mx and my <= p[1] < h - my):
+            raise EyeModelError(f"eye model: an eye ({p[0]:.0f}, {p[1]:.0f}) is too close to the crop's edge")
+
+    radius = [iris_radius(grey, (float(p[0]), float(p[1])), wi) for p in pupils]
+    iris_pics = [subpixel_cut(grey, p[0], p[1], *iris_picture_size(r)) for p, r in zip(pupils, radius)]
+    eye_pics = [subpixel_cut(grey, p[0], p[1], _even(SOCKET_HW * wi), _even(SOCKET_HH * wi)) for p in pupils]
+
+    # brows: the cross-section through each iris, centred on the brow's middle line
+    brow_profiles, brow_centres, brow_heights = [], [], []
+    half = max(int(round(0.13 * wi)), 4)
+    for (px, py), b in zip(pupils, brows):
+        top = int(math.floor(py - 1.1 * wi))
+        prof = column_profile(grey, px, top, int(py), 2)
+        guess = min(max(int(round(b[1] - top)), 0), len(prof) - 1)
+        height = py - (top + brow_centre(prof, guess, max(int(round(0.08 * wi)), 3)))
+        if not (0.08 * wi < height < 1.0 * wi):
+            height = float(np.clip(py - b[1], 0.15 * wi, 0.9 * wi))
+        cy_b = py - height
+        start = int(math.floor(cy_b)) - half
+        brow_profiles.append(strip_profile(grey, px, start, 2 * half + 1, brow_half_width(wi)))
+        brow_centres.append(half + (cy_b - math.floor(cy_b)))
+        brow_heights.append(float(height))
+
+    groups, middle, ring, sclera = _colour_samples(crop, pupils, radius, brow_heights, wi)
+    skin = SkinModel.fit(groups, middle, doubtful=("above the eyes",))
+    skin.set_levels([ring, sclera])
+    skin.set_dark(list(groups.values()), middle)  # darker than every skin sample, even a shadowed lid
+    model = EyeModel(
+        work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
+        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
+        skin_bgr=np.ones(3),
+    )
+    f = EyeFinder(model, wi)
+    ref = f.skin_colour(crop, pupils)
+    model.skin_bgr = ref if ref is not None else np.median(groups["below the eyes"], axis=0).astype(np.float64)
+    # the lash line and the lid gap, measured the way the finder measures them
+    for i, p in enumerate(pupils):
+        at = (float(p[0]), float(p[1]))
+        model.lash[i] = f.lash_line(crop, i, at)
+        up, down = f.lids(crop, i, at)
+        model.lid_open[i] = max(up + down, 0.05 * wi)
+    return model
+
+
+# ---------------------------------------------------------------------------------------------
+# finding
+
+
+class EyeFinder:
+    """Find both eyes in a face crop (see the module docstring).
+
+    ``rect`` is the face-frame rectangle ``(x0, y0, w, h)`` (eye centres at ``(±work_ipd/2,
+    0)``) whose crop holds everything :meth:`find` looks at when the eyes are where
+    predicted; a larger crop works too. ``search`` (x, y) is the half-size of the iris
+    search window and ``prior`` the spread of the preference for irises near the predicted
+    centres, both × ``work_ipd``; ``darkness`` the power of the disc-darkness term (0: off).
+    """
+
+    def __init__(
+        self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y),
+        prior: tuple[float, float] = PRIOR, darkness: float = 1.0,
+    ):
+        self.model = model
+        self.wi = wi = float(work_ipd)
+        self.dark_power = float(darkness)
+        if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
+            raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
+        self.radius = [float(r) for r in model.radius]
+        # iris search: a half-resolution strip for both eyes, then full resolution near the peak
+        self.sx, self.sy = _even(search[0] * wi), _even(search[1] * wi)
+        self.slack = (max(int(round(PAIR_SLACK_X * wi / 2)), 1), max(int(round(PAIR_SLACK_Y * wi / 2)), 1))
+        self._dilate = np.ones((2 * self.slack[1] + 1, 2 * self.slack[0] + 1), np.uint8)
+        self._calib_iris = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.iris_pictures]
+        self._calib_eye = [_even_picture(np.asarray(p, dtype=np.float32)) for p in model.eye_pictures]
+        self._adapted_iris = [p.copy() for p in self._calib_iris]
+        self._adapted_eye = [p.copy() for p in self._calib_eye]
+        self._set_pictures()
+        self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
+        self._gain_slow = np.ones(3)
+        self._adapt_count = 0
+        rm = 0.5 * (self.radius[0] + self.radius[1])
+        self._boxes_half = disc_boxes(0.375 * rm)
+        self._boxes = [disc_boxes(0.75 * r) for r in self.radius]
+        # the ring as a few sample points: offset (half px) and outward direction / count / 3
+        ang = np.arange(RING_POINTS) * (2.0 * math.pi / RING_POINTS)
+        self._ring_points = [
+            (int(round(0.5 * rm * math.cos(a))), int(round(0.5 * rm * math.sin(a))),
+             math.cos(a) / (3.0 * RING_POINTS), math.sin(a) / (3.0 * RING_POINTS))
+            for a in ang
+        ]
+        self.pad = max(
+            _even(max(1.4 * r + 4, t.shape[1] // 2 + 2, t.shape[0] // 2 + 2)) for r, t in zip(self.radius, self._iris)
+        )
+        u = np.arange(-(self.sx // 2), self.sx // 2 + 1) * (2.0 / (prior[0] * wi))
+        v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
+        self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
+        # lids, brows, score, light
+        self.lid_range = int(math.ceil(LID_RANGE * wi))
+        self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
+        self.skin = model.skin
+        self._luma = _YCC[:1].astype(np.float32).reshape(1, 3)
+        self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
+        self.brow_hi = [h + BROW_UP * wi for h in model.brow_heights]
+        self._brow_hw = brow_half_width(wi)
+        self._brow_z = [np.asarray(p, dtype=np.float32).reshape(-1, 1) for p in model.brow_profiles]
+        self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
+        self._skin_step = max(int(round(wi / 20.0)), 1)
+        # the crop this needs (face coordinates)
+        half_w = 0.5 * wi + max(self.sx + self.pad, SOCKET_HW * wi + SOCKET_SEARCH[0] * wi + self.sx, 0.25 * wi + self.sx) + 2
+        top = max(
+            max(self.brow_hi) + max(len(p) for p in model.brow_profiles),
+            self.lid_range, SOCKET_HH * wi + SOCKET_SEARCH[1] * wi,
+        ) + self.sy + 3
+        bottom = max(self.lid_range, SOCKET_HH * wi + SOCKET_SEARCH[1] * wi, 0.35 * wi) + self.sy + 3
+        top, bottom = max(top, self.sy + self.pad + 2), max(bottom, self.sy + self.pad + 2)
+        self.rect = (int(math.floor(-half_w)), int(math.floor(-top)), int(math.ceil(2 * half_w)), int(math.ceil(top + bottom)))
+
+    def _set_pictures(self) -> None:
+        """The pictures in use: the adapted ones with :data:`ADAPT_FLOOR` of the calibration's."""
+        f = ADAPT_FLOOR
+        self._iris = [f * c + (1.0 - f) * a for c, a in zip(self._calib_iris, self._adapted_iris)]
+        self._eye = [f * c + (1.0 - f) * a for c, a in zip(self._calib_eye, self._adapted_eye)]
+        self._iris_half = [cv2.pyrDown(t) for t in self._iris]
+        self._eye_half = [cv2.pyrDown(t) for t in self._eye]
+
+    # ------------------------------------------------------------------ irises
+    def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
+        """Half-resolution iris score maps of both eyes' candidate windows and the crop px of
+        each map's (0, 0): disc darkness against the strip's median grey × (1 + ring votes) ×
+        (1 + correlation with the eye's iris picture) × the prior around the prediction."""
+        p = self.pad
+        cs = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres]
+        x0, y0 = min(c[0] for c in cs) - self.sx - p, min(c[1] for c in cs) - self.sy - p
+        x1, y1 = max(c[0] for c in cs) + self.sx + p, max(c[1] for c in cs) + self.sy + p
+        strip = cut(grey, x0, y0, x1 - x0 + 2, y1 - y0 + 2)
+        half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        ph = p // 2
+        sub = half[::2, ::2].ravel()
+        k = sub.size // 2
+        level = max(float(np.partition(sub, k)[k]), 8.0)
+        dark = np.maximum(level - disc_mean(half, self._boxes_half), 0.0) * (1.0 / level)
+        if self.dark_power != 1.0:
+            dark = dark ** self.dark_power
+        # ring votes: unit gradients (weighted by strength against the median, at most 3×)
+        gx = cv2.Sobel(half, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(half, cv2.CV_32F, 0, 1, ksize=3)
+        mag = cv2.magnitude(gx, gy)
+        m = mag.size // 2
+        t = max(float(np.partition(mag.ravel(), m)[m]), 1.0)
+        wgt = np.minimum(mag * (1.0 / t), 3.0) / (mag + 1e-3)
+        votes = self._ring_votes(gx * wgt, gy * wgt, ph)
+        maps, origins = [], []
+        sxh, syh = self.sx // 2, self.sy // 2
+        ws, hs = 2 * sxh + 1, 2 * syh + 1
+        for i, (cx, cy) in enumerate(cs):
+            u0, v0 = (cx - x0) // 2 - sxh - ph, (cy - y0) // 2 - syh - ph  # window in the inner part
+            tpl = self._iris_half[i]
+            th, tw = tpl.shape[0] // 2, tpl.shape[1] // 2
+            ncc = cv2.matchTemplate(half[ph + v0 - th : ph + v0 + hs + th, ph + u0 - tw : ph + u0 + ws + tw], tpl, cv2.TM_CCOEFF_NORMED)
+            sc = dark[ph + v0 : ph + v0 + hs, ph + u0 : ph + u0 + ws] * (1.0 + votes[v0 : v0 + hs, u0 : u0 + ws])
+            maps.append(sc * (1.0 + np.maximum(ncc, 0.0)) * self._prior)
+            # half px k is the mean of the strip's full px 2k and 2k+1
+            origins.append((x0 + 2 * (ph + u0) + 0.5, y0 + 2 * (ph + v0) + 0.5))
+        return maps, origins
+
+    def _ring_votes(self, gx: np.ndarray, gy: np.ndarray, p: int) -> np.ndarray:
+        """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
+        gradients at the ring's sample points point away from it (about 0..1)."""
+        H, W = gx.shape
+        out = np.zeros((H - 2 * p, W - 2 * p), np.float32)
+        for dx, dy, cx, cy in self._ring_points:
+            out += cx * gx[p + dy : H - p + dy, p + dx : W - p + dx]
+            out += cy * gy[p + dy : H - p + dy, p + dx : W - p + dx]
+        return np.maximum(out, 0.0)
+
+    def _fine(self, grey: np.ndarray, i: int, x: int, y: int) -> tuple[float, float, float]:
+        """Sub-pixel iris centre near full-res ``(x, y)``: disc darkness × (1 + correlation with
+        the iris picture) within :data:`FINE` px, a parabola through the best; also the
+        correlation there."""
+        t = self._iris[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        b = max(max(bx, by) for bx, by in self._boxes[i]) // 2
+        m = max(th, tw, b)
+        n = 2 * FINE + 1
+        win = cut(grey, x - FINE - m, y - FINE - m, n + 2 * m, n + 2 * m)
+        ncc = cv2.matchTemplate(win[m - th : m + n + th, m - tw : m + n + tw], t, cv2.TM_CCOEFF_NORMED)
+        D = disc_mean(win, self._boxes[i])[m : m + n, m : m + n]
+        level = max(float(np.max(win[m : m + n, m : m + n])), 8.0)
+        s = np.maximum(level - D, 0.0)
+        if self.dark_power != 1.0:
+            s = s ** self.dark_power
+        s = s * (1.0 + np.maximum(ncc, 0.0))
+        _, _, _, (kx, ky) = cv2.minMaxLoc(s)
+        fx = parabola_offset(s[ky, kx - 1], s[ky, kx], s[ky, kx + 1]) if 0 < kx < n - 1 else 0.0
+        fy = parabola_offset(s[ky - 1, kx], s[ky, kx], s[ky + 1, kx]) if 0 < ky < n - 1 else 0.0
+        return x - FINE + kx + fx, y - FINE + ky + fy, float(ncc[ky, kx])
+
+    def locate_irises(self, grey: np.ndarray, centres) -> list[tuple[float, float, float]]:
+        """Both iris centres (crop px, sub-pixel) and their iris-picture correlations near the
+        predicted eye ``centres`` (2, 2): the best pair of the two coarse maps, each eye free
+        to move by the slack against the other, each then refined at full resolution."""
+        maps, origins = self._coarse_maps(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
+        J = cv2.dilate(maps[0], self._dilate) + cv2.dilate(maps[1], self._dilate)
+        _, _, _, (jx, jy) = cv2.minMaxLoc(J)
+        sx, sy = self.slack
+        out = []
+        for i, (m, (ox, oy)) in enumerate(zip(maps, origins)):
+            ya, xa = max(jy - sy, 0), max(jx - sx, 0)
+            sub = m[ya : jy + sy + 1, xa : jx + sx + 1]
+            _, _, _, (kx, ky) = cv2.minMaxLoc(sub)
+            out.append(self._fine(grey, i, int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
+        return out
+
+    # ------------------------------------------------------------------ lids
+    def _strip(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
+        """The lid strip of eye ``i`` through ``at`` (rows × columns × BGR) and the row of ``at``."""
+        h, w = crop.shape[:2]
+        hw, R = self.lid_hw[i], self.lid_range
+        xi = min(max(int(round(at[0])), hw), w - 1 - hw)
+        yi = min(max(int(round(at[1])), 0), h - 1)
+        y0 = max(yi - R, 0)
+        return crop[y0 : min(yi + R + 1, h), xi - hw : xi + hw + 1], yi - y0
+
+    def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None) -> tuple[float, float]:
+        """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
+        of the interior runs up and down the strip through ``at``, each row classified by its
+        mean colour (the columns average the noise away), the lash line off the upper one."""
+        strip, c = self._strip(crop, i, at)
+        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F), gain)
+        dy = round(at[1]) - at[1]
+        return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+
+    def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> float:
+        """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
+        white above the iris: from the run's top to the strongest step from light (below) to
+        dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
+        step (the lashes on a dark iris cannot be told from it)."""
+        strip, c = self._strip(crop, i, at)
+        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F))
+        up = _run(e[c::-1])
+        lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
+        k = int(c - math.floor(up))
+        # the step lies above the iris (on the white) and under a thin line
+        lo = max(k, 1)
+        hi = min(k + int(math.ceil(LASH_STEP * self.wi)), c - int(math.ceil(0.9 * self.radius[i])))
+        if hi <= lo:
+            return 0.0
+        steps = lum[lo + 1 : hi + 1] - lum[lo:hi]
+        j = int(np.argmax(steps))
+        return float(max(up - (c - (lo + j + 0.5)), 0.0)) if steps[j] >= LASH_CONTRAST else 0.0
+
+    def _slit(self, crop: np.ndarray, at: tuple[float, float], gain) -> tuple[float, float]:
+        """Centroid of the interior around ``at`` (a closed eye: the slit between the lids), twice."""
+        h, w = crop.shape[:2]
+        hx, hy = int(round(SLIT_HW * self.wi)), int(round(SLIT_HH * self.wi))
+        x, y = at
+        for _ in range(2):
+            xi, yi = int(round(x)), int(round(y))
+            x0, x1, y0, y1 = max(xi - hx, 0), min(xi + hx + 1, w), max(yi - hy, 0), min(yi + hy + 1, h)
+            e = self.skin.interior(crop[y0:y1:2, x0:x1:2], gain)  # every other pixel is plenty
+            tot = float(e.sum())
+            if tot < 0.25:
+                break
+            x = x0 + 2.0 * float(e.sum(axis=0) @ np.arange(e.shape[1])) / tot
+            y = y0 + 2.0 * float(e.sum(axis=1) @ np.arange(e.shape[0])) / tot
+        return x, y
+
+    # ------------------------------------------------------------------ brow, score, light
+    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
+        """Brow height above ``at`` (crop px) and its correlation: the calibrated cross-section
+        slid along a strip of columns above ``at``, refined by a parabola."""
+        px, py = at
+        t = self._brow_z[i]
+        n = len(t)
+        c = self.model.brow_centres[i]
+        top = int(math.floor(py - self.brow_hi[i] - c)) - 1
+        bot = int(math.ceil(py - self.brow_lo[i] - c)) + n + 1
+        if bot - top < n + 2:
+            return self.model.brow_heights[i], 0.0
+        prof = strip_profile(grey, px, top, bot - top, self._brow_hw)
+        score = cv2.matchTemplate(prof.reshape(-1, 1), t, cv2.TM_CCOEFF_NORMED).ravel()
+        _, _, _, (_, k) = cv2.minMaxLoc(score.reshape(-1, 1))
+        d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
+        return float(py - (top + k + d + c)), float(score[k])
+
+    def _eye_match(self, grey: np.ndarray, at: tuple[float, float], i: int) -> float:
+        """Best correlation (0..1) of the eye picture around ``at`` at half resolution: as far
+        sideways as a gaze moves the iris in the eye, a little up and down."""
+        t = self._eye_half[i]
+        th, tw = t.shape[0] // 2, t.shape[1] // 2
+        sx, sy = self._socket_search
+        x, y = 2 * int(round(at[0] / 2)), 2 * int(round(at[1] / 2))
+        w, h = 2 * (tw + sx) + 2, 2 * (th + sy) + 2
+        half = cv2.resize(cut(grey, x - w // 2, y - h // 2, w, h), (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        _, best, _, _ = cv2.minMaxLoc(cv2.matchTemplate(half, t, cv2.TM_CCOEFF_NORMED))
+        return min(max(best, 0.0), 1.0)
+
+    def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
+        """Median BGR of what looks like skin around both eyes (a sparse grid over the brows,
+        lids, bridge and cheeks; a pixel counts when within :data:`SKIN_SELECT` of the start
+        of the skin model's interior ramp under ``gain``), or None when too little does."""
+        c = np.asarray(centres, dtype=np.float64).reshape(2, 2)
+        h, w = crop.shape[:2]
+        x0, x1 = int(max(c[:, 0].min() - 0.45 * self.wi, 0)), int(min(c[:, 0].max() + 0.45 * self.wi, w))
+        y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
+        px = np.ascontiguousarray(crop[y0:y1:self._skin_step, x0:x1:self._skin_step]).reshape(-1, 3)
+        if len(px) < 16:
+            return None
+        g = np.ones(3, np.float32) if gain is None else np.asarray(gain, dtype=np.float32)
+        near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
+        if near.sum() < max(16, 0.1 * len(px)):
+            return None
+        return np.median(px[near], axis=0).astype(np.float64)
+
+    def measure_gain(self, crop: np.ndarray, centres) -> np.ndarray | None:
+        """This frame's per-channel gain from the skin around the eyes (:meth:`skin_colour`,
+        found with the gain so far) to its calibrated colour, or None without enough skin."""
+        now = self.skin_colour(crop, centres, self._gain)
+        if now is None:
+            return None
+        return np.clip(self.model.skin_bgr / np.maximum(now, 1.0), GAIN_LIMITS[0], GAIN_LIMITS[1])
+
+    # ------------------------------------------------------------------ main entry
+    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
+        """Both eyes in a face crop (uint8 BGR and its grey, uint8 or float32) around the
+        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
+        centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
+        if not np.all(np.isfinite(centres)):
+            raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
+        found = self.locate_irises(crop_grey, centres)
+        gain = self._gain
+        eyes = []
+        for i in range(2):
+            iris = found[i][:2]
+            up, down = self.lids(crop_bgr, i, iris, gain)
+            lo, hi = CLOSING
+            w = min(max(((up + down) / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
+            pt = iris
+            if w < 1.0:
+                sx, sy = self._slit(crop_bgr, iris, gain)
+                pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
+                up, down = self.lids(crop_bgr, i, pt, gain)
+            is_open = w >= 0.5
+            match = max(found[i][2], 0.0)
+            score = math.sqrt(self._eye_match(crop_grey, pt, i) * match)
+            brow, brow_match = self._brow(crop_grey, pt, i)
+            eyes.append(EyeObservation(
+                x=float(pt[0]), y=float(pt[1]), score=score, open=bool(is_open), upper=float(up), lower=float(down),
+                brow=brow, iris=(float(iris[0]), float(iris[1])), radius=self.radius[i], iris_match=float(found[i][2]),
+                brow_match=brow_match,
+            ))
+        return EyeResult((eyes[0], eyes[1]))
+
+    # ------------------------------------------------------------------ adaptation
+    def adapt(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, result: EyeResult, rate: float | None = None) -> bool:
+        """Follow the light and the face slowly, from a frame :meth:`find` was confident about.
+
+        When both eyes are open and score at least :data:`ADAPT_MIN_SCORE`, ``rate`` per frame
+        (default :data:`ADAPT_RATE`; applied on every :data:`ADAPT_EVERY`-th such frame) goes
+        into the adapted iris and eye pictures and into the light's gain (measured on the skin
+        around the eyes). The pictures used keep :data:`ADAPT_FLOOR` of the
+        calibration's and the gain stays within :data:`GAIN_LIMITS`, so drift cannot take them
+        further. Returns whether the frame was used.
+        """
+        if not all(e.open and e.score >= ADAPT_MIN_SCORE for e in result.eyes):
+            return False
+        self._adapt_count += 1
+        if self._adapt_count % ADAPT_EVERY:
+            return True
+        # every ADAPT_EVERY-th confident frame counts for all of them (the cost is shared)
+        rate = min((ADAPT_RATE if rate is None else float(rate)) * ADAPT_EVERY, 1.0)
+        grey = np.asarray(crop_grey, dtype=np.float32)
+        for i, e in enumerate(result.eyes):
+            for pics, calib in ((self._adapted_iris, self._calib_iris), (self._adapted_eye, self._calib_eye)):
+                h, w = calib[i].shape[0] // 2, calib[i].shape[1] // 2
+                pics[i] = (1.0 - rate) * pics[i] + rate * subpixel_cut(grey, e.x, e.y, w, h)
+        self._set_pictures()
+        centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
+        g = self.measure_gain(crop_bgr, centres)
+        if g is not None:
+            self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
+            # shading and expressions move it by several per cent; only a change of the
+            # light itself (beyond the dead zone) is applied
+            self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+        return True
+
+    def reset_adaptation(self) -> None:
+        """Back to the calibration: its pictures and its light."""
+        self._adapted_iris = [p.copy() for p in self._calib_iris]
+        self._adapted_eye = [p.copy() for p in self._calib_eye]
+        self._set_pictures()
+        self._gain = None
+        self._gain_slow = np.ones(3)
+
+
+# ---------------------------------------------------------------------------------------------
+# calibration help
+
+
+REFINE_PRIOR = (0.06, 0.04)
+"""How far (× the clicked ipd) :func:`refine_pupils` expects a careful click to be from the
+iris centre: its preference for irises near the clicks."""
+REFINE_DARK = 0.0
+"""Power of the disc darkness in :func:`refine_pupils`' scores: none, the drawn iris's
+correlation and the ring votes place the disc; dark lashes and make-up beside the iris
+would pull the darkest disc off it."""
+REFINE_MIN_MATCH = 0.3
+"""Correlation with a drawn iris below which :func:`refine_pupils` keeps the clicks."""
+
+
+def _drawn_iris(r: float) -> np.ndarray:
+    """A grey picture of the size of :func:`iris_picture_size`: a dark disc of radius ``r``
+    between light sides (for finding irises before anything is learned)."""
+    hw, hh = iris_picture_size(r)
+    yy, xx = np.mgrid[-hh : hh + 1, -hw : hw + 1]
+    inside = np.clip(r + 0.5 - np.hypot(xx, yy), 0.0, 1.0)
+    return (200.0 - 150.0 * inside).astype(np.float32)
+
+
+def refine_pupils(
+    frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Snap two clicked pupils (frame px) to the iris centres near them (sub-pixel, frame px).
+
+    Both eyes are searched together within about an eighth of the clicked inter-pupil
+    distance (twice: with a typical iris radius, then with the radius measured there), a
+    drawn iris as the picture and a preference for irises near careful clicks
+    (:data:`REFINE_PRIOR`). The clicks come back unchanged when nothing iris-like is there or the result is
+    not a plausible pair (a real face is never refused). ``frame_grey`` may also be BGR.
+    """
+    from tracker.calibration import FaceFrame
+
+    grey = np.asarray(frame_grey)
+    if grey.ndim == 3:
+        grey = cv2.cvtColor(grey, cv2.COLOR_BGR2GRAY)
+    lp, rp = (float(left[0]), float(left[1])), (float(right[0]), float(right[1]))
+    for it in range(iterations):
+        ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
+        if ipd < 8:
+            return lp, rp
+        wi = min(ipd, 80.0)
+        ff = FaceFrame.from_pupils(lp, rp, wi)
+        rect = (int(math.floor(-0.9 * wi)), int(math.floor(-0.4 * wi)), int(math.ceil(1.8 * wi)), int(math.ceil(0.8 * wi)))
+        crop = ff.crop(grey, rect).astype(np.float32)
+        o = np.array(rect[:2], dtype=np.float64)
+        centres = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
+        # the radius is measured once the centre is near (off-centre it looks too small)
+        if it == 0:
+            radius = [RADIUS_DEFAULT * wi] * 2
+        else:
+            radius = [iris_radius(crop, (float(c[0]), float(c[1])), wi) for c in centres]
+        # a drawn iris (a picture cut at the clicks would pull the search back to them)
+        pics = [_drawn_iris(r) for r in radius]
+        blank = np.zeros((5, 5), np.float32)
+        model = EyeModel(
+            work_ipd=wi, radius=radius, iris_pictures=pics, eye_pictures=[blank, blank],
+            brow_profiles=[np.zeros(5, np.float32)] * 2, brow_centres=[2.0, 2.0], brow_heights=[0.4 * wi] * 2,
+            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros(3), np.eye(3)), skin_bgr=np.ones(3),
+        )
+        f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR, darkness=REFINE_DARK)
+        found = f.locate_irises(crop, centres)
+        if min(q[2] for q in found) < REFINE_MIN_MATCH:
+            return lp, rp  # nothing there looks like an iris
+        found = np.array([q[:2] for q in found]) + o
+        img = ff.to_image(found)
+        nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
+        if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):
+            return lp, rp
+        lp, rp = nl, nr
+    return lp, rp
