@@ -57,7 +57,10 @@ together in a smile or pressed together and swell together in a pout, so a lip h
 the other."""
 THICKNESS = (0.35, 2.0)
 """Thicknesses (× the calibration's) a lip may have."""
-REACH = (-0.35, 0.55)
+SKIN_UNLIKE = 4.0
+"""Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
+costs nothing: it is no skin, so it is inside the mouth whatever it is."""
+REACH = (-0.45, 0.6)
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 
 
@@ -219,8 +222,11 @@ class MouthFinder:
         e = self.row_costs(f).astype(np.float64)
         cum = np.zeros((4, n + 1))
         np.cumsum(e, axis=1, out=cum[:, 1:])
+        # a row between the lips is free when it looks like the inside (dark, teeth) or like nothing
+        # on the skin (a tongue, the red back of a wide-open mouth); skin there costs the full price
+        skin_like = np.clip(1.0 - np.minimum(e[0], e[3]) / SKIN_UNLIKE, 0.0, 1.0)
         cg = np.zeros(n + 1)
-        np.cumsum(GAP_PRICE * (1.0 - inside), out=cg[1:])
+        np.cumsum(GAP_PRICE * (1.0 - inside) * skin_like, out=cg[1:])
         lo, hi = self.reach
         w = self.skin_w
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
@@ -351,4 +357,5 @@ class MouthFinder:
             jump = max(abs((gap_bottom - gap_top) - (previous.gap_bottom - previous.gap_top)),
                        math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1]))
             s_prev = ramp(-jump, -0.3 * wi, -0.15 * wi)
+        self._parts = (s_fit, s_corner, s_size, s_place, s_prev, fit[0])
         return float(s_fit * s_corner * s_size * s_place * s_prev)

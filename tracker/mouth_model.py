@@ -420,32 +420,46 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) ->
     return top, bottom, y_min
 
 
-def _outer_edge(f: np.ndarray, start: int, direction: int, typical: float, hi: float, wi: float) -> float:
-    """The outer edge of a lip on a profile ``f`` (rows, c), walking from its inner edge ``start`` in
-    ``direction`` (−1 up, +1 down): of the rows up to ``hi`` wi away where the regions before and
-    after differ most (peaks of :func:`step_strength` over 0.06 wi windows), the strongest one past
-    the first dip after the gap's own edge; ``typical`` wi away when there is none (a blurred lip
-    that fades into the gap). Sub-pixel."""
-    w = max(int(round(0.06 * wi)), 2)
-    s = step_strength(f, w)
-    ys = start + direction * np.arange(0, int(round(hi * wi)) + 1)
-    ys = ys[(ys >= w) & (ys < len(f) - w)]
-    fallback = float(start + direction * typical * wi)
-    if len(ys) < 5:
-        return fallback
-    v = s[ys]
-    dips = [k for k in range(1, len(v) - 1) if v[k] <= v[k - 1] and v[k] < v[k + 1]]
-    if not dips:
-        return fallback
-    peaks = [k for k in range(dips[0] + 1, len(v) - 1) if v[k] >= v[k - 1] and v[k] > v[k + 1]]
-    if not peaks:
-        return fallback
-    k = max(peaks, key=lambda q: v[q])
-    y = float(ys[k])
-    den = v[k - 1] - 2 * v[k] + v[k + 1]
-    if den < -1e-9:
-        y += direction * min(max(0.5 * (v[k - 1] - v[k + 1]) / den, -0.5), 0.5)
+def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
+    """The outer edge of a lip on a profile ``f`` (rows, c), from its inner edge ``start`` (the gap's
+    last row) in ``direction`` (−1 up, +1 down), ``lo``..``hi`` wi away: the row that best splits the
+    rows past the gap into a lip (all rows from the gap to it) and skin (:data:`SKIN_ROWS` beyond it)
+    — where the whole lip's mean differs most from the skin's just past it. A lip's window grows
+    with the candidate, so a soft edge, a highlight on the lip or a crease in the skin do not pull
+    the edge the way the steepest local change would. Sub-pixel."""
+    n = len(f)
+    s_rows = max(int(round(SKIN_ROWS * wi)), 3)
+    cs = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(f, axis=0, dtype=np.float64)])
+
+    def mean(a: int, b: int) -> np.ndarray:  # rows a..b-1
+        return (cs[b] - cs[a]) / max(b - a, 1)
+
+    first = start + direction  # the lip's first row
+    es = np.arange(max(int(math.floor(lo * wi)), 2), int(math.ceil(hi * wi)) + 1)
+    score = np.full(len(es), -np.inf)
+    for j, e in enumerate(es):
+        edge = start + direction * e  # first skin row
+        if direction < 0:
+            la, lb, sa, sb = edge + 1, first + 1, edge - s_rows + 1, edge + 1
+        else:
+            la, lb, sa, sb = first, edge, edge, edge + s_rows
+        if sa < 0 or sb > n or la >= lb:
+            continue
+        d = mean(la, lb) - mean(sa, sb)
+        score[j] = float(d @ d)
+    if not np.isfinite(score).any():
+        return float(start + direction * 0.5 * (lo + hi) * wi)
+    j = int(np.argmax(score))
+    y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
+    if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
+        y += direction * _vertex(score[j - 1], score[j], score[j + 1])
     return y
+
+
+def _vertex(a: float, b: float, c: float) -> float:
+    """Offset (−0.5…0.5) of the extreme of a parabola through three equally spaced values."""
+    den = a - 2.0 * b + c
+    return min(max(0.5 * (a - c) / den, -0.5), 0.5) if abs(den) > 1e-12 else 0.0
 
 
 CHEEK = (0.62, 0.8)
@@ -519,15 +533,15 @@ def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: f
     at least a just visible difference, and 12 % of how far the lip's median is from its skin's
     (strong lipstick varies more in absolute terms than pale lips)."""
     n = len(f)
-    skin = max(SKIN_ROWS * wi, 3.0)
+    skin_n = max(SKIN_ROWS * wi, 3.0)
 
     def rows(a: float, b: float) -> np.ndarray:
         i0, i1 = int(math.ceil(a)), int(math.floor(b))
         i0, i1 = min(max(i0, 0), n - 1), min(max(i1, 0), n - 1)
         return f[i0 : max(i1, i0) + 1]
 
-    parts = [rows(y_top - skin, y_top - 0.5), rows(y_top + 0.5, top - 0.5 if bottom > top else top),
-             rows(bottom + 0.5 if bottom > top else bottom + 1, y_bottom - 0.5), rows(y_bottom + 0.5, y_bottom + skin)]
+    parts = [rows(y_top - skin_n, y_top - 0.5), rows(y_top + 0.5, top - 0.5 if bottom > top else top),
+             rows(bottom + 0.5 if bottom > top else bottom + 1, y_bottom - 0.5), rows(y_bottom + 0.5, y_bottom + skin_n)]
     med = [np.median(p, axis=0) for p in parts]
     out = np.empty((5, 2, 3), np.float32)
     for i, p in enumerate(parts):
@@ -576,7 +590,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         lum_rows = luminance(rows_bgr)
         top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi)
         f_rows = profile_features(rows_bgr, skin_level)
-        return (top, bottom, y_min, _outer_edge(f_rows, top, -1, 0.1, 0.3, wi), _outer_edge(f_rows, bottom, +1, 0.16, 0.4, wi),
+        return (top, bottom, y_min, _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi),
                 lum_rows)
 
     # the gap through the click
