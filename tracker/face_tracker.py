@@ -372,6 +372,7 @@ class FaceTracker:
         mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth)
         if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
             mouth_res = None
+        self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
         why = ""
         if presence is not None and presence < FACE_ABSENT:
@@ -491,7 +492,13 @@ class FaceTracker:
         rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
         crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
         self._last_mouth_crop = crop
-        res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
+        prev = getattr(self, "_mouth_prev", None)
+        if prev is not None and hasattr(self.mouth_finder, "shifted"):
+            # the last frame's mouth, moved into this crop's pixels (both crops are in face px)
+            prev = self.mouth_finder.shifted(prev[0], prev[1][0] - rect[0], prev[1][1] - rect[1])
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]), previous=prev)
+        else:
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
         if res is not None and res.score < MOUTH_SCORE_OK:
             res = None
         return res, (rect[0], rect[1]), rect

@@ -31,6 +31,7 @@ edges, ``raw_polygon`` through the corners and the inner ones.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -61,6 +62,11 @@ SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
 REACH = (-0.45, 0.6)
+NOT_SKIN = 2.0
+"""A row as unlike the skin as can be (:data:`ROW_CAP`) costs this much as the mouth whatever it is."""
+PRIOR = 0.5
+"""Weight of the previous frame's outer lip edges (per (0.06 wi)² of change)."""
+VERTICAL = "dp"
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 
 
@@ -269,6 +275,54 @@ class MouthFinder:
         return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
                 (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
 
+    def outer_run(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
+        """Split a profile (:meth:`profile`) into skin, mouth, skin around row ``y_line``: the outer
+        lip edges are the ends of the run of rows that are the mouth — either lip, the dark inside
+        or teeth, or anything no skin looks like (a tongue, the red back of an open mouth) — with
+        skin on both sides. Same return as :meth:`vertical`.
+
+        Each row costs its distance from the calibrated skin next to the lips (above the line: the
+        skin above, below: the skin below) when outside and the least of its distances from the two
+        lips, from the inside, and from "not skin" when inside; the best top and bottom are then
+        independent (the maximum and the minimum of one running sum), given a prior from the
+        previous frame's edges."""
+        n = len(f)
+        e = self.row_costs(f)
+        yl = int(round(y_line))
+        lo, hi = self.reach
+        a, b = max(yl + lo - self.skin_w, 0), min(yl + hi + self.skin_w + 1, n)
+        if b - a < 6 or not (a < yl < b - 1):
+            return None
+        rows = np.arange(a, b)
+        skin = np.where(rows < y_line, e[0, a:b], e[3, a:b])
+        mouth = np.minimum(np.minimum(e[1, a:b], e[2, a:b]), ROW_CAP * (1.0 - inside[a:b]))
+        np.minimum(mouth, ROW_CAP + NOT_SKIN - skin, out=mouth)
+        d = np.concatenate([[0.0], np.cumsum(mouth - skin, dtype=np.float64)])  # d[k]: rows a..a+k-1
+        # top t (first mouth row) ≤ the line < bottom b (first skin row below)
+        k_line = yl - a
+        ts = np.arange(max(k_line + lo, 1), k_line + 1)
+        bs = np.arange(k_line + 1, min(k_line + hi, b - a - 1) + 1)
+        if len(ts) < 2 or len(bs) < 2:
+            return None
+        ct, cb = -d[ts], d[bs]
+        if previous is not None:
+            sig = 0.06 * self.wi
+            ct = ct + PRIOR * ((ts + a - 0.5 - (previous.centre[1] - previous.lip_upper)) / sig) ** 2 / (1 + 0 * ts)
+            cb = cb + PRIOR * ((bs + a - 0.5 - (previous.centre[1] + previous.lip_lower)) / sig) ** 2
+        i, j = int(np.argmin(ct)), int(np.argmin(cb))
+        top = ts[i] + a - 0.5 + (_parabola(ct[i - 1], ct[i], ct[i + 1]) if 0 < i < len(ts) - 1 else 0.0)
+        bottom = bs[j] + a - 0.5 + (_parabola(cb[j - 1], cb[j], cb[j + 1]) if 0 < j < len(bs) - 1 else 0.0)
+        t0, b0 = ts[i], bs[j]
+        fit_rows = float(d[b0] - d[t0] + skin.sum()) / (b - a)
+        ins = np.flatnonzero(inside[a + t0 : a + b0] > 0.5)
+        if len(ins):
+            gap_top, gap_bottom = a + t0 + ins[0] - 0.5, a + t0 + ins[-1] + 0.5
+        else:
+            gap_top = gap_bottom = float(y_line)
+        gap_top, gap_bottom = max(gap_top, top), min(gap_bottom, bottom)
+        stretch = (max(gap_top - top, 0.0) / self.t_up, max(bottom - gap_bottom, 0.0) / self.t_dn)
+        return gap_top, gap_bottom, top, bottom, stretch, (fit_rows, fit_rows)
+
     # ------------------------------------------------------------------ the corners
     def corners(self, crop: np.ndarray, x: float, y_line: float, gains: np.ndarray | None = None):
         """The corners from the line through ``(x, y_line)``: ``(left, right, gains)`` — each corner
@@ -297,6 +351,14 @@ class MouthFinder:
             strength.append(g)
         return out[0], out[1], strength
 
+    @staticmethod
+    def shifted(res: MouthResult, dx: float, dy: float) -> MouthResult:
+        """``res`` moved by ``(dx, dy)`` crop px (the last frame's mouth in this frame's crop)."""
+        return dataclasses.replace(
+            res, left=(res.left[0] + dx, res.left[1] + dy), right=(res.right[0] + dx, res.right[1] + dy),
+            centre=(res.centre[0] + dx, res.centre[1] + dy), gap_top=res.gap_top + dy, gap_bottom=res.gap_bottom + dy,
+            polygon=res.polygon + (dx, dy), raw_polygon=res.raw_polygon + (dx, dy), _blob=None)
+
     # ------------------------------------------------------------------ the whole
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
              previous: MouthResult | None = None) -> MouthResult | None:
@@ -313,7 +375,7 @@ class MouthFinder:
         if previous is not None and previous.score >= SCORE_OK:
             px = 0.5 * (px + previous.centre[0])
         f, inside = self.profile(crop, px, gains)
-        v = self.vertical(f, inside, y_line, previous=previous)
+        v = (self.outer_run if VERTICAL == 'run' else self.vertical)(f, inside, y_line, previous=previous)
         if v is None:
             return None
         mid = 0.5 * (v[0] + v[1])
@@ -321,7 +383,7 @@ class MouthFinder:
         # again through the corners' midpoint, the gap near their line (where the calibration had it)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
         f, inside = self.profile(crop, cx, gains)
-        v2 = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        v2 = (self.outer_run if VERTICAL == 'run' else self.vertical)(f, inside, cy + self.line0, previous=previous, spread=0.12)
         if v2 is not None:
             v = v2
         gap_top, gap_bottom, top, bottom, stretch, fit = v
