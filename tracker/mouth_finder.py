@@ -46,6 +46,8 @@ from tracker.mouth_model import (
 
 SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
+WORK_IPD = 40.0
+"""Inter-eye distance (px) of the crop the finder works on (a larger crop is shrunk to it)."""
 ROW_CAP = 6.0
 """Most one row of the profile can cost in any part (an outlier: a highlight, a crease, teeth)."""
 GAP_PRICE = 3.0
@@ -135,6 +137,21 @@ def _parabola(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if den > 1e-9 else 0.0
 
 
+class _Maps:
+    """Per-frame buffers of :meth:`MouthFinder.prepare` for crops of one size (H, W): ``colour``
+    (H+1, W+1, 3) the integral image of the colours, ``crow`` (H+1, W, 3) the running sums down each
+    column, ``inside`` (H+1, W+1) the integral image of inside-like pixels, ``lum`` (H, W) the
+    smoothed luminance."""
+
+    def __init__(self, shape: tuple[int, int]):
+        H, W = shape
+        self.shape = shape
+        self.colour = np.zeros((H + 1, W + 1, 3), np.int32)
+        self.crow = np.zeros((H + 1, W, 3), np.int32)
+        self.inside = np.zeros((H + 1, W + 1), np.int32)
+        self.lum = np.zeros((H, W), np.uint8)
+
+
 class MouthFinder:
     """Find one performer's mouth in mouth crops (see the module docstring).
 
@@ -144,7 +161,13 @@ class MouthFinder:
 
     def __init__(self, model: MouthModel, work_ipd: float):
         self.model = model
-        self.wi = wi = float(work_ipd)
+        self.wi_crop = float(work_ipd)
+        # everything runs on the crop shrunk to WORK_IPD px between the eyes (lips are several px
+        # thick there; edges are placed sub-pixel), whatever the camera's resolution
+        self.s = min(WORK_IPD / self.wi_crop, 1.0)
+        self.wi = wi = self.wi_crop * self.s
+        self._small = None
+        self._maps: _Maps | None = None
         self.k = k = wi / model.work_ipd  # the model's lengths → this crop's
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
@@ -161,14 +184,30 @@ class MouthFinder:
             self._len.append((ln, (LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
         lu, ld = self._len[0][2], self._len[1][2]
         self._couple = COUPLE * (lu[:, None] - ld[None, :]) ** 2
+        # the vertical split's candidate rows as offsets from the line's row, and what they cost
+        self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
+        lens_u, lens_d = self._len[0][0], self._len[1][0]
+        self._off = np.arange(self.reach[0], self.reach[1] + 1)
+        self._off_u = self._off[:, None] - lens_u[None, :]
+        self._off_sa = self._off_u - self.skin_w
+        self._off_l = self._off[:, None] + lens_d[None, :]
+        self._off_sb = self._off_l + self.skin_w
+        self._pu, self._pd = self._len[0][1][None, :], self._len[1][1][None, :]
+        self._pad = int(max(-self._off_sa.min(), self._off_sb.max())) + 2
+        m = len(self._off)
+        self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
+        self._mid = 0.5 * (self._off[:, None] + self._off[None, :]) - 0.5
+        self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
         self.a1, self.a2 = line_geometry(wi)
+        a1, a2 = self.a1, self.a2
+        self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
         self.strip_half = int(math.ceil(0.32 * wi)) + self.a2 + 2
         self.sigma_line = max(0.015 * wi, 1.0)
         self.n_side = int(math.ceil(0.95 * wi))
+        self._cols = np.arange(self.n_side + 1)
         self.cheeks = (model.cheek_left, model.cheek_right)
         self.run = cheek_run(wi)
         self.body = mouth_body(wi)
-        self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
         self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
         self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
@@ -188,19 +227,47 @@ class MouthFinder:
         return None if np.all(np.abs(g - 1.0) < 0.04) else g
 
     # ------------------------------------------------------------------ the vertical profile
-    def profile(self, crop: np.ndarray, x: float, gains: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def prepare(self, crop: np.ndarray) -> "_Maps":
+        """What every profile and the line need of one crop, once per frame (:class:`_Maps`): the
+        crop's light matched to the calibration's (:meth:`gains`), running sums of its colours along
+        rows and columns and of its inside-like pixels along rows, and its smoothed luminance."""
+        g = self.gains(crop)
+        if g is not None:
+            crop = cv2.transform(crop, np.diag(g).astype(np.float32))
+        H, W = crop.shape[:2]
+        m = self._maps
+        if m is None or m.shape != (H, W):
+            m = self._maps = _Maps((H, W))
+        m.colour = cv2.integral(crop, m.colour)
+        np.subtract(m.colour[:, 1:], m.colour[:, :-1], out=m.crow)  # sums down each column
+        m.inside = cv2.integral(self.model.inside_table.take(lut_index(crop)), m.inside)
+        cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
+        return m
+
+    def profile(self, maps: "_Maps", x: float) -> tuple[np.ndarray, np.ndarray]:
         """The vertical profile through column ``x``: features (H, 3) of each row's mean over the
         band, and how much each row looks like the inside of a mouth (H,) 0..1 (the table's share of
         the band's pixels, or darker than both lips by a third)."""
-        x0, x1 = band_columns(x, self.half, crop.shape[1])
-        band = crop[:, x0:x1]
-        if gains is not None:
-            band = cv2.transform(band, np.diag(gains).astype(np.float32))
-        mean = band.mean(axis=1, dtype=np.float32)
-        f = profile_features(mean, self.model.skin_level)
-        inside = self.model.inside_table.take(lut_index(band)).mean(axis=1, dtype=np.float32)
-        dark = np.clip((np.float32(0.85 * self.lip_l) - f[:, 0]) / np.float32(max(0.2 * self.lip_l, 1e-3)), 0.0, 1.0)
-        return f, np.maximum(inside, dark)
+        x0, x1 = band_columns(x, self.half, maps.shape[1])
+        inv = np.float32(1.0 / (x1 - x0))
+        c = maps.colour[:, x1] - maps.colour[:, x0]  # (H+1, 3): sums over the band of the rows above
+        f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level)
+        i = maps.inside[:, x1] - maps.inside[:, x0]
+        inside = (i[1:] - i[:-1]).astype(np.float32) * inv
+        dark = (np.float32(0.85 * self.lip_l) - f[:, 0]) * np.float32(1.0 / max(0.2 * self.lip_l, 1e-3))
+        np.clip(dark, 0.0, 1.0, out=dark)
+        return f, np.maximum(inside, dark, out=inside)
+
+    def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
+        """The darkest row (smoothed luminance, band through column ``x``) within :data:`REACH` of
+        row ``y_line``, the nearer of equals: where the mouth line is traced from."""
+        H, W = maps.shape
+        x0, x1 = band_columns(x, self.half, W)
+        a = min(max(int(y_line) + self.reach[0] // 2, 0), H - 1)
+        b = min(max(int(y_line) + self.reach[1] // 2 + 1, a + 1), H)
+        col = maps.lum[a:b, x0:x1].mean(axis=1)
+        d = np.abs(np.arange(a, b) - y_line)
+        return float(a + int(np.argmin(col + 0.05 * d)))
 
     def row_costs(self, f: np.ndarray) -> np.ndarray:
         """What each row of a profile costs (4, rows) as the skin above, the upper lip, the lower lip
@@ -225,41 +292,37 @@ class MouthFinder:
         rows between the lips cost nothing where they look like the inside of a mouth and
         :data:`GAP_PRICE` where they do not."""
         n = len(f)
-        e = self.row_costs(f).astype(np.float64)
-        cum = np.zeros((4, n + 1))
+        P = self._pad
+        e = np.full((4, n + 2 * P), ROW_CAP)  # rows past the crop's edges: as bad as can be
+        e[:, P : P + n] = self.row_costs(f)
+        cum = np.zeros((4, n + 2 * P + 1))
         np.cumsum(e, axis=1, out=cum[:, 1:])
         # a row between the lips is free when it looks like the inside (dark, teeth) or like nothing
         # on the skin (a tongue, the red back of a wide-open mouth); skin there costs the full price
-        skin_like = np.clip(1.0 - np.minimum(e[0], e[3]) / SKIN_UNLIKE, 0.0, 1.0)
-        cg = np.zeros(n + 1)
-        np.cumsum(GAP_PRICE * (1.0 - inside) * skin_like, out=cg[1:])
-        lo, hi = self.reach
-        w = self.skin_w
+        price = np.full(n + 2 * P, GAP_PRICE)
+        skin_like = np.minimum(e[0, P : P + n], e[3, P : P + n])
+        price[P : P + n] = (GAP_PRICE / SKIN_UNLIKE) * (1.0 - inside) * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        cg = np.zeros(n + 2 * P + 1)
+        np.cumsum(price, out=cg[1:])
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
-        # the lower lip (b3 = b2: lips closed, no gap row)
-        bs = np.arange(max(int(y_line) + lo, 2), min(int(y_line) + hi + 1, n - 2))
-        if len(bs) < 3:
-            return None
-        (lu, pu, _), (ld, pd, _) = self._len
-        b1 = bs[:, None] - lu[None, :]
-        b1c = np.clip(b1, 0, n)
-        sa0 = np.clip(b1 - w, 0, n)
-        cu = (cum[1][bs][:, None] - cum[1][b1c]) + (cum[0][b1c] - cum[0][sa0]) + pu[None, :]
-        cu += ROW_CAP * ((sa0 - (b1 - w)) + (b1c - b1))  # rows above the crop: as bad as can be
-        b4 = bs[:, None] + ld[None, :]
-        b4c = np.clip(b4, 0, n)
-        sb1 = np.clip(b4 + w, 0, n)
-        cl = (cum[2][b4c] - cum[2][bs][:, None]) + (cum[3][sb1] - cum[3][b4c]) + pd[None, :]
-        cl += ROW_CAP * (((b4 + w) - sb1) + (b4 - b4c))
+        # the lower lip (b3 = b2: lips closed, no gap row); offsets precomputed in the constructor
+        yi = min(max(int(y_line), 0), n - 1)
+        yb = yi + P
+        bs = yb + self._off
+        c0, c1, c2, c3 = cum
+        cu = c1[bs][:, None] - c1[yb + self._off_u] + c0[yb + self._off_u] - c0[yb + self._off_sa] + self._pu
+        cl = c2[yb + self._off_l] - c2[bs][:, None] + c3[yb + self._off_sb] - c3[yb + self._off_l] + self._pd
         U, L = cu.min(axis=1), cl.min(axis=1)
-        gap = cg[bs][None, :] - cg[bs][:, None]  # rows b2 .. b3-1
-        mid = 0.5 * (bs[:, None] + bs[None, :]) - 0.5 - y_line
-        tot = U[:, None] + L[None, :] + gap + 3.0 * (mid / (spread * self.wi)) ** 2
+        cgb = cg[bs]
+        tot = U[:, None] + L[None, :] + (cgb[None, :] - cgb[:, None]) + self._upper_only
+        tot += (3.0 / (spread * self.wi) ** 2) * (self._mid + (yi - y_line)) ** 2
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
-            tot += 2.0 * ((bs[None, :] - bs[:, None] - g0) / (0.15 * self.wi)) ** 2
+            tot += (2.0 / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2
         m = len(bs)
-        tot[np.tril_indices(m, -1)] = np.inf
+        bs = bs - P
+        (lu, pu, _), (ld, pd, _) = self._len
+        w = self.skin_w
         a, b = np.unravel_index(int(np.argmin(tot)), tot.shape)
         # the two lips' thicknesses together at the best pair of inner edges
         joint = cu[a][:, None] + cl[b][None, :] + self._couple
@@ -324,15 +387,11 @@ class MouthFinder:
         return gap_top, gap_bottom, top, bottom, stretch, (fit_rows, fit_rows)
 
     # ------------------------------------------------------------------ the corners
-    def corners(self, crop: np.ndarray, x: float, y_line: float, gains: np.ndarray | None = None):
-        """The corners from the line through ``(x, y_line)``: ``(left, right, gains)`` — each corner
-        (x, y) and how clearly the mouth's columns differed from the cheek on that side
+    def corners(self, maps: "_Maps", x: float, y_line: float):
+        """The corners from the line through ``(x, y_line)``: ``(left, right, strengths)`` — each
+        corner (x, y) and how clearly the mouth's columns differed from the cheek on that side
         (:func:`~tracker.mouth_model.corner_distance`'s sum)."""
-        H, W = crop.shape[:2]
-        y0 = max(int(round(y_line)) - self.strip_half, 0)
-        y1 = min(int(round(y_line)) + self.strip_half + 1, H)
-        strip = crop[y0:y1]
-        lum = cv2.GaussianBlur(cv2.cvtColor(strip, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line)
+        H, W = maps.shape
         x0 = min(max(int(round(x)), 0), W - 1)
         out, strength = [], []
         for step, cheek in ((-1, self.cheeks[0]), (+1, self.cheeks[1])):
@@ -341,15 +400,30 @@ class MouthFinder:
                 out.append((float(x0), float(y_line)))
                 strength.append(0.0)
                 continue
-            ys = trace_line(lum, x0, y_line - y0, step, n)
-            cols = line_columns(strip, x0, ys, step, self.a1, self.a2, self.model.skin_level, gains)
+            ys = trace_line(maps.lum, x0, y_line, step, n)
+            cols = self._line_columns(maps, x0, ys, step)
             d = unlike_cheek(cols, (cheek[0], cheek[1]))
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
-            out.append((x0 + step * half, y0 + float(ys[k] * (1 - t) + ys[k + 1] * t)))
+            out.append((x0 + step * half, float(ys[k] * (1 - t) + ys[k + 1] * t)))
             strength.append(g)
         return out[0], out[1], strength
+
+    def _line_columns(self, maps: "_Maps", x0: int, ys: np.ndarray, step: int) -> np.ndarray:
+        """:func:`~tracker.mouth_model.line_columns` from the running sums: features (n, 9) of the mean
+        colour of the band ``a1..a2`` rows above the line, of its own three rows and of the band below."""
+        H, W = maps.shape
+        xs = x0 + step * self._cols[: len(ys)]
+        if xs[-1] < 0 or xs[-1] >= W:
+            xs = np.clip(xs, 0, W - 1)
+        bounds = ys.astype(np.int32)[None, :] + self._band_rows  # [start, end) of the three bands
+        np.maximum(bounds, 0, out=bounds)
+        np.minimum(bounds, H, out=bounds)
+        sums = maps.crow[bounds, xs[None, :]]  # (6, n, 3)
+        cnt = np.maximum(bounds[1::2] - bounds[0::2], 1).astype(np.float32)  # (3, n)
+        means = (sums[1::2] - sums[0::2]).astype(np.float32) / cnt[:, :, None]  # (3, n, 3)
+        return profile_features(means.transpose(1, 0, 2), self.model.skin_level).reshape(len(ys), 9)
 
     @staticmethod
     def shifted(res: MouthResult, dx: float, dy: float) -> MouthResult:
@@ -362,30 +436,55 @@ class MouthFinder:
     # ------------------------------------------------------------------ the whole
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
              previous: MouthResult | None = None) -> MouthResult | None:
-        """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted centre,
-        the calibrated mouth centre under the head's motion), or None when nothing there can be a
-        mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
-        moves with the head): a mouth's gap cannot jump from one frame to the next, so a result
-        far from it scores lower."""
-        crop = crop_bgr
-        H, W = crop.shape[:2]
+        """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth
+        centre, the calibrated mouth centre under the head's motion), or None when nothing there can be
+        a mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
+        moves with the head; :meth:`shifted`): a mouth's gap cannot jump from one frame to the next,
+        so a result far from it scores lower. Works on the crop shrunk to :data:`WORK_IPD`; the
+        result is in the given crop's pixels."""
+        s = self.s
+        if s >= 1.0:
+            return self._find(crop_bgr, predicted_centre_crop, previous)
+        H, W = crop_bgr.shape[:2]
+        size = (max(int(round(W * s)), 8), max(int(round(H * s)), 8))
+        if self._small is None or self._small.shape[:2] != (size[1], size[0]):
+            self._small = np.empty((size[1], size[0], 3), np.uint8)
+        small = cv2.resize(crop_bgr, size, dst=self._small, interpolation=cv2.INTER_AREA)
+        sx, sy = size[0] / W, size[1] / H
+        down = lambda p: ((p[0] + 0.5) * sx - 0.5, (p[1] + 0.5) * sy - 0.5)
+        prev = None
+        if previous is not None:
+            prev = dataclasses.replace(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
+                                       gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
+                                       lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None)
+        r = self._find(small, down(predicted_centre_crop), prev)
+        if r is None:
+            return None
+        up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
+        scale = np.array([1.0 / sx, 1.0 / sy])
+        off = 0.5 * scale - 0.5
+        return dataclasses.replace(
+            r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
+            polygon=r.polygon * scale + off, raw_polygon=r.raw_polygon * scale + off,
+            gap_top=(r.gap_top + 0.5) / sy - 0.5, gap_bottom=(r.gap_bottom + 0.5) / sy - 0.5, shape=(H, W), _blob=None)
+
+    def _find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
+              previous: MouthResult | None = None) -> MouthResult | None:
+        """:meth:`find` on a crop at the working scale."""
+        H, W = crop_bgr.shape[:2]
         px, py = float(predicted_centre_crop[0]), float(predicted_centre_crop[1])
-        gains = self.gains(crop)
+        maps = self.prepare(crop_bgr)
         y_line = py + self.line0
         if previous is not None and previous.score >= SCORE_OK:
             px = 0.5 * (px + previous.centre[0])
-        f, inside = self.profile(crop, px, gains)
-        v = (self.outer_run if VERTICAL == 'run' else self.vertical)(f, inside, y_line, previous=previous)
-        if v is None:
-            return None
-        mid = 0.5 * (v[0] + v[1])
-        left, right, strength = self.corners(crop, px, mid, gains)
-        # again through the corners' midpoint, the gap near their line (where the calibration had it)
+        # the mouth line: from the darkest row near the prediction (the gap, or an open mouth's inside)
+        # on the column through it, traced out to the corners
+        left, right, strength = self.corners(maps, px, self.line_seed(maps, px, y_line))
+        # the lips on the column through the corners' midpoint, the gap near their line (where the
+        # calibration had it)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
-        f, inside = self.profile(crop, cx, gains)
-        v2 = (self.outer_run if VERTICAL == 'run' else self.vertical)(f, inside, cy + self.line0, previous=previous, spread=0.12)
-        if v2 is not None:
-            v = v2
+        f, inside = self.profile(maps, cx)
+        v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         cy = 0.5 * (left[1] + right[1])
         width = math.hypot(right[0] - left[0], right[1] - left[1])

@@ -61,6 +61,8 @@ LINE_BANDS = (0.03, 0.09)
 """Rows (× wi) above and below the mouth line that a column's "above" and "below" bands cover."""
 L_UNIT, C_UNIT = 0.05, 0.012
 """One unit of the profile features: 5 % of the skin's luminance; 0.012 of a chroma ratio."""
+_FEATURE_MIX = np.array([[0.114, 0.0, -1.0], [0.587, -1.0, 0.5], [0.299, 1.0, 0.5]], np.float32)
+"""BGR → (luminance, r − g, (r + g − 2b) / 2), the numerators of :func:`profile_features`."""
 
 
 # --------------------------------------------------------------------------------------------- features
@@ -77,12 +79,12 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
     units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference."""
     c = np.asarray(bgr, dtype=np.float32)
-    b, g, r = c[..., 0], c[..., 1], c[..., 2]
-    inv = np.float32(1.0 / C_UNIT) / (b + g + r + np.float32(24.0))
-    out = np.empty(c.shape, np.float32)
-    out[..., 0] = (b * np.float32(0.114) + g * np.float32(0.587) + r * np.float32(0.299)) * np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
-    out[..., 1] = (r - g) * inv
-    out[..., 2] = (r + g - b - b) * (np.float32(0.5) * inv)
+    out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2
+    out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
+    den = c.sum(axis=-1, keepdims=True)
+    den += np.float32(24.0)
+    np.divide(out[..., 1:], den, out=out[..., 1:])
+    out[..., 1:] *= np.float32(1.0 / C_UNIT)
     return out
 
 
@@ -320,22 +322,24 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
     mouth, bending with a smile; where no such row is there (even skin, a slope of shading) the
     line goes straight on. Columns past the image's edge keep the last row."""
     h, w = lum.shape
-    ys = np.empty(n + 1)
-    y = min(max(int(round(y0)), 2), h - 3)
-    ys[0] = y
-    cols = lum.T.tolist() if n > 0 else None
-    x = x0
-    for k in range(1, n + 1):
-        x += step
-        if 0 <= x < w:
-            c = cols[x]
+    lo, hi = 2, h - 3
+    y = min(max(int(round(y0)), lo), hi)
+    out = [float(y)]
+    xs = [x0 + step * k for k in range(1, n + 1)]
+    inside = [x for x in xs if 0 <= x < w]
+    cols = dict(zip(inside, lum[:, inside].T.tolist())) if inside else {}
+    for x in xs:
+        c = cols.get(x)
+        if c is not None:
             best, by = None, y
             for v in (y, y - 1, y + 1):
-                if 1 <= v < h - 1 and c[v] < c[v - 1] and c[v] < c[v + 1] and (best is None or c[v] < best):
-                    best, by = c[v], v
-            y = min(max(by, 2), h - 3)
-        ys[k] = y
-    return ys
+                if 0 < v < h - 1:
+                    cv = c[v]
+                    if cv < c[v - 1] and cv < c[v + 1] and (best is None or cv < best):
+                        best, by = cv, v
+            y = lo if by < lo else hi if by > hi else by
+        out.append(float(y))
+    return np.array(out)
 
 
 def line_columns(strip: np.ndarray, x0: int, ys: np.ndarray, step: int, a1: int, a2: int, skin_level: float,
@@ -504,22 +508,28 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
     move it, nor hair, a collar or the background further out — placed sub-pixel where ``d``
     crosses that level; and how clearly the mouth's columns up to it differed from the cheek
     (``Σ min(d, 5·level) − level``). Without such a run, where that sum is largest."""
-    n = len(d)
-    body_d = d[max(body[0], 0) : min(max(body[1], body[0] + 1), n)]
-    level = max(CHEEK_LEVEL, BODY_SHARE * float(np.median(body_d))) if len(body_d) else CHEEK_LEVEL
+    v = d.tolist()  # short (one side of a mouth): plain Python is quicker than numpy here
+    n = len(v)
+    body_d = sorted(v[max(body[0], 0) : min(max(body[1], body[0] + 1), n)])
+    level = max(CHEEK_LEVEL, BODY_SHARE * body_d[len(body_d) // 2]) if body_d else CHEEK_LEVEL
     a, b = max(int(lo), 1), min(int(hi), n - 2)
     if b <= a:
         return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
-    gain = np.cumsum(np.minimum(d, 5.0 * level) - level)
-    cheek = d < level
+    cap = 5.0 * level
+    gain, g = [], 0.0
+    for q in v:
+        g += (q if q < cap else cap) - level
+        gain.append(g)
     # runs[i]: how many columns from i on look like the cheek
-    runs = np.zeros(n + 1, np.int32)
+    runs = [0] * (n + 1)
     for i in range(n - 1, -1, -1):
-        runs[i] = runs[i + 1] + 1 if cheek[i] else 0
-    ends = np.flatnonzero(~cheek[a : b + 1] & (runs[a + 1 : b + 2] >= min(run, n - 1 - b + run)))
-    k = a + int(ends[0]) if len(ends) else a + int(np.argmax(gain[a : b + 1]))
+        runs[i] = runs[i + 1] + 1 if v[i] < level else 0
+    need = min(run, n - 1 - b + run)
+    k = next((i for i in range(a, b + 1) if v[i] >= level and runs[i + 1] >= need), None)
+    if k is None:
+        k = max(range(a, b + 1), key=gain.__getitem__)
     x = float(k)
-    d0, d1 = float(d[k]), float(d[k + 1])
+    d0, d1 = v[k], v[k + 1]
     if d0 >= level > d1:
         x += (d0 - level) / (d0 - d1)
     return x, float(gain[k])
