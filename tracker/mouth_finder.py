@@ -63,7 +63,7 @@ THICKNESS = (0.35, 2.0)
 SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
-REACH = (-0.45, 0.6)
+REACH = (-0.55, 0.6)
 NOT_SKIN = 2.0
 """A row as unlike the skin as can be (:data:`ROW_CAP`) costs this much as the mouth whatever it is."""
 PRIOR = 0.5
@@ -196,7 +196,7 @@ class MouthFinder:
         self._pad = int(max(-self._off_sa.min(), self._off_sb.max())) + 2
         m = len(self._off)
         self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
-        self._mid = 0.5 * (self._off[:, None] + self._off[None, :]) - 0.5
+        self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
         self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
         self.a1, self.a2 = line_geometry(wi)
         a1, a2 = self.a1, self.a2
@@ -315,7 +315,10 @@ class MouthFinder:
         U, L = cu.min(axis=1), cl.min(axis=1)
         cgb = cg[bs]
         tot = U[:, None] + L[None, :] + (cgb[None, :] - cgb[:, None]) + self._upper_only
-        tot += (3.0 / (spread * self.wi) ** 2) * (self._mid + (yi - y_line)) ** 2
+        # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it)
+        dl = y_line - yi
+        off = np.maximum(np.maximum(self._gap_a - dl, dl - self._gap_b), 0.0)
+        tot += (3.0 / (spread * self.wi) ** 2) * off * off
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
             tot += (2.0 / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2
