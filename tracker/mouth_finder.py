@@ -63,6 +63,8 @@ THICKNESS = (0.35, 2.0)
 SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
+OPEN_ROWS = 2
+"""Rows of the inside (dark, teeth) that make a gap an open mouth (where a tongue's rows are free)."""
 REACH = (-0.55, 0.6)
 NOT_SKIN = 2.0
 """A row as unlike the skin as can be (:data:`ROW_CAP`) costs this much as the mouth whatever it is."""
@@ -297,13 +299,21 @@ class MouthFinder:
         e[:, P : P + n] = self.row_costs(f)
         cum = np.zeros((4, n + 2 * P + 1))
         np.cumsum(e, axis=1, out=cum[:, 1:])
-        # a row between the lips is free when it looks like the inside (dark, teeth) or like nothing
-        # on the skin (a tongue, the red back of a wide-open mouth); skin there costs the full price
-        price = np.full(n + 2 * P, GAP_PRICE)
-        skin_like = np.minimum(e[0, P : P + n], e[3, P : P + n])
-        price[P : P + n] = (GAP_PRICE / SKIN_UNLIKE) * (1.0 - inside) * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
-        cg = np.zeros(n + 2 * P + 1)
-        np.cumsum(price, out=cg[1:])
+        # a row between the lips is free when it looks like the inside (dark, teeth); skin there costs
+        # the full price; anything else (a tongue, the red back of a wide-open mouth) is free in an
+        # open mouth — a gap with rows of the dark inside or teeth in it — but lip-like rows are
+        # not a gap between closed lips (lips pressed together, one lip tucked under the other)
+        m0, m1 = P, P + n
+        out = 1.0 - inside
+        skin_like = np.minimum(e[0, m0:m1], e[3, m0:m1])
+        lip_like = np.minimum(e[1, m0:m1], e[2, m0:m1])
+        k = GAP_PRICE / SKIN_UNLIKE
+        cg = np.zeros((3, n + 2 * P + 1))
+        cg[0, 1:] = cg[1, 1:] = GAP_PRICE
+        cg[0, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        cg[1, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
+        cg[2, 1 + m0 : 1 + m1] = inside > 0.5
+        np.cumsum(cg, axis=1, out=cg)
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
         # the lower lip (b3 = b2: lips closed, no gap row); offsets precomputed in the constructor
         yi = min(max(int(y_line), 0), n - 1)
@@ -313,8 +323,10 @@ class MouthFinder:
         cu = c1[bs][:, None] - c1[yb + self._off_u] + c0[yb + self._off_u] - c0[yb + self._off_sa] + self._pu
         cl = c2[yb + self._off_l] - c2[bs][:, None] + c3[yb + self._off_sb] - c3[yb + self._off_l] + self._pd
         U, L = cu.min(axis=1), cl.min(axis=1)
-        cgb = cg[bs]
-        tot = U[:, None] + L[None, :] + (cgb[None, :] - cgb[:, None]) + self._upper_only
+        cgb = cg[:, bs]
+        gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
+        tot = np.where(gap[2] >= OPEN_ROWS, gap[0], gap[1])
+        tot += U[:, None] + L[None, :] + self._upper_only
         # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it)
         dl = y_line - yi
         off = np.maximum(np.maximum(self._gap_a - dl, dl - self._gap_b), 0.0)

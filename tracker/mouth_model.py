@@ -466,6 +466,8 @@ def _vertex(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if abs(den) > 1e-12 else 0.0
 
 
+LIP_MAX = (0.15, 0.2)
+"""Thickest upper and lower lip (× wi): a lip's red is about 0.1–0.15 of the inter-eye distance high."""
 CHEEK = (0.62, 0.8)
 """Distances (× wi) from the click along the line whose columns are cheek at calibration."""
 CHEEK_LEVEL = 6.0
@@ -652,6 +654,15 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         thick_up, thick_down = top - y_top, y_bottom - bottom
     thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
     y_top, y_bottom = top - thick_up, bottom + thick_down
+    # a lip thicker than any lip is: the gap reached less far than the mouth is open (a tongue or the
+    # lower teeth next to the lip were taken for lip) — the outer edge stands, the inner one moves
+    if thick_up > LIP_MAX[0] * wi:
+        thick_up = LIP_MAX[0] * wi
+        top = min(int(round(y_top + thick_up)), int(y_min))
+    if thick_down > LIP_MAX[1] * wi:
+        thick_down = LIP_MAX[1] * wi
+        bottom = max(int(round(y_bottom - thick_down)), int(y_min))
+    thick_up, thick_down = top - y_top, y_bottom - bottom
 
     # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
     b0, b1 = band_columns(centre[0], band, W)
