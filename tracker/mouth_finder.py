@@ -40,7 +40,7 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outline, line_columns, line_geometry, mouth_body,
+    BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outline, line_geometry, mouth_body,
     profile_features, trace_line, unlike_cheek,
 )
 
@@ -66,11 +66,7 @@ costs nothing: it is no skin, so it is inside the mouth whatever it is."""
 OPEN_ROWS = 2
 """Rows of the inside (dark, teeth) that make a gap an open mouth (where a tongue's rows are free)."""
 REACH = (-0.55, 0.6)
-NOT_SKIN = 2.0
-"""A row as unlike the skin as can be (:data:`ROW_CAP`) costs this much as the mouth whatever it is."""
-PRIOR = 0.5
-"""Weight of the previous frame's outer lip edges (per (0.06 wi)² of change)."""
-VERTICAL = "dp"
+
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 
 
@@ -353,54 +349,6 @@ class MouthFinder:
         return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
                 (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
 
-    def outer_run(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
-        """Split a profile (:meth:`profile`) into skin, mouth, skin around row ``y_line``: the outer
-        lip edges are the ends of the run of rows that are the mouth — either lip, the dark inside
-        or teeth, or anything no skin looks like (a tongue, the red back of an open mouth) — with
-        skin on both sides. Same return as :meth:`vertical`.
-
-        Each row costs its distance from the calibrated skin next to the lips (above the line: the
-        skin above, below: the skin below) when outside and the least of its distances from the two
-        lips, from the inside, and from "not skin" when inside; the best top and bottom are then
-        independent (the maximum and the minimum of one running sum), given a prior from the
-        previous frame's edges."""
-        n = len(f)
-        e = self.row_costs(f)
-        yl = int(round(y_line))
-        lo, hi = self.reach
-        a, b = max(yl + lo - self.skin_w, 0), min(yl + hi + self.skin_w + 1, n)
-        if b - a < 6 or not (a < yl < b - 1):
-            return None
-        rows = np.arange(a, b)
-        skin = np.where(rows < y_line, e[0, a:b], e[3, a:b])
-        mouth = np.minimum(np.minimum(e[1, a:b], e[2, a:b]), ROW_CAP * (1.0 - inside[a:b]))
-        np.minimum(mouth, ROW_CAP + NOT_SKIN - skin, out=mouth)
-        d = np.concatenate([[0.0], np.cumsum(mouth - skin, dtype=np.float64)])  # d[k]: rows a..a+k-1
-        # top t (first mouth row) ≤ the line < bottom b (first skin row below)
-        k_line = yl - a
-        ts = np.arange(max(k_line + lo, 1), k_line + 1)
-        bs = np.arange(k_line + 1, min(k_line + hi, b - a - 1) + 1)
-        if len(ts) < 2 or len(bs) < 2:
-            return None
-        ct, cb = -d[ts], d[bs]
-        if previous is not None:
-            sig = 0.06 * self.wi
-            ct = ct + PRIOR * ((ts + a - 0.5 - (previous.centre[1] - previous.lip_upper)) / sig) ** 2 / (1 + 0 * ts)
-            cb = cb + PRIOR * ((bs + a - 0.5 - (previous.centre[1] + previous.lip_lower)) / sig) ** 2
-        i, j = int(np.argmin(ct)), int(np.argmin(cb))
-        top = ts[i] + a - 0.5 + (_parabola(ct[i - 1], ct[i], ct[i + 1]) if 0 < i < len(ts) - 1 else 0.0)
-        bottom = bs[j] + a - 0.5 + (_parabola(cb[j - 1], cb[j], cb[j + 1]) if 0 < j < len(bs) - 1 else 0.0)
-        t0, b0 = ts[i], bs[j]
-        fit_rows = float(d[b0] - d[t0] + skin.sum()) / (b - a)
-        ins = np.flatnonzero(inside[a + t0 : a + b0] > 0.5)
-        if len(ins):
-            gap_top, gap_bottom = a + t0 + ins[0] - 0.5, a + t0 + ins[-1] + 0.5
-        else:
-            gap_top = gap_bottom = float(y_line)
-        gap_top, gap_bottom = max(gap_top, top), min(gap_bottom, bottom)
-        stretch = (max(gap_top - top, 0.0) / self.t_up, max(bottom - gap_bottom, 0.0) / self.t_dn)
-        return gap_top, gap_bottom, top, bottom, stretch, (fit_rows, fit_rows)
-
     # ------------------------------------------------------------------ the corners
     def corners(self, maps: "_Maps", x: float, y_line: float):
         """The corners from the line through ``(x, y_line)``: ``(left, right, strengths)`` — each
@@ -421,7 +369,7 @@ class MouthFinder:
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
-            out.append((x0 + step * half, float(ys[k] * (1 - t) + ys[k + 1] * t)))
+            out.append((x0 + step * (half + CORNER_BIAS), float(ys[k] * (1 - t) + ys[k + 1] * t)))
             strength.append(g)
         return out[0], out[1], strength
 
@@ -533,5 +481,4 @@ class MouthFinder:
             jump = max(abs((gap_bottom - gap_top) - (previous.gap_bottom - previous.gap_top)),
                        math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1]))
             s_prev = ramp(-jump, -0.3 * wi, -0.15 * wi)
-        self._parts = (s_fit, s_corner, s_size, s_place, s_prev, fit[0])
         return float(s_fit * s_corner * s_size * s_place * s_prev)
