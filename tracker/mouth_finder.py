@@ -478,7 +478,8 @@ class MouthFinder:
         s_place = 1.0 if d <= 1.0 else max(math.exp(-(d - 1.0)), 0.3)
         s_prev = 1.0
         if previous is not None and previous.score >= SCORE_OK:
-            jump = max(abs((gap_bottom - gap_top) - (previous.gap_bottom - previous.gap_top)),
-                       math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1]))
-            s_prev = ramp(-jump, -0.3 * wi, -0.15 * wi)
+            # the mouth's place cannot jump; its opening can change fast (speech), which the split
+            # of the profile already weighs against the last frame's gap
+            jump = math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1])
+            s_prev = ramp(-jump, -0.4 * wi, -0.2 * wi)
         return float(s_fit * s_corner * s_size * s_place * s_prev)
