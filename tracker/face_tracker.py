@@ -13,8 +13,9 @@ Per frame (Buck et al. §2, made roll-, scale- and motion-robust):
    pictures, lids from how far the eye's interior reaches, brows by their calibrated
    cross-section; an eye far from its anchor (past a gaze's reach) or unlike the calibrated
    eye is doubtful and is predicted from the anchor instead;
-4. **mouth** (:mod:`tracker.mouth_finder`): lip colour and the mouth's gap and inside → blob
-   → radial polygon → snake, with a score that says whether it is this person's mouth;
+4. **mouth** (:mod:`tracker.mouth_finder`): the corners along the mouth line and the outer lip
+   edges on the vertical profile between them (the gap, dark inside and teeth counted in), given
+   the last frame's mouth, with a score that says whether it is this person's mouth;
 5. **know when you are wrong**: the face picture, the flow, the eyes' geometry against the
    head's pose and the mouth's size and place decide ``ok``, ``eyes_closed``, ``mouth_lost``
    or ``lost``; a lost face holds the last values and is looked for again — where it was,

@@ -2,30 +2,35 @@
 
 Works in the upright mouth crop of :class:`~tracker.calibration.FaceFrame` (y down, the face's up
 is −y), cut with :data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth centre, with
-a :class:`~tracker.mouth_model.MouthModel` learned at calibration. Per frame:
+a :class:`~tracker.mouth_model.MouthModel` learned at calibration. A larger crop is first shrunk
+to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
 
-1. **light**: the crop's median colour (mostly skin) is matched to the calibration's
-   (:meth:`MouthFinder.gains`), folded into every profile below;
-2. **the lips on the vertical profile through the centre** (:meth:`MouthFinder.vertical`): the
-   calibrated templates of the upper and the lower lip — from each lip's inner edge out over the
-   skin beyond it — are matched to the profile, each lip stretched by 0.5–1.7× and placed
-   anywhere near the prediction, with the rows between the two lips (the gap) costing nothing
-   where they look like the inside of a mouth (dark and colourless, teeth) and a fixed price
-   where they do not (a tongue, skin). The best pair gives the inner lip edges (the gap) and the
-   outer ones (inner edge ± stretched thickness): the outer edge cannot drift into the philtrum,
-   a chin's shadow or stubble, since the whole lip — its colour, its shading, the skin past it —
-   must fit, and what is inside the mouth does not matter;
-3. **the corners** (:meth:`MouthFinder.corners`): the mouth line is traced from the gap's
-   middle outwards along the darkest valley, and on each side the corner is where the columns
-   along it (the bands above, on and below the line) start to look like the calibrated cheek;
-4. the centre moves to the corners' midpoint and step 2 runs again there;
-5. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
+1. **light and sums** (:meth:`MouthFinder.prepare`): the crop's median colour (mostly skin) is
+   matched to the calibration's (:meth:`MouthFinder.gains`); integral images of the colours and
+   of the inside-like pixels and a smoothed luminance are made once, so every profile and every
+   column along the line below is a few look-ups;
+2. **the corners** (:meth:`MouthFinder.corners`): the mouth line is traced from the darkest row
+   near the prediction (the gap, or an open mouth's inside) outwards along the darkest valley, and
+   on each side the corner is where the columns along it (the bands above, on and below the line)
+   start to look like the calibrated cheek;
+3. **the lips on the vertical profile through the corners' midpoint** (:meth:`MouthFinder.vertical`):
+   the calibrated templates of the upper and the lower lip — from each lip's inner edge out over
+   the skin beyond it — are matched to the profile, each lip stretched within :data:`THICKNESS`,
+   with the line between the corners running through the gap; the rows between the two lips cost
+   nothing where they look like the inside (dark and colourless, teeth), the full price where they
+   look like skin, and — only in an open mouth, one with rows of the inside — nothing where they
+   look like neither (a tongue, the red back of a yawn). The best pair gives the inner lip edges
+   (the gap) and the outer ones: the outer edge cannot drift into the philtrum, a chin's shadow or
+   stubble, since the whole lip — its colour, its shading, the skin past it — must fit, and the
+   dark inside and teeth are counted inside the mouth. With the last frame's mouth (``previous``)
+   the gap's height is weighed against it;
+4. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
    clearly the columns between the corners differ from the cheek against the calibration, the
    plausibility of the size, the place against the prediction and, with the previous frame's
-   result, of the change since then. :data:`SCORE_OK` is the threshold.
+   result, how far the mouth moved. :data:`SCORE_OK` is the threshold.
 
-Everything runs on a few profiles (one column band, a strip around the line), never on every
-pixel of the crop; the outline (``polygon``) is drawn through the corners and the outer lip
+Everything runs on a few profiles (one column band, a strip along the line), never pixel by
+pixel after step 1; the outline (``polygon``) is drawn through the corners and the outer lip
 edges, ``raw_polygon`` through the corners and the inner ones.
 """
 
@@ -279,16 +284,18 @@ class MouthFinder:
         return np.minimum(e[:4], np.float32(ROW_CAP))
 
     def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
-        """Split a profile (:meth:`profile`) into skin, upper lip, gap, lower lip, skin, with the gap's
-        middle expected around row ``y_line`` (give or take ``spread`` wi) and its edges within
+        """Split a profile (:meth:`profile`) into skin, upper lip, gap, lower lip, skin, with the gap
+        expected to hold row ``y_line`` (the line between the corners; a gap that misses it by ``spread``
+        wi costs 3) and its edges within
         :data:`REACH` of it: ``(gap_top, gap_bottom, top, bottom, (k_up, k_down), fit)`` — the inner
         and the outer lip edges (rows, sub-pixel), each lip's thickness against the calibration's and
         the mean cost per row of the lips and the skin next to them.
 
         Each lip is a run of rows like it, as thick as calibrated give or take (:data:`LENGTH_PRICE`,
-        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it; the
-        rows between the lips cost nothing where they look like the inside of a mouth and
-        :data:`GAP_PRICE` where they do not."""
+        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it; a row
+        between the lips costs up to :data:`GAP_PRICE` the more it looks like skin (or, unless the gap
+        holds :data:`OPEN_ROWS` rows of the inside, like a lip) and nothing where it looks like the
+        inside of a mouth."""
         n = len(f)
         P = self._pad
         e = np.full((4, n + 2 * P), ROW_CAP)  # rows past the crop's edges: as bad as can be
