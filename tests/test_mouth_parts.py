@@ -39,7 +39,7 @@ def test_line_columns_from_the_running_sums_match_the_direct_ones(finder_and_cro
     maps = finder.prepare(small)
     ys = np.full(20, 30.0) + np.arange(20) % 3  # a line a little wavy, well inside the crop
     for step in (-1, 1):
-        fast = finder._line_columns(maps, 38, ys, step)
+        fast = finder._line_columns(maps, 38 + step * np.arange(len(ys)), ys)
         slow = line_columns(small, 38, ys, step, finder.a1, finder.a2, finder.model.skin_level)
         assert np.allclose(fast, slow, atol=1e-3)
 
@@ -139,3 +139,14 @@ def test_shifted_moves_every_point_and_keeps_the_opening():
     assert moved.gap_top == pytest.approx(res.gap_top - 2.0) and moved.gap_bottom == pytest.approx(res.gap_bottom - 2.0)
     assert np.allclose(moved.polygon, res.polygon + (3.0, -2.0))
     assert moved.lip_upper == res.lip_upper and moved.lip_lower == res.lip_lower and math.isclose(moved.width, res.width)
+
+
+def test_outlines_through_the_same_corners_at_once_match_one_at_a_time():
+    from tracker.mouth_model import lens_outline, lens_outlines
+
+    both = lens_outlines((10.0, 30.0), (60.0, 33.0), (20.0, 27.0), (40.0, 35.0), 35.0)
+    assert both.shape == (2, 48, 2)
+    assert np.allclose(both[0], lens_outline((10.0, 30.0), (60.0, 33.0), 20.0, 40.0, 35.0))
+    assert np.allclose(both[1], lens_outline((10.0, 30.0), (60.0, 33.0), 27.0, 35.0, 35.0))
+    top = both[0][np.argmin(np.abs(both[0][:24, 0] - 35.0))]
+    assert top[1] == pytest.approx(20.0, abs=0.5)  # the upper edge passes through the given row at x_mid

@@ -45,7 +45,7 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outline, line_geometry, mouth_body,
+    BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
     profile_features, trace_line, unlike_cheek,
 )
 
@@ -363,16 +363,22 @@ class MouthFinder:
         (:func:`~tracker.mouth_model.corner_distance`'s sum)."""
         H, W = maps.shape
         x0 = min(max(int(round(x)), 0), W - 1)
-        out, strength = [], []
-        for step, cheek in ((-1, self.cheeks[0]), (+1, self.cheeks[1])):
+        traced = []
+        for step in (-1, +1):
             n = min(self.n_side, x0 if step < 0 else W - 1 - x0)
-            if n < 4:
+            traced.append(trace_line(maps.lum, x0, y_line, step, n) if n >= 4 else None)
+        live = [(step, ys) for step, ys in zip((-1, +1), traced) if ys is not None]
+        if live:  # the columns along both sides in one go
+            xs = np.concatenate([x0 + step * self._cols[: len(ys)] for step, ys in live])
+            cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
+        out, strength, at = [], [], 0
+        for step, ys, cheek in zip((-1, +1), traced, self.cheeks):
+            if ys is None:
                 out.append((float(x0), float(y_line)))
                 strength.append(0.0)
                 continue
-            ys = trace_line(maps.lum, x0, y_line, step, n)
-            cols = self._line_columns(maps, x0, ys, step)
-            d = unlike_cheek(cols, (cheek[0], cheek[1]))
+            d = unlike_cheek(cols[at : at + len(ys)], (cheek[0], cheek[1]))
+            at += len(ys)
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
@@ -380,16 +386,13 @@ class MouthFinder:
             strength.append(g)
         return out[0], out[1], strength
 
-    def _line_columns(self, maps: "_Maps", x0: int, ys: np.ndarray, step: int) -> np.ndarray:
-        """:func:`~tracker.mouth_model.line_columns` from the running sums: features (n, 9) of the mean
-        colour of the band ``a1..a2`` rows above the line, of its own three rows and of the band below."""
-        H, W = maps.shape
-        xs = x0 + step * self._cols[: len(ys)]
-        if xs[-1] < 0 or xs[-1] >= W:
-            xs = np.clip(xs, 0, W - 1)
+    def _line_columns(self, maps: "_Maps", xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """:func:`~tracker.mouth_model.line_columns` from the running sums at columns ``xs`` (inside the
+        crop) and line rows ``ys``: features (n, 9) of the mean colour of the band ``a1..a2`` rows above
+        the line, of its own three rows and of the band below."""
+        H = maps.shape[0]
         bounds = ys.astype(np.int32)[None, :] + self._band_rows  # [start, end) of the three bands
-        np.maximum(bounds, 0, out=bounds)
-        np.minimum(bounds, H, out=bounds)
+        np.clip(bounds, 0, H, out=bounds)
         sums = maps.crow[bounds, xs[None, :]]  # (6, n, 3)
         cnt = np.maximum(bounds[1::2] - bounds[0::2], 1).astype(np.float32)  # (3, n)
         means = (sums[1::2] - sums[0::2]).astype(np.float32) / cnt[:, :, None]  # (3, n, 3)
@@ -459,8 +462,7 @@ class MouthFinder:
         cy = 0.5 * (left[1] + right[1])
         width = math.hypot(right[0] - left[0], right[1] - left[1])
         score = self._score(width, bottom - top, (cx, cy), (px, py), fit, strength, gap_top, gap_bottom, previous)
-        poly = lens_outline(left, right, top, bottom, cx, N_RAYS)
-        raw = lens_outline(left, right, gap_top, gap_bottom, cx, N_RAYS)
+        poly, raw = lens_outlines(left, right, (top, gap_top), (bottom, gap_bottom), cx, N_RAYS)
         return MouthResult(
             left=left, right=right, centre=(cx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,

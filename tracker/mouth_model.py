@@ -280,19 +280,32 @@ def lens_outline(left, right, top: float, bottom: float, x_mid: float, n: int = 
     """A closed mouth outline (n, 2) through the corners ``left`` / ``right`` (x, y) and, on the
     column ``x_mid``, the outer lip edges at rows ``top`` and ``bottom``: the upper lip from left to
     right, then the lower lip back, each an arc ``(1 − t²)^0.7`` above / below the corners' line."""
+    return lens_outlines(left, right, (top,), (bottom,), x_mid, n)[0]
+
+
+_ARC_T: dict[int, np.ndarray] = {}
+
+
+def lens_outlines(left, right, tops, bottoms, x_mid: float, n: int = N_RAYS) -> np.ndarray:
+    """:func:`lens_outline` for several pairs of edges through the same corners at once: (k, n, 2)."""
     (xl, yl), (xr, yr) = left, right
     half = n // 2
-    t = np.linspace(0.0, 1.0, half + 1)
-    xs = xl + t * (xr - xl)
+    t = _ARC_T.get(half)
+    if t is None:
+        t = _ARC_T[half] = np.linspace(0.0, 1.0, half + 1)
+    s = min(max((x_mid - xl) / max(xr - xl, 1e-6), 0.05), 0.95)
+    u = np.where(t <= s, t * (1.0 / s) - 1.0, (t - s) * (1.0 / (1.0 - s)))
+    shape = np.clip(1.0 - u * u, 0.0, 1.0) ** 0.7  # 1 at x_mid, 0 at the corners
     base = yl + t * (yr - yl)
-    # arc shape: 1 at x_mid, 0 at the corners
-    s = np.clip((x_mid - xl) / max(xr - xl, 1e-6), 0.05, 0.95)
-    u = np.where(t <= s, (t / s - 1.0), (t - s) / (1.0 - s))
-    shape = np.clip(1.0 - u * u, 0.0, 1.0) ** 0.7
     base_mid = yl + s * (yr - yl)
-    upper = np.stack([xs, base - (base_mid - top) * shape], axis=1)
-    lower = np.stack([xs, base + (bottom - base_mid) * shape], axis=1)[::-1]
-    return np.concatenate([upper[:-1], lower[:-1]])[:n]
+    tops, bottoms = np.asarray(tops, dtype=np.float64), np.asarray(bottoms, dtype=np.float64)
+    out = np.empty((len(tops), 2 * half, 2))
+    xs = xl + t * (xr - xl)
+    out[:, :half, 0] = xs[:-1]
+    out[:, half:, 0] = xs[:0:-1]
+    out[:, :half, 1] = base[:-1] - (base_mid - tops)[:, None] * shape[:-1]
+    out[:, half:, 1] = (base + (bottoms - base_mid)[:, None] * shape)[:, :0:-1]
+    return out[:, :n]
 
 
 def polygon_area(poly: np.ndarray) -> float:
