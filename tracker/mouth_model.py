@@ -94,21 +94,6 @@ def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
     return x0, min(max(int(round(x + half)) + 1, x0 + 1), width)
 
 
-def step_strength(f: np.ndarray, w: int) -> np.ndarray:
-    """Per row of a profile ``f`` (n, c): the distance between the means of the ``w`` rows before and
-    the ``w`` rows after it (0 where a window leaves the profile) — large where one region ends and
-    another begins, however soft the edge."""
-    n = len(f)
-    cs = np.concatenate([np.zeros((1, f.shape[1]), np.float64), np.cumsum(f, axis=0, dtype=np.float64)])
-    out = np.zeros(n)
-    i = np.arange(w, n - w)
-    if len(i):
-        before = (cs[i] - cs[i - w]) / w
-        after = (cs[i + 1 + w] - cs[i + 1]) / w
-        out[i] = np.linalg.norm(before - after, axis=1)
-    return out
-
-
 # --------------------------------------------------------------------------------------------- tables
 
 
