@@ -13,8 +13,9 @@ Per frame (Buck et al. §2, made roll-, scale- and motion-robust):
    pictures, lids from how far the eye's interior reaches, brows by their calibrated
    cross-section; an eye far from its anchor (past a gaze's reach) or unlike the calibrated
    eye is doubtful and is predicted from the anchor instead;
-4. **mouth** (:mod:`tracker.mouth_finder`): lip colour and the mouth's gap and inside → blob
-   → radial polygon → snake, with a score that says whether it is this person's mouth;
+4. **mouth** (:mod:`tracker.mouth_finder`): the corners along the mouth line and the outer lip
+   edges on the vertical profile between them (the gap, dark inside and teeth counted in), given
+   the last frame's mouth, with a score that says whether it is this person's mouth;
 5. **know when you are wrong**: the face picture, the flow, the eyes' geometry against the
    head's pose and the mouth's size and place decide ``ok``, ``eyes_closed``, ``mouth_lost``
    or ``lost``; a lost face holds the last values and is looked for again — where it was,
@@ -373,6 +374,7 @@ class FaceTracker:
         mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth)
         if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
             mouth_res = None
+        self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
         why = ""
         if presence is not None and presence < FACE_ABSENT:
@@ -492,7 +494,13 @@ class FaceTracker:
         rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
         crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
         self._last_mouth_crop = crop
-        res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
+        prev = getattr(self, "_mouth_prev", None)
+        if prev is not None and hasattr(self.mouth_finder, "shifted"):
+            # the last frame's mouth, moved into this crop's pixels (both crops are in face px)
+            prev = self.mouth_finder.shifted(prev[0], prev[1][0] - rect[0], prev[1][1] - rect[1])
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]), previous=prev)
+        else:
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
         if res is not None and res.score < MOUTH_SCORE_OK:
             res = None
         return res, (rect[0], rect[1]), rect

@@ -4,27 +4,32 @@ Everything lives in the upright, scale-normalised mouth crop of :class:`~tracker
 (x along the eye line, y down, ``work_ipd`` px between the eyes), cut with :data:`MOUTH_RECT`
 around the mouth click.
 
-Nothing here assumes what colour lips or skin are. From the calibration crop the model learns
+A mouth has the same structure on every face, whatever the colour of lips and skin: from the
+nose down, skin, the upper lip, the gap between the lips (a dark line when they are closed; the
+dark inside, teeth or a tongue when open), the lower lip, skin; and along the gap, from the middle
+out, lips above and below it until the corners, then cheek. Lip *thickness* changes little while
+the gap opens and closes, and the gap is the high-contrast part. So calibration learns
 
-* the mouth's **outline**: a first guess at each lip is the rows right above and below the gap
-  between the lips (or the open mouth) at the click; three kinds of evidence — those rows' colour
-  against the skin next to them, anything unlike the skin, redness — are each traced the way the
-  finder traces a mouth, and the outline lying on the strongest colour boundary wins;
-* one **lip axis** per lip: Fisher's linear discriminant of the lip's pixels inside that outline
-  against the skin just outside it (the upper lip faces the floor and the lower lip the light, and
-  the skin above and below them differs too), kept orthogonal to the skin's colour so shading
-  does not move it — a linear colour classifier, 0 on skin and 1 on lip, linear in BGR so outer
-  lip edges can be placed to a fraction of a pixel;
-* what the **inside** of a mouth looks like next to this skin (a 64³ table): dark and colourless,
-  or the greys of teeth — so an open mouth, teeth and the gap between closed lips add to the mouth
-  instead of splitting it;
-* the calibrated mouth's **geometry** (centre, width, lip heights, outline).
+* the **gap** at the click: the darkest row near it and the rows around it that look like the
+  inside of a mouth (dark and colourless, or the greys of teeth; past a tongue on the lower teeth);
+* the **outer lip edges**: on the vertical profile through the click, the strongest change of
+  colour above the gap within an upper lip's thickness, and below it within a lower lip's;
+* the **corners**: the mouth line traced from the click outwards along its darkest row, and on
+  each side where its columns (the bands above, on and below it) stop differing from the cheek
+  further out (:func:`corner_distance`);
+* what the **rows** of the profile through the centre look like — the skin above the upper lip
+  (:data:`SKIN_ROWS`), the upper lip, the lower lip, the skin below — for the finder to split
+  every frame's profile into the same five parts; and what the **cheek** beside each corner looks
+  like along the line;
+* one **lip axis** per lip (Fisher's linear discriminant of that lip's pixels against the skin
+  next to it, kept orthogonal to the skin's colour) — how clearly the lips differ in colour
+  (``separation``, the ``cue``) — and what the **inside** of a mouth looks like next to this
+  skin (a 64³ table).
 
-The **cue** is ``"colour"`` when both lips stand out from their skin along their axes (d′ ≥
-:data:`COLOUR_SEPARATION`), else ``"contrast"``: the lips barely differ in colour, so the finder
-leans on what else sets the mouth apart — its dark gap or inside and teeth — and on the weak lip
-edges its axes still see. :func:`learn_mouth` never refuses a face; a face with no visible mouth
-gets a typical mouth at the click, and the finder's score says how sure each frame is.
+Profiles are means of small bands of pixels in colour features (:func:`profile_features`):
+luminance relative to the skin's, and two brightness-free chroma ratios, each in units of a just
+noticeable difference. :func:`learn_mouth` never refuses a face: a crop with no visible mouth gets
+a typical one at the click, and the finder's score says how sure each frame is.
 """
 
 from __future__ import annotations
@@ -35,18 +40,58 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import TILE_SHAPE, Gaussians, _grid_features, features, lut_index, table_to_tile
+from tracker.colour_model import TILE_SHAPE, _grid_features, features, lut_index, table_to_tile
 
-FORMAT = 1
+FORMAT = 2
 MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
 """Crop rectangle ``(x0, y0, w, h)`` in units of ``work_ipd``, relative to the predicted mouth centre
 (face px): wide enough for a grin (1.5× the width), a yawn (the centre drops ~0.3 wi, the lower lip
 another 0.6 wi) and the head-motion prediction's error."""
 N_RAYS = 48
+"""Points on a mouth outline (half on the upper lip, half on the lower)."""
 COLOUR_SEPARATION = 2.0
 """Lip-vs-skin d′ along the lip axes at and above which the lip colour is the cue."""
 TABLE_NAMES = ("inside",)
 """Names of the colour-table images of :meth:`MouthModel.images` (512×512 grey tiles, 255 = inside-like)."""
+BAND = 0.06
+"""Half-width (× wi) of the column band a vertical profile averages."""
+SKIN_ROWS = 0.12
+"""Rows (× wi) of skin beyond each lip's outer edge in the vertical templates."""
+LINE_BANDS = (0.03, 0.09)
+"""Rows (× wi) above and below the mouth line that a column's "above" and "below" bands cover."""
+L_UNIT, C_UNIT = 0.05, 0.012
+"""One unit of the profile features: 5 % of the skin's luminance; 0.012 of a chroma ratio."""
+_FEATURE_MIX = np.array([[0.114, 0.0, -1.0], [0.587, -1.0, 0.5], [0.299, 1.0, 0.5]], np.float32)
+"""BGR → (luminance, r − g, (r + g − 2b) / 2), the numerators of :func:`profile_features`."""
+
+
+# --------------------------------------------------------------------------------------------- features
+
+
+def luminance(bgr: np.ndarray) -> np.ndarray:
+    """Rec. 601 luminance (float32, 0..255) of uint8 or float BGR pixels ``(..., 3)``."""
+    c = np.asarray(bgr, dtype=np.float32)
+    return c[..., 0] * np.float32(0.114) + c[..., 1] * np.float32(0.587) + c[..., 2] * np.float32(0.299)
+
+
+def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
+    """Colour features (float32 ``(..., 3)``) of mean BGR values ``(..., 3)``: luminance in units of
+    :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
+    units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference."""
+    c = np.asarray(bgr, dtype=np.float32)
+    out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2
+    out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
+    den = c.sum(axis=-1, keepdims=True)
+    den += np.float32(24.0)
+    np.divide(out[..., 1:], den, out=out[..., 1:])
+    out[..., 1:] *= np.float32(1.0 / C_UNIT)
+    return out
+
+
+def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
+    """Columns ``[x0, x1)`` of a band ``half`` px either side of column ``x``, inside ``[0, width)``."""
+    x0 = min(max(int(round(x - half)), 0), width - 1)
+    return x0, min(max(int(round(x + half)) + 1, x0 + 1), width)
 
 
 # --------------------------------------------------------------------------------------------- tables
@@ -75,13 +120,22 @@ class MouthModel:
     ``centre`` is the calibrated mouth centre (midpoint of the corners) in the calibration crop's
     pixels; the tracker turns it into a face-frame offset. ``width``, ``lip_upper``, ``lip_lower``
     and ``area`` are the calibration frame's measurements; ``outline`` the mouth outline there,
-    relative to the centre. ``axis_up`` / ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c``
-    of the upper / lower lip (0 on the skin next to it, 1 on the lip). ``skin_level`` /
-    ``skin_sat`` are the skin's median luminance and chroma (:func:`~tracker.colour_model.features`),
-    ``dark`` the luminance under which a colourless pixel is the mouth's dark inside; they define
-    ``inside_table`` (64³, 1 = inside-like). ``separation`` is the smaller lip-vs-skin d′ of the two
-    axes; ``cue`` ``"colour"`` or ``"contrast"``. ``crop_median`` is the calibration crop's median
-    BGR (mostly skin), the reference the finder matches each frame's light to.
+    relative to the centre. ``gap`` is the calibration's gap height at the centre (0: closed lips)
+    and ``line`` the gap's middle below the centre; ``thick_up`` / ``thick_down`` the lips'
+    thicknesses there (inner to outer edge); ``half_left`` / ``half_right`` the corners' distances
+    from the centre along the line.
+
+    ``classes`` (5, 2, 3) describe the rows of the vertical profile through the centre, from the
+    top: the skin above the upper lip, the upper lip, the lower lip, the skin below it — each the
+    median and the spread of its rows' :func:`profile_features` — and the skin round the mouth
+    (which a bulging chin or a lit philtrum looks like better than the skin next to the lips did); ``cheek_left`` / ``cheek_right`` (2, 9) the cheek beside each corner
+    along the line (median and spread of :func:`line_columns`' features). ``axis_up`` /
+    ``axis_down`` (4,) map BGR to the lip value ``w·bgr + c`` of the upper / lower lip (0 on the skin
+    next to it, 1 on the lip); ``separation`` is their smaller d′, ``cue`` ``"colour"`` (≥
+    :data:`COLOUR_SEPARATION`) or ``"contrast"``. ``skin_level`` / ``skin_sat`` are the skin's median
+    luminance and chroma, ``dark`` the luminance under which a colourless pixel is the mouth's dark
+    inside; they define ``inside_table`` (64³, 1 = inside-like). ``crop_median`` is the calibration
+    crop's median BGR (mostly skin), the reference each frame's light is matched to.
     """
 
     work_ipd: float
@@ -91,6 +145,15 @@ class MouthModel:
     lip_lower: float
     area: float
     outline: np.ndarray
+    gap: float
+    line: float
+    thick_up: float
+    thick_down: float
+    half_left: float
+    half_right: float
+    classes: np.ndarray
+    cheek_left: np.ndarray
+    cheek_right: np.ndarray
     axis_up: np.ndarray
     axis_down: np.ndarray
     skin_level: float
@@ -106,28 +169,22 @@ class MouthModel:
             self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat).view(np.uint8)
 
     # ------------------------------------------------------------------ persistence
+    _ARRAYS = ("outline", "classes", "cheek_left", "cheek_right")
+    _FLOATS = ("work_ipd", "width", "lip_upper", "lip_lower", "area", "gap", "line", "thick_up", "thick_down",
+               "half_left", "half_right", "skin_level", "skin_sat", "dark", "separation")
+
     def to_dict(self) -> dict:
         """JSON-able description (the table is rebuilt from it; :meth:`images` shows it)."""
-        return {
-            "format": FORMAT,
-            "kind": "inkface-mouth",
-            "work_ipd": self.work_ipd,
-            "centre": [float(v) for v in self.centre],
-            "width": self.width,
-            "lip_upper": self.lip_upper,
-            "lip_lower": self.lip_lower,
-            "area": self.area,
-            "outline": np.round(np.asarray(self.outline, dtype=np.float64), 3).tolist(),
-            "axis_up": [float(v) for v in self.axis_up],
-            "axis_down": [float(v) for v in self.axis_down],
-            "skin_level": self.skin_level,
-            "skin_sat": self.skin_sat,
-            "dark": self.dark,
-            "separation": self.separation,
-            "cue": self.cue,
-            "crop_median": None if self.crop_median is None else [float(v) for v in self.crop_median],
-            "tables": list(TABLE_NAMES),
-        }
+        d = {"format": FORMAT, "kind": "inkface-mouth"}
+        d.update({k: float(getattr(self, k)) for k in self._FLOATS})
+        d.update({k: np.round(np.asarray(getattr(self, k), dtype=np.float64), 4).tolist() for k in self._ARRAYS})
+        d.update(
+            centre=[float(v) for v in self.centre],
+            axis_up=[float(v) for v in self.axis_up], axis_down=[float(v) for v in self.axis_down], cue=self.cue,
+            crop_median=None if self.crop_median is None else [float(v) for v in self.crop_median],
+            tables=list(TABLE_NAMES),
+        )
+        return d
 
     def images(self) -> dict[str, np.ndarray]:
         """The baked table as a 512×512 uint8 grey image, by name (:data:`TABLE_NAMES`)."""
@@ -137,40 +194,32 @@ class MouthModel:
     def from_dict(cls, d: dict, images: dict[str, np.ndarray] | None = None) -> "MouthModel":
         """Rebuild from :meth:`to_dict` (``images`` are accepted and checked but not needed: the
         table is rebuilt from the description). Raises ``ValueError`` (one line) when malformed."""
-        if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("kind") != "inkface-mouth":
-            raise ValueError(f"not an Inkface mouth model of format {FORMAT}")
+        if not isinstance(d, dict) or d.get("kind") != "inkface-mouth":
+            raise ValueError("not an Inkface mouth model")
+        if d.get("format") != FORMAT:
+            raise ValueError(f"mouth model of format {d.get('format')!r}, this Inkface reads format {FORMAT}: "
+                             "calibrate again")
         img = None if images is None else images.get("inside")
         if img is not None and (np.asarray(img).shape != TILE_SHAPE or np.asarray(img).dtype != np.uint8):
             raise ValueError(f"mouth table image must be {TILE_SHAPE[1]}×{TILE_SHAPE[0]} 8-bit grey")
         try:
+            kw = {k: float(d[k]) for k in cls._FLOATS}
+            shapes = {"outline": (-1, 2), "classes": (5, 2, 3), "cheek_left": (2, 9), "cheek_right": (2, 9)}
+            for k, shape in shapes.items():
+                a = np.asarray(d[k], dtype=np.float64).reshape(shape)
+                kw[k] = a if k == "outline" else a.astype(np.float32)
             return cls(
-                work_ipd=float(d["work_ipd"]),
                 centre=(float(d["centre"][0]), float(d["centre"][1])),
-                width=float(d["width"]),
-                lip_upper=float(d["lip_upper"]),
-                lip_lower=float(d["lip_lower"]),
-                area=float(d["area"]),
-                outline=np.asarray(d["outline"], dtype=np.float64).reshape(-1, 2),
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
-                axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4),
-                skin_level=float(d["skin_level"]),
-                skin_sat=float(d["skin_sat"]),
-                dark=float(d["dark"]),
-                separation=float(d["separation"]),
-                cue=str(d["cue"]),
+                axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4), cue=str(d["cue"]),
                 crop_median=None if d.get("crop_median") is None else tuple(float(v) for v in d["crop_median"]),
+                **kw,
             )
         except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
 
 
-# --------------------------------------------------------------------------------------------- learning
-
-
-def luminance(bgr: np.ndarray) -> np.ndarray:
-    """Rec. 601 luminance (float32, 0..255) of uint8 or float BGR pixels ``(..., 3)``."""
-    c = np.asarray(bgr, dtype=np.float32)
-    return c[..., 0] * np.float32(0.114) + c[..., 1] * np.float32(0.587) + c[..., 2] * np.float32(0.299)
+# --------------------------------------------------------------------------------------------- lip colour
 
 
 def fisher_axis(a: np.ndarray, b: np.ndarray, shading_free: bool = True) -> tuple[np.ndarray, float]:
@@ -209,143 +258,305 @@ def best_axis(lips: np.ndarray, skin: np.ndarray) -> tuple[np.ndarray, float]:
     return (axis_b, sep_b) if sep_b > 1.25 * sep else (axis, sep)
 
 
-def _fill(poly: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    m = np.zeros(shape, np.uint8)
-    cv2.fillPoly(m, [np.round(poly * 16).astype(np.int32)], 1, cv2.LINE_8, 4)
-    return m
+# --------------------------------------------------------------------------------------------- geometry
 
 
-def _overlap(a: np.ndarray, b: np.ndarray, shape: tuple[int, int]) -> float:
-    """Intersection over union of two closed polygons (px) rasterised on an image of ``shape``."""
-    ma, mb = _fill(a, shape), _fill(b, shape)
-    union = int(np.count_nonzero(ma | mb))
-    return int(np.count_nonzero(ma & mb)) / union if union else 0.0
+def lens_outline(left, right, top: float, bottom: float, x_mid: float, n: int = N_RAYS) -> np.ndarray:
+    """A closed mouth outline (n, 2) through the corners ``left`` / ``right`` (x, y) and, on the
+    column ``x_mid``, the outer lip edges at rows ``top`` and ``bottom``: the upper lip from left to
+    right, then the lower lip back, each an arc ``(1 − t²)^0.7`` above / below the corners' line."""
+    return lens_outlines(left, right, (top,), (bottom,), x_mid, n)[0]
 
 
-def _typical_outline(centre: tuple[float, float], wi: float) -> np.ndarray:
-    """A closed mouth of typical size (0.8 wi wide) at ``centre``, on :data:`N_RAYS` rays."""
-    a = np.arange(N_RAYS) * (2.0 * math.pi / N_RAYS)
-    s = np.sin(a)
-    return np.stack([centre[0] + 0.4 * wi * np.cos(a), centre[1] + np.where(s < 0, 0.09, 0.11) * wi * s], axis=1)
+_ARC_T: dict[int, np.ndarray] = {}
 
 
-def _seed_lips(crop: np.ndarray, lum: np.ndarray, inside: np.ndarray, click: tuple[float, float], wi: float
-               ) -> tuple[dict[str, np.ndarray], dict[str, int]]:
-    """BGR pixels that are lip on almost any mouth, per side (``"up"``, ``"down"``), and the rows
-    used (``"line"``: the gap; ``"up"`` / ``"down"``: the outermost seed row on that side).
+def lens_outlines(left, right, tops, bottoms, x_mid: float, n: int = N_RAYS) -> np.ndarray:
+    """:func:`lens_outline` for several pairs of edges through the same corners at once: (k, n, 2)."""
+    (xl, yl), (xr, yr) = left, right
+    half = n // 2
+    t = _ARC_T.get(half)
+    if t is None:
+        t = _ARC_T[half] = np.linspace(0.0, 1.0, half + 1)
+    s = min(max((x_mid - xl) / max(xr - xl, 1e-6), 0.05), 0.95)
+    u = np.where(t <= s, t * (1.0 / s) - 1.0, (t - s) * (1.0 / (1.0 - s)))
+    shape = np.clip(1.0 - u * u, 0.0, 1.0) ** 0.7  # 1 at x_mid, 0 at the corners
+    base = yl + t * (yr - yl)
+    base_mid = yl + s * (yr - yl)
+    tops, bottoms = np.asarray(tops, dtype=np.float64), np.asarray(bottoms, dtype=np.float64)
+    out = np.empty((len(tops), 2 * half, 2))
+    xs = xl + t * (xr - xl)
+    out[:, :half, 0] = xs[:-1]
+    out[:, half:, 0] = xs[:0:-1]
+    out[:, :half, 1] = base[:-1] - (base_mid - tops)[:, None] * shape[:-1]
+    out[:, half:, 1] = (base + (bottoms - base_mid)[:, None] * shape)[:, :0:-1]
+    return out[:, :n]
 
-    In a band 0.24 wi wide through the click, the darkest row near the click is the gap between the
-    lips or the open mouth's inside; walking out from it, up and down, past the dark valley (darker
-    than a quarter of the way to the band's median: dark lipstick is darker than half-way) and past
-    rows that are mostly inside-like (teeth) — and, below, past a tongue on the lower teeth — the
-    next 0.05 wi (above) / 0.06 wi (below) of rows are lip."""
-    H, W = lum.shape
-    cx, cy = click
-    x0, x1 = max(int(round(cx - 0.12 * wi)), 0), min(int(round(cx + 0.12 * wi)) + 1, W)
-    smooth = lambda v: cv2.GaussianBlur(v.reshape(-1, 1).astype(np.float32), (1, 0), 0.8).ravel()
-    rows = smooth(lum[:, x0:x1].mean(axis=1))
-    teeth = smooth(inside[:, x0:x1].mean(axis=1))
-    ya, yb = max(int(round(cy - 0.1 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
-    y_min = ya + int(np.argmin(rows[ya:yb]))
+
+def polygon_area(poly: np.ndarray) -> float:
+    """Area (px²) of a closed polygon (shoelace)."""
+    x, y = poly[:, 0], poly[:, 1]
+    return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+# --------------------------------------------------------------------------------------------- the line
+
+
+def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.ndarray:
+    """Rows (float, length ``n + 1``) of the mouth line from column ``x0`` (row ``y0``) over ``n``
+    columns in direction ``step`` (±1), along a valley of ``lum`` (a smoothed luminance image): in
+    each next column, of the row above, the same row and the row below, the darkest that is darker
+    than both rows next to it in that column — the gap between the lips, or the middle of an open
+    mouth, bending with a smile; where no such row is there (even skin, a slope of shading) the
+    line goes straight on. Columns past the image's edge keep the last row."""
+    h, w = lum.shape
+    lo, hi = 2, h - 3
+    y = min(max(int(round(y0)), lo), hi)
+    out = [float(y)]
+    xs = [x0 + step * k for k in range(1, n + 1)]
+    inside = [x for x in xs if 0 <= x < w]
+    cols = dict(zip(inside, lum[:, inside].T.tolist())) if inside else {}
+    for x in xs:
+        c = cols.get(x)
+        if c is not None:
+            best, by = None, y
+            for v in (y, y - 1, y + 1):
+                if 0 < v < h - 1:
+                    cv = c[v]
+                    if cv < c[v - 1] and cv < c[v + 1] and (best is None or cv < best):
+                        best, by = cv, v
+            y = lo if by < lo else hi if by > hi else by
+        out.append(float(y))
+    return np.array(out)
+
+
+def line_columns(strip: np.ndarray, x0: int, ys: np.ndarray, step: int, a1: int, a2: int, skin_level: float,
+                 gains: np.ndarray | None = None) -> np.ndarray:
+    """Features (len(ys), 9) of the columns along a traced line: :func:`profile_features` of the mean
+    BGR of the band ``a1..a2`` rows above the line, of the line's own three rows, and of the band
+    ``a1..a2`` rows below, per column ``x0 + step·k``."""
+    h, w = strip.shape[:2]
+    n = len(ys)
+    xs = np.clip(x0 + step * np.arange(n), 0, w - 1)
+    offs = np.concatenate([-np.arange(a1, a2 + 1), np.arange(-1, 2), np.arange(a1, a2 + 1)])
+    rows = np.clip(ys.astype(np.int32)[:, None] + offs[None, :], 0, h - 1)
+    px = strip[rows, xs[:, None]].astype(np.float32)  # (n, m, 3)
+    m = a2 - a1 + 1
+    means = np.stack([px[:, :m].mean(1), px[:, m : m + 3].mean(1), px[:, m + 3 :].mean(1)], axis=1)  # (n, 3, 3)
+    if gains is not None:
+        means *= gains.astype(np.float32)
+    return profile_features(means, skin_level).reshape(n, 9)
+
+
+def line_geometry(wi: float) -> tuple[int, int]:
+    """Rows ``(a1, a2)`` of the above / below bands of :func:`line_columns` at this scale."""
+    a1 = max(int(round(LINE_BANDS[0] * wi)), 1)
+    return a1, max(int(round(LINE_BANDS[1] * wi)), a1 + 2)
+
+
+# --------------------------------------------------------------------------------------------- learning
+
+
+def _skin(crop: np.ndarray, cx: float, cy: float, wi: float, skin_samples) -> np.ndarray:
+    """The skin round the mouth: an elliptic ring about the click outside any mouth, its 90 % most
+    typical pixels (plus ``skin_samples`` from elsewhere on the face)."""
+    H, W = crop.shape[:2]
+    yy, xx = np.mgrid[0:H, 0:W]
+    e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
+    ring = crop[(e <= 1.0) & (e >= 0.75**2)]
+    if skin_samples is not None and len(skin_samples):
+        ring = np.concatenate([ring, np.asarray(skin_samples, dtype=np.uint8).reshape(-1, 3)])
+    fs = features(ring, 1.0)
+    med = np.median(fs, axis=0)
+    dev = np.abs(fs - med) / (np.median(np.abs(fs - med), axis=0) * 1.4826 + 1e-6)
+    return ring[dev.max(axis=1) <= np.percentile(dev.max(axis=1), 90)]
+
+
+def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) -> tuple[int, int, int]:
+    """The gap on the profile through the click: ``(top, bottom, darkest)`` rows.
+
+    The darkest row within −0.12…+0.15 wi of the click is in the gap between the lips or in the open
+    mouth; the gap spreads up and down over rows nearly as dark (15 % of the way from that row to the
+    profile's median: a dark lip is not that dark) or teeth (``inside_rows``: the share of teeth-like
+    pixels), across a row or two of neither (the blurred edge between them), at most 0.35 wi each
+    way; below, past a tongue
+    on the lower teeth: lip-like rows followed by more teeth within 0.15 wi are inside too."""
+    H = len(lum_rows)
+    ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
+    y_min = ya + int(np.argmin(lum_rows[ya:yb]))
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
-    level = rows[y_min] + 0.25 * (float(np.median(rows[ra:rb])) - rows[y_min])
-    skip = (rows < level) | (teeth > 0.5)
-    seeds, used = {}, {"line": y_min}
-    for side, direction, depth in (("up", -1, 0.05), ("down", 1, 0.06)):
-        y, k, limit = y_min, 0, int(round(0.3 * wi))
-        while k < limit and 0 <= y < H and skip[y]:
-            y += direction
-            k += 1
-        if k >= limit or not 0 <= y < H:
-            continue
-        # a tongue on the lower teeth is not the lower lip: if more teeth follow below it within
-        # 0.15 wi, the lip is past them (not past a shadow: only teeth count here)
-        reach = [y + direction * j for j in range(1, int(round(0.15 * wi)))] if direction > 0 else []
-        reach = [v for v in reach if 0 <= v < H]
-        flags = [bool(teeth[v] > 0.5) for v in reach]
-        for j in range(len(flags) - 1):
-            if flags[j] and flags[j + 1]:
-                v = reach[j]
-                while 0 <= v < H and skip[v] and abs(v - y) < int(round(0.35 * wi)):
-                    v += direction
-                if 0 <= v < H and not skip[v]:
-                    y = v
-                break
-        y1 = min(max(y + direction * max(int(round(depth * wi)), 2), 0), H - 1)
-        lo, hi = sorted((y, y1))
-        sel = (lum[lo : hi + 1, x0:x1] >= level) & ~inside[lo : hi + 1, x0:x1]
-        seeds[side] = crop[lo : hi + 1, x0:x1][sel]
-        used[side] = y1
-    return seeds, used
+    level = lum_rows[y_min] + 0.15 * (float(np.median(lum_rows[ra:rb])) - lum_rows[y_min])
+    skip = (lum_rows < level) | (inside_rows > 0.5)
+    limit = int(round(0.35 * wi))
+    bridge = max(int(round(0.025 * wi)), 1)
+
+    def walk(y: int, step: int) -> int:
+        """From ``y`` over gap rows, across up to ``bridge`` rows that are not (a blurred edge
+        between the dark inside and teeth)."""
+        while True:
+            nxt = [y + step * j for j in range(1, bridge + 2) if 0 <= y + step * j < H and abs(y + step * j - y_min) <= limit]
+            hit = next((v for v in nxt if skip[v]), None)
+            if hit is None:
+                return y
+            y = hit
+
+    top = walk(y_min, -1)
+    bottom = y_min
+    while True:
+        bottom = walk(bottom, +1)
+        reach = range(bottom + 2, min(bottom + int(round(0.15 * wi)), H - 1))
+        teeth = [v for v in reach if inside_rows[v] > 0.5 and inside_rows[v + 1] > 0.5]
+        if not teeth or teeth[0] - y_min > limit:
+            break
+        bottom = teeth[0]
+    return top, bottom, y_min
 
 
-def _local_skin(crop: np.ndarray, feats: np.ndarray, click: tuple[float, float], wi: float,
-                rows: dict[str, int], whiten: np.ndarray) -> dict[str, np.ndarray]:
-    """Skin right next to each lip: beyond the first strong colour edge outwards from its seed rows
-    (rows of a 0.3 wi band, colour features whitened by ``whiten``), 0.04–0.12 wi past it. The skin
-    around the lips can differ from the cheeks (a redder nose and philtrum, stubble, the shadow
-    under the lower lip), and it is the lips' contrast with *this* skin that marks their edges."""
-    H, W = crop.shape[:2]
-    cx = click[0]
-    x0, x1 = max(int(round(cx - 0.15 * wi)), 0), min(int(round(cx + 0.15 * wi)) + 1, W)
-    prof = cv2.GaussianBlur(feats[:, x0:x1].mean(axis=1).reshape(-1, 1, 3), (1, 0), 1.0).reshape(-1, 3)
-    z = prof @ whiten.T
-    out = {}
-    for side, direction in (("up", -1), ("down", 1)):
-        if side not in rows:
+def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
+    """The outer edge of a lip on a profile ``f`` (rows, c), from its inner edge ``start`` (the gap's
+    last row) in ``direction`` (−1 up, +1 down), ``lo``..``hi`` wi away: the row that best splits the
+    rows past the gap into a lip (all rows from the gap to it) and skin (:data:`SKIN_ROWS` beyond it)
+    — where the whole lip's mean differs most from the skin's just past it. A lip's window grows
+    with the candidate, so a soft edge, a highlight on the lip or a crease in the skin do not pull
+    the edge the way the steepest local change would. Sub-pixel."""
+    n = len(f)
+    s_rows = max(int(round(SKIN_ROWS * wi)), 3)
+    cs = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(f, axis=0, dtype=np.float64)])
+
+    def mean(a: int, b: int) -> np.ndarray:  # rows a..b-1
+        return (cs[b] - cs[a]) / max(b - a, 1)
+
+    first = start + direction  # the lip's first row
+    es = np.arange(max(int(math.floor(lo * wi)), 2), int(math.ceil(hi * wi)) + 1)
+    score = np.full(len(es), -np.inf)
+    for j, e in enumerate(es):
+        edge = start + direction * e  # first skin row
+        if direction < 0:
+            la, lb, sa, sb = edge + 1, first + 1, edge - s_rows + 1, edge + 1
+        else:
+            la, lb, sa, sb = first, edge, edge, edge + s_rows
+        if sa < 0 or sb > n or la >= lb:
             continue
-        ys = rows[side] + direction * np.arange(0, int(round(0.3 * wi)))
-        ys = ys[(ys >= 1) & (ys < H - 1)]
-        if len(ys) < 5:
-            continue
-        g = np.linalg.norm(z[ys - direction] - z[ys + direction], axis=1)
-        peaks = [i for i in range(1, len(g) - 1) if g[i] >= g[i - 1] and g[i] >= g[i + 1]]
-        if not peaks:
-            continue
-        gmax = max(g[i] for i in peaks)
-        edge = ys[next(i for i in peaks if g[i] >= 0.4 * gmax)]
-        lo, hi = sorted((edge + direction * int(round(0.04 * wi)), edge + direction * int(round(0.12 * wi))))
-        lo, hi = max(lo, 0), min(hi + 1, H)
-        if hi > lo:
-            out[side] = crop[lo:hi, x0:x1].reshape(-1, 3)
+        d = mean(la, lb) - mean(sa, sb)
+        score[j] = float(d @ d)
+    if not np.isfinite(score).any():
+        return float(start + direction * 0.5 * (lo + hi) * wi)
+    j = int(np.argmax(score))
+    y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
+    if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
+        y += direction * _vertex(score[j - 1], score[j], score[j + 1])
+    return y
+
+
+def _vertex(a: float, b: float, c: float) -> float:
+    """Offset (−0.5…0.5) of the extreme of a parabola through three equally spaced values."""
+    den = a - 2.0 * b + c
+    return min(max(0.5 * (a - c) / den, -0.5), 0.5) if abs(den) > 1e-12 else 0.0
+
+
+LIP_MAX = (0.15, 0.2)
+"""Thickest upper and lower lip (× wi): a lip's red is about 0.1–0.15 of the inter-eye distance high."""
+CHEEK = (0.62, 0.8)
+"""Distances (× wi) from the click along the line whose columns are cheek at calibration."""
+CHEEK_LEVEL = 6.0
+"""Mean squared distance (per feature, in the cheek's own spread) above which a column is not cheek."""
+BODY_SHARE = 0.3
+CORNER_BIAS = 1.0
+"""Columns a corner from :func:`corner_distance` is moved outwards: the columns about the line turn
+to cheek where the lips have tapered to a point, one column (at any scale: measured on synthetic
+faces whose corners are known, 80 and 40 px between the eyes) inside where the corner is. A
+constant, so it moves no correlation."""
+"""A corner is where the columns are less unlike the cheek than this share of the lips' body."""
+
+
+def mouth_body(wi: float) -> tuple[int, int]:
+    """Columns (from the centre) along the line that are the body of the lips on any mouth."""
+    return max(int(round(0.06 * wi)), 1), max(int(round(0.22 * wi)), 3)
+
+
+def cheek_run(wi: float) -> int:
+    """Columns in a row that must look like the cheek past a corner (0.08 wi)."""
+    return max(int(round(0.08 * wi)), 3)
+
+
+def cheek_model(cols: np.ndarray, wi: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Median and spread (9,) of the line columns :data:`CHEEK` wi out (None when the line is shorter)."""
+    j = np.arange(len(cols))
+    cheek = cols[(j >= CHEEK[0] * wi) & (j <= CHEEK[1] * wi)]
+    if len(cheek) < 3:
+        return None
+    mu = np.median(cheek, axis=0)
+    return mu, np.maximum(1.4826 * np.median(np.abs(cheek - mu), axis=0), 1.0)
+
+
+def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Per column: mean squared distance of its features from the cheek's, in the cheek's spread."""
+    z = (cols - cheek[0]) / cheek[1]
+    return (z * z).mean(axis=1)
+
+
+def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int, int]) -> tuple[float, float]:
+    """Where the mouth ends along one side of the line, from the columns' unlikeness to the cheek
+    ``d`` (column 0 at the centre): the first column in ``[lo, hi]`` after which ``run`` columns in a
+    row are less unlike the cheek than :data:`BODY_SHARE` of the mouth's body (the median over columns
+    ``body``; at least :data:`CHEEK_LEVEL`) — a short crease or blotch beyond the corner does not
+    move it, nor hair, a collar or the background further out — placed sub-pixel where ``d``
+    crosses that level; and how clearly the mouth's columns up to it differed from the cheek
+    (``Σ min(d, 5·level) − level``). Without such a run, where that sum is largest."""
+    v = d.tolist()  # short (one side of a mouth): plain Python is quicker than numpy here
+    n = len(v)
+    body_d = sorted(v[max(body[0], 0) : min(max(body[1], body[0] + 1), n)])
+    level = max(CHEEK_LEVEL, BODY_SHARE * body_d[len(body_d) // 2]) if body_d else CHEEK_LEVEL
+    a, b = max(int(lo), 1), min(int(hi), n - 2)
+    if b <= a:
+        return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
+    cap = 5.0 * level
+    gain, g = [], 0.0
+    for q in v:
+        g += (q if q < cap else cap) - level
+        gain.append(g)
+    # runs[i]: how many columns from i on look like the cheek
+    runs = [0] * (n + 1)
+    for i in range(n - 1, -1, -1):
+        runs[i] = runs[i + 1] + 1 if v[i] < level else 0
+    need = min(run, n - 1 - b + run)
+    k = next((i for i in range(a, b + 1) if v[i] >= level and runs[i + 1] >= need), None)
+    if k is None:
+        k = max(range(a, b + 1), key=gain.__getitem__)
+    x = float(k)
+    d0, d1 = v[k], v[k + 1]
+    if d0 >= level > d1:
+        x += (d0 - level) / (d0 - d1)
+    return x, float(gain[k])
+
+
+def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
+                 skin: np.ndarray) -> np.ndarray:
+    """Median and spread (5, 2, 3) of the profile's rows in each part — skin above (:data:`SKIN_ROWS`
+    above the outer edge), upper lip, lower lip, skin below — and of ``skin`` (features of the skin
+    round the mouth, pixel by pixel: its spread is halved for a profile's band means). The spread is
+    at least a just visible difference, and 12 % of how far the lip's median is from its skin's
+    (strong lipstick varies more in absolute terms than pale lips)."""
+    n = len(f)
+    skin_n = max(SKIN_ROWS * wi, 3.0)
+
+    def rows(a: float, b: float) -> np.ndarray:
+        i0, i1 = int(math.ceil(a)), int(math.floor(b))
+        i0, i1 = min(max(i0, 0), n - 1), min(max(i1, 0), n - 1)
+        return f[i0 : max(i1, i0) + 1]
+
+    parts = [rows(y_top - skin_n, y_top - 0.5), rows(y_top + 0.5, top - 0.5 if bottom > top else top),
+             rows(bottom + 0.5 if bottom > top else bottom + 1, y_bottom - 0.5), rows(y_bottom + 0.5, y_bottom + skin_n)]
+    med = [np.median(p, axis=0) for p in parts]
+    out = np.empty((5, 2, 3), np.float32)
+    for i, p in enumerate(parts):
+        lip_skin = abs(med[1] - med[0]) if i < 2 else abs(med[2] - med[3])
+        out[i, 0] = med[i]
+        out[i, 1] = np.maximum(np.maximum(1.4826 * np.median(np.abs(p - med[i]), axis=0), 1.0), 0.12 * lip_skin)
+    ms = np.median(skin, axis=0)
+    out[4, 0] = ms
+    out[4, 1] = np.maximum(0.5 * 1.4826 * np.median(np.abs(skin - ms), axis=0), 1.0)
     return out
-
-
-def _plausible(poly: np.ndarray, click: tuple[float, float], wi: float) -> float:
-    """How much a calibration outline looks like a mouth at the click (0..1): 0.35–1.3 wi wide,
-    0.06–0.7 wi tall, no more than 0.3 wi above the corners, centred within ~0.2 wi of the click."""
-    from tracker.mouth_finder import polygon_measures
-
-    left, right, up, down = polygon_measures(poly)
-    w, h = right[0] - left[0], up + down
-    ramp = lambda v, a, b: float(np.clip((v - a) / (b - a), 0.0, 1.0))
-    c = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]) + 0.5 * (down - up))
-    d = math.hypot(c[0] - click[0], c[1] - click[1]) / wi
-    return (ramp(w, 0.3 * wi, 0.4 * wi) * ramp(-w, -1.4 * wi, -1.2 * wi) * ramp(h, 0.04 * wi, 0.08 * wi)
-            * ramp(-h, -0.8 * wi, -0.6 * wi) * ramp(-up, -0.35 * wi, -0.25 * wi) * ramp(-d, -0.3 * wi / wi, -0.15))
-
-
-def _boundary_contrast(crop: np.ndarray, poly: np.ndarray, inside: np.ndarray, wi: float) -> float:
-    """Fisher separation (d′ along the best direction, colour features) between a band just inside
-    the outline (without the mouth's inside) and a band just outside it: largest on the lips' outer
-    edge — smaller if the outline cuts through the lips or runs out into skin."""
-    H, W = crop.shape[:2]
-    filled = _fill(poly, (H, W))
-    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
-    out_depth = cv2.distanceTransform(1 - filled, cv2.DIST_L2, 3)
-    band_in = (filled > 0) & (depth >= 1.0) & (depth <= max(0.06 * wi, 2.5)) & (inside == 0)
-    band_out = (filled == 0) & (out_depth >= 1.5) & (out_depth <= max(0.1 * wi, 4.0))
-    if band_in.sum() < 12 or band_out.sum() < 12:
-        return 0.0
-    a, b = features(crop[band_in], 1.0), features(crop[band_out], 1.0)
-    d = a.mean(0) - b.mean(0)
-    sw = 0.5 * (np.cov(a.T) + np.cov(b.T)) + np.diag([1e-4, 1e-5, 1e-5])
-    return float(np.sqrt(max(d @ np.linalg.solve(sw, d), 0.0)))
-
-
-def _every(px: np.ndarray, n: int) -> np.ndarray:
-    """At most about ``n`` rows of ``px``, evenly spaced."""
-    return px[:: max(len(px) // max(n, 1), 1)]
 
 
 def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], work_ipd: float,
@@ -357,157 +568,137 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     ``skin_samples`` optional ``(n, 3)`` BGR skin pixels from elsewhere on the face (cheeks,
     forehead). Never refuses a face; ``model.cue`` says which cue the finder will lean on.
     """
-    from tracker.mouth_finder import MouthFinder, polygon_measures
-
     crop = np.ascontiguousarray(crop_bgr)
     if crop.ndim != 3 or crop.shape[2] != 3 or crop.dtype != np.uint8:
         raise ValueError("mouth crop must be a uint8 (H, W, 3) BGR image")
     wi = float(work_ipd)
     H, W = crop.shape[:2]
     cx, cy = float(mouth_click_crop[0]), float(mouth_click_crop[1])
-    yy, xx = np.mgrid[0:H, 0:W]
-    feats = features(crop.reshape(-1, 3), 1.0).reshape(H, W, 3).astype(np.float32)
-    lum = luminance(crop)
-    idx = lut_index(crop)
-    crop32 = crop.astype(np.float32)
     sub = crop[::4, ::4].reshape(-1, 3)
     crop_median = tuple(float(v) for v in np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2])
 
-    # skin: an ellipse around the click, outside any mouth (its 90 % most typical pixels)
-    e = ((xx - cx) / (0.72 * wi)) ** 2 + ((yy - cy) / (0.45 * wi)) ** 2
-    ring = crop[(e <= 1.0) & (e >= 0.75**2)]
-    if skin_samples is not None and len(skin_samples):
-        ring = np.concatenate([ring, np.asarray(skin_samples, dtype=np.uint8).reshape(-1, 3)])
-    fs = features(ring, 1.0)
-    med = np.median(fs, axis=0)
-    dev = np.abs(fs - med) / (np.median(np.abs(fs - med), axis=0) * 1.4826 + 1e-6)
-    skin_in = ring[dev.max(axis=1) <= np.percentile(dev.max(axis=1), 90)]
-    fs_in = features(skin_in, 1.0)
-    skin_level = float(np.median(fs_in[:, 0]) * 255.0)
-    skin_sat = float(np.median(np.hypot(fs_in[:, 1], fs_in[:, 2])))
-    inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).take(idx)
+    skin = _skin(crop, cx, cy, wi, skin_samples)
+    fs = features(skin, 1.0)
+    skin_level = float(np.median(fs[:, 0]) * 255.0)
+    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))
+    idx = lut_index(crop)
+    inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
+    teeth0 = _inside(0.0, skin_level, skin_sat).view(np.uint8).take(idx)
 
-    # first guess at each lip: the rows next to the gap (or the open mouth) above and below the click;
-    # its own skin: just beyond its outer edge
-    seeds, rows = _seed_lips(crop, lum, inside0, (cx, cy), wi)
-    cov = np.cov(fs_in.T) + np.diag([1e-4, 1e-5, 1e-5])
-    near = _local_skin(crop, feats, (cx, cy), wi, rows, np.linalg.cholesky(np.linalg.inv(cov)).T)
-    lip_lums = [float(np.median(luminance(v))) for v in seeds.values() if len(v) >= 12]
-    dark = 0.6 * min([skin_level] + lip_lums)  # the inside is darker than either lip
-    inside = _inside(dark, skin_level, skin_sat).take(idx)
+    band = max(BAND * wi, 1.5)
 
-    def skin_next_to(side: str) -> np.ndarray:
-        sk = near.get(side)
-        if sk is None or len(sk) < 12:
-            return skin_in
-        return np.concatenate([sk, _every(skin_in, len(sk))])
+    def column(x: float, y: float):
+        """The gap and the outer lip edges on the profile through column ``x`` near row ``y``, and
+        that profile's features and luminance."""
+        b0, b1 = band_columns(x, band, W)
+        rows_bgr = cv2.GaussianBlur(crop[:, b0:b1].astype(np.float32).mean(axis=1).reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
+        lum_rows = luminance(rows_bgr)
+        top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi)
+        f_rows = profile_features(rows_bgr, skin_level)
+        return (top, bottom, y_min, _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi),
+                lum_rows)
 
-    # pass 1: candidate outlines from three kinds of evidence, each traced the way the finder traces
-    # a mouth; the one on the strongest colour boundary wins
-    finder0 = MouthFinder(_provisional(wi, skin_level, skin_sat, dark), wi)
-    evidence = []
-    if len(seeds.get("up", ())) >= 6 or len(seeds.get("down", ())) >= 6:
-        a_up = best_axis(seeds.get("up") if len(seeds.get("up", ())) >= 6 else seeds["down"], skin_next_to("up"))[0]
-        a_dn = best_axis(seeds.get("down") if len(seeds.get("down", ())) >= 6 else seeds["up"], skin_next_to("down"))[0]
-        evidence.append(lip_evidence(lip_value(crop32, a_up, a_dn, rows["line"], wi)))
-    d_skin = np.sqrt(Gaussians(fs_in, 1, np.array([0.02, 0.006, 0.006])).mahalanobis2(features(crop.reshape(-1, 3), 1.0)))
-    evidence.append((d_skin.reshape(H, W).astype(np.float32) - 3.0) * 0.5)
-    rg = features(skin_next_to("up"), 1.0)[:, 1]
-    evidence.append((feats[..., 1] - np.float32(np.median(rg))) / np.float32(max(float(np.std(rg)), 0.004)) * 0.5 - 1.0)
-    candidates = []
-    for ev in evidence:
-        ev = cv2.GaussianBlur(np.clip(ev, -2.0, 2.0).astype(np.float32), (0, 0), finder0.sigma)
-        res = finder0.outline_on(ev, inside, (cx, cy), fill=False)
-        if res is not None:
-            q = _plausible(res[0], (cx, cy), wi)
-            if q > 0:
-                candidates.append((q * _boundary_contrast(crop, res[0], inside, wi), res[0]))
-    if _trace is not None:
-        _trace.update(rows=rows, candidates=candidates)
-    outline = max(candidates, key=lambda c: c[0])[1] if candidates else None
-    seen = outline is not None
-    if outline is None:  # nothing near the click stands out from the skin: a typical mouth there
-        outline = _typical_outline((cx, cy), wi)
+    # the gap through the click
+    top, bottom, y_min, y_top, y_bottom, lum_rows = column(cx, cy)
 
-    # pass 2: each lip's axis, from its pixels inside the outline against the skin just outside it
-    axes, sep = _axes_for(crop, outline, inside, wi, skin_next_to)
-    cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
+    # the line through the middle of the gap, traced out to both sides; the corners on it
+    y_line = 0.5 * (top + bottom)
+    a1, a2 = line_geometry(wi)
+    lum = cv2.GaussianBlur(luminance(crop), (0, 0), max(0.015 * wi, 1.0))
+    n_side = int(min(0.95 * wi, W - 2))
+    x0 = int(round(cx))
+    sides = {}
+    for name, step in (("left", -1), ("right", +1)):
+        n = min(n_side, x0 if step < 0 else W - 1 - x0)
+        ys = trace_line(lum, x0, y_line, step, max(n, 1))
+        cols = line_columns(crop, x0, ys, step, a1, a2, skin_level)
+        cheek = cheek_model(cols, wi)
+        half = (corner_distance(unlike_cheek(cols, cheek), 0.2 * wi, 0.75 * wi, cheek_run(wi), mouth_body(wi))[0] + CORNER_BIAS
+                if cheek is not None else 0.4 * wi)
+        sides[name] = (ys, cols, half, step, cheek)
+    # a mouth is seen when the gap is clearly darker than the profile round it
+    ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
+    seen = float(np.median(lum_rows[ra:rb])) - float(lum_rows[y_min]) > 0.06 * skin_level
 
-    def model_for(poly: np.ndarray, axes: dict, sep: float, measured=None) -> MouthModel:
-        left, right, up, down = polygon_measures(poly) if measured is None else measured
-        centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
-        return MouthModel(
-            work_ipd=wi, centre=(float(centre[0]), float(centre[1])),
-            width=float(math.hypot(right[0] - left[0], right[1] - left[1])), lip_upper=float(up), lip_lower=float(down),
-            area=float(_fill(poly, (H, W)).sum()), outline=poly - np.array(centre), axis_up=axes["up"],
-            axis_down=axes["down"], skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep, cue=cue,
-            crop_median=crop_median,
-        )
+    def corner_point(name):
+        ys, _, half, step, _ = sides[name]
+        k = min(int(round(half)), len(ys) - 1)
+        return (x0 + step * half, float(ys[k]))
 
-    model = model_for(outline, axes, sep)
-    # measure the calibration frame the way every frame will be measured (and learn the axes again
-    # from that outline if it agrees with the first)
+    left, right = corner_point("left"), corner_point("right")
+    centre = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
+    width = math.hypot(right[0] - left[0], right[1] - left[1])
+
+    # the gap and the lips' thickness through the centre, and a little to either side (a Cupid's
+    # bow, a highlight or a crease on one column does not decide it)
+    ys_l, ys_r = sides["left"][0], sides["right"][0]
+
+    def line_row(x: float) -> float:
+        k = int(round(x - x0))
+        ys, k = (ys_r, k) if k >= 0 else (ys_l, -k)
+        return float(ys[min(k, len(ys) - 1)])
+
     if seen:
-        res = MouthFinder(model, wi).find(crop, model.centre)
-        if _trace is not None:
-            _trace["final"] = None if res is None else res.polygon
-        if res is not None and res.score >= 0.3 and _overlap(res.polygon, outline, (H, W)) >= 0.7:
-            axes2, sep2 = _axes_for(crop, res.polygon, inside, wi, skin_next_to)
-            model = model_for(res.polygon, axes2, sep2, (res.left, res.right, res.lip_upper, res.lip_lower))
-    return model
+        cols3 = [column(x, line_row(x)) for x in (centre[0], centre[0] - 0.12 * wi, centre[0] + 0.12 * wi)]
+        top, bottom, y_min = cols3[0][:3]
+        thick_up = float(np.median([c[0] - c[3] for c in cols3]))
+        thick_down = float(np.median([c[4] - c[1] for c in cols3]))
+    else:
+        thick_up, thick_down = top - y_top, y_bottom - bottom
+    thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
+    y_top, y_bottom = top - thick_up, bottom + thick_down
+    # a lip thicker than any lip is: the gap reached less far than the mouth is open (a tongue or the
+    # lower teeth next to the lip were taken for lip) — the outer edge stands, the inner one moves
+    if thick_up > LIP_MAX[0] * wi:
+        thick_up = LIP_MAX[0] * wi
+        top = min(int(round(y_top + thick_up)), int(y_min))
+    if thick_down > LIP_MAX[1] * wi:
+        thick_down = LIP_MAX[1] * wi
+        bottom = max(int(round(y_bottom - thick_down)), int(y_min))
+    thick_up, thick_down = top - y_top, y_bottom - bottom
 
+    # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
+    b0, b1 = band_columns(centre[0], band, W)
+    f_centre = profile_features(crop[:, b0:b1].astype(np.float32).mean(axis=1), skin_level)
+    classes = _row_classes(f_centre, y_top, top, bottom, y_bottom, wi, profile_features(skin.astype(np.float32), skin_level))
+    typical = np.stack([np.zeros(9), np.full(9, 10.0)])  # no cheek seen: nothing is much unlike it
+    cheeks = {name: np.stack(sides[name][4]) if sides[name][4] is not None else typical for name in ("left", "right")}
 
-def _axes_for(crop: np.ndarray, outline: np.ndarray, inside: np.ndarray, wi: float, skin_next_to) -> tuple[dict, float]:
-    """Lip axes for the upper and lower lip of ``outline`` (pixels inside it, neither its rim nor the
-    mouth's inside, above / below the corners' line, against a band 1.5 px to 0.1 wi outside it on the
-    same side), and the smaller of their d′."""
-    from tracker.mouth_finder import polygon_measures
+    outline = lens_outline(left, right, y_top, y_bottom, centre[0])
+    if not seen:  # nothing near the click looks like a mouth: a typical mouth there
+        outline = lens_outline((cx - 0.4 * wi, cy), (cx + 0.4 * wi, cy), cy - 0.09 * wi, cy + 0.11 * wi, cx)
 
-    H, W = crop.shape[:2]
-    yy = np.arange(H)[:, None]
-    filled = _fill(outline, (H, W))
-    depth = cv2.distanceTransform(filled, cv2.DIST_L2, 3)
-    out_depth = cv2.distanceTransform(1 - filled, cv2.DIST_L2, 3)
-    lipish = (filled > 0) & (depth >= 1.0) & (inside == 0)
-    skin = (filled == 0) & (out_depth >= 1.5) & (out_depth <= max(0.1 * wi, 4.0))
-    left, right, _, _ = polygon_measures(outline)
-    y_line = 0.5 * (left[1] + right[1])
-    xs = (np.arange(W)[None, :] >= left[0]) & (np.arange(W)[None, :] <= right[0])
-    axes, seps = {}, []
-    for side, half in (("up", yy < y_line), ("down", yy >= y_line)):
-        lp = lipish & half
-        sk = skin & half & xs
-        lips = crop[lp] if lp.sum() >= 12 else crop[lipish] if lipish.sum() >= 12 else crop[filled > 0]
-        sk_px = crop[sk] if sk.sum() >= 12 else skin_next_to(side)
-        axes[side], s = best_axis(lips, sk_px)
-        seps.append(s)
-    return axes, float(min(seps))
+    # lip colour: each lip's pixels (between its inner and outer edge, the middle 60 % of the mouth)
+    # against the skin just beyond its outer edge
+    xa, xb = int(round(centre[0] - 0.3 * width)), int(round(centre[0] + 0.3 * width)) + 1
+    xa, xb = max(xa, 0), min(max(xb, xa + 1), W)
+    def rows_px(y0, y1):
+        y0, y1 = int(round(min(y0, y1))), int(round(max(y0, y1)))
+        y0, y1 = max(y0, 0), min(max(y1, y0 + 1), H)
+        blk = crop[y0:y1, xa:xb]
+        keep = inside0[y0:y1, xa:xb] == 0
+        return blk[keep] if keep.sum() >= 12 else blk.reshape(-1, 3)
+    skin_up = rows_px(y_top - 0.1 * wi, y_top - 0.02 * wi)
+    skin_dn = rows_px(y_bottom + 0.02 * wi, y_bottom + 0.1 * wi)
+    lip_up = rows_px(y_top + 0.2 * thick_up, top - 0.15 * thick_up)
+    lip_dn = rows_px(bottom + 0.15 * thick_down, y_bottom - 0.2 * thick_down)
+    axis_up, sep_up = best_axis(lip_up, np.concatenate([skin_up, skin[:: max(len(skin) // max(len(skin_up), 1), 1)]]))
+    axis_dn, sep_dn = best_axis(lip_dn, np.concatenate([skin_dn, skin[:: max(len(skin) // max(len(skin_dn), 1), 1)]]))
+    sep = float(min(sep_up, sep_dn))
+    cue = "colour" if seen and sep >= COLOUR_SEPARATION else "contrast"
+    lip_lums = [float(np.median(luminance(v))) for v in (lip_up, lip_dn) if len(v) >= 12]
+    dark = 0.6 * min([skin_level] + lip_lums)  # the inside is darker than either lip
 
-
-def lip_value(crop32: np.ndarray, a_up: np.ndarray, a_dn: np.ndarray, y_line: float, wi: float) -> np.ndarray:
-    """The lip value (float32; 0 skin, 1 lip) of a float32 BGR crop: the upper lip's axis above the
-    mouth line ``y_line``, the lower lip's below, blended over about ±0.03 wi."""
-    vu = cv2.transform(crop32, a_up[:3].reshape(1, 3).astype(np.float32))
-    vd = cv2.transform(crop32, a_dn[:3].reshape(1, 3).astype(np.float32))
-    vu += np.float32(a_up[3])
-    vd += np.float32(a_dn[3])
-    vd -= vu
-    y = (np.arange(crop32.shape[0], dtype=np.float32) - np.float32(y_line)) / np.float32(max(0.03 * wi, 1.0))
-    vd *= (1.0 / (1.0 + np.exp(-y))).astype(np.float32).reshape(-1, 1)
-    vd += vu
-    return vd
-
-
-def lip_evidence(v: np.ndarray) -> np.ndarray:
-    """Evidence (+1 lip, −1 skin, float32) from a lip value map: ``2·v − 1`` clipped to [−2, 2]."""
-    return np.clip(np.float32(2.0) * v - np.float32(1.0), -2.0, 2.0)
-
-
-def _provisional(wi: float, skin_level: float, skin_sat: float, dark: float) -> MouthModel:
-    """A model with only the sizes and the inside known (for the calibration's first outlines)."""
-    zero = np.zeros(4)
+    if _trace is not None:
+        _trace.update(gap=(top, bottom, y_min), edges=(y_top, y_bottom), left=left, right=right, sides=sides)
     return MouthModel(
-        work_ipd=wi, centre=(0.0, 0.0), width=0.8 * wi, lip_upper=0.1 * wi, lip_lower=0.12 * wi, area=0.15 * wi * wi,
-        outline=_typical_outline((0.0, 0.0), wi), axis_up=zero, axis_down=zero, skin_level=skin_level,
-        skin_sat=skin_sat, dark=dark, separation=0.0, cue="contrast",
+        work_ipd=wi, centre=(float(centre[0]), float(centre[1])), width=float(width),
+        lip_upper=float(centre[1] - y_top), lip_lower=float(y_bottom - centre[1]), area=polygon_area(outline),
+        outline=outline - np.array(centre), gap=float(bottom - top), line=float(y_line - centre[1]),
+        thick_up=float(thick_up), thick_down=float(thick_down),
+        half_left=float(centre[0] - left[0]), half_right=float(right[0] - centre[0]),
+        classes=classes,
+        cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
+        axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
+        cue=cue, crop_median=crop_median,
     )

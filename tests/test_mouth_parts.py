@@ -1,0 +1,152 @@
+"""The mouth finder's pieces on synthetic frames and profiles: the per-frame sums against the
+direct means they replace, the corner search, the vertical split on open and pressed mouths, the
+working scale and the last frame's mouth moved into a new crop."""
+
+import math
+
+import numpy as np
+import pytest
+
+from tracker.mouth_finder import WORK_IPD, MouthFinder
+from tracker.mouth_model import band_columns, corner_distance, line_columns, profile_features
+
+from test_mouth_finder import BASE, WI, _calibrate, _crop, _frame_of, render_face
+
+
+@pytest.fixture(scope="module")
+def finder_and_crop():
+    model, centre = _calibrate()
+    img, _ = render_face(BASE.with_expression("ah"))
+    crop, origin = _crop(img, _frame_of(BASE), centre)
+    finder = MouthFinder(model, WI)
+    small = np.ascontiguousarray(crop[::2, ::2])
+    return finder, small, tuple(np.array(centre) - origin)
+
+
+def test_profile_from_the_integral_image_is_the_band_mean(finder_and_crop):
+    finder, small, _ = finder_and_crop
+    maps = finder.prepare(small)
+    for x in (10.0, 37.4, float(small.shape[1] - 3)):
+        f, inside = finder.profile(maps, x)
+        x0, x1 = band_columns(x, finder.half, small.shape[1])
+        direct = profile_features(small[:, x0:x1].astype(np.float32).mean(axis=1), finder.model.skin_level)
+        assert np.allclose(f, direct, atol=1e-3)
+        assert inside.shape == (small.shape[0],) and 0.0 <= inside.min() and inside.max() <= 1.0
+
+
+def test_line_columns_from_the_running_sums_match_the_direct_ones(finder_and_crop):
+    finder, small, _ = finder_and_crop
+    maps = finder.prepare(small)
+    ys = np.full(20, 30.0) + np.arange(20) % 3  # a line a little wavy, well inside the crop
+    for step in (-1, 1):
+        fast = finder._line_columns(maps, 38 + step * np.arange(len(ys)), ys)
+        slow = line_columns(small, 38, ys, step, finder.a1, finder.a2, finder.model.skin_level)
+        assert np.allclose(fast, slow, atol=1e-3)
+
+
+def _corner_reference(d, lo, hi, run, body):
+    """The corner search written plainly with numpy (the finder's runs in plain Python)."""
+    from tracker.mouth_model import BODY_SHARE, CHEEK_LEVEL
+
+    n = len(d)
+    level = max(CHEEK_LEVEL, BODY_SHARE * float(np.sort(d[body[0] : body[1]])[(body[1] - body[0]) // 2]))
+    a, b = max(int(lo), 1), min(int(hi), n - 2)
+    gain = np.cumsum(np.minimum(d, 5.0 * level) - level)
+    cheek = d < level
+    runs = np.zeros(n + 1, int)
+    for i in range(n - 1, -1, -1):
+        runs[i] = runs[i + 1] + 1 if cheek[i] else 0
+    need = min(run, n - 1 - b + run)
+    ends = [i for i in range(a, b + 1) if not cheek[i] and runs[i + 1] >= need]
+    k = ends[0] if ends else a + int(np.argmax(gain[a : b + 1]))
+    x = float(k)
+    if d[k] >= level > d[k + 1]:
+        x += (d[k] - level) / (d[k] - d[k + 1])
+    return x, float(gain[k])
+
+
+def test_corner_distance_matches_the_plain_reference():
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        n = int(rng.integers(20, 45))
+        end = int(rng.integers(6, n - 4))
+        d = np.concatenate([rng.uniform(10, 60, end), rng.uniform(0, 8, n - end)])
+        d[rng.integers(0, n)] = rng.uniform(0, 80)  # a blotch anywhere
+        got = corner_distance(d, 4, n - 3, 3, (2, 9))
+        want = _corner_reference(d, 4, n - 3, 3, (2, 9))
+        assert got == pytest.approx(want, abs=1e-9)
+
+
+def _profile(rows, finder):
+    """A profile (features, inside) from a list of (kind, count): kinds are the model's classes."""
+    cls = np.asarray(finder.model.classes)
+    feats, inside = [], []
+    for kind, k in rows:
+        if kind == "inside":
+            f, i = np.array([2.0, 0.0, 0.0]), 1.0
+        elif kind == "tongue":
+            f, i = cls[2, 0] + np.array([6.0, 0.0, 0.0]), 0.0  # lower-lip coloured, brighter
+        else:
+            f, i = cls[{"skin_up": 0, "lip_up": 1, "lip_down": 2, "skin_down": 3}[kind], 0], 0.0
+        feats += [f] * k
+        inside += [i] * k
+    return np.array(feats, np.float32), np.array(inside, np.float32)
+
+
+def test_vertical_split_counts_the_inside_and_a_tongue_in_an_open_mouth(finder_and_crop):
+    finder = finder_and_crop[0]
+    tu, td = int(round(finder.t_up)), int(round(finder.t_dn))
+    rows = [("skin_up", 20), ("lip_up", tu), ("inside", 4), ("tongue", 6), ("inside", 2), ("lip_down", td), ("skin_down", 20)]
+    f, inside = _profile(rows, finder)
+    top_true, bottom_true = 20, 20 + tu + 12 + td
+    line = 20 + tu + 6
+    gap_top, gap_bottom, top, bottom, _, _ = finder.vertical(f, inside, line)
+    assert abs(top - (top_true - 0.5)) <= 1.5 and abs(bottom - (bottom_true - 0.5)) <= 1.5
+    assert gap_top < line < gap_bottom
+
+
+def test_pressed_lips_are_not_an_open_mouth(finder_and_crop):
+    """Lip rows and no inside: the lips are closed, the outer edges are those of the two lips."""
+    finder = finder_and_crop[0]
+    tu, td = int(round(finder.t_up)), int(round(finder.t_dn))
+    rows = [("skin_up", 20), ("lip_up", tu), ("lip_down", td), ("skin_down", 25)]
+    f, inside = _profile(rows, finder)
+    _, _, top, bottom, _, _ = finder.vertical(f, inside, 20 + tu)
+    assert abs((bottom - top) - (tu + td)) <= 2.0
+
+
+def test_a_large_crop_is_shrunk_to_the_working_scale_and_the_result_scaled_back():
+    model, centre = _calibrate()
+    img, _ = render_face(BASE)
+    crop, origin = _crop(img, _frame_of(BASE), centre)
+    finder = MouthFinder(model, WI)
+    assert finder.s == pytest.approx(WORK_IPD / WI) and finder.wi == pytest.approx(WORK_IPD)
+    res = finder.find(crop, tuple(np.array(centre) - origin))
+    assert res is not None and res.shape == crop.shape[:2] and res.blob.shape == crop.shape[:2]
+    cx, cy = res.centre
+    assert abs(cx - (centre[0] - origin[0])) < 3.0 and abs(cy - (centre[1] - origin[1])) < 3.0
+    assert np.all(res.polygon[:, 0] >= res.left[0] - 1e-6) and np.all(res.polygon[:, 0] <= res.right[0] + 1e-6)
+
+
+def test_shifted_moves_every_point_and_keeps_the_opening():
+    model, centre = _calibrate()
+    img, _ = render_face(BASE.with_expression("ah"))
+    crop, origin = _crop(img, _frame_of(BASE), centre)
+    res = MouthFinder(model, WI).find(crop, tuple(np.array(centre) - origin))
+    moved = MouthFinder.shifted(res, 3.0, -2.0)
+    assert moved.centre == pytest.approx((res.centre[0] + 3.0, res.centre[1] - 2.0))
+    assert moved.left == pytest.approx((res.left[0] + 3.0, res.left[1] - 2.0))
+    assert moved.gap_top == pytest.approx(res.gap_top - 2.0) and moved.gap_bottom == pytest.approx(res.gap_bottom - 2.0)
+    assert np.allclose(moved.polygon, res.polygon + (3.0, -2.0))
+    assert moved.lip_upper == res.lip_upper and moved.lip_lower == res.lip_lower and math.isclose(moved.width, res.width)
+
+
+def test_outlines_through_the_same_corners_at_once_match_one_at_a_time():
+    from tracker.mouth_model import lens_outline, lens_outlines
+
+    both = lens_outlines((10.0, 30.0), (60.0, 33.0), (20.0, 27.0), (40.0, 35.0), 35.0)
+    assert both.shape == (2, 48, 2)
+    assert np.allclose(both[0], lens_outline((10.0, 30.0), (60.0, 33.0), 20.0, 40.0, 35.0))
+    assert np.allclose(both[1], lens_outline((10.0, 30.0), (60.0, 33.0), 27.0, 35.0, 35.0))
+    top = both[0][np.argmin(np.abs(both[0][:24, 0] - 35.0))]
+    assert top[1] == pytest.approx(20.0, abs=0.5)  # the upper edge passes through the given row at x_mid
