@@ -791,7 +791,9 @@ def _eye_model(path: Path, d, names) -> EyeModel | None:
 
 
 def _mouth_model(path: Path, d) -> MouthModel | None:
-    if d is None:
+    """The calibration's mouth model, or None when it has none or one of the first format (its
+    measurements mean something else to today's finder: the lip-blob finder tracks that calibration)."""
+    if d is None or (isinstance(d, dict) and d.get("format") == 1):
         return None
     try:
         return MouthModel.from_dict(d)

@@ -91,5 +91,5 @@ class LegacyMouth:
         w = self.cal.mouth_width
         if r is None or not (0.2 * w <= r.width <= 2.2 * w):
             return None
-        return MouthResult(r.left, r.right, r.centre, r.lip_upper, r.lip_lower, r.polygon, r.raw_polygon, r.blob,
-                           "lip colour", 1.0)
+        return MouthResult(r.left, r.right, r.centre, r.lip_upper, r.lip_lower, r.polygon, r.raw_polygon,
+                           cue="lip colour", score=1.0, shape=tuple(r.blob.shape), _blob=r.blob)
