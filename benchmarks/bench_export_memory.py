@@ -14,6 +14,7 @@ import subprocess
 import sys
 import tempfile
 
+from app.net import Receiver
 from benchmarks.harness import Table, benchmark
 
 _RSS = """
@@ -47,7 +48,7 @@ import argparse, json, sys
 import numpy as np
 from pathlib import Path
 from app import net_cmd
-from app.net import Hello, Receiver
+from app.net import Hello
 from tracker.params import FaceParams, ParamCodec, encode_packet
 n, warm, folder, outputs = int(sys.argv[1]), int(sys.argv[2]), Path(sys.argv[3]), sys.argv[4] == "all"
 frame, ipd = (640, 480), 80.0
@@ -57,36 +58,13 @@ base = FaceParams(mid_x=320, mid_y=220, eye_open_l=14, eye_open_r=15, brow_l=30,
 codes = [codec.encode(FaceParams.from_values(base + np.sin(i / 9.0) * 5)) for i in range(600)]
 hello = Hello(7, frame, ipd, compressed=False, key_interval=30, neutral_codes=codes[0]).encode()
 
-class Clock:
-    t = 100.0
-    def __call__(self):
-        return self.t
+from benchmarks.bench_export_memory import FedReceiver
 
-class Fed(Receiver):
-    # the receiver core fed from a generator instead of a socket, 50 datagrams a poll
-    def __init__(self):
-        self.clock_ = Clock()
-        super().__init__(clock=self.clock_)
-        self.data = self.datagrams()
-        self.address = ("127.0.0.1", 0)
-    def datagrams(self):
-        for i in range(n):
-            if i % 300 == 0:
-                yield hello
-            yield encode_packet(codes[i % 600], i, 33 * i)
-    def poll(self, timeout=0.0, max_datagrams=1000):
-        out = []
-        for _ in range(50):
-            d = next(self.data, None)
-            if d is None:
-                if not out:
-                    raise KeyboardInterrupt
-                break
-            self.clock_.t += 1 / 30
-            f = self.handle(d, "A")
-            if f is not None:
-                out.append(f)
-        return out
+def datagrams():
+    for i in range(n):
+        if i % 300 == 0:
+            yield hello
+        yield encode_packet(codes[i % 600], i, 33 * i)
 
 marks = {}
 class Marking(net_cmd._TrackFiles):
@@ -97,9 +75,45 @@ class Marking(net_cmd._TrackFiles):
 names = ("r.csv", "r.ifs", "r.fap") if outputs else (None, None, None)
 args = argparse.Namespace(frames=None, timeout=0, wait=0, quiet=True,
                           **{k: (str(folder / v) if v else None) for k, v in zip(("csv", "record", "fap"), names)})
-net_cmd._session(args, Fed(), None, Marking(args), "benchmark")
+net_cmd._session(args, FedReceiver(datagrams()), None, Marking(args), "benchmark")
 print(json.dumps({"first": marks[warm], "last": marks[n], "frames": n}))
 """
+
+
+class _Clock:
+    """A clock the fed receiver advances by one frame (1/30 s) per datagram."""
+
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+class FedReceiver(Receiver):
+    """The receiver core fed from an iterable of datagrams instead of a socket (``poll`` hands
+    out ``per_poll`` at a time; the end of the data stops the session as Ctrl+C does)."""
+
+    def __init__(self, datagrams, per_poll: int = 50) -> None:
+        self._clock = _Clock()
+        super().__init__(clock=self._clock)
+        self._data = iter(datagrams)
+        self.per_poll = per_poll
+        self.address = ("127.0.0.1", 0)
+
+    def poll(self, timeout: float = 0.0, max_datagrams: int = 1000):
+        out = []
+        for _ in range(self.per_poll):
+            d = next(self._data, None)
+            if d is None:
+                if not out:
+                    raise KeyboardInterrupt
+                break
+            self._clock.t += 1 / 30
+            f = self.handle(d, "A")
+            if f is not None:
+                out.append(f)
+        return out
 
 
 def _child(code: str, *argv: str) -> dict:

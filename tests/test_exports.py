@@ -6,12 +6,12 @@ import io
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import pytest
 from PIL import Image, ImageSequence
 
 from app.record import FrameWriter, GifStream, RecordError, Recorder, to_straight
+from benchmarks.soak_window import count_video_frames
 from tracker.params import FaceParams, read_csv
 
 
@@ -115,14 +115,6 @@ class _Frame:  # what app.workers.DisplayFrame gives the recorder
     params: FaceParams | None
 
 
-def _count_video_frames(path) -> int:
-    cap = cv2.VideoCapture(str(path))
-    n = 0
-    while cap.read()[0]:
-        n += 1
-    cap.release()
-    return n
-
 
 @pytest.mark.parametrize("source_fps, out_fps", [(30, 30), (10, 30), (30, 10), (24, 15)])
 def test_the_track_has_one_row_per_written_frame(tmp_path, source_fps, out_fps):
@@ -133,7 +125,7 @@ def test_the_track_has_one_row_per_written_frame(tmp_path, source_fps, out_fps):
         rec.add(_Frame(_scene(i, 32), i / source_fps, params))
     res = rec.finish()
     rows = read_csv(res.track)
-    n = _count_video_frames(out)
+    n = count_video_frames(out)
     last_t = (2 * source_fps - 1) / source_fps  # frames sit on the output clock by their times
     assert n == res.frames == len(rows) == math.floor(last_t * out_fps + 1e-6) + 1
     assert [r.frame for r in rows] == list(range(n))

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from app.net import RESYNC_AFTER, SEQ_AHEAD, Hello, Receiver
+from benchmarks import bench_export_memory
 from tracker.params import FaceParams, ParamCodec, encode_packet
 from tracker.stream_codec import StreamEncoder, encode_stream_packet
 
@@ -140,29 +141,7 @@ def test_fuzzed_datagrams_between_the_frames_do_not_silence_the_stream():
 # ---------------------------------------------------------------------------- bounded receiver
 
 
-class _FakeUdp(Receiver):
-    """The receiver core fed from a list instead of a socket (``poll`` hands out a few at a time)."""
-
-    def __init__(self, datagrams, per_poll: int = 50) -> None:
-        self._clock = Clock()
-        super().__init__(clock=self._clock)
-        self._data = iter(datagrams)
-        self.per_poll = per_poll
-        self.address = ("127.0.0.1", 0)
-
-    def poll(self, timeout: float = 0.0, max_datagrams: int = 1000):
-        out = []
-        for _ in range(self.per_poll):
-            d = next(self._data, None)
-            if d is None:
-                if not out:
-                    raise KeyboardInterrupt  # the stream ended: stop like Ctrl-C does
-                break
-            self._clock.t += 1 / 30
-            f = self.handle(d, "A")
-            if f is not None:
-                out.append(f)
-        return out
+_FakeUdp = bench_export_memory.FedReceiver  # the receiver core fed from a list instead of a socket
 
 
 def _long_stream(n: int):
