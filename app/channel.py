@@ -40,7 +40,11 @@ class ChannelClosed(OSError):
 
 
 class Channel:
-    """Length-prefixed pickled messages over a non-blocking stream socket (see the module doc)."""
+    """Length-prefixed pickled messages over a non-blocking stream socket (see the module doc).
+
+    Pickle is only the wire format between the window and the engine process it spawned itself
+    (as multiprocessing's own pipes use it); nothing pickled is written to a file or read from
+    anywhere else — files are JSON and PNG."""
 
     def __init__(self, sock: socket.socket):
         sock.setblocking(False)
