@@ -68,6 +68,11 @@ THICKNESS = (0.35, 2.0)
 SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
+PREVIOUS_CAP = 8.0
+"""Most the last frame's gap height can weigh against a split of this frame's profile."""
+OPEN_SKIN = 1.0
+"""Cost of one skin-like row between the lips of an open mouth: a tongue is skin-coloured, and the
+lower lip and the skin past it must still fit below it."""
 OPEN_ROWS = 2
 """Rows of the inside (dark, teeth) that make a gap an open mouth (where a tongue's rows are free)."""
 REACH = (-0.55, 0.6)
@@ -279,8 +284,10 @@ class MouthFinder:
         most :data:`ROW_CAP`."""
         d = f[None, :, :] - self._mu[:, None, :]
         e = np.einsum("prc,prc,pc->pr", d, d, self._inv)
-        np.minimum(e[0], e[4], out=e[0])  # skin next to the lips, or like the skin round the mouth
-        np.minimum(e[3], e[4], out=e[3])
+        # skin next to either lip, or like the skin round the mouth: the shading above and below the
+        # lips swaps with the pose and an open jaw (a dropped chin is lit like the philtrum was)
+        np.minimum(np.minimum(e[0], e[3], out=e[0]), e[4], out=e[0])
+        e[3] = e[0]
         return np.minimum(e[:4], np.float32(ROW_CAP))
 
     def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
@@ -313,7 +320,7 @@ class MouthFinder:
         k = GAP_PRICE / SKIN_UNLIKE
         cg = np.zeros((3, n + 2 * P + 1))
         cg[0, 1:] = cg[1, 1:] = GAP_PRICE
-        cg[0, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        cg[0, 1 + m0 : 1 + m1] = (OPEN_SKIN / SKIN_UNLIKE) * out * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
         cg[1, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
         cg[2, 1 + m0 : 1 + m1] = inside > 0.5
         np.cumsum(cg, axis=1, out=cg)
@@ -336,7 +343,8 @@ class MouthFinder:
         tot += (3.0 / (spread * self.wi) ** 2) * off * off
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
-            tot += (2.0 / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2
+            # capped: it settles what the rows leave open, and cannot hold on to a wrong gap
+            tot += np.minimum((2.0 / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2, PREVIOUS_CAP)
         m = len(bs)
         bs = bs - P
         (lu, pu, _), (ld, pd, _) = self._len
@@ -471,14 +479,15 @@ class MouthFinder:
 
     def _score(self, width, height, centre, pred, fit, strength, gap_top, gap_bottom, previous) -> float:
         """Fit of the lip templates (mean cost per row: full under 2, none at 5), clarity of the
-        corners against the calibration (full at 40 % of its columns' difference from the cheek),
+        corners against the calibration (the two sides' mean: full at 40 % of its columns' difference
+        from the cheek; one side's cheek may have been in shadow or hair at calibration),
         plausibility of the width (0.5–1.8× the calibrated mouth's) and height (under 1.1 wi), the
         place against the prediction (full within ~0.3 wi) and, with a previous result, the change
         of the gap and the centre (full within 0.15 wi)."""
         wi = self.wi
         ramp = lambda v, a, b: min(max((v - a) / (b - a), 0.0), 1.0)
         s_fit = ramp(-max(fit), -5.0, -2.0)
-        s_corner = ramp(min(strength) / self.gain0, 0.0, 0.4)
+        s_corner = ramp(0.5 * (strength[0] + strength[1]) / self.gain0, 0.0, 0.4)
         rho = width / max(self.width0, 1e-6)
         s_size = ramp(rho, 0.4, 0.5) * ramp(-rho, -1.9, -1.8) * ramp(-height, -1.2 * wi, -1.1 * wi)
         dx = (centre[0] - pred[0]) / (0.3 * wi)

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from tracker.colour_model import TILE_SHAPE, _grid_features, features, lut_index, table_to_tile
 
@@ -97,17 +98,50 @@ def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
 # --------------------------------------------------------------------------------------------- tables
 
 
-def _inside(dark: float, skin_level: float, skin_sat: float) -> np.ndarray:
+def _inside(dark: float, skin_level: float, skin_sat: float, skin_bins: np.ndarray | None = None) -> np.ndarray:
     """Bool per 64³ bin: looks like the inside of a mouth — dark (under ``dark``) with little colour
     (absolute chroma under 60 % of the skin's: dark lipstick is dark but strongly coloured), or grey
-    (teeth: chroma under 55 % of the skin's and not dark, or under 80 % and brighter than the skin)."""
+    (teeth: chroma under 55 % of the skin's and not dark, or under 80 % and brighter than the skin).
+
+    ``skin_bins`` (table indices) are colours the calibration saw on the skin round the mouth: they
+    and their neighbouring bins are never teeth — a lit philtrum or chin under studio light is as
+    bright and as colourless as teeth, but it was there at calibration and teeth were not."""
     f = _grid_features()
     lum = f[:, 0] * np.float32(255.0)
     sat = np.hypot(f[:, 1], f[:, 2])
     black = (lum < np.float32(dark)) & (sat * lum < np.float32(0.6 * skin_sat * skin_level))
     grey = (sat < np.float32(0.55 * skin_sat)) & (lum > np.float32(0.45 * skin_level))
     white = (sat < np.float32(0.8 * skin_sat)) & (lum > np.float32(1.1 * skin_level))
-    return black | grey | white
+    teeth = grey | white
+    if skin_bins is not None and len(skin_bins):
+        seen = np.zeros(len(lum), bool)
+        seen[np.asarray(skin_bins, dtype=np.int64)] = True
+        n = round(len(lum) ** (1 / 3))
+        seen = ndimage.binary_dilation(seen.reshape(n, n, n), np.ones((3, 3, 3), bool)).reshape(-1)
+        teeth &= ~seen
+    return black | teeth
+
+
+SKIN_BIN_COUNT = 3
+"""Pixels of one colour bin on the skin round the calibration's mouth that make it a skin colour."""
+
+
+def skin_bins(crop: np.ndarray, outline: np.ndarray, centre: tuple[float, float], wi: float) -> np.ndarray:
+    """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
+    crop: an ellipse 0.75 × 0.6 wi about the mouth centre (the face, not the background or hair at
+    the crop's sides), outside the mouth outline grown by 0.1 wi; bins with at least
+    :data:`SKIN_BIN_COUNT` pixels."""
+    H, W = crop.shape[:2]
+    near = np.zeros((H, W), np.uint8)
+    cv2.ellipse(near, (int(round(centre[0])), int(round(centre[1]))), (int(round(0.75 * wi)), int(round(0.6 * wi))),
+                0.0, 0.0, 360.0, 1, -1)
+    mouth = np.zeros((H, W), np.uint8)
+    cv2.fillPoly(mouth, [np.round(outline).astype(np.int32)], 1)
+    r = max(int(round(0.1 * wi)), 1)
+    mouth = cv2.dilate(mouth, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
+    idx = lut_index(crop)[(near > 0) & (mouth == 0)]
+    counts = np.bincount(idx.ravel(), minlength=1)
+    return np.flatnonzero(counts >= SKIN_BIN_COUNT).astype(np.int32)
 
 
 # --------------------------------------------------------------------------------------------- the model
@@ -162,11 +196,12 @@ class MouthModel:
     separation: float
     cue: str
     crop_median: tuple[float, float, float] | None = None
+    skin_bins: np.ndarray | None = field(repr=False, default=None)
     inside_table: np.ndarray = field(repr=False, default=None)
 
     def __post_init__(self) -> None:
         if self.inside_table is None:
-            self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat).view(np.uint8)
+            self.inside_table = _inside(self.dark, self.skin_level, self.skin_sat, self.skin_bins).view(np.uint8)
 
     # ------------------------------------------------------------------ persistence
     _ARRAYS = ("outline", "classes", "cheek_left", "cheek_right")
@@ -184,6 +219,8 @@ class MouthModel:
             crop_median=None if self.crop_median is None else [float(v) for v in self.crop_median],
             tables=list(TABLE_NAMES),
         )
+        if self.skin_bins is not None:
+            d["skin_bins"] = [int(v) for v in self.skin_bins]
         return d
 
     def images(self) -> dict[str, np.ndarray]:
@@ -213,10 +250,21 @@ class MouthModel:
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
                 axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4), cue=str(d["cue"]),
                 crop_median=None if d.get("crop_median") is None else tuple(float(v) for v in d["crop_median"]),
+                skin_bins=_bins(d.get("skin_bins")),
                 **kw,
             )
         except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
+
+
+def _bins(v) -> np.ndarray | None:
+    """``skin_bins`` from a file (absent in calibrations older than it: None)."""
+    if v is None:
+        return None
+    a = np.asarray(v, dtype=np.int64).reshape(-1)
+    if a.size and (a.min() < 0 or a.max() >= 1 << 18):
+        raise ValueError("skin_bins must be colour-table indices (0 … 262143)")
+    return a.astype(np.int32)
 
 
 # --------------------------------------------------------------------------------------------- lip colour
@@ -700,5 +748,5 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         classes=classes,
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
-        cue=cue, crop_median=crop_median,
+        cue=cue, crop_median=crop_median, skin_bins=skin_bins(crop, outline, centre, wi),
     )
