@@ -18,11 +18,16 @@ from tracker.mouth_finder import SCORE_OK, MouthFinder, polygon_measures
 from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
-SYNTH_PRECISION = pytest.mark.xfail(
-    strict=False,
-    reason="issue 13 (i13-mouth): the 1-D finder at its 40 px working scale puts an open or grinning synthetic "
-           "mouth's corners 1.5-3 px (up to 10 px in a grin) below the true ones, which moves the lip_upper / "
-           "lip_lower split (not their sum), and finds pale-lip corners inside the true ones",
+GRIN_CORNERS = pytest.mark.xfail(
+    strict=True,
+    reason="issue 13: in the synthetic grin the traced mouth line runs along the lower teeth and the corners' "
+           "heights from the lips next to them still sit ~2 px (face px, IPD 80) above or below the true ones, "
+           "which moves the lip_upper / lip_lower split by 2-2.5 px (their sum is within 1 px)",
+)
+PALE_CORNERS = pytest.mark.xfail(
+    strict=True,
+    reason="issue 13: with pale lips barely apart from the skin, the corners are found 8-15 px inside the true "
+           "ones (the columns near the corners look like the calibrated cheek)",
 )
 BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
 WI = 80.0
@@ -90,8 +95,7 @@ def test_calibration_finds_the_neutral_mouth(calibrated):
     assert abs(model.width - true_width) < 2.0
 
 
-@pytest.mark.parametrize("expr", ["neutral", pytest.param("smile", marks=SYNTH_PRECISION), pytest.param("ah", marks=SYNTH_PRECISION),
-                                  pytest.param("oo", marks=SYNTH_PRECISION), pytest.param("grin", marks=SYNTH_PRECISION), "surprise"])
+@pytest.mark.parametrize("expr", ["neutral", "smile", "ah", "oo", pytest.param("grin", marks=GRIN_CORNERS), "surprise"])
 def test_expressions_match_truth(calibrated, expr):
     model, centre = calibrated
     res, t = _find(model, centre, BASE.with_expression(expr))
@@ -100,7 +104,6 @@ def test_expressions_match_truth(calibrated, expr):
     assert ew < 2.5 and eu < 1.5 and el < 1.5, (expr, round(ew, 2), round(eu, 2), round(el, 2))
 
 
-@SYNTH_PRECISION
 def test_open_mouth_counts_teeth_and_inside_as_mouth(calibrated):
     """A wide-open mouth with teeth: the outer lip edges, not the teeth or the dark inside."""
     model, centre = calibrated
@@ -110,7 +113,6 @@ def test_open_mouth_counts_teeth_and_inside_as_mouth(calibrated):
     assert eu < 1.5 and el < 1.5
 
 
-@SYNTH_PRECISION
 def test_roll_and_lean_are_handled_by_the_crop(calibrated):
     model, centre = calibrated
     for roll, ipd in ((12.0, 80.0), (-20.0, 70.0), (5.0, 95.0)):
@@ -120,7 +122,6 @@ def test_roll_and_lean_are_handled_by_the_crop(calibrated):
         assert ew < 2.5 and eu < 1.5 and el < 1.5
 
 
-@SYNTH_PRECISION
 def test_prediction_error_is_absorbed(calibrated):
     """The head-motion prediction is a few px off: the mouth is still found where it is."""
     model, centre = calibrated
@@ -130,8 +131,7 @@ def test_prediction_error_is_absorbed(calibrated):
         assert ew < 2.5 and eu < 1.5 and el < 1.5
 
 
-@SYNTH_PRECISION
-@pytest.mark.parametrize("style", ["dark_skin", "pale_lips"])
+@pytest.mark.parametrize("style", ["dark_skin", pytest.param("pale_lips", marks=PALE_CORNERS)])
 def test_other_performers(style):
     model, centre = _calibrate(STYLES[style])
     for expr in ("neutral", "ah", "smile"):
@@ -156,7 +156,6 @@ def test_a_noisy_blurred_jpeg_camera():
     assert opens[0] < opens[1] < opens[2]
 
 
-@SYNTH_PRECISION
 def test_a_lip_coloured_object_away_from_the_mouth_is_ignored(calibrated):
     model, centre = calibrated
     state = BASE.with_expression("smile")
@@ -185,7 +184,6 @@ def test_no_mouth_in_the_crop_is_not_a_confident_mouth(calibrated):
     assert res is None or res.score < SCORE_OK
 
 
-@SYNTH_PRECISION
 def test_dimmer_light_after_calibration(calibrated):
     """The light falls to 60 % and turns warmer: the crop's light is matched to the calibration's."""
     model, centre = calibrated

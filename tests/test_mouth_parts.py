@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from tracker.mouth_finder import WORK_IPD, MouthFinder
-from tracker.mouth_model import band_columns, corner_distance, line_columns, profile_features
+from tracker.colour_model import lut_index
+from tracker.mouth_finder import WORK_IPD, MouthFinder, _edge_shift, body_middle
+from tracker.mouth_model import MouthModel, _inside, band_columns, corner_distance, line_columns, profile_features
 
 from test_mouth_finder import BASE, WI, _calibrate, _crop, _frame_of, render_face
 
@@ -86,6 +87,10 @@ def _profile(rows, finder):
             f, i = np.array([2.0, 0.0, 0.0]), 1.0
         elif kind == "tongue":
             f, i = cls[2, 0] + np.array([6.0, 0.0, 0.0]), 0.0  # lower-lip coloured, brighter
+        elif kind == "skin_tongue":
+            f, i = cls[4, 0] + np.array([-1.0, 0.5, 0.0]), 0.0  # as pale as the skin round the mouth
+        elif kind == "shaded_chin":
+            f, i = cls[3, 0] + np.array([-2.5, 1.0, 0.0]), 0.0  # the chin under a dropped jaw, in shadow
         else:
             f, i = cls[{"skin_up": 0, "lip_up": 1, "lip_down": 2, "skin_down": 3}[kind], 0], 0.0
         feats += [f] * k
@@ -150,3 +155,82 @@ def test_outlines_through_the_same_corners_at_once_match_one_at_a_time():
     assert np.allclose(both[1], lens_outline((10.0, 30.0), (60.0, 33.0), 27.0, 35.0, 35.0))
     top = both[0][np.argmin(np.abs(both[0][:24, 0] - 35.0))]
     assert top[1] == pytest.approx(20.0, abs=0.5)  # the upper edge passes through the given row at x_mid
+
+
+def test_a_skin_coloured_tongue_is_inside_an_open_mouth(finder_and_crop):
+    """A tongue as pale as the skin between the teeth and the lower lip, over a chin in the dropped
+    jaw's shadow: the lower lip still decides where the mouth ends, not the first skin-like row."""
+    finder = finder_and_crop[0]
+    tu, td = int(round(finder.t_up)), int(round(finder.t_dn))
+    rows = [("skin_up", 20), ("lip_up", tu), ("inside", 3), ("skin_tongue", 9), ("lip_down", td), ("shaded_chin", 20)]
+    f, inside = _profile(rows, finder)
+    bottom_true = 20 + tu + 12 + td
+    _, _, _, bottom, _, _ = finder.vertical(f, inside, 20 + tu + 1)
+    assert abs(bottom - (bottom_true - 0.5)) <= 1.5
+
+
+def test_edge_shift_reads_the_lip_share_of_the_rows_at_the_edge():
+    lip, skin = np.array([10.0, 20.0, 10.0]), np.array([20.0, 8.0, 6.0])
+    f = np.array([skin, skin, lip, lip, lip])
+    assert _edge_shift(f, 2, -1, lip, skin) == pytest.approx(0.0)  # a sharp edge between rows 1 and 2
+    f[1] = 0.3 * lip + 0.7 * skin  # 30 % of the skin row above is lip: the edge is 0.3 rows out
+    assert _edge_shift(f, 2, -1, lip, skin) == pytest.approx(0.3)
+    f[1], f[2] = skin, 0.6 * lip + 0.4 * skin  # the outermost lip row is 40 % skin: 0.4 rows in
+    assert _edge_shift(f, 2, -1, lip, skin) == pytest.approx(-0.4)
+    assert _edge_shift(f, 0, -1, lip, skin) == 0.0  # no row beyond the crop
+
+
+def test_body_middle_is_the_middle_of_the_run_through_the_line():
+    unlike = np.zeros(30, np.float32)
+    unlike[10:16] = 6.0  # the mouth's rows on this column
+    inside = np.zeros(30, bool)
+    middle, height = body_middle(unlike, inside, 12, 8)
+    assert middle == pytest.approx(12.5, abs=0.51) and height == pytest.approx(6.0, abs=1.01)
+    unlike[16] = 4.5  # a row partly lip below: the lower edge moves down into it
+    m2, h2 = body_middle(unlike, inside, 12, 8)
+    assert m2 > middle and h2 > height
+    assert body_middle(np.full(30, 0.2, np.float32), inside, 12, 8) is None  # all skin
+    far = np.zeros(30, np.float32)
+    far[2:4] = 6.0  # something dark 9 rows from the line is no corner
+    assert body_middle(far, inside, 12, 10) is None
+
+
+def test_skin_seen_at_calibration_is_never_teeth():
+    """A lit philtrum as bright and colourless as teeth was on the skin round the calibration's mouth:
+    its colours are not inside-like, while a bright grey never seen on the skin still is."""
+    skin_level, skin_sat = 150.0, 0.12
+    highlight = np.array([[[200, 205, 215]]], np.uint8)  # BGR: bright, little colour
+    teeth = np.array([[[225, 228, 230]]], np.uint8)
+    h, t = int(lut_index(highlight)[0, 0]), int(lut_index(teeth)[0, 0])
+    plain = _inside(60.0, skin_level, skin_sat)
+    assert plain[h] and plain[t]
+    seen = _inside(60.0, skin_level, skin_sat, np.array([h], np.int32))
+    assert not seen[h] and seen[t]
+
+
+def test_skin_bins_survive_a_save_and_old_models_load_without_them(finder_and_crop):
+    model = finder_and_crop[0].model
+    assert model.skin_bins is not None and len(model.skin_bins) > 0
+    again = MouthModel.from_dict(model.to_dict())
+    assert np.array_equal(again.skin_bins, model.skin_bins)
+    assert np.array_equal(again.inside_table, model.inside_table)
+    old = model.to_dict()
+    del old["skin_bins"]
+    assert MouthModel.from_dict(old).skin_bins is None
+    bad = model.to_dict()
+    bad["skin_bins"] = [-1]
+    with pytest.raises(ValueError, match="skin_bins"):
+        MouthModel.from_dict(bad)
+
+
+def test_one_side_like_its_cheek_does_not_lose_the_mouth(finder_and_crop):
+    """A side whose calibrated cheek was in shadow or under hair may look like it later (its
+    columns differ little from that cheek): the mouth stays sure while the other side is clear,
+    and is not sure when neither is."""
+    from tracker.mouth_finder import SCORE_OK
+    finder = finder_and_crop[0]
+    g = finder.gain0
+    args = dict(width=finder.width0, height=0.4 * finder.wi, on_line=(30.0, 24.0), centre=(30.0, 24.0),
+                pred=(30.0, 24.0), fit=(1.0, 1.0), previous=None)
+    assert finder._score(strength=[-0.1 * g, 2.0 * g], **args) >= SCORE_OK
+    assert finder._score(strength=[0.05 * g, 0.1 * g], **args) < SCORE_OK

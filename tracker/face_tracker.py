@@ -264,10 +264,12 @@ class FaceTracker:
     def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
         """A mouth of about the calibrated size, corners level, near where the head puts it."""
         w = self.cal.mouth_width
-        if not (0.4 * w <= m.width <= 1.9 * w and abs(m.right[1] - m.left[1]) < 0.35 * m.width):
+        rise = m.level_rise if hasattr(m, "level_rise") else m.left[1] - m.right[1]
+        if not (0.4 * w <= m.width <= 1.9 * w and abs(rise) < 0.35 * m.width):
             return False
-        dx = m.centre[0] + origin[0] - predicted[0]
-        dy = m.centre[1] + origin[1] - predicted[1]
+        c = m.line_centre if hasattr(m, "line_centre") else m.centre  # where calibration put it
+        dx = c[0] + origin[0] - predicted[0]
+        dy = c[1] + origin[1] - predicted[1]
         return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
 
     # -------------------------------------------------------------- main entry
@@ -438,7 +440,10 @@ class FaceTracker:
             ov.blob = mouth_res.blob
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             ov.mouth_cue = mouth_res.cue
-            self.jaw = np.clip(np.array([mcx, mcy]) - rigid_mouth, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
+            # the jaw from the centre on the mouth line, where calibration measured the rigid place
+            lc = mouth_res.line_centre if hasattr(mouth_res, "line_centre") else mouth_res.centre
+            at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
+            self.jaw = np.clip(at - rigid_mouth, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST

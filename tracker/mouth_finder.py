@@ -68,6 +68,15 @@ THICKNESS = (0.35, 2.0)
 SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
+CORNER_INSETS = (1.0, 2.5, 4.0)
+"""Columns (px at the working scale, inwards from a corner) whose mouth rows give the corner's height."""
+CORNER_SHIFT = 0.2
+"""Farthest (× wi) a corner's height may be from the traced line's row."""
+CORNER_NEAR = 4
+"""Rows (working scale) between the traced line and the nearest mouth row on a corner's column."""
+CORNER_UNLIKE = 1.5
+"""Least row cost as skin (see :meth:`MouthFinder.row_costs`) near the line that shows the mouth's
+body on a corner's column."""
 PREVIOUS_CAP = 8.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
@@ -91,7 +100,9 @@ class MouthResult:
     crop size), ``cue`` the model's cue (``"colour"`` or ``"contrast"``), ``score`` 0..1 (≥
     :data:`SCORE_OK`: on this person's mouth). ``gap_top`` / ``gap_bottom`` are the inner lip
     edges' rows on the centre column, ``stretch`` the upper and lower lip's thickness against the
-    calibration's.
+    calibration's. ``line_ends`` are the corners on the traced mouth line (x as ``left``/``right``,
+    the line's rows there), whose midpoint ``line_centre`` is where calibration put the mouth's
+    centre: the corners' own height is measured from the lips next to them (None: the corners).
     """
 
     left: tuple[float, float]
@@ -107,7 +118,19 @@ class MouthResult:
     gap_bottom: float = 0.0
     stretch: tuple[float, float] = (1.0, 1.0)
     shape: tuple[int, int] = (0, 0)
+    line_ends: tuple[tuple[float, float], tuple[float, float]] | None = None
     _blob: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def line_centre(self) -> tuple[float, float]:
+        (xl, yl), (xr, yr) = self.line_ends if self.line_ends is not None else (self.left, self.right)
+        return 0.5 * (xl + xr), 0.5 * (yl + yr)
+
+    @property
+    def level_rise(self) -> float:
+        """How much higher (px) the traced line is at the right corner than at the left."""
+        (_, yl), (_, yr) = self.line_ends if self.line_ends is not None else (self.left, self.right)
+        return yl - yr
 
     @property
     def width(self) -> float:
@@ -137,6 +160,67 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     t = (cx - x0[hit]) / (x1[hit] - x0[hit])
     ys = poly[hit, 1] + t * (p1[hit, 1] - poly[hit, 1])
     return left, right, float(cy - ys.min()), float(ys.max() - cy)
+
+
+_SKINS = np.array([0, 3, 4])
+"""The row classes that are skin (above, below, round the mouth)."""
+
+
+def body_middle(unlike: np.ndarray, inside: np.ndarray, y: int, reach: int) -> tuple[float, float] | None:
+    """The middle and the height (rows, sub-pixel edges) of the run of mouth rows on one column: rows unlike skin
+    (``unlike``, row costs as skin) by more than half the most unlike row within ``reach`` rows of
+    row ``y``, or inside-like (``inside``, bool) — the run holding ``y`` or one ending at most
+    :data:`CORNER_NEAR` rows from it. None when there is none (the column looks like skin: a corner
+    in shadow, a closed pale mouth)."""
+    H = len(unlike)
+    a, b = max(y - reach, 0), min(y + reach + 1, H)
+    peak = float(unlike[a:b].max()) if b > a else 0.0
+    if peak < CORNER_UNLIKE:
+        return None
+    level = 0.5 * peak
+    mouth = (unlike > level) | inside
+    near = np.flatnonzero(mouth[a:b])
+    if not len(near):
+        return None
+    k = a + int(near[np.argmin(np.abs(near + a - y))])
+    if abs(k - y) > CORNER_NEAR:
+        return None
+    lo, hi = k, k
+    while lo - 1 >= a and mouth[lo - 1]:
+        lo -= 1
+    while hi + 1 < b and mouth[hi + 1]:
+        hi += 1
+
+    def edge(i_in: int, i_out: int) -> float:
+        """Where ``unlike`` crosses ``level`` between a mouth row and the skin row past it."""
+        if not 0 <= i_out < H:
+            return float(i_in)
+        u0, u1 = float(unlike[i_in]), float(unlike[i_out])
+        t = (u0 - level) / (u0 - u1) if u0 > level > u1 else 0.5
+        return i_in + (i_out - i_in) * min(max(t, 0.0), 1.0)
+
+    top, bottom = edge(lo, lo - 1), edge(hi, hi + 1)
+    return 0.5 * (top + bottom), bottom - top
+
+
+def _share(f: np.ndarray, lip: np.ndarray, skin: np.ndarray) -> float:
+    """How much of a row with features ``f`` is lip (0..1): its place between the skin's and the
+    lip's medians along the line joining them."""
+    d = lip - skin
+    den = float(d @ d)
+    return min(max(float((f - skin) @ d) / den, 0.0), 1.0) if den > 1e-6 else 0.5
+
+
+def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.ndarray) -> float:
+    """How far (rows, −0.5…0.5, positive outwards) a lip's outer edge lies from the boundary after
+    its outermost row ``row`` (``out`` = −1 up, +1 down): the lip's share of the skin row past it
+    moves the edge out, the skin's share of the lip row moves it in (a blurred or anti-aliased edge
+    falls inside a row, not between two)."""
+    n = len(f)
+    if not (0 <= row < n and 0 <= row + out < n):
+        return 0.0
+    shift = _share(f[row + out], lip, skin) - (1.0 - _share(f[row], lip, skin))
+    return min(max(shift, -0.5), 0.5)
 
 
 def _parabola(a: float, b: float, c: float) -> float:
@@ -353,8 +437,10 @@ class MouthFinder:
         # the two lips' thicknesses together at the best pair of inner edges
         joint = cu[a][:, None] + cl[b][None, :] + self._couple
         p, q = np.unravel_index(int(np.argmin(joint)), joint.shape)
-        fu = _parabola(joint[p - 1, q], joint[p, q], joint[p + 1, q]) if 0 < p < len(lu) - 1 else 0.0
-        fd = _parabola(joint[p, q - 1], joint[p, q], joint[p, q + 1]) if 0 < q < len(ld) - 1 else 0.0
+        # each outer edge inside its rows: the lip's share of the row on either side of it
+        r_up, r_dn = int(bs[a] - lu[p]), int(bs[b] + ld[q] - 1)  # the lips' outermost rows
+        fu = _edge_shift(f, r_up, -1, self._mu[1], self._mu[0])
+        fd = _edge_shift(f, r_dn, +1, self._mu[2], self._mu[3])
         fa = _parabola(tot[a - 1, b], tot[a, b], tot[a + 1, b]) if 0 < a and a + 1 <= b and np.isfinite(tot[a - 1, b]) else 0.0
         fb = _parabola(tot[a, b - 1], tot[a, b], tot[a, b + 1]) if b + 1 < m and b - 1 >= a else 0.0
         gap_top, gap_bottom = bs[a] - 0.5 + fa, bs[b] - 0.5 + fb
@@ -394,6 +480,49 @@ class MouthFinder:
             strength.append(g)
         return out[0], out[1], strength
 
+    def corner_heights(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float]) -> tuple[float, float]:
+        """The corners' rows: on narrow columns :data:`CORNER_INSETS` px inside each corner, the middle
+        and the height of the mouth's body (:func:`body_middle`); the two lips' outlines meet at the
+        corner, and inwards the middle moves towards the thicker lip in proportion to the height
+        (upper edge ``y − a·h(d)``, lower ``y + b·h(d)`` whatever their curve ``h``), so a straight line
+        through (height, middle) carried on to no height gives it. The traced line's row (``left[1]``, ``right[1]``) where no column shows the mouth; at
+        most :data:`CORNER_SHIFT` wi from it."""
+        H, W = maps.shape
+        reach = int(math.ceil(0.2 * self.wi))
+        ys = [min(max(int(round(c[1])), 0), H - 1) for c in (left, right)]
+        a, b = max(min(ys) - reach, 0), min(max(ys) + reach + 1, H)
+        ins = np.asarray(CORNER_INSETS)
+        xs = np.concatenate([left[0] + ins, right[0] - ins])
+        x0 = np.clip(np.round(xs - 1.0).astype(np.int64), 0, W - 1)
+        x1 = np.clip(np.round(xs + 1.0).astype(np.int64) + 1, x0 + 1, W)
+        inv = (1.0 / (x1 - x0)).astype(np.float32)[:, None]
+        c = maps.colour[a : b + 1][:, x1] - maps.colour[a : b + 1][:, x0]  # (n+1, k, 3)
+        f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
+        d = f[:, None, :, :] - self._mu[_SKINS][None, :, None, :]
+        unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv[_SKINS]).min(axis=1)  # (k, n)
+        np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
+        i = maps.inside[a : b + 1][:, x1] - maps.inside[a : b + 1][:, x0]
+        inside = ((i[1:] - i[:-1]).astype(np.float32) * inv[:, 0]).T > 0.5
+        out = []
+        n_in = len(ins)
+        for side, (corner, yi) in enumerate(zip((left, right), ys)):
+            hs, ms = [], []
+            for j in range(n_in):
+                r = body_middle(unlike[side * n_in + j], inside[side * n_in + j], yi - a, reach)
+                if r is not None:
+                    ms.append(r[0] + a)
+                    hs.append(r[1])
+            if not ms:
+                out.append(corner[1])
+                continue
+            # the middle moves from the corner in proportion to the body's height, whatever the
+            # lips' curve: carried on to no height, and inside the body on the nearest column (the
+            # lips close towards the corner)
+            at0 = ms[0] if len(ms) == 1 or max(hs) - min(hs) < 0.5 else float(np.polyfit(hs, ms, 1)[1])
+            at0 = min(max(at0, ms[0] - 0.5 * hs[0]), ms[0] + 0.5 * hs[0])
+            out.append(min(max(at0, corner[1] - CORNER_SHIFT * self.wi), corner[1] + CORNER_SHIFT * self.wi))
+        return out[0], out[1]
+
     def _line_columns(self, maps: "_Maps", xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """:func:`~tracker.mouth_model.line_columns` from the running sums at columns ``xs`` (inside the
         crop) and line rows ``ys``: features (n, 9) of the mean colour of the band ``a1..a2`` rows above
@@ -412,6 +541,7 @@ class MouthFinder:
         return dataclasses.replace(
             res, left=(res.left[0] + dx, res.left[1] + dy), right=(res.right[0] + dx, res.right[1] + dy),
             centre=(res.centre[0] + dx, res.centre[1] + dy), gap_top=res.gap_top + dy, gap_bottom=res.gap_bottom + dy,
+            line_ends=None if res.line_ends is None else tuple((x + dx, y + dy) for x, y in res.line_ends),
             polygon=res.polygon + (dx, dy), raw_polygon=res.raw_polygon + (dx, dy), _blob=None)
 
     # ------------------------------------------------------------------ the whole
@@ -437,7 +567,8 @@ class MouthFinder:
         if previous is not None:
             prev = dataclasses.replace(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
                                        gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
-                                       lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None)
+                                       lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None,
+                                       line_ends=None if previous.line_ends is None else tuple(down(p) for p in previous.line_ends))
         r = self._find(small, down(predicted_centre_crop), prev)
         if r is None:
             return None
@@ -446,6 +577,7 @@ class MouthFinder:
         off = 0.5 * scale - 0.5
         return dataclasses.replace(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
+            line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),
             polygon=r.polygon * scale + off, raw_polygon=r.raw_polygon * scale + off,
             gap_top=(r.gap_top + 0.5) / sy - 0.5, gap_bottom=(r.gap_bottom + 0.5) / sy - 0.5, shape=(H, W), _blob=None)
 
@@ -467,31 +599,37 @@ class MouthFinder:
         f, inside = self.profile(maps, cx)
         v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
-        cy = 0.5 * (left[1] + right[1])
+        # the corners' height from the mouth's own body next to them (the line runs through the gap
+        # or the dark inside, which in a grin ends below the corners)
+        line_c, line_ends = (cx, cy), (left, right)
+        yl, yr = self.corner_heights(maps, left, right)
+        left, right = (left[0], yl), (right[0], yr)
+        mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
-        score = self._score(width, bottom - top, (cx, cy), (px, py), fit, strength, gap_top, gap_bottom, previous)
+        score = self._score(width, bottom - top, line_c, (mx, cy), (px, py), fit, strength, previous)
         poly, raw = lens_outlines(left, right, (top, gap_top), (bottom, gap_bottom), cx, N_RAYS)
         return MouthResult(
-            left=left, right=right, centre=(cx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
+            left=left, right=right, centre=(mx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
-            stretch=stretch, shape=(H, W),
+            stretch=stretch, shape=(H, W), line_ends=line_ends,
         )
 
-    def _score(self, width, height, centre, pred, fit, strength, gap_top, gap_bottom, previous) -> float:
+    def _score(self, width, height, on_line, centre, pred, fit, strength, previous) -> float:
         """Fit of the lip templates (mean cost per row: full under 2, none at 5), clarity of the
         corners against the calibration (the two sides' mean: full at 40 % of its columns' difference
         from the cheek; one side's cheek may have been in shadow or hair at calibration),
         plausibility of the width (0.5–1.8× the calibrated mouth's) and height (under 1.1 wi), the
-        place against the prediction (full within ~0.3 wi) and, with a previous result, the change
-        of the gap and the centre (full within 0.15 wi)."""
+        place of the centre on the traced line (``on_line``) against the prediction (full within ~0.3
+        wi) and, with a previous result, how far the centre between the corners (``centre``) moved
+        (full within 0.2 wi)."""
         wi = self.wi
         ramp = lambda v, a, b: min(max((v - a) / (b - a), 0.0), 1.0)
         s_fit = ramp(-max(fit), -5.0, -2.0)
         s_corner = ramp(0.5 * (strength[0] + strength[1]) / self.gain0, 0.0, 0.4)
         rho = width / max(self.width0, 1e-6)
         s_size = ramp(rho, 0.4, 0.5) * ramp(-rho, -1.9, -1.8) * ramp(-height, -1.2 * wi, -1.1 * wi)
-        dx = (centre[0] - pred[0]) / (0.3 * wi)
-        dy = (centre[1] - pred[1]) / (0.4 * wi)
+        dx = (on_line[0] - pred[0]) / (0.3 * wi)
+        dy = (on_line[1] - pred[1]) / (0.4 * wi)
         d = math.sqrt(dx * dx + dy * dy)
         s_place = 1.0 if d <= 1.0 else max(math.exp(-(d - 1.0)), 0.3)
         s_prev = 1.0
