@@ -1281,6 +1281,43 @@ def _drawn_iris(r: float) -> np.ndarray:
     return (200.0 - 150.0 * inside).astype(np.float32)
 
 
+SLIT_CONTRAST = 12.0
+"""Grey levels the lids must be brighter than the eye's darkest row for :func:`slit_middle`."""
+
+
+def slit_middle(grey: np.ndarray, at: tuple[float, float], ipd: float) -> tuple[float, float]:
+    """``at`` (frame px) moved up or down to the middle of the dark run through it: the
+    visible part of an eye, between the lids, on the column through ``at``.
+
+    For an eye so narrow that the iris does not show as a disc (a squint, hooded or sleepy
+    lids) the iris's centre is hidden and the middle of the slit is where it shows (and
+    where a landmark tracker puts it); the point moves by at most a typical iris radius, and
+    stays where it is without a clear run (brighter lid skin above and below).
+    """
+    g = np.asarray(grey)
+    r = max(RADIUS_DEFAULT * ipd, 2.0)
+    hw, n = max(int(round(0.4 * r)), 1), int(round(2.5 * r))
+    x, y = float(at[0]), float(at[1])
+    xi, yi = int(round(x)), int(round(y))
+    h, w = g.shape[:2]
+    if not (hw <= xi < w - hw and n <= yi < h - n):
+        return x, y
+    col = g[yi - n : yi + n + 1, xi - hw : xi + hw + 1].astype(np.float32).mean(axis=1)
+    col = cv2.GaussianBlur(col.reshape(-1, 1), (1, 0), 1.0).ravel()
+    c, ri = n, int(r)
+    k = c - ri + int(np.argmin(col[c - ri : c + ri + 1]))
+    dark, up_lit, down_lit = float(col[k]), float(col[: k + 1].max()), float(col[k:].max())
+    if min(up_lit, down_lit) - dark < SLIT_CONTRAST:
+        return x, y
+    top, bottom = k, k
+    while top > 0 and col[top - 1] < 0.5 * (dark + up_lit):
+        top -= 1
+    while bottom < len(col) - 1 and col[bottom + 1] < 0.5 * (dark + down_lit):
+        bottom += 1
+    dy = min(max(0.5 * (top + bottom) - c + (yi - y), -r), r)
+    return x, y + dy
+
+
 def refine_pupils(
     frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
 ) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -1324,7 +1361,8 @@ def refine_pupils(
         f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR, darkness=REFINE_DARK)
         found = f.locate_irises(crop, centres)
         if min(q[2] for q in found) < REFINE_MIN_MATCH:
-            return lp, rp  # nothing there looks like an iris
+            # no disc: eyes too narrow for the iris to show round, or no eyes at all
+            return slit_middle(grey, lp, ipd), slit_middle(grey, rp, ipd)
         found = np.array([q[:2] for q in found]) + o
         img = ff.to_image(found)
         nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
