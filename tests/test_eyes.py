@@ -20,6 +20,7 @@ from tracker.eyes import (
     iris_radius,
     learn_eyes,
     refine_pupils,
+    slit_middle,
 )
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -248,6 +249,44 @@ def test_refine_pupils_snaps_clicks_to_the_irises():
 def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
     flat = np.full((200, 300, 3), 140, np.uint8)
     assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))
+
+
+def _slit_eye(centre_y: float, half_height: float) -> np.ndarray:
+    """Lit skin with a dark slit between two lids (an eye too narrow for its iris to show
+    round), grey; the slit spans rows centre_y ± half_height."""
+    img = np.full((120, 160), 185.0, np.float32)
+    yy, xx = np.mgrid[0:120, 0:160]
+    inside = (np.abs(yy - centre_y) <= half_height) & (((xx - 80.0) / 26.0) ** 2 + ((yy - centre_y) / (half_height + 1.0)) ** 2 <= 1.0)
+    img[inside] = 60.0
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+@pytest.mark.parametrize("start", [-5.0, 0.0, 4.0, 6.0])
+def test_slit_middle_centres_a_point_on_a_narrow_eyes_slit(start):
+    img = _slit_eye(58.3, 3.5)
+    x, y = slit_middle(img, (80.0, 58.3 + start), 100.0)
+    assert x == 80.0
+    assert abs(y - 58.3) < 0.8
+
+
+def test_slit_middle_leaves_a_point_without_a_slit_and_moves_at_most_an_iris_radius():
+    flat = np.full((120, 160), 140.0, np.float32)
+    assert slit_middle(flat, (80.0, 60.0), 100.0) == (80.0, 60.0)
+    # a long dark band (hair, a shadow), not a slit: the point moves by at most a radius
+    band = np.full((120, 160), 185.0, np.float32)
+    band[20:110] = 50.0
+    _, y = slit_middle(band, (80.0, 60.0), 100.0)
+    assert abs(y - 60.0) <= 10.0 + 1e-6
+
+
+def test_refine_pupils_centres_clicks_below_narrow_eyes_on_their_slits():
+    """No iris shows round: the clicks move up to the middle of each eye's slit."""
+    img = _slit_eye(58.0, 3.0)
+    two = np.hstack([img, img])  # eyes 160 px apart, slits at y = 58
+    frame = cv2.cvtColor(np.clip(two, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    l, r = refine_pupils(frame, (80.0, 63.0), (240.0, 63.0))
+    assert abs(l[1] - 58.0) < 1.0 and abs(r[1] - 58.0) < 1.0
+    assert abs(l[0] - 80.0) < 3.0 and abs(r[0] - 240.0) < 3.0
 
 
 def test_iris_radius_of_a_drawn_disc():
