@@ -60,6 +60,7 @@ def _find(finder, state, style=None, offset=(0.0, 0.0), roll_error=0.0, frame=No
     crop = ff.crop(frame, finder.rect)
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
     centres = np.array([[-0.5 * wi - x0, -y0], [0.5 * wi - x0, -y0]])
+    finder.forget()  # each render on its own: no brow height carried over from another test
     res = finder.find(crop, grey, centres)
     o = np.array([x0, y0], dtype=np.float64)
     keys = ("pupil", "lid_upper", "lid_lower", "brow")
@@ -374,3 +375,26 @@ def test_pupils_found_wherever_the_prediction_lands(finder, dx, dy, gaze):
     res, truth, _, _ = _find(finder, BASE.replace(gaze_x=gaze), offset=(dx, dy))
     for e, side in zip(res.eyes, ("left", "right")):
         assert math.hypot(e.x - truth[side]["pupil"][0], e.y - truth[side]["pupil"][1]) < 1.0
+
+
+def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder):
+    """Two equally good places for the brow's cross-section: the first frame takes the better,
+    the next frames stay where the brow was unless the other is much better."""
+    n, top, py = 40, 0, 50.0
+    base = py - top - finder.model.brow_centres[0]
+    score = np.zeros(n, np.float32)
+    brow_k, crease_k = 10, 25  # the crease lies 15 px lower (a smaller height)
+    score[brow_k - 1 : brow_k + 2] = (0.7, 0.9, 0.7)
+    score[crease_k - 1 : crease_k + 2] = (0.72, 0.93, 0.72)
+    finder.forget()
+    h, m = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - crease_k) and m == pytest.approx(0.93)  # no history: the best
+    finder._brow_last[0] = base - brow_k
+    h, _ = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - brow_k)  # the brow was here: it stays
+    score[crease_k] = 1.0
+    score[brow_k] = 0.3  # the brow's match collapsed: the other place wins after all
+    h, _ = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - crease_k, abs=0.5)
+    finder.forget()
+    assert all(math.isnan(v) for v in finder._brow_last)

@@ -81,6 +81,9 @@ SOCKET_SEARCH = (0.17, 0.05)
 """How far (x, y) around the iris the eye picture is searched (gaze moves the iris in the eye)."""
 BROW_DOWN, BROW_UP = 0.15, 0.3
 """Brow search range: this far below / above its calibrated height."""
+BROW_STEADY = 1.0
+"""Correlation a brow height costs per work ipd away from the last frame's (see
+:meth:`EyeFinder._brow_peak`)."""
 BROW_HW = 0.03
 """Half-width of the strip of columns the brow's cross-section averages."""
 RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
@@ -771,6 +774,7 @@ class EyeFinder:
             t = t - t.mean()
             self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
         self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
+        self._brow_last = [math.nan, math.nan]  # the last heights found (crop px), see _brow_peak
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
@@ -1102,9 +1106,21 @@ class EyeFinder:
         return out
 
     def _brow_peak(self, score: np.ndarray, top: int, py: float, i: int) -> tuple[float, float]:
-        k = int(score.argmax())
+        """The brow's height and correlation from the correlation at every offset of its strip:
+        the best offset, less :data:`BROW_STEADY` per work ipd away from the last frame's
+        height (a lid crease or a lock of hair can look as much like the brow's cross-section
+        as the brow; the brow does not jump between them from one frame to the next)."""
+        base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
+        last = self._brow_last[i]
+        if math.isfinite(last):
+            pick = score - np.abs(base - np.arange(len(score), dtype=np.float32) - last) * (BROW_STEADY / self.wi)
+            k = int(pick.argmax())
+        else:
+            k = int(score.argmax())
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
-        return float(py - (top + k + d + self.model.brow_centres[i])), min(float(score[k]), 1.0)
+        h = float(base - k - d)
+        self._brow_last[i] = h
+        return h, min(float(score[k]), 1.0)
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
         """:meth:`_brows` of one eye."""
@@ -1247,6 +1263,10 @@ class EyeFinder:
             pics[i] = cv2.addWeighted(pics[i], 1.0 - rate, now, rate, 0.0)
         self._set_pictures(iris=phase == 0, eye=phase == 1)
         return True
+
+    def forget(self) -> None:
+        """Forget the last frame (the brows' heights): the next :meth:`find` looks afresh."""
+        self._brow_last = [math.nan, math.nan]
 
     def reset_adaptation(self) -> None:
         """Back to the calibration: its pictures and its light."""

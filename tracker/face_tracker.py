@@ -198,6 +198,13 @@ class FaceTracker:
         self.lost_frames = 0
         self.motion.reset()
         self.eye_finder.reset_adaptation()
+        self._forget_eyes()
+
+    def _forget_eyes(self) -> None:
+        """The eye finder forgets the last frame (a new start, or a face found again)."""
+        forget = getattr(self.eye_finder, "forget", None)
+        if forget is not None:
+            forget()
 
     # -------------------------------------------------------------- helpers
     def _buffer(self, name: str, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
@@ -294,6 +301,7 @@ class FaceTracker:
             self.gaze[:] = 0.0
             self.jaw[:] = 0.0
             self.motion.reset()
+            self._forget_eyes()
             self.lost = False
             self.lost_frames = 0
         elif self.motion.active:
