@@ -20,6 +20,7 @@ from tracker.eyes import (
     iris_radius,
     learn_eyes,
     refine_pupils,
+    slit_middle,
 )
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -59,6 +60,7 @@ def _find(finder, state, style=None, offset=(0.0, 0.0), roll_error=0.0, frame=No
     crop = ff.crop(frame, finder.rect)
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
     centres = np.array([[-0.5 * wi - x0, -y0], [0.5 * wi - x0, -y0]])
+    finder.forget()  # each render on its own: no brow height carried over from another test
     res = finder.find(crop, grey, centres)
     o = np.array([x0, y0], dtype=np.float64)
     keys = ("pupil", "lid_upper", "lid_lower", "brow")
@@ -250,6 +252,44 @@ def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
     assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))
 
 
+def _slit_eye(centre_y: float, half_height: float) -> np.ndarray:
+    """Lit skin with a dark slit between two lids (an eye too narrow for its iris to show
+    round), grey; the slit spans rows centre_y ± half_height."""
+    img = np.full((120, 160), 185.0, np.float32)
+    yy, xx = np.mgrid[0:120, 0:160]
+    inside = (np.abs(yy - centre_y) <= half_height) & (((xx - 80.0) / 26.0) ** 2 + ((yy - centre_y) / (half_height + 1.0)) ** 2 <= 1.0)
+    img[inside] = 60.0
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+@pytest.mark.parametrize("start", [-5.0, 0.0, 4.0, 6.0])
+def test_slit_middle_centres_a_point_on_a_narrow_eyes_slit(start):
+    img = _slit_eye(58.3, 3.5)
+    x, y = slit_middle(img, (80.0, 58.3 + start), 100.0)
+    assert x == 80.0
+    assert abs(y - 58.3) < 0.8
+
+
+def test_slit_middle_leaves_a_point_without_a_slit_and_moves_at_most_an_iris_radius():
+    flat = np.full((120, 160), 140.0, np.float32)
+    assert slit_middle(flat, (80.0, 60.0), 100.0) == (80.0, 60.0)
+    # a long dark band (hair, a shadow), not a slit: the point moves by at most a radius
+    band = np.full((120, 160), 185.0, np.float32)
+    band[20:110] = 50.0
+    _, y = slit_middle(band, (80.0, 60.0), 100.0)
+    assert abs(y - 60.0) <= 10.0 + 1e-6
+
+
+def test_refine_pupils_centres_clicks_below_narrow_eyes_on_their_slits():
+    """No iris shows round: the clicks move up to the middle of each eye's slit."""
+    img = _slit_eye(58.0, 3.0)
+    two = np.hstack([img, img])  # eyes 160 px apart, slits at y = 58
+    frame = cv2.cvtColor(np.clip(two, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    l, r = refine_pupils(frame, (80.0, 63.0), (240.0, 63.0))
+    assert abs(l[1] - 58.0) < 1.0 and abs(r[1] - 58.0) < 1.0
+    assert abs(l[0] - 80.0) < 3.0 and abs(r[0] - 240.0) < 3.0
+
+
 def test_iris_radius_of_a_drawn_disc():
     img = np.full((60, 100), 200, np.float32)
     cv2.circle(img, (50, 30), 8, 40, -1, cv2.LINE_AA)
@@ -335,3 +375,26 @@ def test_pupils_found_wherever_the_prediction_lands(finder, dx, dy, gaze):
     res, truth, _, _ = _find(finder, BASE.replace(gaze_x=gaze), offset=(dx, dy))
     for e, side in zip(res.eyes, ("left", "right")):
         assert math.hypot(e.x - truth[side]["pupil"][0], e.y - truth[side]["pupil"][1]) < 1.0
+
+
+def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder):
+    """Two equally good places for the brow's cross-section: the first frame takes the better,
+    the next frames stay where the brow was unless the other is much better."""
+    n, top, py = 40, 0, 50.0
+    base = py - top - finder.model.brow_centres[0]
+    score = np.zeros(n, np.float32)
+    brow_k, crease_k = 10, 25  # the crease lies 15 px lower (a smaller height)
+    score[brow_k - 1 : brow_k + 2] = (0.7, 0.9, 0.7)
+    score[crease_k - 1 : crease_k + 2] = (0.72, 0.93, 0.72)
+    finder.forget()
+    h, m = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - crease_k) and m == pytest.approx(0.93)  # no history: the best
+    finder._brow_last[0] = base - brow_k
+    h, _ = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - brow_k)  # the brow was here: it stays
+    score[crease_k] = 1.0
+    score[brow_k] = 0.3  # the brow's match collapsed: the other place wins after all
+    h, _ = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - crease_k, abs=0.5)
+    finder.forget()
+    assert all(math.isnan(v) for v in finder._brow_last)

@@ -190,3 +190,22 @@ def test_flow_follows_corners_near_the_frame_edge_and_far_apart():
     motion = hm.step(cv2.warpAffine(img, m, (w, h), borderMode=cv2.BORDER_REFLECT), face)
     assert motion is not None
     assert np.allclose(motion.matrix[:, 2], (5.0, -4.0), atol=0.3)
+
+
+def test_without_the_flow_the_eyes_move_the_head_but_grow_and_turn_it_only_a_little():
+    """A blink's half-shut eyes found 12 % too far apart and turned 8° do not set the pose."""
+    from tracker.face_tracker import MAX_GROW, MAX_TURN
+
+    anchors = np.array([[200.0, 240.0], [300.0, 240.0]])
+    th = math.radians(8.0)
+    half = 56.0 * np.array([math.cos(th), -math.sin(th)])
+    mid = np.array([262.0, 236.0])
+    pupils = np.array([mid - half, mid + half])
+    new = FaceTracker._limited(anchors, pupils)
+    assert np.allclose(0.5 * (new[0] + new[1]), mid)  # the position follows fully
+    d = new[1] - new[0]
+    assert math.hypot(*d) == pytest.approx(100.0 * (1 + MAX_GROW))
+    assert math.atan2(-d[1], d[0]) == pytest.approx(MAX_TURN)
+    # within the limits the found eyes are taken as they are
+    small = np.array([[203.0, 241.0], [304.0, 240.0]])
+    assert np.allclose(FaceTracker._limited(anchors, small), small)

@@ -81,6 +81,9 @@ SOCKET_SEARCH = (0.17, 0.05)
 """How far (x, y) around the iris the eye picture is searched (gaze moves the iris in the eye)."""
 BROW_DOWN, BROW_UP = 0.15, 0.3
 """Brow search range: this far below / above its calibrated height."""
+BROW_STEADY = 1.0
+"""Correlation a brow height costs per work ipd away from the last frame's (see
+:meth:`EyeFinder._brow_peak`)."""
 BROW_HW = 0.03
 """Half-width of the strip of columns the brow's cross-section averages."""
 RADIUS_LO, RADIUS_HI, RADIUS_DEFAULT = 0.065, 0.135, 0.1
@@ -771,6 +774,7 @@ class EyeFinder:
             t = t - t.mean()
             self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
         self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
+        self._brow_last = [math.nan, math.nan]  # the last heights found (crop px), see _brow_peak
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
@@ -1102,9 +1106,21 @@ class EyeFinder:
         return out
 
     def _brow_peak(self, score: np.ndarray, top: int, py: float, i: int) -> tuple[float, float]:
-        k = int(score.argmax())
+        """The brow's height and correlation from the correlation at every offset of its strip:
+        the best offset, less :data:`BROW_STEADY` per work ipd away from the last frame's
+        height (a lid crease or a lock of hair can look as much like the brow's cross-section
+        as the brow; the brow does not jump between them from one frame to the next)."""
+        base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
+        last = self._brow_last[i]
+        if math.isfinite(last):
+            pick = score - np.abs(base - np.arange(len(score), dtype=np.float32) - last) * (BROW_STEADY / self.wi)
+            k = int(pick.argmax())
+        else:
+            k = int(score.argmax())
         d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
-        return float(py - (top + k + d + self.model.brow_centres[i])), min(float(score[k]), 1.0)
+        h = float(base - k - d)
+        self._brow_last[i] = h
+        return h, min(float(score[k]), 1.0)
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
         """:meth:`_brows` of one eye."""
@@ -1248,6 +1264,10 @@ class EyeFinder:
         self._set_pictures(iris=phase == 0, eye=phase == 1)
         return True
 
+    def forget(self) -> None:
+        """Forget the last frame (the brows' heights): the next :meth:`find` looks afresh."""
+        self._brow_last = [math.nan, math.nan]
+
     def reset_adaptation(self) -> None:
         """Back to the calibration: its pictures and its light."""
         self._adapted_iris = [p.copy() for p in self._calib_iris]
@@ -1279,6 +1299,43 @@ def _drawn_iris(r: float) -> np.ndarray:
     yy, xx = np.mgrid[-hh : hh + 1, -hw : hw + 1]
     inside = np.clip(r + 0.5 - np.hypot(xx, yy), 0.0, 1.0)
     return (200.0 - 150.0 * inside).astype(np.float32)
+
+
+SLIT_CONTRAST = 12.0
+"""Grey levels the lids must be brighter than the eye's darkest row for :func:`slit_middle`."""
+
+
+def slit_middle(grey: np.ndarray, at: tuple[float, float], ipd: float) -> tuple[float, float]:
+    """``at`` (frame px) moved up or down to the middle of the dark run through it: the
+    visible part of an eye, between the lids, on the column through ``at``.
+
+    For an eye so narrow that the iris does not show as a disc (a squint, hooded or sleepy
+    lids) the iris's centre is hidden and the middle of the slit is where it shows (and
+    where a landmark tracker puts it); the point moves by at most a typical iris radius, and
+    stays where it is without a clear run (brighter lid skin above and below).
+    """
+    g = np.asarray(grey)
+    r = max(RADIUS_DEFAULT * ipd, 2.0)
+    hw, n = max(int(round(0.4 * r)), 1), int(round(2.5 * r))
+    x, y = float(at[0]), float(at[1])
+    xi, yi = int(round(x)), int(round(y))
+    h, w = g.shape[:2]
+    if not (hw <= xi < w - hw and n <= yi < h - n):
+        return x, y
+    col = g[yi - n : yi + n + 1, xi - hw : xi + hw + 1].astype(np.float32).mean(axis=1)
+    col = cv2.GaussianBlur(col.reshape(-1, 1), (1, 0), 1.0).ravel()
+    c, ri = n, int(r)
+    k = c - ri + int(np.argmin(col[c - ri : c + ri + 1]))
+    dark, up_lit, down_lit = float(col[k]), float(col[: k + 1].max()), float(col[k:].max())
+    if min(up_lit, down_lit) - dark < SLIT_CONTRAST:
+        return x, y
+    top, bottom = k, k
+    while top > 0 and col[top - 1] < 0.5 * (dark + up_lit):
+        top -= 1
+    while bottom < len(col) - 1 and col[bottom + 1] < 0.5 * (dark + down_lit):
+        bottom += 1
+    dy = min(max(0.5 * (top + bottom) - c + (yi - y), -r), r)
+    return x, y + dy
 
 
 def refine_pupils(
@@ -1324,7 +1381,8 @@ def refine_pupils(
         f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR, darkness=REFINE_DARK)
         found = f.locate_irises(crop, centres)
         if min(q[2] for q in found) < REFINE_MIN_MATCH:
-            return lp, rp  # nothing there looks like an iris
+            # no disc: eyes too narrow for the iris to show round, or no eyes at all
+            return slit_middle(grey, lp, ipd), slit_middle(grey, rp, ipd)
         found = np.array([q[:2] for q in found]) + o
         img = ff.to_image(found)
         nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))

@@ -145,6 +145,9 @@ FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrate
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
 FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
 FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
+SCALE_STEP = 1.06  # the face picture is also compared this much larger and smaller: its best size
+SCALE_PULL = 0.5  # per frame pull of the head's scale onto the face picture's best size
+MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye finder goes back to the calibration
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
@@ -195,6 +198,13 @@ class FaceTracker:
         self.lost_frames = 0
         self.motion.reset()
         self.eye_finder.reset_adaptation()
+        self._forget_eyes()
+
+    def _forget_eyes(self) -> None:
+        """The eye finder forgets the last frame (a new start, or a face found again)."""
+        forget = getattr(self.eye_finder, "forget", None)
+        if forget is not None:
+            forget()
 
     # -------------------------------------------------------------- helpers
     def _buffer(self, name: str, shape: tuple[int, ...], dtype=np.uint8) -> np.ndarray:
@@ -293,6 +303,7 @@ class FaceTracker:
             self.gaze[:] = 0.0
             self.jaw[:] = 0.0
             self.motion.reset()
+            self._forget_eyes()
             self.lost = False
             self.lost_frames = 0
         elif self.motion.active:
@@ -483,7 +494,7 @@ class FaceTracker:
         if not (usable[0] and usable[1]):
             new = anchors
         elif not flow_ok and not pinned:
-            new = pupils_img
+            new = self._limited(anchors, pupils_img)
         else:
             a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
             a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
@@ -493,6 +504,24 @@ class FaceTracker:
         self.velocity = new - self.anchors
         self.anchors = new
         self.pose = similarity_from_pairs(self._cal_pupils, new)
+
+    @staticmethod
+    def _limited(anchors: np.ndarray, pupils: np.ndarray) -> np.ndarray:
+        """``pupils`` (frame px), with their scale and roll against ``anchors`` limited to
+        :data:`MAX_GROW` and :data:`MAX_TURN`: without the flow the eyes say where the head
+        went, but a head does not grow or turn by more in one frame, while a blink, a squint
+        or the lash line can move a found eye that far (the midpoint follows fully)."""
+        za = complex(*(anchors[1] - anchors[0]))
+        zp = complex(*(pupils[1] - pupils[0]))
+        if abs(za) < 1e-6 or abs(zp) < 1e-6:
+            return pupils
+        q = zp / za
+        grow = min(max(abs(q), 1.0 - MAX_GROW), 1.0 + MAX_GROW)
+        turn = min(max(math.atan2(q.imag, q.real), -MAX_TURN), MAX_TURN)
+        v = za * grow * complex(math.cos(turn), math.sin(turn))
+        mid = 0.5 * (pupils[0] + pupils[1])
+        half = 0.5 * np.array([v.real, v.imag])
+        return np.array([mid - half, mid + half])
 
     def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray):
         """Crop around the predicted mouth centre (face coordinates) and run the mouth finder."""
