@@ -234,3 +234,15 @@ def test_one_side_like_its_cheek_does_not_lose_the_mouth(finder_and_crop):
                 pred=(30.0, 24.0), fit=(1.0, 1.0), previous=None)
     assert finder._score(strength=[-0.1 * g, 2.0 * g], **args) >= SCORE_OK
     assert finder._score(strength=[0.05 * g, 0.1 * g], **args) < SCORE_OK
+
+
+def test_plain_skin_costs_more_as_lip_than_an_outlier(finder_and_crop):
+    """A row that is plainly skin says the lip is not there; a row like nothing calibrated (a
+    highlight, a crease) only says the lip looks odd there: as lip, the first costs more."""
+    finder = finder_and_crop[0]
+    cls = np.asarray(finder.model.classes)
+    skin = cls[0, 0]
+    odd = cls[1, 0] + np.array([25.0, -15.0, 10.0], np.float32)  # far from every class
+    e = finder.row_costs(np.array([skin, odd], np.float32))
+    assert e[0, 0] < 1.0 and e[0, 1] > 3.0  # one is skin, the other is not
+    assert e[1, 0] > e[1, 1] and e[2, 0] > e[2, 1]

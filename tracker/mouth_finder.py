@@ -70,6 +70,10 @@ SKIN_UNLIKE = 4.0
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
 CORNER_INSETS = (1.0, 2.5, 4.0)
 """Columns (px at the working scale, inwards from a corner) whose mouth rows give the corner's height."""
+SKIN_IN_LIP = 3.0
+"""Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
+SKIN_CLEAR = 2.0
+"""Row cost as skin under which a row is plainly skin (see :data:`SKIN_IN_LIP`)."""
 CORNER_SHIFT = 0.2
 """Farthest (× wi) a corner's height may be from the traced line's row."""
 CORNER_NEAR = 4
@@ -372,7 +376,11 @@ class MouthFinder:
         # lips swaps with the pose and an open jaw (a dropped chin is lit like the philtrum was)
         np.minimum(np.minimum(e[0], e[3], out=e[0]), e[4], out=e[0])
         e[3] = e[0]
-        return np.minimum(e[:4], np.float32(ROW_CAP))
+        out = np.minimum(e[:4], np.float32(ROW_CAP))
+        # a row as lip that is plainly skin costs more than one like nothing calibrated (a highlight):
+        # skin where a lip should be says the lip is not there
+        out[1:3] += np.float32(SKIN_IN_LIP) * np.clip(1.0 - out[0] * np.float32(1.0 / SKIN_CLEAR), 0.0, 1.0)
+        return out
 
     def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
         """Split a profile (:meth:`profile`) into skin, upper lip, gap, lower lip, skin, with the gap
