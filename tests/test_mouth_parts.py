@@ -181,18 +181,25 @@ def test_edge_shift_reads_the_lip_share_of_the_rows_at_the_edge():
 
 
 def test_body_middle_is_the_middle_of_the_run_through_the_line():
-    unlike = np.zeros(30, np.float32)
-    unlike[10:16] = 6.0  # the mouth's rows on this column
-    inside = np.zeros(30, bool)
+    unlike = [0.0] * 30
+    unlike[10:16] = [6.0] * 6  # the mouth's rows on this column
+    inside = [False] * 30
     middle, height = body_middle(unlike, inside, 12, 8)
     assert middle == pytest.approx(12.5, abs=0.51) and height == pytest.approx(6.0, abs=1.01)
     unlike[16] = 4.5  # a row partly lip below: the lower edge moves down into it
     m2, h2 = body_middle(unlike, inside, 12, 8)
     assert m2 > middle and h2 > height
-    assert body_middle(np.full(30, 0.2, np.float32), inside, 12, 8) is None  # all skin
-    far = np.zeros(30, np.float32)
-    far[2:4] = 6.0  # something dark 9 rows from the line is no corner
+    assert body_middle([0.2] * 30, inside, 12, 8) is None  # all skin
+    far = [0.0] * 30
+    far[2:4] = [6.0, 6.0]  # something dark 9 rows from the line is no corner
     assert body_middle(far, inside, 12, 10) is None
+    teeth = [False] * 30
+    teeth[11:14] = [True] * 3  # teeth between two lip rows: inside-like rows are the mouth's body too
+    lips = [0.0] * 30
+    lips[10] = lips[14] = 6.0
+    m4, h4 = body_middle(lips, teeth, 12, 8)
+    assert m4 == pytest.approx(12.5, abs=0.6) and h4 >= 4.0
+    assert body_middle([0.0] * 30, teeth, 12, 8) is None  # nothing unlike skin: no mouth to speak of
 
 
 def test_skin_seen_at_calibration_is_never_teeth():

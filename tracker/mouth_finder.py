@@ -170,25 +170,25 @@ _SKINS = np.array([0, 3, 4])
 """The row classes that are skin (above, below, round the mouth)."""
 
 
-def body_middle(unlike: np.ndarray, inside: np.ndarray, y: int, reach: int) -> tuple[float, float] | None:
-    """The middle and the height (rows, sub-pixel edges) of the run of mouth rows on one column: rows unlike skin
-    (``unlike``, row costs as skin) by more than half the most unlike row within ``reach`` rows of
-    row ``y``, or inside-like (``inside``, bool) — the run holding ``y`` or one ending at most
-    :data:`CORNER_NEAR` rows from it. None when there is none (the column looks like skin: a corner
-    in shadow, a closed pale mouth)."""
+def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int) -> tuple[float, float] | None:
+    """The middle and the height (rows, sub-pixel edges) of the run of mouth rows on one column: rows
+    unlike skin (``unlike``, row costs as skin) by more than half the most unlike row within
+    ``reach`` rows of row ``y``, or inside-like (``inside``) — the run holding ``y`` or one ending at
+    most :data:`CORNER_NEAR` rows from it. None when there is none (the column looks like skin: a
+    corner in shadow, a closed pale mouth). Plain lists: a column is a few dozen rows."""
     H = len(unlike)
     a, b = max(y - reach, 0), min(y + reach + 1, H)
-    peak = float(unlike[a:b].max()) if b > a else 0.0
+    if b <= a:
+        return None
+    peak = max(unlike[a:b])
     if peak < CORNER_UNLIKE:
         return None
     level = 0.5 * peak
-    mouth = (unlike > level) | inside
-    near = np.flatnonzero(mouth[a:b])
-    if not len(near):
+    mouth = [u > level or i for u, i in zip(unlike, inside)]
+    near = [j for j in range(max(a, y - CORNER_NEAR), min(b, y + CORNER_NEAR + 1)) if mouth[j]]
+    if not near:
         return None
-    k = a + int(near[np.argmin(np.abs(near + a - y))])
-    if abs(k - y) > CORNER_NEAR:
-        return None
+    k = min(near, key=lambda j: abs(j - y))
     lo, hi = k, k
     while lo - 1 >= a and mouth[lo - 1]:
         lo -= 1
@@ -199,7 +199,7 @@ def body_middle(unlike: np.ndarray, inside: np.ndarray, y: int, reach: int) -> t
         """Where ``unlike`` crosses ``level`` between a mouth row and the skin row past it."""
         if not 0 <= i_out < H:
             return float(i_in)
-        u0, u1 = float(unlike[i_in]), float(unlike[i_out])
+        u0, u1 = unlike[i_in], unlike[i_out]
         t = (u0 - level) / (u0 - u1) if u0 > level > u1 else 0.5
         return i_in + (i_out - i_in) * min(max(t, 0.0), 1.0)
 
@@ -225,6 +225,15 @@ def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.nda
         return 0.0
     shift = _share(f[row + out], lip, skin) - (1.0 - _share(f[row], lip, skin))
     return min(max(shift, -0.5), 0.5)
+
+
+def _intercept(xs: list[float], ys: list[float]) -> float:
+    """Where the least-squares line through the points ``(xs, ys)`` crosses ``x = 0``."""
+    n = len(xs)
+    mx, my = sum(xs) / n, sum(ys) / n
+    sxx = sum((x - mx) ** 2 for x in xs)
+    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
+    return my - (sxy / sxx) * mx if sxx > 1e-12 else my
 
 
 def _parabola(a: float, b: float, c: float) -> float:
@@ -513,10 +522,11 @@ class MouthFinder:
         inside = ((i[1:] - i[:-1]).astype(np.float32) * inv[:, 0]).T > 0.5
         out = []
         n_in = len(ins)
+        unlike_l, inside_l = unlike.tolist(), inside.tolist()
         for side, (corner, yi) in enumerate(zip((left, right), ys)):
             hs, ms = [], []
             for j in range(n_in):
-                r = body_middle(unlike[side * n_in + j], inside[side * n_in + j], yi - a, reach)
+                r = body_middle(unlike_l[side * n_in + j], inside_l[side * n_in + j], yi - a, reach)
                 if r is not None:
                     ms.append(r[0] + a)
                     hs.append(r[1])
@@ -526,7 +536,7 @@ class MouthFinder:
             # the middle moves from the corner in proportion to the body's height, whatever the
             # lips' curve: carried on to no height, and inside the body on the nearest column (the
             # lips close towards the corner)
-            at0 = ms[0] if len(ms) == 1 or max(hs) - min(hs) < 0.5 else float(np.polyfit(hs, ms, 1)[1])
+            at0 = ms[0] if len(ms) == 1 or max(hs) - min(hs) < 0.5 else _intercept(hs, ms)
             at0 = min(max(at0, ms[0] - 0.5 * hs[0]), ms[0] + 0.5 * hs[0])
             out.append(min(max(at0, corner[1] - CORNER_SHIFT * self.wi), corner[1] + CORNER_SHIFT * self.wi))
         return out[0], out[1]
