@@ -253,3 +253,17 @@ def test_plain_skin_costs_more_as_lip_than_an_outlier(finder_and_crop):
     e = finder.row_costs(np.array([skin, odd], np.float32))
     assert e[0, 0] < 1.0 and e[0, 1] > 3.0  # one is skin, the other is not
     assert e[1, 0] > e[1, 1] and e[2, 0] > e[2, 1]
+
+
+def test_corners_rise_together_and_tilt_only_a_little(finder_and_crop, monkeypatch):
+    """One side's lips say its corner is far above the line, the other's say it is where the line
+    is: both move by the shared shift, each within a small tilt of it."""
+    import tracker.mouth_finder as mf
+    finder, small, _ = finder_and_crop
+    maps = finder.prepare(small)
+    shifts = iter([-6.0] * 3 + [0.0] * 3)  # the left side's lips 6 rows up, the right side's on the line
+    monkeypatch.setattr(mf, "body_middle", lambda unlike, inside, y, reach: (y + next(shifts), 4.0))
+    left, right = (10.0, 20.0), (40.0, 20.0)  # the traced line at row 20
+    yl, yr = finder.corner_heights(maps, left, right)
+    assert 0.5 * ((yl - 20.0) + (yr - 20.0)) == pytest.approx(-3.0)  # the mean of the two
+    assert yl < yr and yr - yl == pytest.approx(2 * mf.CORNER_TILT * 30.0)  # tilted, a little

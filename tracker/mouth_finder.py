@@ -74,6 +74,8 @@ SKIN_IN_LIP = 3.0
 """Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
 SKIN_CLEAR = 2.0
 """Row cost as skin under which a row is plainly skin (see :data:`SKIN_IN_LIP`)."""
+CORNER_TILT = 0.04
+"""Most (× the mouth's width) one corner's height may differ from the two corners' shared shift."""
 CORNER_SHIFT = 0.2
 """Farthest (× wi) a corner's height may be from the traced line's row."""
 CORNER_NEAR = 4
@@ -531,15 +533,24 @@ class MouthFinder:
                     ms.append(r[0] + a)
                     hs.append(r[1])
             if not ms:
-                out.append(corner[1])
+                out.append(None)
                 continue
             # the middle moves from the corner in proportion to the body's height, whatever the
             # lips' curve: carried on to no height, and inside the body on the nearest column (the
             # lips close towards the corner)
             at0 = ms[0] if len(ms) == 1 or max(hs) - min(hs) < 0.5 else _intercept(hs, ms)
             at0 = min(max(at0, ms[0] - 0.5 * hs[0]), ms[0] + 0.5 * hs[0])
-            out.append(min(max(at0, corner[1] - CORNER_SHIFT * self.wi), corner[1] + CORNER_SHIFT * self.wi))
-        return out[0], out[1]
+            out.append(min(max(at0 - corner[1], -CORNER_SHIFT * self.wi), CORNER_SHIFT * self.wi))
+        # both corners rise or fall together (a smile, a grin, a frown); one side's own estimate
+        # only tilts the line a little (a lopsided smile), since one side alone is easily misled
+        # (its lips in shadow, a tongue at one corner)
+        seen = [d for d in out if d is not None]
+        if not seen:
+            return left[1], right[1]
+        shared = sum(seen) / len(seen)
+        tilt = CORNER_TILT * (right[0] - left[0])
+        dl, dr = (shared if d is None else shared + min(max(d - shared, -tilt), tilt) for d in out)
+        return left[1] + dl, right[1] + dr
 
     def _line_columns(self, maps: "_Maps", xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """:func:`~tracker.mouth_model.line_columns` from the running sums at columns ``xs`` (inside the
