@@ -267,3 +267,21 @@ def test_corners_rise_together_and_tilt_only_a_little(finder_and_crop, monkeypat
     yl, yr = finder.corner_heights(maps, left, right)
     assert 0.5 * ((yl - 20.0) + (yr - 20.0)) == pytest.approx(-3.0)  # the mean of the two
     assert yl < yr and yr - yl == pytest.approx(2 * mf.CORNER_TILT * 30.0)  # tilted, a little
+
+
+def test_a_dark_shadow_above_the_mouth_is_not_its_line():
+    """A nose's shadow darker than the closed mouth's gap, a quarter of the eye distance above it:
+    the mouth line starts on the mouth, not on the shadow."""
+    import cv2
+    from test_mouth_finder import _errors, _truth_in_crop
+    from tracker.synthetic import face_landmarks
+    model, centre = _calibrate()
+    img, _ = render_face(BASE)
+    lm = face_landmarks(BASE)
+    mx, my = lm["mouth"]
+    cv2.rectangle(img, (int(mx - 0.25 * WI), int(my - 0.26 * WI)), (int(mx + 0.25 * WI), int(my - 0.23 * WI)), (40, 45, 60), -1)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    ew, eu, el = _errors(res, _truth_in_crop(BASE, ff, origin))
+    assert ew < 3.0 and eu < 2.0 and el < 2.0
