@@ -508,8 +508,10 @@ class MouthFinder:
         and the height of the mouth's body (:func:`body_middle`); the two lips' outlines meet at the
         corner, and inwards the middle moves towards the thicker lip in proportion to the height
         (upper edge ``y − a·h(d)``, lower ``y + b·h(d)`` whatever their curve ``h``), so a straight line
-        through (height, middle) carried on to no height gives it. The traced line's row (``left[1]``, ``right[1]``) where no column shows the mouth; at
-        most :data:`CORNER_SHIFT` wi from it."""
+        through (height, middle) carried on to no height gives it. Each side's shift from the traced
+        line's row is at most :data:`CORNER_SHIFT` wi; the two move by their mean, each differing from
+        it by at most :data:`CORNER_TILT` of the width (a side whose columns show no mouth takes the
+        other's shift; neither: the traced rows)."""
         H, W = maps.shape
         reach = int(math.ceil(0.2 * self.wi))
         ys = [min(max(int(round(c[1])), 0), H - 1) for c in (left, right)]
