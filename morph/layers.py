@@ -7,10 +7,17 @@ layers are then laid over each other with "over", so an opaque lid hides what li
 
 Loading precomputes, per distinct set of control lines, one :class:`PartMorpher` (its α tables):
 layers that share the drawing's lines share one set of tables and, per frame, one set of meshes
-and meshes. A layer that is the same picture with the same lines in every drawing (an eyeball
+and dense maps. A layer that is the same picture with the same lines in every drawing (an eyeball
 that never changes) is kept as it is and never warped. Each frame, a moving layer is only warped
 inside the rectangle its content can reach under that frame's meshes (the mesh cells whose corners
 sample its content), so a small layer, such as a lower lid, costs little.
+
+The per-frame work is batched over the part's line sets: their α tables live in one array, so
+every set's meshes come from one gather and one product (the mixing weights depend only on the
+frame's weights); the rectangles of all moving layers are found in one pass over the meshes; and
+the dense maps are upsampled in two calls, one for the layers that span the part and one for the
+union of the others' rectangles. A frame whose drawings and weights equal the last one's (a
+performer holding still, a face held while lost) reuses the last result.
 
 Everything is premultiplied RGBA uint8 (see ``morph``).
 """
@@ -117,6 +124,19 @@ class LayeredMorpher:
         for ly in self.layers:
             if ly.group >= 0:
                 self._content_boxes(ly)
+        self._batch_tables()
+        self._full_groups = sorted({ly.group for ly in self.layers if ly.group >= 0 and ly.full})
+        self._rect_layers = [k for k, ly in enumerate(self.layers) if ly.group >= 0 and not ly.full]
+        self._rect_groups = sorted({self.layers[k].group for k in self._rect_layers})
+        # where each moving layer's maps sit in its upsampling call's output: (spans the part, slot)
+        self._slot = {k: (ly.full, (self._full_groups if ly.full else self._rect_groups).index(ly.group))
+                      for k, ly in enumerate(self.layers) if ly.group >= 0}
+        if self._rect_layers:
+            self._rect_boxes = np.stack([self.layers[k].boxes for k in self._rect_layers])  # (L, n, 4)
+            self._rect_group_of = np.array([self.layers[k].group for k in self._rect_layers])
+        self._last_act: list[tuple[int, float]] | None = None  # the last frame, for reuse (see render)
+        self._last_detail = False
+        self._last = np.empty((h, w, 4), np.uint8)
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
@@ -142,29 +162,60 @@ class LayeredMorpher:
         ly.boxes = boxes
         ly.full = bool(np.all(boxes[:, :2] <= -1.0) and np.all(boxes[:, 2] >= w) and np.all(boxes[:, 3] >= h))
 
-    def _frame_rect(self, ly: _Layer, planes: np.ndarray, act) -> tuple[int, int, int, int] | None:
-        """The pixels ``(x0, y0, x1, y1)`` of the part where ``ly`` can be non-transparent this
-        frame, or None: the mesh cells some of whose corners, for some active drawing, sample
-        inside that drawing's content box (a pixel's source is a convex mix of its cell's corners)."""
-        w, h = self.size
-        if ly.full:
-            return 0, 0, w, h
-        k = len(act)
-        b = ly.boxes[[ia for ia, _ in act]]
+    def _batch_tables(self) -> None:
+        """Put every line set's α tables into one array (each ``PartMorpher`` keeps a view of its
+        rows), so one gather reads the rows a frame needs from all of them."""
+        if not self.groups:
+            self._table = None
+            return
+        self._group_rows = self.groups[0]._planes.shape[0]
+        table = np.concatenate([g._planes for g in self.groups])
+        table.flags.writeable = False
+        for g, m in enumerate(self.groups):
+            m._planes = table[g * self._group_rows:(g + 1) * self._group_rows]
+        self._table = table
+        self._row_offsets = np.arange(len(self.groups))[:, None] * self._group_rows
+
+    def _frame_rects(self, planes: np.ndarray, act) -> list[tuple[int, int, int, int] | None]:
+        """For each layer of ``_rect_layers``, the pixels ``(x0, y0, x1, y1)`` of the part where it
+        can be non-transparent this frame, or None: the mesh cells some of whose corners, for some
+        active drawing, sample inside that drawing's content box (a pixel's source is a convex mix
+        of its cell's corners). ``planes``: ``(groups, len(act), 2, m, m)``, all line sets' meshes."""
+        b = self._rect_boxes[:, [ia for ia, _ in act]]  # (L, k, 4)
+        p = planes[self._rect_group_of]  # (L, k, 2, m, m)
         # a cell can sample a box if one of its corners lies beyond each of the box's sides
-        inside = np.empty((4, k) + planes.shape[2:], bool)
-        np.greater_equal(planes[:k, 0], b[:, 0, None, None], out=inside[0])
-        np.less_equal(planes[:k, 0], b[:, 2, None, None], out=inside[1])
-        np.greater_equal(planes[:k, 1], b[:, 1, None, None], out=inside[2])
-        np.less_equal(planes[:k, 1], b[:, 3, None, None], out=inside[3])
-        corner = inside[..., :-1, :-1] | inside[..., 1:, :-1] | inside[..., :-1, 1:] | inside[..., 1:, 1:]  # (4, k, c, c)
-        hit = corner.all(axis=0).any(axis=0)
-        rows = np.nonzero(hit.any(axis=1))[0]
-        if not len(rows):
-            return None
-        cols = np.nonzero(hit.any(axis=0))[0]
+        inside = np.empty((4,) + p.shape[:2] + p.shape[3:], bool)
+        np.greater_equal(p[:, :, 0], b[..., 0, None, None], out=inside[0])
+        np.less_equal(p[:, :, 0], b[..., 2, None, None], out=inside[1])
+        np.greater_equal(p[:, :, 1], b[..., 1, None, None], out=inside[2])
+        np.less_equal(p[:, :, 1], b[..., 3, None, None], out=inside[3])
+        pair = inside[..., :-1, :] | inside[..., 1:, :]
+        corner = pair[..., :-1] | pair[..., 1:]  # (4, L, k, c, c)
+        hit = corner.all(axis=0).any(axis=1)  # (L, c, c)
+        row_hit, col_hit = hit.any(axis=2), hit.any(axis=1)
+        c = hit.shape[1]
         xs, ys = self._spans
-        return int(xs[cols[0], 0]), int(ys[rows[0], 0]), int(xs[cols[-1], 1]), int(ys[rows[-1], 1])
+        out = []
+        for rh, ch, any_ in zip(row_hit, col_hit, row_hit.any(axis=1).tolist()):
+            if not any_:
+                out.append(None)
+                continue
+            r0, r1 = int(rh.argmax()), c - 1 - int(rh[::-1].argmax())
+            c0, c1 = int(ch.argmax()), c - 1 - int(ch[::-1].argmax())
+            out.append((int(xs[c0, 0]), int(ys[r0, 0]), int(xs[c1, 1]), int(ys[r1, 1])))
+        return out
+
+    def _all_mesh_planes(self, act: list[tuple[int, float]]) -> np.ndarray:
+        """``(groups, len(act), 2, m, m)`` float32: every line set's meshes for this frame (what
+        each ``PartMorpher._mesh_planes`` gives, from one gather and one batched product)."""
+        g0 = self.groups[0]
+        m = self.grid.cells + 1
+        k = len(act)
+        if k == 1 or (self.exact_three_way and k > 2):
+            return np.stack([g._mesh_planes(act) for g in self.groups])
+        rows, coef = g0._mesh_terms(act)
+        gathered = self._table[(self._row_offsets + np.array(rows)).ravel()].reshape(len(self.groups), len(rows), -1)
+        return np.matmul(coef, gathered).reshape(len(self.groups), k, 2, m, m)
 
     @staticmethod
     def _stack(images: Sequence[np.ndarray]) -> np.ndarray:
@@ -189,18 +240,50 @@ class LayeredMorpher:
         out: np.ndarray | None = None,
     ) -> np.ndarray:
         """The morphed, stacked part: premultiplied RGBA uint8 of the part size (a new array, or
-        ``out``). Arguments as in :meth:`PartMorpher.render`; one frame at a time per instance."""
+        ``out``). Arguments as in :meth:`PartMorpher.render`; one frame at a time per instance.
+
+        Without ``jitter``, the same drawings in the same order with weights within
+        ``REUSE_EPS`` of the last frame's give the last frame's result again (copied)."""
         act = self.active(indices, weights)
         if len(act) == 1 and jitter is None:
             if out is None:
                 return self.pm[act[0][0]].copy()
             np.copyto(out, self.pm[act[0][0]])
             return out
+        if jitter is None and detail == self._last_detail and _same(act, self._last_act):
+            if out is None:
+                return self._last.copy()
+            np.copyto(out, self._last)
+            return out
         if out is None:
             out = np.empty_like(self.pm[0])
-        planes_of: dict[int, np.ndarray] = {}
-        wts = [wa for _, wa in act]
+        self._last_act = None
+        self._compose(act, detail, jitter, out)
+        if jitter is None:
+            np.copyto(self._last, out)
+            self._last_act, self._last_detail = act, detail
+        return out
+
+    def _compose(self, act: list[tuple[int, float]], detail: bool, jitter: np.ndarray | None, out: np.ndarray) -> None:
+        """Warp, blend and stack every layer for the active drawings ``act`` into ``out``."""
         w, h = self.size
+        k_act = len(act)
+        wts = [wa for _, wa in act]
+        if self.groups:
+            planes = self._all_mesh_planes(act)
+            if jitter is not None:
+                planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
+            m = planes.shape[-1]
+            if self._full_groups:
+                sel = planes if len(self._full_groups) == len(self.groups) else planes[self._full_groups]
+                full_x, full_y = self.grid.upsample_planes(sel.reshape(-1, 2, m, m), reuse=True)
+            rects = dict(zip(self._rect_layers, self._frame_rects(planes, act))) if self._rect_layers else {}
+            live = [r for r in rects.values() if r is not None]
+            if live:
+                ux0, uy0 = min(r[0] for r in live), min(r[1] for r in live)
+                ux1, uy1 = max(r[2] for r in live), max(r[3] for r in live)
+                sel = planes if len(self._rect_groups) == len(self.groups) else planes[self._rect_groups]
+                rect_x, rect_y = self.grid.upsample_rect(sel.reshape(-1, 2, m, m), (ux0, uy0, ux1, uy1))
         for k, ly in enumerate(self.layers):
             if ly.group < 0:
                 if k == 0:
@@ -208,32 +291,30 @@ class LayeredMorpher:
                 else:
                     over_u8(ly.pm[0], out, out, self._inv)
                 continue
-            m = self.groups[ly.group]
-            if ly.group not in planes_of:
-                planes = m._mesh_planes(act)
-                if jitter is not None:
-                    planes += np.moveaxis(np.asarray(jitter, dtype=np.float32), -1, 0)
-                planes_of[ly.group] = planes
-            rect = self._frame_rect(ly, planes_of[ly.group], act)
-            if k == 0 and rect != (0, 0, w, h):
-                out[...] = 0
-            if rect is None:
-                continue
-            x0, y0, x1, y1 = rect
-            if rect == (0, 0, w, h):
-                mx, my = m.grid.upsample_planes(planes_of[ly.group], reuse=True)
+            full, slot = self._slot[k]
+            if full:
+                x0, y0, x1, y1 = 0, 0, w, h
+                mx, my = full_x[slot * k_act:(slot + 1) * k_act], full_y[slot * k_act:(slot + 1) * k_act]
             else:
-                mx, my = m.grid.upsample_rect(planes_of[ly.group], rect)
+                rect = rects[k]
+                if k == 0:
+                    out[...] = 0
+                if rect is None:
+                    continue
+                x0, y0, x1, y1 = rect
+                cut = (slice(slot * k_act, (slot + 1) * k_act), slice(y0 - uy0, y1 - uy0), slice(x0 - ux0, x1 - ux0))
+                mx, my = rect_x[cut], rect_y[cut]
+            border = self.groups[ly.group].border
             n_px = (y1 - y0) * (x1 - x0) * 4
             bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(y1 - y0, x1 - x0, 4) for j in range(5)]
             warped = [
                 cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
-                          borderMode=m.border, borderValue=(0, 0, 0, 0))
+                          borderMode=border, borderValue=(0, 0, 0, 0))
                 for j, (ia, _) in enumerate(act)
             ]
-            if detail and len(act) > 1:
+            if detail and k_act > 1:
                 blended = detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
-            elif len(act) == 3:
+            elif k_act == 3:
                 blended = _blend3_u8(warped, wts, out=bufs[4], scratch=bufs[3])
             else:
                 blended = blend_u8(warped, wts, out=bufs[4])
@@ -242,7 +323,18 @@ class LayeredMorpher:
                 region[...] = blended
             else:
                 over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
-        return out
+
+
+# Weights closer than this to the last frame's reuse its result: a vertex then moves by well under
+# 1/1000 px and a blended pixel by under 1/1000 of a level, far below what uint8 output shows.
+REUSE_EPS = 1e-6
+
+
+def _same(act: list[tuple[int, float]], last: list[tuple[int, float]] | None) -> bool:
+    """Same drawings in the same order, weights within ``REUSE_EPS``."""
+    if last is None or len(act) != len(last):
+        return False
+    return all(i == j and abs(a - b) <= REUSE_EPS for (i, a), (j, b) in zip(act, last))
 
 
 class _Plain:
