@@ -134,6 +134,9 @@ class LayeredMorpher:
         if self._rect_layers:
             self._rect_boxes = np.stack([self.layers[k].boxes for k in self._rect_layers])  # (L, n, 4)
             self._rect_group_of = np.array([self.layers[k].group for k in self._rect_layers])
+        self._moving_top_down = [k for k in reversed(range(len(self.layers))) if self.layers[k].group >= 0]
+        self._layer_bufs = {k: np.empty(h * w * 4, np.uint8) for k in self._moving_top_down}
+        self._trims = self._trimming_layers()
         self._last_act: list[tuple[int, float]] | None = None  # the last frame, for reuse (see render)
         self._last_detail = False
         self._last = np.empty((h, w, 4), np.uint8)
@@ -141,7 +144,7 @@ class LayeredMorpher:
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
             s.flags.writeable = False
-        self._scratch = np.empty(5 * h * w * 4, np.uint8)  # 3 warped images, a pair sum, the blend: of the rectangle's size
+        self._scratch = np.empty(4 * h * w * 4, np.uint8)  # 3 warped images and a pair sum, of the rectangle's size
         self._inv = np.empty((h, w, 4), np.uint8)  # scratch for over_u8 (its prefix, reshaped, for a rectangle)
 
     # --- load time -------------------------------------------------------------------------
@@ -175,6 +178,32 @@ class LayeredMorpher:
             m._planes = table[g * self._group_rows:(g + 1) * self._group_rows]
         self._table = table
         self._row_offsets = np.arange(len(self.groups))[:, None] * self._group_rows
+
+    def _trimming_layers(self) -> set[int]:
+        """The moving layers that span the part and, in their drawings, hide much of the moving
+        layers below them: after such a layer, a frame looks for what it leaves visible (see
+        ``_compose``). Elsewhere (lids whose lower lid sits in the eye openings) the search would
+        cost more than it saves."""
+        out = set()
+        for k in self._moving_top_down:
+            below = [j for j in self._moving_top_down if j < k]
+            if not self.layers[k].full or not below:
+                continue
+            shares = []
+            for i in range(self.n):
+                window = _see_through(self.layers[k].pm[i], 0, 0)
+                boxes = np.array([self.layers[j].boxes[i] for j in below])
+                lo = np.maximum(boxes[:, :2].min(axis=0), 0)
+                hi = np.minimum(boxes[:, 2:].max(axis=0), self.size)
+                area = float(np.prod(np.maximum(hi - lo, 0)))
+                if window is None or area <= 0:
+                    shares.append(0.0)
+                    continue
+                cut = np.maximum(np.minimum(hi, window[2:]) - np.maximum(lo, window[:2]), 0)
+                shares.append(float(np.prod(cut)) / area)
+            if max(shares) < _TRIM_SHARE:
+                out.add(k)
+        return out
 
     def _frame_rects(self, planes: np.ndarray, act) -> list[tuple[int, int, int, int] | None]:
         """For each layer of ``_rect_layers``, the pixels ``(x0, y0, x1, y1)`` of the part where it
@@ -265,10 +294,16 @@ class LayeredMorpher:
         return out
 
     def _compose(self, act: list[tuple[int, float]], detail: bool, jitter: np.ndarray | None, out: np.ndarray) -> None:
-        """Warp, blend and stack every layer for the active drawings ``act`` into ``out``."""
+        """Warp, blend and stack every layer for the active drawings ``act`` into ``out``.
+
+        Moving layers are warped top first, each only where every layer above it lets some
+        light through: once a layer is computed over the whole visible box, the box shrinks to
+        its pixels with α < 255 (under an opaque pixel, ``over`` gives the top pixel exactly,
+        whatever lies below). The warped layers are then stacked bottom first, as drawn."""
         w, h = self.size
         k_act = len(act)
         wts = [wa for _, wa in act]
+        shown: dict[int, tuple[int, int, int, int, np.ndarray]] = {}  # layer -> its rectangle, blended
         if self.groups:
             planes = self._all_mesh_planes(act)
             if jitter is not None:
@@ -278,12 +313,26 @@ class LayeredMorpher:
                 sel = planes if len(self._full_groups) == len(self.groups) else planes[self._full_groups]
                 full_x, full_y = self.grid.upsample_planes(sel.reshape(-1, 2, m, m), reuse=True)
             rects = dict(zip(self._rect_layers, self._frame_rects(planes, act))) if self._rect_layers else {}
-            live = [r for r in rects.values() if r is not None]
-            if live:
-                ux0, uy0 = min(r[0] for r in live), min(r[1] for r in live)
-                ux1, uy1 = max(r[2] for r in live), max(r[3] for r in live)
-                sel = planes if len(self._rect_groups) == len(self.groups) else planes[self._rect_groups]
-                rect_x, rect_y = self.grid.upsample_rect(sel.reshape(-1, 2, m, m), (ux0, uy0, ux1, uy1))
+            vis = (0, 0, w, h)
+            for k in self._moving_top_down:
+                full, slot = self._slot[k]
+                r = (0, 0, w, h) if full else rects[k]
+                if r is None:
+                    continue
+                x0, y0, x1, y1 = max(r[0], vis[0]), max(r[1], vis[1]), min(r[2], vis[2]), min(r[3], vis[3])
+                if x1 <= x0 or y1 <= y0:
+                    continue
+                if full:
+                    cut = (slice(slot * k_act, (slot + 1) * k_act), slice(y0, y1), slice(x0, x1))
+                    mx, my = full_x[cut], full_y[cut]
+                else:
+                    mx, my = self.grid.upsample_rect(planes[self.layers[k].group], (x0, y0, x1, y1))
+                blended = self._warp_blend(k, act, wts, mx, my, detail)
+                shown[k] = (x0, y0, x1, y1, blended)
+                if k in self._trims and not detail and (x0, y0, x1, y1) == vis:  # (the detail blend's blur would see a cut)
+                    vis = _see_through(blended, x0, y0)
+                    if vis is None:
+                        break
         for k, ly in enumerate(self.layers):
             if ly.group < 0:
                 if k == 0:
@@ -291,39 +340,53 @@ class LayeredMorpher:
                 else:
                     over_u8(ly.pm[0], out, out, self._inv)
                 continue
-            full, slot = self._slot[k]
-            if full:
-                x0, y0, x1, y1 = 0, 0, w, h
-                mx, my = full_x[slot * k_act:(slot + 1) * k_act], full_y[slot * k_act:(slot + 1) * k_act]
-            else:
-                rect = rects[k]
-                if k == 0:
-                    out[...] = 0
-                if rect is None:
-                    continue
-                x0, y0, x1, y1 = rect
-                cut = (slice(slot * k_act, (slot + 1) * k_act), slice(y0 - uy0, y1 - uy0), slice(x0 - ux0, x1 - ux0))
-                mx, my = rect_x[cut], rect_y[cut]
-            border = self.groups[ly.group].border
-            n_px = (y1 - y0) * (x1 - x0) * 4
-            bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(y1 - y0, x1 - x0, 4) for j in range(5)]
-            warped = [
-                cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
-                          borderMode=border, borderValue=(0, 0, 0, 0))
-                for j, (ia, _) in enumerate(act)
-            ]
-            if detail and k_act > 1:
-                blended = detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
-            elif k_act == 3:
-                blended = _blend3_u8(warped, wts, out=bufs[4], scratch=bufs[3])
-            else:
-                blended = blend_u8(warped, wts, out=bufs[4])
+            x0, y0, x1, y1, blended = shown.get(k, (0, 0, 0, 0, None))
+            if k == 0 and (x0, y0, x1, y1) != (0, 0, w, h):
+                out[...] = 0
+            if blended is None:
+                continue
             region = out[y0:y1, x0:x1]
             if k == 0:
                 region[...] = blended
             else:
+                n_px = (y1 - y0) * (x1 - x0) * 4
                 over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
 
+    def _warp_blend(self, k: int, act, wts, mx: np.ndarray, my: np.ndarray, detail: bool) -> np.ndarray:
+        """Layer ``k`` of the active drawings resampled along the maps ``mx, my`` (one per drawing,
+        of a rectangle's size) and blended with the weights, into that layer's own buffer."""
+        ly = self.layers[k]
+        rh, rw = mx.shape[1:]
+        n_px = rh * rw * 4
+        bufs = [self._scratch[j * n_px:(j + 1) * n_px].reshape(rh, rw, 4) for j in range(4)]
+        border = self.groups[ly.group].border
+        warped = [
+            cv2.remap(ly.pm[ia], mx[j], my[j], dst=bufs[j], interpolation=cv2.INTER_LINEAR,
+                      borderMode=border, borderValue=(0, 0, 0, 0))
+            for j, (ia, _) in enumerate(act)
+        ]
+        dst = self._layer_bufs[k][:n_px].reshape(rh, rw, 4)
+        if detail and len(act) > 1:
+            return detail_blend(warped, wts, sigma=self.detail_sigma, plain=blend_u8(warped, wts))
+        if len(act) == 3:
+            return _blend3_u8(warped, wts, out=dst, scratch=bufs[3])
+        return blend_u8(warped, wts, out=dst)
+
+
+def _see_through(blended: np.ndarray, x0: int, y0: int) -> tuple[int, int, int, int] | None:
+    """The bounding box ``(x0, y0, x1, y1)`` of the pixels of ``blended`` (placed at ``x0, y0``)
+    with α < 255, or None when it is opaque everywhere."""
+    a = cv2.extractChannel(blended, 3)
+    rows = np.flatnonzero(cv2.reduce(a, 1, cv2.REDUCE_MIN).ravel() < 255)
+    if not len(rows):
+        return None
+    cols = np.flatnonzero(cv2.reduce(a, 0, cv2.REDUCE_MIN).ravel() < 255)
+    return x0 + int(cols[0]), y0 + int(rows[0]), x0 + int(cols[-1]) + 1, y0 + int(rows[-1]) + 1
+
+
+# A layer that leaves less than this share of the layers below it visible in every drawing
+# (by bounding boxes) makes the layers below be warped only where it lets light through.
+_TRIM_SHARE = 0.75
 
 # Weights closer than this to the last frame's reuse its result: a vertex then moves by well under
 # 1/1000 px and a blended pixel by under 1/1000 of a level, far below what uint8 output shows.
