@@ -14,10 +14,11 @@ sample its content), so a small layer, such as a lower lid, costs little.
 
 The per-frame work is batched over the part's line sets: their α tables live in one array, so
 every set's meshes come from one gather and one product (the mixing weights depend only on the
-frame's weights); the rectangles of all moving layers are found in one pass over the meshes; and
-the dense maps are upsampled in two calls, one for the layers that span the part and one for the
-union of the others' rectangles. A frame whose drawings and weights equal the last one's (a
-performer holding still, a face held while lost) reuses the last result.
+frame's weights); the rectangles of all small layers are found in one pass over the meshes; and
+the dense maps of the layers that span the part, or most of it, come from one upsampling call.
+Layers are warped top first: under a layer that hides most of what lies below it (an upper lip
+over the lower lip), the layers below are warped only inside the box where it lets light
+through. Both are exact: the frames equal a layer-by-layer, full-box render.
 
 Everything is premultiplied RGBA uint8 (see ``morph``).
 """
@@ -125,21 +126,20 @@ class LayeredMorpher:
             if ly.group >= 0:
                 self._content_boxes(ly)
         self._batch_tables()
-        self._full_groups = sorted({ly.group for ly in self.layers if ly.group >= 0 and ly.full})
         self._rect_layers = [k for k, ly in enumerate(self.layers) if ly.group >= 0 and not ly.full]
-        self._rect_groups = sorted({self.layers[k].group for k in self._rect_layers})
-        # where each moving layer's maps sit in its upsampling call's output: (spans the part, slot)
-        self._slot = {k: (ly.full, (self._full_groups if ly.full else self._rect_groups).index(ly.group))
-                      for k, ly in enumerate(self.layers) if ly.group >= 0}
+        # line sets whose dense maps are upsampled over the whole part in one call: those of layers
+        # that span it, and of layers whose content covers most of it anyway (one call for all of
+        # them costs less than a call per rectangle)
+        big = {ly.group for ly in self.layers if ly.group >= 0 and (ly.full or self._content_share(ly) >= _FULL_MAP_SHARE)}
+        self._full_groups = sorted(big)
+        self._full_slot = {k: self._full_groups.index(ly.group) for k, ly in enumerate(self.layers) if ly.group in big}
         if self._rect_layers:
-            self._rect_boxes = np.stack([self.layers[k].boxes for k in self._rect_layers])  # (L, n, 4)
+            boxes = np.stack([self.layers[k].boxes for k in self._rect_layers])  # (L, n, 4) x0, y0, x1, y1
+            self._rect_bounds = np.concatenate((boxes[..., :2], -boxes[..., 2:]), axis=-1).astype(np.float32)
             self._rect_group_of = np.array([self.layers[k].group for k in self._rect_layers])
         self._moving_top_down = [k for k in reversed(range(len(self.layers))) if self.layers[k].group >= 0]
         self._layer_bufs = {k: np.empty(h * w * 4, np.uint8) for k in self._moving_top_down}
         self._trims = self._trimming_layers()
-        self._last_act: list[tuple[int, float]] | None = None  # the last frame, for reuse (see render)
-        self._last_detail = False
-        self._last = np.empty((h, w, 4), np.uint8)
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
@@ -179,6 +179,13 @@ class LayeredMorpher:
         self._table = table
         self._row_offsets = np.arange(len(self.groups))[:, None] * self._group_rows
 
+    def _content_share(self, ly: _Layer) -> float:
+        """The mean share of the part that ``ly``'s content boxes cover in its drawings."""
+        w, h = self.size
+        b = ly.boxes
+        sides = np.clip(b[:, 2:], 0, (w, h)) - np.clip(b[:, :2], 0, (w, h))
+        return float(np.mean(np.prod(np.maximum(sides, 0), axis=1))) / (w * h)
+
     def _trimming_layers(self) -> set[int]:
         """The moving layers that span the part and, in their drawings, hide much of the moving
         layers below them: after such a layer, a frame looks for what it leaves visible (see
@@ -210,28 +217,22 @@ class LayeredMorpher:
         can be non-transparent this frame, or None: the mesh cells some of whose corners, for some
         active drawing, sample inside that drawing's content box (a pixel's source is a convex mix
         of its cell's corners). ``planes``: ``(groups, len(act), 2, m, m)``, all line sets' meshes."""
-        b = self._rect_boxes[:, [ia for ia, _ in act]]  # (L, k, 4)
         p = planes[self._rect_group_of]  # (L, k, 2, m, m)
+        signed = np.concatenate((p, -p), axis=2)  # x, y, −x, −y: one comparison for all four sides
+        inside = signed >= self._rect_bounds[:, [ia for ia, _ in act], :, None, None]
         # a cell can sample a box if one of its corners lies beyond each of the box's sides
-        inside = np.empty((4,) + p.shape[:2] + p.shape[3:], bool)
-        np.greater_equal(p[:, :, 0], b[..., 0, None, None], out=inside[0])
-        np.less_equal(p[:, :, 0], b[..., 2, None, None], out=inside[1])
-        np.greater_equal(p[:, :, 1], b[..., 1, None, None], out=inside[2])
-        np.less_equal(p[:, :, 1], b[..., 3, None, None], out=inside[3])
         pair = inside[..., :-1, :] | inside[..., 1:, :]
-        corner = pair[..., :-1] | pair[..., 1:]  # (4, L, k, c, c)
-        hit = corner.all(axis=0).any(axis=1)  # (L, c, c)
-        row_hit, col_hit = hit.any(axis=2), hit.any(axis=1)
-        c = hit.shape[1]
+        corner = pair[..., :-1] | pair[..., 1:]  # (L, k, 4, c, c)
+        hit = corner.all(axis=2).any(axis=1)  # (L, c, c)
         xs, ys = self._spans
         out = []
-        for rh, ch, any_ in zip(row_hit, col_hit, row_hit.any(axis=1).tolist()):
-            if not any_:
+        for rows, cols in zip(hit.any(axis=2), hit.any(axis=1)):
+            r = np.flatnonzero(rows)
+            if not len(r):
                 out.append(None)
                 continue
-            r0, r1 = int(rh.argmax()), c - 1 - int(rh[::-1].argmax())
-            c0, c1 = int(ch.argmax()), c - 1 - int(ch[::-1].argmax())
-            out.append((int(xs[c0, 0]), int(ys[r0, 0]), int(xs[c1, 1]), int(ys[r1, 1])))
+            c = np.flatnonzero(cols)
+            out.append((int(xs[c[0], 0]), int(ys[r[0], 0]), int(xs[c[-1], 1]), int(ys[r[-1], 1])))
         return out
 
     def _all_mesh_planes(self, act: list[tuple[int, float]]) -> np.ndarray:
@@ -269,28 +270,16 @@ class LayeredMorpher:
         out: np.ndarray | None = None,
     ) -> np.ndarray:
         """The morphed, stacked part: premultiplied RGBA uint8 of the part size (a new array, or
-        ``out``). Arguments as in :meth:`PartMorpher.render`; one frame at a time per instance.
-
-        Without ``jitter``, the same drawings in the same order with weights within
-        ``REUSE_EPS`` of the last frame's give the last frame's result again (copied)."""
+        ``out``). Arguments as in :meth:`PartMorpher.render`; one frame at a time per instance."""
         act = self.active(indices, weights)
         if len(act) == 1 and jitter is None:
             if out is None:
                 return self.pm[act[0][0]].copy()
             np.copyto(out, self.pm[act[0][0]])
             return out
-        if jitter is None and detail == self._last_detail and _same(act, self._last_act):
-            if out is None:
-                return self._last.copy()
-            np.copyto(out, self._last)
-            return out
         if out is None:
             out = np.empty_like(self.pm[0])
-        self._last_act = None
         self._compose(act, detail, jitter, out)
-        if jitter is None:
-            np.copyto(self._last, out)
-            self._last_act, self._last_detail = act, detail
         return out
 
     def _compose(self, act: list[tuple[int, float]], detail: bool, jitter: np.ndarray | None, out: np.ndarray) -> None:
@@ -315,14 +304,14 @@ class LayeredMorpher:
             rects = dict(zip(self._rect_layers, self._frame_rects(planes, act))) if self._rect_layers else {}
             vis = (0, 0, w, h)
             for k in self._moving_top_down:
-                full, slot = self._slot[k]
-                r = (0, 0, w, h) if full else rects[k]
+                r = (0, 0, w, h) if self.layers[k].full else rects[k]
                 if r is None:
                     continue
                 x0, y0, x1, y1 = max(r[0], vis[0]), max(r[1], vis[1]), min(r[2], vis[2]), min(r[3], vis[3])
                 if x1 <= x0 or y1 <= y0:
                     continue
-                if full:
+                slot = self._full_slot.get(k)
+                if slot is not None:
                     cut = (slice(slot * k_act, (slot + 1) * k_act), slice(y0, y1), slice(x0, x1))
                     mx, my = full_x[cut], full_y[cut]
                 else:
@@ -376,29 +365,19 @@ class LayeredMorpher:
 def _see_through(blended: np.ndarray, x0: int, y0: int) -> tuple[int, int, int, int] | None:
     """The bounding box ``(x0, y0, x1, y1)`` of the pixels of ``blended`` (placed at ``x0, y0``)
     with α < 255, or None when it is opaque everywhere."""
-    a = cv2.extractChannel(blended, 3)
-    rows = np.flatnonzero(cv2.reduce(a, 1, cv2.REDUCE_MIN).ravel() < 255)
-    if not len(rows):
+    bx, by, bw, bh = cv2.boundingRect(cv2.compare(cv2.extractChannel(blended, 3), 255, cv2.CMP_LT))
+    if bw == 0:
         return None
-    cols = np.flatnonzero(cv2.reduce(a, 0, cv2.REDUCE_MIN).ravel() < 255)
-    return x0 + int(cols[0]), y0 + int(rows[0]), x0 + int(cols[-1]) + 1, y0 + int(rows[-1]) + 1
+    return x0 + bx, y0 + by, x0 + bx + bw, y0 + by + bh
 
+
+# A layer whose content boxes cover at least this share of the part gets its dense maps from the
+# one upsampling call for the whole part (see ``__init__``).
+_FULL_MAP_SHARE = 0.5
 
 # A layer that leaves less than this share of the layers below it visible in every drawing
 # (by bounding boxes) makes the layers below be warped only where it lets light through.
 _TRIM_SHARE = 0.75
-
-# Weights closer than this to the last frame's reuse its result: a vertex then moves by well under
-# 1/1000 px and a blended pixel by under 1/1000 of a level, far below what uint8 output shows.
-REUSE_EPS = 1e-6
-
-
-def _same(act: list[tuple[int, float]], last: list[tuple[int, float]] | None) -> bool:
-    """Same drawings in the same order, weights within ``REUSE_EPS``."""
-    if last is None or len(act) != len(last):
-        return False
-    return all(i == j and abs(a - b) <= REUSE_EPS for (i, a), (j, b) in zip(act, last))
-
 
 class _Plain:
     """``PartMorpher.active`` for a part whose layers are all static (no morpher to borrow)."""
