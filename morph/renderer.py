@@ -72,7 +72,8 @@ class CharacterRenderer:
             names = part.names()
             self.rest[name] = next((names.index(n) for n in _REST_NAMES.get(name, ()) if n in names), 0)
         self._part_buffers = {n: np.empty_like(m.pm[0]) for n, m in self.morphers.items()}
-        self._part_keys: dict[str, tuple | None] = {n: None for n in self.morphers}  # what each buffer holds
+        self._parts: dict[str, np.ndarray] = dict(self._part_buffers)  # each part's last picture
+        self._part_keys: dict[str, tuple | None] = {n: None for n in self.morphers}  # ... and what it shows
         body = getattr(artset, "body", None)
         self.compositor = Compositor(
             artset.canvas, artset.pivot, artset.heads, {n: p.box for n, p in artset.parts.items()},
@@ -132,9 +133,11 @@ class CharacterRenderer:
             key = None if style_level > 0 else _part_key(given.get(name), self.detail)
             if key is None or not _same_key(key, self._part_keys[name]):
                 self._part_keys[name] = None
-                self.render_part(name, given.get(name), frame_no, style_level, out=self._part_buffers[name])
+                # (the detail blend returns a new array rather than filling the buffer)
+                self._parts[name] = self.render_part(name, given.get(name), frame_no, style_level,
+                                                     out=self._part_buffers[name])
                 self._part_keys[name] = key
-            parts[name] = self._part_buffers[name]
+            parts[name] = self._parts[name]
         if style_level <= 0:
             return self.compositor.compose(parts, pose, frame_no)
         flat = self.style.apply_tint(self.compositor.flat(parts, frame_no), style_level)
