@@ -139,7 +139,8 @@ class LayeredMorpher:
             self._rect_group_of = np.array([self.layers[k].group for k in self._rect_layers])
         self._moving_top_down = [k for k in reversed(range(len(self.layers))) if self.layers[k].group >= 0]
         self._layer_bufs = {k: np.empty(h * w * 4, np.uint8) for k in self._moving_top_down}
-        self._trims = self._trimming_layers()
+        # moving layers spanning the part over something: each frame finds where they let light through
+        self._sees = {k for k in self._moving_top_down if k > 0 and self.layers[k].full}
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
@@ -185,32 +186,6 @@ class LayeredMorpher:
         b = ly.boxes
         sides = np.clip(b[:, 2:], 0, (w, h)) - np.clip(b[:, :2], 0, (w, h))
         return float(np.mean(np.prod(np.maximum(sides, 0), axis=1))) / (w * h)
-
-    def _trimming_layers(self) -> set[int]:
-        """The moving layers that span the part and, in their drawings, hide much of the moving
-        layers below them: after such a layer, a frame looks for what it leaves visible (see
-        ``_compose``). Elsewhere (lids whose lower lid sits in the eye openings) the search would
-        cost more than it saves."""
-        out = set()
-        for k in self._moving_top_down:
-            below = [j for j in self._moving_top_down if j < k]
-            if not self.layers[k].full or not below:
-                continue
-            shares = []
-            for i in range(self.n):
-                window = _see_through(self.layers[k].pm[i], 0, 0)
-                boxes = np.array([self.layers[j].boxes[i] for j in below])
-                lo = np.maximum(boxes[:, :2].min(axis=0), 0)
-                hi = np.minimum(boxes[:, 2:].max(axis=0), self.size)
-                area = float(np.prod(np.maximum(hi - lo, 0)))
-                if window is None or area <= 0:
-                    shares.append(0.0)
-                    continue
-                cut = np.maximum(np.minimum(hi, window[2:]) - np.maximum(lo, window[:2]), 0)
-                shares.append(float(np.prod(cut)) / area)
-            if max(shares) < _TRIM_SHARE:
-                out.add(k)
-        return out
 
     def _frame_rects(self, planes: np.ndarray, act) -> list[tuple[int, int, int, int] | None]:
         """For each layer of ``_rect_layers``, the pixels ``(x0, y0, x1, y1)`` of the part where it
@@ -317,11 +292,13 @@ class LayeredMorpher:
                 else:
                     mx, my = self.grid.upsample_rect(planes[self.layers[k].group], (x0, y0, x1, y1))
                 blended = self._warp_blend(k, act, wts, mx, my, detail)
-                shown[k] = (x0, y0, x1, y1, blended)
-                if k in self._trims and not detail and (x0, y0, x1, y1) == vis:  # (the detail blend's blur would see a cut)
+                light = None  # where it lets light through, when looked for (an empty box: nowhere)
+                if k in self._sees and not detail and (x0, y0, x1, y1) == vis:  # (the detail blend's blur would see a cut)
                     vis = _see_through(blended, x0, y0)
-                    if vis is None:
-                        break
+                    light = vis or (x0, y0, x0, y0)
+                shown[k] = (x0, y0, x1, y1, blended, light)
+                if vis is None:
+                    break
         for k, ly in enumerate(self.layers):
             if ly.group < 0:
                 if k == 0:
@@ -329,17 +306,26 @@ class LayeredMorpher:
                 else:
                     over_u8(ly.pm[0], out, out, self._inv)
                 continue
-            x0, y0, x1, y1, blended = shown.get(k, (0, 0, 0, 0, None))
+            x0, y0, x1, y1, blended, light = shown.get(k, (0, 0, 0, 0, None, None))
             if k == 0 and (x0, y0, x1, y1) != (0, 0, w, h):
                 out[...] = 0
             if blended is None:
                 continue
-            region = out[y0:y1, x0:x1]
             if k == 0:
-                region[...] = blended
-            else:
-                n_px = (y1 - y0) * (x1 - x0) * 4
-                over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
+                out[y0:y1, x0:x1] = blended
+                continue
+            if light is not None:  # opaque around its see-through box: a copy there, "over" inside
+                lx0, ly0, lx1, ly1 = light
+                out[y0:ly0, x0:x1] = blended[:ly0 - y0]
+                out[ly1:y1, x0:x1] = blended[ly1 - y0:]
+                out[ly0:ly1, x0:lx0] = blended[ly0 - y0:ly1 - y0, :lx0 - x0]
+                out[ly0:ly1, lx1:x1] = blended[ly0 - y0:ly1 - y0, lx1 - x0:]
+                blended, (x0, y0, x1, y1) = blended[ly0 - y0:ly1 - y0, lx0 - x0:lx1 - x0], light
+                if x1 == x0:
+                    continue
+            region = out[y0:y1, x0:x1]
+            n_px = (y1 - y0) * (x1 - x0) * 4
+            over_u8(blended, region, region, self._inv.reshape(-1)[:n_px].reshape(y1 - y0, x1 - x0, 4))
 
     def _warp_blend(self, k: int, act, wts, mx: np.ndarray, my: np.ndarray, detail: bool) -> np.ndarray:
         """Layer ``k`` of the active drawings resampled along the maps ``mx, my`` (one per drawing,
@@ -374,10 +360,6 @@ def _see_through(blended: np.ndarray, x0: int, y0: int) -> tuple[int, int, int, 
 # A layer whose content boxes cover at least this share of the part gets its dense maps from the
 # one upsampling call for the whole part (see ``__init__``).
 _FULL_MAP_SHARE = 0.5
-
-# A layer that leaves less than this share of the layers below it visible in every drawing
-# (by bounding boxes) makes the layers below be warped only where it lets light through.
-_TRIM_SHARE = 0.75
 
 class _Plain:
     """``PartMorpher.active`` for a part whose layers are all static (no morpher to borrow)."""

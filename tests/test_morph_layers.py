@@ -241,12 +241,19 @@ def test_a_bundled_character_renders_exactly_as_layer_by_layer_over_the_whole_bo
     np.testing.assert_array_equal(fast.render(*w, jitter=jit), slow(*w, jitter=jit))
 
 
-def test_upper_lips_hide_the_lower_lip_and_lids_do_not_hide_the_lower_lid(bundled_parts):
-    """Where the search for what a layer leaves visible pays (see ``LayeredMorpher._compose``)."""
-    eyes, mouth, gnash = (bundled_parts[k][0] for k in ("ivy eyes", "ivy mouth", "gnash mouth"))
-    assert eyes._trims == set()
-    assert [mouth.layer_names[k] for k in mouth._trims] == ["upper-lip"]
-    assert [gnash.layer_names[k] for k in gnash._trims] == ["upper-lip"]
+def test_an_opaque_top_layer_leaves_nothing_to_warp_below_it(artset):
+    """A top layer opaque everywhere: the layers under it are not warped, the frame is that layer."""
+    part = _stack_part(artset, 255)
+    for d in part:
+        d.layers[2].image[...] = (0, 0, 255, 255)
+    m = LayeredMorpher(part, alpha_steps=4)
+    assert 2 in m._sees
+    warped = []
+    orig = m._warp_blend
+    m._warp_blend = lambda k, *a: warped.append(k) or orig(k, *a)
+    out = m.render((0, 1, 2), (0.3, 0.3, 0.4))
+    assert warped == [2]
+    np.testing.assert_array_equal(out, _layer_by_layer(part, alpha_steps=4)((0, 1, 2), (0.3, 0.3, 0.4)))
 
 
 def test_every_line_sets_meshes_come_from_one_product(bundled_parts):
