@@ -133,14 +133,15 @@ class LayeredMorpher:
         big = {ly.group for ly in self.layers if ly.group >= 0 and (ly.full or self._content_share(ly) >= _FULL_MAP_SHARE)}
         self._full_groups = sorted(big)
         self._full_slot = {k: self._full_groups.index(ly.group) for k, ly in enumerate(self.layers) if ly.group in big}
-        if self._rect_layers:
-            boxes = np.stack([self.layers[k].boxes for k in self._rect_layers])  # (L, n, 4) x0, y0, x1, y1
-            self._rect_bounds = np.concatenate((boxes[..., :2], -boxes[..., 2:]), axis=-1).astype(np.float32)
-            self._rect_group_of = np.array([self.layers[k].group for k in self._rect_layers])
         self._moving_top_down = [k for k in reversed(range(len(self.layers))) if self.layers[k].group >= 0]
         self._layer_bufs = {k: np.empty(h * w * 4, np.uint8) for k in self._moving_top_down}
         # moving layers spanning the part over something: each frame finds where they let light through
         self._sees = {k for k in self._moving_top_down if k > 0 and self.layers[k].full}
+        # The small layers whose rectangles a frame needs: under a layer that finds where it lets
+        # light through, a layer is warped inside that box, where its own rectangle adds little
+        # (the detail blend, which finds no such box, needs them all).
+        under = [k for k in self._rect_layers if not any(j > k for j in self._sees)]
+        self._rect_sets = {detail: self._rect_set(self._rect_layers if detail else under) for detail in (False, True)}
         # each drawing stacked: what a frame showing one drawing alone returns (``pm`` as in PartMorpher)
         self.pm = [self._stack([ly.pm[i] for ly in self.layers]) for i in range(self.n)]
         for s in self.pm:
@@ -187,27 +188,38 @@ class LayeredMorpher:
         sides = np.clip(b[:, 2:], 0, (w, h)) - np.clip(b[:, :2], 0, (w, h))
         return float(np.mean(np.prod(np.maximum(sides, 0), axis=1))) / (w * h)
 
-    def _frame_rects(self, planes: np.ndarray, act) -> list[tuple[int, int, int, int] | None]:
-        """For each layer of ``_rect_layers``, the pixels ``(x0, y0, x1, y1)`` of the part where it
-        can be non-transparent this frame, or None: the mesh cells some of whose corners, for some
-        active drawing, sample inside that drawing's content box (a pixel's source is a convex mix
-        of its cell's corners). ``planes``: ``(groups, len(act), 2, m, m)``, all line sets' meshes."""
-        p = planes[self._rect_group_of]  # (L, k, 2, m, m)
+    def _rect_set(self, layers: list[int]) -> tuple | None:
+        """``(layers, bounds, groups)`` for ``_frame_rects``: the layers, their content boxes as
+        ``(L, n, 4)`` float32 ``x0, y0, −x1, −y1`` and their line sets (None for no layers)."""
+        if not layers:
+            return None
+        boxes = np.stack([self.layers[k].boxes for k in layers])
+        bounds = np.concatenate((boxes[..., :2], -boxes[..., 2:]), axis=-1).astype(np.float32)
+        return layers, bounds, np.array([self.layers[k].group for k in layers])
+
+    def _frame_rects(self, planes: np.ndarray, act, rect_set: tuple) -> dict[int, tuple[int, int, int, int] | None]:
+        """For each layer of ``rect_set`` (see ``_rect_set``), the pixels ``(x0, y0, x1, y1)`` of the
+        part where it can be non-transparent this frame, or None: the mesh cells some of whose
+        corners, for some active drawing, sample inside that drawing's content box (a pixel's source
+        is a convex mix of its cell's corners). ``planes``: ``(groups, len(act), 2, m, m)``, all
+        line sets' meshes."""
+        layers, bounds, groups = rect_set
+        p = planes[groups]  # (L, k, 2, m, m)
         signed = np.concatenate((p, -p), axis=2)  # x, y, −x, −y: one comparison for all four sides
-        inside = signed >= self._rect_bounds[:, [ia for ia, _ in act], :, None, None]
+        inside = signed >= bounds[:, [ia for ia, _ in act], :, None, None]
         # a cell can sample a box if one of its corners lies beyond each of the box's sides
         pair = inside[..., :-1, :] | inside[..., 1:, :]
         corner = pair[..., :-1] | pair[..., 1:]  # (L, k, 4, c, c)
         hit = corner.all(axis=2).any(axis=1)  # (L, c, c)
         xs, ys = self._spans
-        out = []
-        for rows, cols in zip(hit.any(axis=2), hit.any(axis=1)):
+        out = {}
+        for k, rows, cols in zip(layers, hit.any(axis=2), hit.any(axis=1)):
             r = np.flatnonzero(rows)
             if not len(r):
-                out.append(None)
+                out[k] = None
                 continue
             c = np.flatnonzero(cols)
-            out.append((int(xs[c[0], 0]), int(ys[r[0], 0]), int(xs[c[-1], 1]), int(ys[r[-1], 1])))
+            out[k] = (int(xs[c[0], 0]), int(ys[r[0], 0]), int(xs[c[-1], 1]), int(ys[r[-1], 1]))
         return out
 
     def _all_mesh_planes(self, act: list[tuple[int, float]]) -> np.ndarray:
@@ -276,10 +288,11 @@ class LayeredMorpher:
             if self._full_groups:
                 sel = planes if len(self._full_groups) == len(self.groups) else planes[self._full_groups]
                 full_x, full_y = self.grid.upsample_planes(sel.reshape(-1, 2, m, m), reuse=True)
-            rects = dict(zip(self._rect_layers, self._frame_rects(planes, act))) if self._rect_layers else {}
+            rect_set = self._rect_sets[bool(detail)]
+            rects = self._frame_rects(planes, act, rect_set) if rect_set else {}
             vis = (0, 0, w, h)
             for k in self._moving_top_down:
-                r = (0, 0, w, h) if self.layers[k].full else rects[k]
+                r = rects.get(k, (0, 0, w, h))
                 if r is None:
                     continue
                 x0, y0, x1, y1 = max(r[0], vis[0]), max(r[1], vis[1]), min(r[2], vis[2]), min(r[3], vis[3])
