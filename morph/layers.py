@@ -16,9 +16,11 @@ The per-frame work is batched over the part's line sets: their α tables live in
 every set's meshes come from one gather and one product (the mixing weights depend only on the
 frame's weights); the rectangles of all small layers are found in one pass over the meshes; and
 the dense maps of the layers that span the part, or most of it, come from one upsampling call.
-Layers are warped top first: under a layer that hides most of what lies below it (an upper lip
-over the lower lip), the layers below are warped only inside the box where it lets light
-through. Both are exact: the frames equal a layer-by-layer, full-box render.
+Layers are warped top first. A layer that spans the part (upper lids and lips) then finds the box
+where it lets light through (its eye openings, the gap of the lips): the layers below it are
+warped only inside that box, a small layer there without a rectangle of its own, and around it
+the layer is copied rather than laid over (under an opaque pixel, "over" gives the top pixel
+whatever lies below). All of this is exact: the frames equal a layer-by-layer, full-box render.
 
 Everything is premultiplied RGBA uint8 (see ``morph``).
 """
@@ -279,7 +281,7 @@ class LayeredMorpher:
         w, h = self.size
         k_act = len(act)
         wts = [wa for _, wa in act]
-        shown: dict[int, tuple[int, int, int, int, np.ndarray]] = {}  # layer -> its rectangle, blended
+        shown: dict[int, tuple] = {}  # layer -> its rectangle x0, y0, x1, y1, blended, see-through box or None
         if self.groups:
             planes = self._all_mesh_planes(act)
             if jitter is not None:
@@ -373,6 +375,7 @@ def _see_through(blended: np.ndarray, x0: int, y0: int) -> tuple[int, int, int, 
 # A layer whose content boxes cover at least this share of the part gets its dense maps from the
 # one upsampling call for the whole part (see ``__init__``).
 _FULL_MAP_SHARE = 0.5
+
 
 class _Plain:
     """``PartMorpher.active`` for a part whose layers are all static (no morpher to borrow)."""
