@@ -271,3 +271,10 @@ def test_see_through_box():
     img[3:6, 10:12, 3] = 254
     img[8, 4, 3] = 0
     assert _see_through(img, 5, 7) == (5 + 4, 7 + 3, 5 + 12, 7 + 9)
+
+
+def test_four_way_blends_equal_the_layer_by_layer_render_too(bundled_parts):
+    for key in ("ivy eyes", "gnash mouth"):
+        fast, slow = bundled_parts[key]
+        w = ((0, 1, 2, 3), (0.4, 0.3, 0.2, 0.1))
+        np.testing.assert_array_equal(fast.render(*w), slow(*w))
