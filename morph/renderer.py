@@ -130,7 +130,7 @@ class CharacterRenderer:
         given = {"eyes": eyes, "mouth": mouth}
         parts = {}  # rendered into per-part buffers: the compositor copies them into the frame
         for name in self.morphers:
-            key = None if style_level > 0 else _part_key(given.get(name), self.detail)
+            key = None if style_level > 0 else _part_key(given.get(name) or ((self.rest[name],), (1.0,)), self.detail)
             if key is None or not _same_key(key, self._part_keys[name]):
                 self._part_keys[name] = None
                 # (the detail blend returns a new array rather than filling the buffer)
@@ -150,10 +150,8 @@ class CharacterRenderer:
 REUSE_EPS = 1e-6
 
 
-def _part_key(weights: Weights | None, detail: bool) -> tuple:
-    """What a part's buffer shows: ``(detail, indices, weights)`` (None weights: the rest drawing)."""
-    if weights is None:
-        return (detail, None, ())
+def _part_key(weights: Weights, detail: bool) -> tuple:
+    """What a part's buffer shows: ``(detail, indices, weights)``."""
     idx, wts = weights
     return (detail, tuple(int(i) for i in idx), tuple(float(w) for w in wts))
 
