@@ -159,7 +159,7 @@ class MeshGrid:
         rw, rh = x1 - x0, y1 - y0
         size_c, size_d = 2 * k * (v1 - v0) * rw, 2 * k * rh * rw
         if getattr(self, "_flat", None) is None or self._flat.size < size_c + size_d:
-            self._flat = np.empty(2 * 3 * (n * self.w + self.h * self.w), np.float32)
+            self._flat = np.empty(max(size_c + size_d, 2 * 3 * (n * self.w + self.h * self.w)), np.float32)
         col = self._flat[:size_c].reshape(2 * k, v1 - v0, rw)
         dense = self._flat[size_c:size_c + size_d].reshape(2 * k, rh, rw)
         for q0, q1, j0, wts in cols:

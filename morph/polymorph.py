@@ -172,6 +172,15 @@ class PartMorpher:
         n = len(act)
         if n == 1:
             return self._planes[self._vertex_row].reshape(1, 2, m, m).copy()
+        rows, coef = self._mesh_terms(act)
+        out = np.matmul(coef, self._planes[rows])
+        return out.reshape(n, 2, m, m)
+
+    def _mesh_terms(self, act: list[tuple[int, float]]) -> tuple[list[int], np.ndarray]:
+        """``(rows, coef)``: the table rows a frame's meshes mix and the ``(len(act), len(rows))``
+        float32 weights mixing them (``_mesh_planes`` = ``coef @ _planes[rows]``). They depend
+        only on the weights, so parts with several tables of one shape share them."""
+        n = len(act)
         top = self.alpha_steps - 1
         rows = [self._vertex_row]
         coef = [[1.0] + [0.0] * (2 * n * (n - 1)) for _ in range(n)]
@@ -187,8 +196,7 @@ class PartMorpher:
                     coef[k][col] = 1.0 - (t - s)
                     coef[k][col + 1] = t - s
                     col += 2
-        out = np.matmul(np.array(coef, np.float32), self._planes[rows])
-        return out.reshape(n, 2, m, m)
+        return rows, np.array(coef, np.float32)
 
     def _exact_meshes(self, act: list[tuple[int, float]]) -> list[tuple[int, float, np.ndarray]]:
         """The exact n-way field sampled on the mesh now (slower; no sum-of-two-way error)."""

@@ -3,7 +3,8 @@
 Loading builds a ``PartMorpher`` per part (the α tables: the slow part, done once), or a
 ``LayeredMorpher`` for a part drawn in layers, and a ``Compositor`` (with the body, when the set
 has one). ``render`` then costs two mesh polymorphs (one per moving layer of a layered part), the
-head composite and one affine warp (two with a body).
+head composite and one affine warp (two with a body). A part asked for with the same drawings
+and weights as in the last frame is not rendered again.
 """
 
 from __future__ import annotations
@@ -71,6 +72,8 @@ class CharacterRenderer:
             names = part.names()
             self.rest[name] = next((names.index(n) for n in _REST_NAMES.get(name, ()) if n in names), 0)
         self._part_buffers = {n: np.empty_like(m.pm[0]) for n, m in self.morphers.items()}
+        self._parts: dict[str, np.ndarray] = dict(self._part_buffers)  # each part's last picture
+        self._part_keys: dict[str, tuple | None] = {n: None for n in self.morphers}  # ... and what it shows
         body = getattr(artset, "body", None)
         self.compositor = Compositor(
             artset.canvas, artset.pivot, artset.heads, {n: p.box for n, p in artset.parts.items()},
@@ -125,11 +128,36 @@ class CharacterRenderer:
         ``gain``; ``frame_no`` drives the head shimmer; ``style_level`` 0..1 the expression style.
         """
         given = {"eyes": eyes, "mouth": mouth}
-        parts = {  # rendered into per-part buffers: the compositor copies them into the frame
-            name: self.render_part(name, given.get(name), frame_no, style_level, out=self._part_buffers[name])
-            for name in self.morphers
-        }
+        parts = {}  # rendered into per-part buffers: the compositor copies them into the frame
+        for name in self.morphers:
+            key = None if style_level > 0 else _part_key(given.get(name) or ((self.rest[name],), (1.0,)), self.detail)
+            if key is None or not _same_key(key, self._part_keys[name]):
+                self._part_keys[name] = None
+                # (the detail blend returns a new array rather than filling the buffer)
+                self._parts[name] = self.render_part(name, given.get(name), frame_no, style_level,
+                                                     out=self._part_buffers[name])
+                self._part_keys[name] = key
+            parts[name] = self._parts[name]
         if style_level <= 0:
             return self.compositor.compose(parts, pose, frame_no)
         flat = self.style.apply_tint(self.compositor.flat(parts, frame_no), style_level)
         return self.compositor.transform(flat, pose)
+
+
+# A part whose drawings and weights are within this of the last frame's is not rendered again
+# (a performer holding still, a face held while lost): its vertices would move by well under
+# 1/1000 px and its pixels by under 1/1000 of a level.
+REUSE_EPS = 1e-6
+
+
+def _part_key(weights: Weights, detail: bool) -> tuple:
+    """What a part's buffer shows: ``(detail, indices, weights)``."""
+    idx, wts = weights
+    return (detail, tuple(int(i) for i in idx), tuple(float(w) for w in wts))
+
+
+def _same_key(a: tuple, b: tuple | None) -> bool:
+    """Same detail flag and drawings in the same order, weights within ``REUSE_EPS``."""
+    if b is None or a[:2] != b[:2] or len(a[2]) != len(b[2]):
+        return False
+    return all(abs(x - y) <= REUSE_EPS for x, y in zip(a[2], b[2]))

@@ -104,16 +104,35 @@ def test_half_transparent_layers_compose_with_over(artset):
     assert out.dtype == np.uint8 and (out[..., :3] <= out[..., 3:]).all()
 
 
+def _layer_by_layer(drawings, alpha_steps):
+    """The definition, done naively: each layer warped over the whole box by a ``PartMorpher`` of
+    its own (a static layer kept as drawn), the blended layers stacked bottom first."""
+    morphers = []
+    for k in range(len(drawings[0].layers)):
+        images = [d.layers[k].image for d in drawings]
+        lines = [d.layer_lines(k) for d in drawings]
+        static = all(np.array_equal(im, images[0]) for im in images[1:]) and \
+            all(np.array_equal(l, lines[0]) for l in lines[1:])
+        morphers.append(premultiply(images[0]) if static else PartMorpher(images, lines, alpha_steps=alpha_steps))
+
+    def render(idx, w, jitter=None):
+        layers = [m if isinstance(m, np.ndarray) else m.render(idx, w, jitter=jitter) for m in morphers]
+        acc = layers[0].copy()
+        for img in layers[1:]:
+            over_u8(img, acc, acc)
+        return acc
+
+    return render
+
+
 @settings(max_examples=20, deadline=None)
 @given(w=weights5(), jitter=st.booleans())
 def test_per_frame_rectangles_change_no_pixel(artset, w, jitter):
     """A moving layer warped only where its content can land gives the full-box warp exactly."""
     fast = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
-    full = LayeredMorpher(_stack_part(artset, 200), alpha_steps=5)
-    for ly in full.layers:
-        ly.full = True
+    full = _layer_by_layer(_stack_part(artset, 200), alpha_steps=5)
     jit = np.random.default_rng(len(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
-    np.testing.assert_array_equal(fast.render(*w, jitter=jit), full.render(*w, jitter=jit))
+    np.testing.assert_array_equal(fast.render(*w, jitter=jit), full(*w, jitter=jit))
 
 
 def test_layers_must_match_across_drawings(artset):
@@ -194,18 +213,15 @@ def test_renderer_passes_the_body_from_the_art_set(artset):
 
 
 @pytest.fixture(scope="module")
-def ivy_parts():
+def bundled_parts():
+    """Ivy's eyes and mouth, and Gnash's mouth (tusks, a small layer, over the upper lip)."""
     from art_sets.io import load_artset
     from art_sets.library import bundled_dir
 
-    art = load_artset(bundled_dir() / "ivy")
+    ivy, gnash = (load_artset(bundled_dir() / name) for name in ("ivy", "gnash"))
     out = {}
-    for part in (art.eyes, art.mouth):
-        fast = LayeredMorpher(part.drawings, alpha_steps=5)
-        slow = LayeredMorpher(part.drawings, alpha_steps=5)
-        for ly in slow.layers:
-            ly.full = True
-        out[part.name] = fast, slow
+    for key, part in (("ivy eyes", ivy.eyes), ("ivy mouth", ivy.mouth), ("gnash mouth", gnash.mouth)):
+        out[key] = LayeredMorpher(part.drawings, alpha_steps=5), _layer_by_layer(part.drawings, alpha_steps=5)
     return out
 
 
@@ -214,10 +230,51 @@ def weights_of_five(draw):
     return _weights(draw, 5)
 
 
-@settings(max_examples=25, deadline=None)
-@given(w=weights_of_five(), jitter=st.booleans(), part=st.sampled_from(["eyes", "mouth"]))
-def test_per_frame_rectangles_change_no_pixel_of_a_bundled_character(ivy_parts, w, jitter, part):
-    """Ivy's lower lid and lower lip reach the box's edges (the warp reads past them there)."""
-    fast, slow = ivy_parts[part]
+@settings(max_examples=30, deadline=None)
+@given(w=weights_of_five(), jitter=st.booleans(), part=st.sampled_from(["ivy eyes", "ivy mouth", "gnash mouth"]))
+def test_a_bundled_character_renders_exactly_as_layer_by_layer_over_the_whole_box(bundled_parts, w, jitter, part):
+    """Per-frame rectangles (Ivy's lower lid and lower lip reach the box's edges: the warp reads
+    past them there), batched meshes and maps, and the lower lip warped only where the upper lip
+    lets light through change no pixel."""
+    fast, slow = bundled_parts[part]
     jit = np.random.default_rng(sum(w[0])).normal(0, 1.5, (31, 31, 2)).astype(np.float32) if jitter else None
-    np.testing.assert_array_equal(fast.render(*w, jitter=jit), slow.render(*w, jitter=jit))
+    np.testing.assert_array_equal(fast.render(*w, jitter=jit), slow(*w, jitter=jit))
+
+
+def test_an_opaque_top_layer_leaves_nothing_to_warp_below_it(artset):
+    """A top layer opaque everywhere: the layers under it are not warped, the frame is that layer."""
+    part = _stack_part(artset, 255)
+    for d in part:
+        d.layers[2].image[...] = (0, 0, 255, 255)
+    m = LayeredMorpher(part, alpha_steps=4)
+    assert 2 in m._sees
+    warped = []
+    orig = m._warp_blend
+    m._warp_blend = lambda k, *a: warped.append(k) or orig(k, *a)
+    out = m.render((0, 1, 2), (0.3, 0.3, 0.4))
+    assert warped == [2]
+    np.testing.assert_array_equal(out, _layer_by_layer(part, alpha_steps=4)((0, 1, 2), (0.3, 0.3, 0.4)))
+
+
+def test_every_line_sets_meshes_come_from_one_product(bundled_parts):
+    m = bundled_parts["gnash mouth"][0]
+    for idx, w in (((0, 3, 5), (0.2, 0.5, 0.3)), ((1, 2), (0.7, 0.3)), ((4,), (1.0,))):
+        act = m.active(idx, w)
+        np.testing.assert_array_equal(m._all_mesh_planes(act), np.stack([g._mesh_planes(act) for g in m.groups]))
+
+
+def test_see_through_box():
+    from morph.layers import _see_through
+
+    img = np.full((20, 30, 4), 255, np.uint8)
+    assert _see_through(img, 5, 7) is None
+    img[3:6, 10:12, 3] = 254
+    img[8, 4, 3] = 0
+    assert _see_through(img, 5, 7) == (5 + 4, 7 + 3, 5 + 12, 7 + 9)
+
+
+def test_four_way_blends_equal_the_layer_by_layer_render_too(bundled_parts):
+    for key in ("ivy eyes", "gnash mouth"):
+        fast, slow = bundled_parts[key]
+        w = ((0, 1, 2, 3), (0.4, 0.3, 0.2, 0.1))
+        np.testing.assert_array_equal(fast.render(*w), slow(*w))

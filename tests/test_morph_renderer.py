@@ -92,3 +92,54 @@ def test_bundled_art_sets_render_if_present():
     r = CharacterRenderer(art, alpha_steps=3)
     out = r.render(eyes=((0, 1, 2), (0.4, 0.3, 0.3)), mouth=((0, 1, 2), (0.4, 0.3, 0.3)), pose=(3, 2, 8))
     assert out.shape == (art.canvas[1], art.canvas[0], 4) and _valid_pm(out) and out[:, :, 3].max() == 255
+
+
+# --- a part asked for again is not rendered again ------------------------------------------------------------
+def _counting(r):
+    calls = []
+    orig = r.render_part
+
+    def counted(name, *a, **k):
+        calls.append(name)
+        return orig(name, *a, **k)
+
+    r.render_part = counted
+    return calls
+
+
+def test_a_repeated_part_is_reused_and_equals_a_fresh_render(artset):
+    r, fresh = CharacterRenderer(artset, alpha_steps=6), CharacterRenderer(artset, alpha_steps=6)
+    calls = _counting(r)
+    eyes, mouth = ((0, 1, 2), (0.5, 0.3, 0.2)), ((3, 4, 5), (0.2, 0.2, 0.6))
+    r.render(eyes=eyes, mouth=mouth, pose=(1.0, 2.0, 3.0), frame_no=0)
+    calls.clear()
+    still = ((0, 1, 2), (0.5 + 1e-9, 0.3, 0.2))
+    got = r.render(eyes=still, mouth=mouth, pose=(-2.0, 1.0, -4.0), frame_no=1)
+    assert calls == []
+    np.testing.assert_array_equal(got, fresh.render(eyes=eyes, mouth=mouth, pose=(-2.0, 1.0, -4.0), frame_no=1))
+
+
+@pytest.mark.parametrize("change", ["weight", "order", "drawing", "rest", "detail"])
+def test_a_change_in_drawings_weights_or_detail_renders_the_part_again(artset, change):
+    r = CharacterRenderer(artset, alpha_steps=6)
+    calls = _counting(r)
+    eyes, mouth = ((0, 1, 2), (0.5, 0.3, 0.2)), ((3, 4, 5), (0.2, 0.2, 0.6))
+    r.render(eyes=eyes, mouth=mouth)
+    new = {"weight": ((0, 1, 2), (0.5, 0.3 + 1e-3, 0.2)), "order": ((1, 0, 2), (0.3, 0.5, 0.2)),
+           "drawing": ((0, 1, 3), (0.5, 0.3, 0.2)), "rest": None, "detail": eyes}[change]
+    if change == "detail":
+        r.detail = True
+    calls.clear()
+    got = r.render(eyes=new, mouth=mouth)
+    assert calls == (["eyes", "mouth"] if change == "detail" else ["eyes"])
+    fresh = CharacterRenderer(artset, alpha_steps=6, detail=change == "detail")
+    np.testing.assert_array_equal(got, fresh.render(eyes=new, mouth=mouth))
+
+
+def test_the_style_renders_every_frame(artset):
+    r = CharacterRenderer(artset, alpha_steps=6)
+    calls = _counting(r)
+    w = ((0, 1, 2), (0.5, 0.3, 0.2))
+    for k in range(3):
+        r.render(eyes=w, mouth=w, frame_no=k, style_level=0.8)
+    assert calls == ["eyes", "mouth"] * 3
