@@ -70,6 +70,8 @@ SKIN_UNLIKE = 4.0
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
 CORNER_INSETS = (1.0, 2.5, 4.0)
 """Columns (px at the working scale, inwards from a corner) whose mouth rows give the corner's height."""
+OTHER_SKIN = 1.0
+"""Extra row cost of skin beyond a lip that looks like the skin beyond the other lip instead."""
 SKIN_IN_LIP = 3.0
 """Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
 SKIN_CLEAR = 2.0
@@ -389,8 +391,10 @@ class MouthFinder:
         e = np.einsum("prc,prc,pc->pr", d, d, self._inv)
         # skin next to either lip, or like the skin round the mouth: the shading above and below the
         # lips swaps with the pose and an open jaw (a dropped chin is lit like the philtrum was)
-        np.minimum(np.minimum(e[0], e[3], out=e[0]), e[4], out=e[0])
-        e[3] = e[0]
+        other = np.float32(OTHER_SKIN)
+        up, down = np.minimum(e[0], e[3] + other), np.minimum(e[3], e[0] + other)
+        np.minimum(up, e[4], out=e[0])
+        np.minimum(down, e[4], out=e[3])
         out = np.minimum(e[:4], np.float32(ROW_CAP))
         # a row as lip that is plainly skin costs more than one like nothing calibrated (a highlight):
         # skin where a lip should be says the lip is not there
