@@ -58,7 +58,8 @@ class Overlay:
     ``mouth_centre`` (2,); ``lip_points`` (2,2) outer edges of the upper and lower lip;
     ``rois`` a list of 4-corner polygons (4,2); ``status`` the frame's status; ``mouth_cue`` what
     the mouth was found by ("colour": the lips' own colour, "contrast": weak lip colour helped by
-    the gap and the inside).
+    the gap and the inside). The tracker hands over the mouth result and ``blob`` is filled from
+    it only when asked for (most frames are never drawn).
     """
 
     pupils: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
@@ -66,7 +67,6 @@ class Overlay:
     lids: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan))
     lip_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     lip_raw_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    blob: np.ndarray | None = None
     blob_origin: tuple | None = field(default=None, repr=False)
     mouth_corners: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     mouth_centre: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
@@ -74,6 +74,19 @@ class Overlay:
     rois: list = field(default_factory=list)
     status: str = OK
     mouth_cue: str = ""
+    _blob: np.ndarray | None = field(default=None, repr=False)
+    _blob_of: object = field(default=None, repr=False)  # a mouth result: its ``blob`` when asked for
+
+    @property
+    def blob(self) -> np.ndarray | None:
+        if self._blob is None and self._blob_of is not None:
+            self._blob = self._blob_of.blob
+            self._blob_of = None
+        return self._blob
+
+    @blob.setter
+    def blob(self, value: np.ndarray | None) -> None:
+        self._blob, self._blob_of = value, None
 
     def blob_contour(self) -> np.ndarray:
         """Outline (m,2) of the lip blob in frame px (empty without a blob)."""
@@ -307,7 +320,7 @@ class FaceTracker:
             self.lost = False
             self.lost_frames = 0
         elif self.motion.active:
-            flow = self.motion.step(frame_bgr, self.face_outline(), grey=self._grey)
+            flow = self.motion.step(frame_bgr, self.face_outline, grey=self._grey)
             if flow is not None:
                 self.pose = compose(flow.matrix, self.pose)
         if flow is None and not self.motion.active and not reacquired:
@@ -339,20 +352,22 @@ class FaceTracker:
         when the face itself is there (``face_there``: its picture matched, or the flow follows it).
         """
         wi = self.wi
-        preds = self._pupils_face
+        preds = self._pupils_face.tolist()
+        f = found.tolist()
         obs = res.eyes
         doubt = [o.score < EYE_DOUBT and (o.open or not face_there) for o in obs]
         strong = all(o.open and o.score >= EYE_STRONG for o in obs)
         if strong:  # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
-            g = 0.5 * (found[0] + found[1] - preds[0] - preds[1]) / wi
-            strong = (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 <= 1.0
+            gx = 0.5 * (f[0][0] + f[1][0] - preds[0][0] - preds[1][0]) / wi
+            gy = 0.5 * (f[0][1] + f[1][1] - preds[0][1] - preds[1][1]) / wi
+            strong = (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 <= 1.0
         for i in range(2):
             if not doubt[i] and not strong:
-                gx, gy = (found[i] - preds[i]) / wi
+                gx, gy = (f[i][0] - preds[i][0]) / wi, (f[i][1] - preds[i][1]) / wi
                 if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
                     doubt[i] = True
         if not any(doubt) and obs[0].open and obs[1].open:
-            d = found[1] - found[0]
+            d = (f[1][0] - f[0][0], f[1][1] - f[0][1])
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: open eyes must agree with them
             tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
@@ -365,7 +380,9 @@ class FaceTracker:
         wi = self.wi
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
-        if not np.all((anchors > -0.1 * wi) & (anchors < np.array([W, H]) + 0.1 * wi)):
+        (lx, ly), (rx, ry) = anchors.tolist()
+        lo, hx, hy = -0.1 * wi, W + 0.1 * wi, H + 0.1 * wi
+        if not (lo < lx < hx and lo < rx < hx and lo < ly < hy and lo < ry < hy):
             return self._lost_result(index, time, "left the frame")
         anchors, presence = self._pin(anchors, flow_ok)
         ff = self._frame(anchors)
@@ -448,7 +465,7 @@ class FaceTracker:
             ov.lip_points = img_pts[19:21]
             ov.lip_polygon = img_pts[21 : 21 + n]
             ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
-            ov.blob = mouth_res.blob
+            ov._blob_of = mouth_res
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             ov.mouth_cue = mouth_res.cue
             # the jaw from the centre on the mouth line, where calibration measured the rigid place

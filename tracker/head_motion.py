@@ -16,6 +16,7 @@ coming out are frame pixels.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -67,6 +68,10 @@ def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
     m[:, 2] = d[0] - m[:, :2] @ s[0]
     return m
+
+
+def _polygon(p: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
+    return p() if callable(p) else p
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -161,27 +166,30 @@ class HeadMotion:
             return found
         return np.concatenate([keep, found])
 
-    def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | None = None, grey: np.ndarray | None = None) -> Motion | None:
+    def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | Callable[[], np.ndarray] | None = None,
+             grey: np.ndarray | None = None) -> Motion | None:
         """The rigid motion from the previous frame to this one (frame px), or None.
 
-        ``face_polygon`` (frame px, where the face is now as far as the caller knows) lets
-        corners be topped up every :data:`RESEED_EVERY` frames or when many died. ``grey`` is
-        this frame from :meth:`grey` when the caller already made it.
+        ``face_polygon`` (frame px, where the face is now as far as the caller knows; or a
+        function that returns it, called only when corners are picked) lets corners be topped
+        up every :data:`RESEED_EVERY` frames or when many died. ``grey`` is this frame from
+        :meth:`grey` when the caller already made it.
         """
         g = self.grey(frame_bgr) if grey is None else grey
         prev, pts = self._prev, self._pts
         self._prev = g
         if prev is None or pts is None or len(pts) < self.min_inliers or prev.shape != g.shape:
-            self._pts = self._pick(g, face_polygon, None) if face_polygon is not None else None
+            self._pts = self._pick(g, _polygon(face_polygon), None) if face_polygon is not None else None
             self._age = 0
             return None
         nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
-        ok = st.reshape(-1).astype(bool)
         h, w = g.shape
         if nxt is not None:
             q = nxt.reshape(-1, 2)
-            ok &= (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] < w) & (q[:, 1] < h)
-        n_ok = int(ok.sum())
+            ok = (st.reshape(-1) != 0) & np.all((q >= 0) & (q < (w, h)), axis=1)
+        else:
+            ok = st.reshape(-1) != 0
+        n_ok = int(np.count_nonzero(ok))
         motion = None
         if n_ok >= self.min_inliers:
             a, b = pts[ok], nxt[ok]
@@ -194,7 +202,7 @@ class HeadMotion:
                 n_in = int(inl.sum())
                 if n_in >= self.min_inliers and n_in >= 0.4 * n_ok:
                     s = self.scale
-                    fm = m.astype(np.float64).copy()
+                    fm = m.astype(np.float64)  # a copy
                     fm[:, 2] /= s  # scaled px → frame px (rotation/scale part is unchanged)
                     motion = Motion(fm, n_in, n_ok)
                     pts = b[inl].reshape(-1, 1, 2)
@@ -207,7 +215,7 @@ class HeadMotion:
         self._age += 1
         if face_polygon is not None and (pts is None or len(pts) < 0.6 * MAX_POINTS or self._age >= RESEED_EVERY):
             if motion is not None or pts is None:
-                pts = self._pick(g, face_polygon, pts if motion is not None else None)
+                pts = self._pick(g, _polygon(face_polygon), pts if motion is not None else None)
                 self._age = 0
         self._pts = pts
         return motion
