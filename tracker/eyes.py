@@ -775,6 +775,7 @@ class EyeFinder:
             self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
         self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
         self._brow_last = [math.nan, math.nan]  # the last heights found (crop px), see _brow_peak
+        self._offsets: dict[int, np.ndarray] = {}  # 0, 1, … n−1 (float32), by n, for _brow_peak
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
@@ -858,7 +859,7 @@ class EyeFinder:
                 continue
             P = windows(np.ascontiguousarray(t), t.shape[0] - h + 1, t.shape[1] - w + 1, h, w).reshape(-1, h * w)
             P = P - P.mean(axis=1, keepdims=True)
-            self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32))
+            self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32, copy=False))
 
     # ------------------------------------------------------------------ irises
     def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
@@ -966,7 +967,11 @@ class EyeFinder:
         """Both iris centres (crop px, sub-pixel) and their iris-picture correlations near the
         predicted eye ``centres`` (2, 2): the best pair of the two coarse maps, each eye free
         to move by the slack against the other, each then refined at full resolution."""
-        maps, origins = self._coarse_maps(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
+        return self._locate(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
+
+    def _locate(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float, float]]:
+        """:meth:`locate_irises` for centres already a (2, 2) float64 array."""
+        maps, origins = self._coarse_maps(grey, centres)
         J = cv2.dilate(maps[0], self._dilate)
         J += cv2.dilate(maps[1], self._dilate)
         _, _, _, (jx, jy) = cv2.minMaxLoc(J)
@@ -1112,15 +1117,23 @@ class EyeFinder:
         as the brow; the brow does not jump between them from one frame to the next)."""
         base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
         last = self._brow_last[i]
+        n = len(score)
         if math.isfinite(last):
-            pick = score - np.abs(base - np.arange(len(score), dtype=np.float32) - last) * (BROW_STEADY / self.wi)
+            offsets = self._offsets.get(n)
+            if offsets is None:
+                offsets = self._offsets[n] = np.arange(n, dtype=np.float32)
+            pick = score - np.abs(base - offsets - last) * (BROW_STEADY / self.wi)
             k = int(pick.argmax())
         else:
             k = int(score.argmax())
-        d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
+        if 0 < k < n - 1:
+            a, b, c = score[k - 1 : k + 2].tolist()
+            d = parabola_offset(a, b, c)
+        else:
+            b, d = float(score[k]), 0.0
         h = float(base - k - d)
         self._brow_last[i] = h
-        return h, min(float(score[k]), 1.0)
+        return h, min(b, 1.0)
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
         """:meth:`_brows` of one eye."""
@@ -1200,7 +1213,7 @@ class EyeFinder:
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
         if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
-        found = self.locate_irises(crop_grey, centres)
+        found = self._locate(crop_grey, centres)
         gain = self._gain
         lids = self._both_lids(crop_bgr, found, gain)
         lo, hi = CLOSING

@@ -229,7 +229,8 @@ class FaceTracker:
         return buf
 
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
-        return FaceFrame.from_pupils(tuple(pupils[0]), tuple(pupils[1]), self.wi)
+        (lx, ly), (rx, ry) = pupils.tolist()
+        return FaceFrame.from_pupils((lx, ly), (rx, ry), self.wi)
 
     @staticmethod
     def _rect_corners(rect) -> np.ndarray:

@@ -59,11 +59,12 @@ def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     """The 2×3 similarity taking two points ``src`` exactly onto two points ``dst``."""
     s = np.asarray(src, dtype=np.float64).reshape(2, 2)
     d = np.asarray(dst, dtype=np.float64).reshape(2, 2)
-    vs, vd = s[1] - s[0], d[1] - d[0]
-    zs = complex(vs[0], vs[1])
-    zd = complex(vd[0], vd[1])
+    (sx0, sy0), (sx1, sy1) = s.tolist()
+    (dx0, dy0), (dx1, dy1) = d.tolist()
+    zs = complex(sx1 - sx0, sy1 - sy0)
+    zd = complex(dx1 - dx0, dy1 - dy0)
     if abs(zs) < 1e-9:
-        return np.array([[1.0, 0.0, d[0, 0] - s[0, 0]], [0.0, 1.0, d[0, 1] - s[0, 1]]])
+        return np.array([[1.0, 0.0, dx0 - sx0], [0.0, 1.0, dy0 - sy0]])
     a = zd / zs
     m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
     m[:, 2] = d[0] - m[:, :2] @ s[0]
@@ -76,8 +77,11 @@ def _polygon(p: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     """The 2×3 affine ``outer ∘ inner`` (apply ``inner`` first)."""
-    m = outer[:, :2] @ inner[:, :2]
-    return np.concatenate([m, (outer[:, :2] @ inner[:, 2] + outer[:, 2])[:, None]], axis=1)
+    r = outer[:, :2]
+    m = np.empty((2, 3))
+    m[:, :2] = r @ inner[:, :2]
+    m[:, 2] = r @ inner[:, 2] + outer[:, 2]
+    return m
 
 
 class HeadMotion:
