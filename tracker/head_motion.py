@@ -15,6 +15,7 @@ coming out are frame pixels.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -69,6 +70,16 @@ def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
     m[:, 2] = d[0] - m[:, :2] @ s[0]
     return m
+
+
+@functools.lru_cache(maxsize=None)
+def _disc_offsets(radius: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column offsets ``(1, k)`` of the pixels ``cv2.circle`` fills for a disc of this
+    radius round an integer centre."""
+    c = np.zeros((2 * radius + 3, 2 * radius + 3), np.uint8)
+    cv2.circle(c, (radius + 1, radius + 1), radius, 1, -1)
+    ys, xs = np.nonzero(c)
+    return (ys - radius - 1)[None, :], (xs - radius - 1)[None, :]
 
 
 def _polygon(p: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
@@ -157,8 +168,14 @@ class HeadMotion:
         min_d = max(3.0, 0.09 * FLOW_IPD)
         want = MAX_POINTS
         if keep is not None and len(keep):
-            for p in keep.reshape(-1, 2):  # no new corner next to one still tracked
-                cv2.circle(mask, (int(p[0]) - x0, int(p[1]) - y0), int(min_d), 0, -1)
+            # no new corner next to one still tracked: the pixels cv2.circle fills round each
+            # (truncated) corner, all at once
+            dy, dx = _disc_offsets(int(min_d))
+            ip = keep.reshape(-1, 2).astype(np.int64)
+            ys = (ip[:, 1:2] - y0 + dy).ravel()
+            xs = (ip[:, 0:1] - x0 + dx).ravel()
+            inside = (ys >= 0) & (ys < mask.shape[0]) & (xs >= 0) & (xs < mask.shape[1])
+            mask[ys[inside], xs[inside]] = 0
             want = MAX_POINTS - len(keep)
         if want <= 0:
             return keep
