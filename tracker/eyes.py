@@ -255,7 +255,7 @@ def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) 
 def _run(e) -> float:
     """Soft length of the interior run starting in the middle of ``e[0]``: half of sample 0,
     then whole samples by their membership until two in a row are mostly not interior."""
-    v = e.tolist() if isinstance(e, np.ndarray) else list(e)
+    v = e if isinstance(e, list) else e.tolist() if isinstance(e, np.ndarray) else list(e)
     if not v:
         return 0.0
     total = 0.5 * v[0]

@@ -185,6 +185,7 @@ class FaceTracker:
         self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
+        self._pupils_eye_crop = self._pupils_face - self.eye_rect[:2]  # ... in the eye crop's px
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -268,7 +269,11 @@ class FaceTracker:
         crop = ff.crop(frame, self.eye_rect, self._buffer("eye", (h, w, 3)))
         self._last_eye_crop = crop
         grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY, dst=self._buffer("eye grey", (h, w)))
-        res = self.eye_finder.find(crop, grey, np.asarray(centres_face, dtype=np.float64) - (x0, y0))
+        if centres_face is self._pupils_face:
+            centres = self._pupils_eye_crop
+        else:
+            centres = np.asarray(centres_face, dtype=np.float64) - (x0, y0)
+        res = self.eye_finder.find(crop, grey, centres)
         return crop, grey, res, (x0, y0)
 
     def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
