@@ -186,6 +186,7 @@ class FaceTracker:
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
         self._pupils_eye_crop = self._pupils_face - self.eye_rect[:2]  # ... in the eye crop's px
+        self._jaw_max = np.array(JAW_MAX) * wi
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -477,7 +478,7 @@ class FaceTracker:
             # the jaw from the centre on the mouth line, where calibration measured the rigid place
             lc = mouth_res.line_centre if hasattr(mouth_res, "line_centre") else mouth_res.centre
             at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
-            self.jaw = np.clip(at - rigid_mouth, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
+            self.jaw = np.minimum(np.maximum(at - rigid_mouth, -self._jaw_max), self._jaw_max)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
