@@ -213,20 +213,21 @@ class HeadMotion:
         n_ok = int(np.count_nonzero(ok))
         motion = None
         if n_ok >= self.min_inliers:
-            a, b = pts[ok], nxt[ok]
+            a, b = (pts, nxt) if n_ok == len(ok) else (pts[ok], nxt[ok])
             m, inl = cv2.estimateAffinePartial2D(
                 a, b, method=cv2.RANSAC, ransacReprojThreshold=max(0.6, 0.025 * FLOW_IPD), maxIters=200,
                 confidence=0.99, refineIters=5,
             )
             if m is not None and inl is not None:
                 inl = inl.reshape(-1).astype(bool)
-                n_in = int(inl.sum())
+                n_in = int(np.count_nonzero(inl))
                 if n_in >= self.min_inliers and n_in >= 0.4 * n_ok:
                     s = self.scale
                     fm = m.astype(np.float64)  # a copy
                     fm[:, 2] /= s  # scaled px → frame px (rotation/scale part is unchanged)
                     motion = Motion(fm, n_in, n_ok)
-                    pts = b[inl].reshape(-1, 1, 2)
+                    pts = b if n_in == len(inl) else b[inl]
+                    pts = pts.reshape(-1, 1, 2)
                 else:
                     pts = b.reshape(-1, 1, 2)
             else:
