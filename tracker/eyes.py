@@ -1207,9 +1207,13 @@ class EyeFinder:
         return np.array([min(max(r / max(c, 1.0), lo), hi) for r, c in zip(self.model.skin_bgr.tolist(), now.tolist())])
 
     # ------------------------------------------------------------------ main entry
-    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
+    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop, brows: bool = True) -> EyeResult:
         """Both eyes in a face crop (uint8 BGR and its grey, uint8 or float32) around the
-        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
+        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first.
+
+        ``brows=False`` (checking a guess, e.g. while looking for a lost face) leaves the brows
+        out: their heights are NaN and the last frame's brows are neither used nor changed.
+        """
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
         if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
@@ -1228,7 +1232,10 @@ class EyeFinder:
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
                 lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
             pts.append((pt, w))
-        brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+        if brows:
+            brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+        else:
+            brows = [(math.nan, 0.0), (math.nan, 0.0)]
         eyes = []
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]

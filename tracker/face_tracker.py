@@ -264,8 +264,10 @@ class FaceTracker:
             out.append(tuple(float(v) for v in np.partition(s, len(s) // 2, axis=0)[len(s) // 2]))
         return out[0], out[1]
 
-    def _eyes(self, frame: np.ndarray, ff: FaceFrame, centres_face: np.ndarray) -> tuple[np.ndarray, np.ndarray, EyeResult, tuple[int, int]]:
-        """Crop the eye region and find both eyes near ``centres_face``; (crop, grey, result, origin)."""
+    def _eyes(self, frame: np.ndarray, ff: FaceFrame, centres_face: np.ndarray,
+              brows: bool = True) -> tuple[np.ndarray, np.ndarray, EyeResult, tuple[int, int]]:
+        """Crop the eye region and find both eyes near ``centres_face``; (crop, grey, result, origin).
+        ``brows=False``: only the eyes (a guess being checked; see :meth:`EyeFinder.find`)."""
         x0, y0, w, h = self.eye_rect
         crop = ff.crop(frame, self.eye_rect, self._buffer("eye", (h, w, 3)))
         self._last_eye_crop = crop
@@ -274,7 +276,10 @@ class FaceTracker:
             centres = self._pupils_eye_crop
         else:
             centres = np.asarray(centres_face, dtype=np.float64) - (x0, y0)
-        res = self.eye_finder.find(crop, grey, centres)
+        if brows or not isinstance(self.eye_finder, EyeFinder):
+            res = self.eye_finder.find(crop, grey, centres)
+        else:
+            res = self.eye_finder.find(crop, grey, centres, brows=False)
         return crop, grey, res, (x0, y0)
 
     def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
@@ -572,7 +577,8 @@ class FaceTracker:
             return None
         for _ in range(2):  # a second pass in the frame the first pass's pupils define
             ff = self._frame(pupils)
-            _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face)
+            # the brows are not part of the check (and the tracker forgets them on a found face)
+            _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face, brows=False)
             if not all(o.open and o.score >= EYE_STRONG for o in res.eyes):
                 return None
             found = np.array([[o.x + ox, o.y + oy] for o in res.eyes])
