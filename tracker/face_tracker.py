@@ -525,11 +525,15 @@ class FaceTracker:
         elif not flow_ok and not pinned:
             new = self._limited(anchors, pupils_img)
         else:
-            a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
-            a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
-            mid = a_mid + (FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT) * (p_mid - a_mid)
-            vec = a_vec + (0.5 if strong else FOLLOW_TURN) * (p_vec - a_vec)
-            new = np.array([mid - 0.5 * vec, mid + 0.5 * vec])
+            (ax0, ay0), (ax1, ay1) = anchors.tolist()
+            (px0, py0), (px1, py1) = pupils_img.tolist()
+            shift = FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT
+            turn = 0.5 if strong else FOLLOW_TURN
+            amx, amy, pmx, pmy = 0.5 * (ax0 + ax1), 0.5 * (ay0 + ay1), 0.5 * (px0 + px1), 0.5 * (py0 + py1)
+            mx, my = amx + shift * (pmx - amx), amy + shift * (pmy - amy)
+            avx, avy = ax1 - ax0, ay1 - ay0
+            vx, vy = avx + turn * ((px1 - px0) - avx), avy + turn * ((py1 - py0) - avy)
+            new = np.array([[mx - 0.5 * vx, my - 0.5 * vy], [mx + 0.5 * vx, my + 0.5 * vy]])
         self.velocity = new - self.anchors
         self.anchors = new
         self.pose = similarity_from_pairs(self._cal_pupils, new)
