@@ -398,3 +398,13 @@ def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder
     assert h == pytest.approx(base - crease_k, abs=0.5)
     finder.forget()
     assert all(math.isnan(v) for v in finder._brow_last)
+
+
+def test_checking_a_guess_without_the_brows_finds_the_same_eyes_and_keeps_the_brow_memory(finder):
+    res, _, _, (crop, grey, centres) = _find(finder, BASE.with_expression("smile"))
+    remembered = list(finder._brow_last)
+    quick = finder.find(crop, grey, centres, brows=False)
+    assert finder._brow_last == remembered
+    for a, b in zip(res.eyes, quick.eyes):
+        assert (a.x, a.y, a.score, a.open, a.upper, a.lower, a.iris) == (b.x, b.y, b.score, b.open, b.upper, b.lower, b.iris)
+        assert math.isnan(b.brow) and math.isfinite(a.brow)

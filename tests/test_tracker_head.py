@@ -209,3 +209,48 @@ def test_without_the_flow_the_eyes_move_the_head_but_grow_and_turn_it_only_a_lit
     # within the limits the found eyes are taken as they are
     small = np.array([[203.0, 241.0], [304.0, 240.0]])
     assert np.allclose(FaceTracker._limited(anchors, small), small)
+
+
+@pytest.mark.parametrize("radius", [3, 5, 8])
+def test_corner_spacing_mask_is_the_pixels_cv2_circle_fills(radius):
+    from tracker.head_motion import _disc_offsets
+
+    rng = np.random.default_rng(radius)
+    dy, dx = _disc_offsets(radius)
+    for _ in range(20):
+        h, w = (int(v) for v in rng.integers(10, 80, 2))
+        pts = rng.uniform(-12, 90, (25, 2)).astype(np.float32)
+        want = np.full((h, w), 255, np.uint8)
+        for p in pts:
+            cv2.circle(want, (int(p[0]), int(p[1])), radius, 0, -1)
+        got = np.full((h, w), 255, np.uint8)
+        ip = pts.astype(np.int64)
+        ys, xs = (ip[:, 1:2] + dy).ravel(), (ip[:, 0:1] + dx).ravel()
+        inside = (ys >= 0) & (ys < h) & (xs >= 0) & (xs < w)
+        got[ys[inside], xs[inside]] = 0
+        assert np.array_equal(got, want)
+
+
+def test_flow_takes_the_face_region_as_a_function_called_only_to_pick_corners():
+    img = _textured(3)
+    face = np.array([[200, 120], [440, 120], [440, 360], [200, 360]], dtype=np.float64)
+    frames = [img] + [cv2.warpAffine(img, np.array([[1.0, 0.0, k], [0.0, 1.0, -0.5 * k]]), (640, 480),
+                                     borderMode=cv2.BORDER_REFLECT) for k in (1.0, 2.5, 4.0)]
+    a, b = HeadMotion(), HeadMotion()
+    a.set_scale(80.0)
+    b.set_scale(80.0)
+    a.seed(frames[0], face)
+    b.seed(frames[0], face)
+    calls = []
+
+    def region():
+        calls.append(1)
+        return face
+
+    for f in frames[1:]:
+        ra, rb = a.step(f, face), b.step(f, region)
+        assert (ra is None) == (rb is None)
+        if ra is not None:
+            assert np.array_equal(ra.matrix, rb.matrix)
+    assert np.array_equal(a._pts, b._pts)
+    assert len(calls) < len(frames) - 1  # only when corners are topped up, not every frame

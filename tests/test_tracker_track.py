@@ -145,6 +145,11 @@ def test_overlay_draws(cal, tmp_path):
     assert out.shape == img.shape and not np.array_equal(out, img)
     assert r.overlay.lip_polygon.shape[1] == 2 and len(r.overlay.rois) == 2
     assert len(r.overlay.blob_contour()) > 10
+    # the blob is filled from the mouth result when first asked for, and can be replaced
+    blob = r.overlay.blob
+    assert blob is not None and blob.dtype == bool and blob.any() and r.overlay.blob is blob
+    r.overlay.blob = None
+    assert r.overlay.blob is None and len(r.overlay.blob_contour()) == 0
 
 
 @pytest.mark.parametrize("style", ["default", "small_far"])

@@ -81,11 +81,12 @@ class FaceFrame:
 
     def __post_init__(self) -> None:
         c, s = math.cos(self.angle), math.sin(self.angle)
-        self._u = np.array([c, -s])
-        self._d = np.array([s, c])
+        self._cs = (c, s)
+        self._R = np.array([[c, -s], [s, c]])  # rows: the face's x and down axes
+        self._u, self._d = self._R
         self._m = np.array([float(self.mid[0]), float(self.mid[1])])
         # frame px = mid + (face x, face y) @ _back
-        self._back = np.array([self._u, self._d]) / self.scale
+        self._back = self._R / self.scale
 
     def axes(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit vectors (frame px) of the face's x and down axes."""
@@ -93,11 +94,13 @@ class FaceFrame:
 
     def matrix(self, origin: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
         """2×3 affine from frame px to crop px, where a crop's (0,0) is face point ``origin``."""
-        u, d, k, m = self._u, self._d, self.scale, self._m
+        c, s = self._cs
+        k = self.scale
+        mx, my = float(self.mid[0]), float(self.mid[1])
         return np.array(
             [
-                [k * u[0], k * u[1], -k * (m[0] * u[0] + m[1] * u[1]) - origin[0]],
-                [k * d[0], k * d[1], -k * (m[0] * d[0] + m[1] * d[1]) - origin[1]],
+                [k * c, k * -s, -k * (mx * c + my * -s) - origin[0]],
+                [k * s, k * c, -k * (mx * s + my * c) - origin[1]],
             ]
         )
 
@@ -119,7 +122,7 @@ class FaceFrame:
     def to_face(self, pts: np.ndarray) -> np.ndarray:
         """Frame px ``(n, 2)`` to face coordinates."""
         p = np.asarray(pts, dtype=np.float64).reshape(-1, 2) - self._m
-        return self.scale * (p @ np.array([self._u, self._d]).T)
+        return self.scale * (p @ self._R.T)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -255,7 +255,7 @@ def iris_radius(grey: np.ndarray, centre: tuple[float, float], work_ipd: float) 
 def _run(e) -> float:
     """Soft length of the interior run starting in the middle of ``e[0]``: half of sample 0,
     then whole samples by their membership until two in a row are mostly not interior."""
-    v = e.tolist() if isinstance(e, np.ndarray) else list(e)
+    v = e if isinstance(e, list) else e.tolist() if isinstance(e, np.ndarray) else list(e)
     if not v:
         return 0.0
     total = 0.5 * v[0]
@@ -775,6 +775,7 @@ class EyeFinder:
             self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
         self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
         self._brow_last = [math.nan, math.nan]  # the last heights found (crop px), see _brow_peak
+        self._offsets: dict[int, np.ndarray] = {}  # 0, 1, … n−1 (float32), by n, for _brow_peak
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
         self._slit_half = (int(round(SLIT_HW * wi)), int(round(SLIT_HH * wi)))
@@ -858,7 +859,7 @@ class EyeFinder:
                 continue
             P = windows(np.ascontiguousarray(t), t.shape[0] - h + 1, t.shape[1] - w + 1, h, w).reshape(-1, h * w)
             P = P - P.mean(axis=1, keepdims=True)
-            self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32))
+            self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32, copy=False))
 
     # ------------------------------------------------------------------ irises
     def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
@@ -966,7 +967,11 @@ class EyeFinder:
         """Both iris centres (crop px, sub-pixel) and their iris-picture correlations near the
         predicted eye ``centres`` (2, 2): the best pair of the two coarse maps, each eye free
         to move by the slack against the other, each then refined at full resolution."""
-        maps, origins = self._coarse_maps(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
+        return self._locate(grey, np.asarray(centres, dtype=np.float64).reshape(2, 2))
+
+    def _locate(self, grey: np.ndarray, centres: np.ndarray) -> list[tuple[float, float, float]]:
+        """:meth:`locate_irises` for centres already a (2, 2) float64 array."""
+        maps, origins = self._coarse_maps(grey, centres)
         J = cv2.dilate(maps[0], self._dilate)
         J += cv2.dilate(maps[1], self._dilate)
         _, _, _, (jx, jy) = cv2.minMaxLoc(J)
@@ -1112,15 +1117,23 @@ class EyeFinder:
         as the brow; the brow does not jump between them from one frame to the next)."""
         base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
         last = self._brow_last[i]
+        n = len(score)
         if math.isfinite(last):
-            pick = score - np.abs(base - np.arange(len(score), dtype=np.float32) - last) * (BROW_STEADY / self.wi)
+            offsets = self._offsets.get(n)
+            if offsets is None:
+                offsets = self._offsets[n] = np.arange(n, dtype=np.float32)
+            pick = score - np.abs(base - offsets - last) * (BROW_STEADY / self.wi)
             k = int(pick.argmax())
         else:
             k = int(score.argmax())
-        d = parabola_offset(score[k - 1], score[k], score[k + 1]) if 0 < k < len(score) - 1 else 0.0
+        if 0 < k < n - 1:
+            a, b, c = score[k - 1 : k + 2].tolist()
+            d = parabola_offset(a, b, c)
+        else:
+            b, d = float(score[k]), 0.0
         h = float(base - k - d)
         self._brow_last[i] = h
-        return h, min(float(score[k]), 1.0)
+        return h, min(b, 1.0)
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
         """:meth:`_brows` of one eye."""
@@ -1194,13 +1207,17 @@ class EyeFinder:
         return np.array([min(max(r / max(c, 1.0), lo), hi) for r, c in zip(self.model.skin_bgr.tolist(), now.tolist())])
 
     # ------------------------------------------------------------------ main entry
-    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop) -> EyeResult:
+    def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop, brows: bool = True) -> EyeResult:
         """Both eyes in a face crop (uint8 BGR and its grey, uint8 or float32) around the
-        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first."""
+        predicted eye centres ``eye_centres_crop`` (2, 2) crop px, image-left first.
+
+        ``brows=False`` (checking a guess, e.g. while looking for a lost face) leaves the brows
+        out: their heights are NaN and the last frame's brows are neither used nor changed.
+        """
         centres = np.asarray(eye_centres_crop, dtype=np.float64).reshape(2, 2)
         if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
-        found = self.locate_irises(crop_grey, centres)
+        found = self._locate(crop_grey, centres)
         gain = self._gain
         lids = self._both_lids(crop_bgr, found, gain)
         lo, hi = CLOSING
@@ -1215,7 +1232,10 @@ class EyeFinder:
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
                 lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
             pts.append((pt, w))
-        brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+        if brows:
+            brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+        else:
+            brows = [(math.nan, 0.0), (math.nan, 0.0)]
         eyes = []
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]

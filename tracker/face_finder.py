@@ -114,17 +114,18 @@ PATCH_IPD = 28.0
 """Inter-pupil distance (px) of the stored face picture used to tell the face from anything else."""
 PATCH_RECT = (-1.0, -0.6, 2.0, 1.35)
 """The face picture's extent in inter-pupil distances (x0, y0, w, h): brows, eyes and nose, no mouth."""
+_PATCH_PX = tuple(v * PATCH_IPD for v in PATCH_RECT)
 
 
 def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], tuple[float, float], tuple[float, float]]:
     """The affine from the scaled grey image to the face picture (grown by ``margin`` px on
     every side), the picture's size, and the picture's x and down axes in frame px per picture px."""
-    (lx, ly), (rx, ry) = ((float(x) * scale, float(y) * scale) for x, y in np.asarray(pupils, dtype=np.float64).reshape(2, 2).tolist())
+    lx, ly, rx, ry = (v * scale for v in np.asarray(pupils, dtype=np.float64).ravel().tolist())
     ipd = max(math.hypot(rx - lx, ry - ly), 1e-6)
     k = PATCH_IPD / ipd
     c, s = (rx - lx) / ipd, (ry - ly) / ipd  # unit eye line (x right, y down)
     mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
-    x0, y0, w, h = (v * PATCH_IPD for v in PATCH_RECT)
+    x0, y0, w, h = _PATCH_PX
     # picture px = R·k·(grey px − mid) − origin, R turning the eye line onto +x
     a, b = k * c, k * s
     m = np.array([[a, b, -(a * mx + b * my) - (x0 - margin)], [-b, a, -(a * my - b * mx) - (y0 - margin)]])

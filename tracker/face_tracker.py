@@ -58,7 +58,8 @@ class Overlay:
     ``mouth_centre`` (2,); ``lip_points`` (2,2) outer edges of the upper and lower lip;
     ``rois`` a list of 4-corner polygons (4,2); ``status`` the frame's status; ``mouth_cue`` what
     the mouth was found by ("colour": the lips' own colour, "contrast": weak lip colour helped by
-    the gap and the inside).
+    the gap and the inside). The tracker hands over the mouth result and ``blob`` is filled from
+    it only when asked for (most frames are never drawn).
     """
 
     pupils: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
@@ -66,7 +67,6 @@ class Overlay:
     lids: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan))
     lip_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     lip_raw_polygon: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    blob: np.ndarray | None = None
     blob_origin: tuple | None = field(default=None, repr=False)
     mouth_corners: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     mouth_centre: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
@@ -74,6 +74,19 @@ class Overlay:
     rois: list = field(default_factory=list)
     status: str = OK
     mouth_cue: str = ""
+    _blob: np.ndarray | None = field(default=None, repr=False)
+    _blob_of: object = field(default=None, repr=False)  # a mouth result: its ``blob`` when asked for
+
+    @property
+    def blob(self) -> np.ndarray | None:
+        if self._blob is None and self._blob_of is not None:
+            self._blob = self._blob_of.blob
+            self._blob_of = None
+        return self._blob
+
+    @blob.setter
+    def blob(self, value: np.ndarray | None) -> None:
+        self._blob, self._blob_of = value, None
 
     def blob_contour(self) -> np.ndarray:
         """Outline (m,2) of the lip blob in frame px (empty without a blob)."""
@@ -172,6 +185,8 @@ class FaceTracker:
         self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
+        self._pupils_eye_crop = self._pupils_face - self.eye_rect[:2]  # ... in the eye crop's px
+        self._jaw_max = np.array(JAW_MAX) * wi
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -216,7 +231,8 @@ class FaceTracker:
         return buf
 
     def _frame(self, pupils: np.ndarray) -> FaceFrame:
-        return FaceFrame.from_pupils(tuple(pupils[0]), tuple(pupils[1]), self.wi)
+        (lx, ly), (rx, ry) = pupils.tolist()
+        return FaceFrame.from_pupils((lx, ly), (rx, ry), self.wi)
 
     @staticmethod
     def _rect_corners(rect) -> np.ndarray:
@@ -248,13 +264,22 @@ class FaceTracker:
             out.append(tuple(float(v) for v in np.partition(s, len(s) // 2, axis=0)[len(s) // 2]))
         return out[0], out[1]
 
-    def _eyes(self, frame: np.ndarray, ff: FaceFrame, centres_face: np.ndarray) -> tuple[np.ndarray, np.ndarray, EyeResult, tuple[int, int]]:
-        """Crop the eye region and find both eyes near ``centres_face``; (crop, grey, result, origin)."""
+    def _eyes(self, frame: np.ndarray, ff: FaceFrame, centres_face: np.ndarray,
+              brows: bool = True) -> tuple[np.ndarray, np.ndarray, EyeResult, tuple[int, int]]:
+        """Crop the eye region and find both eyes near ``centres_face``; (crop, grey, result, origin).
+        ``brows=False``: only the eyes (a guess being checked; see :meth:`EyeFinder.find`)."""
         x0, y0, w, h = self.eye_rect
         crop = ff.crop(frame, self.eye_rect, self._buffer("eye", (h, w, 3)))
         self._last_eye_crop = crop
         grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY, dst=self._buffer("eye grey", (h, w)))
-        res = self.eye_finder.find(crop, grey, np.asarray(centres_face, dtype=np.float64) - (x0, y0))
+        if centres_face is self._pupils_face:
+            centres = self._pupils_eye_crop
+        else:
+            centres = np.asarray(centres_face, dtype=np.float64) - (x0, y0)
+        if brows or not isinstance(self.eye_finder, EyeFinder):
+            res = self.eye_finder.find(crop, grey, centres)
+        else:
+            res = self.eye_finder.find(crop, grey, centres, brows=False)
         return crop, grey, res, (x0, y0)
 
     def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
@@ -307,7 +332,7 @@ class FaceTracker:
             self.lost = False
             self.lost_frames = 0
         elif self.motion.active:
-            flow = self.motion.step(frame_bgr, self.face_outline(), grey=self._grey)
+            flow = self.motion.step(frame_bgr, self.face_outline, grey=self._grey)
             if flow is not None:
                 self.pose = compose(flow.matrix, self.pose)
         if flow is None and not self.motion.active and not reacquired:
@@ -339,20 +364,22 @@ class FaceTracker:
         when the face itself is there (``face_there``: its picture matched, or the flow follows it).
         """
         wi = self.wi
-        preds = self._pupils_face
+        preds = self._pupils_face.tolist()
+        f = found.tolist()
         obs = res.eyes
         doubt = [o.score < EYE_DOUBT and (o.open or not face_there) for o in obs]
         strong = all(o.open and o.score >= EYE_STRONG for o in obs)
         if strong:  # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
-            g = 0.5 * (found[0] + found[1] - preds[0] - preds[1]) / wi
-            strong = (g[0] / GAZE_X) ** 2 + (g[1] / GAZE_Y) ** 2 <= 1.0
+            gx = 0.5 * (f[0][0] + f[1][0] - preds[0][0] - preds[1][0]) / wi
+            gy = 0.5 * (f[0][1] + f[1][1] - preds[0][1] - preds[1][1]) / wi
+            strong = (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 <= 1.0
         for i in range(2):
             if not doubt[i] and not strong:
-                gx, gy = (found[i] - preds[i]) / wi
+                gx, gy = (f[i][0] - preds[i][0]) / wi, (f[i][1] - preds[i][1]) / wi
                 if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
                     doubt[i] = True
         if not any(doubt) and obs[0].open and obs[1].open:
-            d = found[1] - found[0]
+            d = (f[1][0] - f[0][0], f[1][1] - f[0][1])
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: open eyes must agree with them
             tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
@@ -365,7 +392,9 @@ class FaceTracker:
         wi = self.wi
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
-        if not np.all((anchors > -0.1 * wi) & (anchors < np.array([W, H]) + 0.1 * wi)):
+        (lx, ly), (rx, ry) = anchors.tolist()
+        lo, hx, hy = -0.1 * wi, W + 0.1 * wi, H + 0.1 * wi
+        if not (lo < lx < hx and lo < rx < hx and lo < ly < hy and lo < ry < hy):
             return self._lost_result(index, time, "left the frame")
         anchors, presence = self._pin(anchors, flow_ok)
         ff = self._frame(anchors)
@@ -448,13 +477,13 @@ class FaceTracker:
             ov.lip_points = img_pts[19:21]
             ov.lip_polygon = img_pts[21 : 21 + n]
             ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
-            ov.blob = mouth_res.blob
+            ov._blob_of = mouth_res
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             ov.mouth_cue = mouth_res.cue
             # the jaw from the centre on the mouth line, where calibration measured the rigid place
             lc = mouth_res.line_centre if hasattr(mouth_res, "line_centre") else mouth_res.centre
             at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
-            self.jaw = np.clip(at - rigid_mouth, -np.array(JAW_MAX) * wi, np.array(JAW_MAX) * wi)
+            self.jaw = np.minimum(np.maximum(at - rigid_mouth, -self._jaw_max), self._jaw_max)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
@@ -496,11 +525,15 @@ class FaceTracker:
         elif not flow_ok and not pinned:
             new = self._limited(anchors, pupils_img)
         else:
-            a_mid, p_mid = 0.5 * (anchors[0] + anchors[1]), 0.5 * (pupils_img[0] + pupils_img[1])
-            a_vec, p_vec = anchors[1] - anchors[0], pupils_img[1] - pupils_img[0]
-            mid = a_mid + (FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT) * (p_mid - a_mid)
-            vec = a_vec + (0.5 if strong else FOLLOW_TURN) * (p_vec - a_vec)
-            new = np.array([mid - 0.5 * vec, mid + 0.5 * vec])
+            (ax0, ay0), (ax1, ay1) = anchors.tolist()
+            (px0, py0), (px1, py1) = pupils_img.tolist()
+            shift = FOLLOW_SHIFT if pinned else 2 * FOLLOW_SHIFT
+            turn = 0.5 if strong else FOLLOW_TURN
+            amx, amy, pmx, pmy = 0.5 * (ax0 + ax1), 0.5 * (ay0 + ay1), 0.5 * (px0 + px1), 0.5 * (py0 + py1)
+            mx, my = amx + shift * (pmx - amx), amy + shift * (pmy - amy)
+            avx, avy = ax1 - ax0, ay1 - ay0
+            vx, vy = avx + turn * ((px1 - px0) - avx), avy + turn * ((py1 - py0) - avy)
+            new = np.array([[mx - 0.5 * vx, my - 0.5 * vy], [mx + 0.5 * vx, my + 0.5 * vy]])
         self.velocity = new - self.anchors
         self.anchors = new
         self.pose = similarity_from_pairs(self._cal_pupils, new)
@@ -548,7 +581,8 @@ class FaceTracker:
             return None
         for _ in range(2):  # a second pass in the frame the first pass's pupils define
             ff = self._frame(pupils)
-            _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face)
+            # the brows are not part of the check (and the tracker forgets them on a found face)
+            _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face, brows=False)
             if not all(o.open and o.score >= EYE_STRONG for o in res.eyes):
                 return None
             found = np.array([[o.x + ox, o.y + oy] for o in res.eyes])

@@ -15,7 +15,9 @@ coming out are frame pixels.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -58,21 +60,39 @@ def similarity_from_pairs(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     """The 2×3 similarity taking two points ``src`` exactly onto two points ``dst``."""
     s = np.asarray(src, dtype=np.float64).reshape(2, 2)
     d = np.asarray(dst, dtype=np.float64).reshape(2, 2)
-    vs, vd = s[1] - s[0], d[1] - d[0]
-    zs = complex(vs[0], vs[1])
-    zd = complex(vd[0], vd[1])
+    (sx0, sy0), (sx1, sy1) = s.tolist()
+    (dx0, dy0), (dx1, dy1) = d.tolist()
+    zs = complex(sx1 - sx0, sy1 - sy0)
+    zd = complex(dx1 - dx0, dy1 - dy0)
     if abs(zs) < 1e-9:
-        return np.array([[1.0, 0.0, d[0, 0] - s[0, 0]], [0.0, 1.0, d[0, 1] - s[0, 1]]])
+        return np.array([[1.0, 0.0, dx0 - sx0], [0.0, 1.0, dy0 - sy0]])
     a = zd / zs
     m = np.array([[a.real, -a.imag, 0.0], [a.imag, a.real, 0.0]])
     m[:, 2] = d[0] - m[:, :2] @ s[0]
     return m
 
 
+@functools.lru_cache(maxsize=None)
+def _disc_offsets(radius: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column offsets ``(1, k)`` of the pixels ``cv2.circle`` fills for a disc of this
+    radius round an integer centre."""
+    c = np.zeros((2 * radius + 3, 2 * radius + 3), np.uint8)
+    cv2.circle(c, (radius + 1, radius + 1), radius, 1, -1)
+    ys, xs = np.nonzero(c)
+    return (ys - radius - 1)[None, :], (xs - radius - 1)[None, :]
+
+
+def _polygon(p: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
+    return p() if callable(p) else p
+
+
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     """The 2×3 affine ``outer ∘ inner`` (apply ``inner`` first)."""
-    m = outer[:, :2] @ inner[:, :2]
-    return np.concatenate([m, (outer[:, :2] @ inner[:, 2] + outer[:, 2])[:, None]], axis=1)
+    r = outer[:, :2]
+    m = np.empty((2, 3))
+    m[:, :2] = r @ inner[:, :2]
+    m[:, 2] = r @ inner[:, 2] + outer[:, 2]
+    return m
 
 
 class HeadMotion:
@@ -148,8 +168,14 @@ class HeadMotion:
         min_d = max(3.0, 0.09 * FLOW_IPD)
         want = MAX_POINTS
         if keep is not None and len(keep):
-            for p in keep.reshape(-1, 2):  # no new corner next to one still tracked
-                cv2.circle(mask, (int(p[0]) - x0, int(p[1]) - y0), int(min_d), 0, -1)
+            # no new corner next to one still tracked: the pixels cv2.circle fills round each
+            # (truncated) corner, all at once
+            dy, dx = _disc_offsets(int(min_d))
+            ip = keep.reshape(-1, 2).astype(np.int64)
+            ys = (ip[:, 1:2] - y0 + dy).ravel()
+            xs = (ip[:, 0:1] - x0 + dx).ravel()
+            inside = (ys >= 0) & (ys < mask.shape[0]) & (xs >= 0) & (xs < mask.shape[1])
+            mask[ys[inside], xs[inside]] = 0
             want = MAX_POINTS - len(keep)
         if want <= 0:
             return keep
@@ -161,43 +187,47 @@ class HeadMotion:
             return found
         return np.concatenate([keep, found])
 
-    def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | None = None, grey: np.ndarray | None = None) -> Motion | None:
+    def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | Callable[[], np.ndarray] | None = None,
+             grey: np.ndarray | None = None) -> Motion | None:
         """The rigid motion from the previous frame to this one (frame px), or None.
 
-        ``face_polygon`` (frame px, where the face is now as far as the caller knows) lets
-        corners be topped up every :data:`RESEED_EVERY` frames or when many died. ``grey`` is
-        this frame from :meth:`grey` when the caller already made it.
+        ``face_polygon`` (frame px, where the face is now as far as the caller knows; or a
+        function that returns it, called only when corners are picked) lets corners be topped
+        up every :data:`RESEED_EVERY` frames or when many died. ``grey`` is this frame from
+        :meth:`grey` when the caller already made it.
         """
         g = self.grey(frame_bgr) if grey is None else grey
         prev, pts = self._prev, self._pts
         self._prev = g
         if prev is None or pts is None or len(pts) < self.min_inliers or prev.shape != g.shape:
-            self._pts = self._pick(g, face_polygon, None) if face_polygon is not None else None
+            self._pts = self._pick(g, _polygon(face_polygon), None) if face_polygon is not None else None
             self._age = 0
             return None
         nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
-        ok = st.reshape(-1).astype(bool)
         h, w = g.shape
         if nxt is not None:
             q = nxt.reshape(-1, 2)
-            ok &= (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] < w) & (q[:, 1] < h)
-        n_ok = int(ok.sum())
+            ok = (st.reshape(-1) != 0) & np.all((q >= 0) & (q < (w, h)), axis=1)
+        else:
+            ok = st.reshape(-1) != 0
+        n_ok = int(np.count_nonzero(ok))
         motion = None
         if n_ok >= self.min_inliers:
-            a, b = pts[ok], nxt[ok]
+            a, b = (pts, nxt) if n_ok == len(ok) else (pts[ok], nxt[ok])
             m, inl = cv2.estimateAffinePartial2D(
                 a, b, method=cv2.RANSAC, ransacReprojThreshold=max(0.6, 0.025 * FLOW_IPD), maxIters=200,
                 confidence=0.99, refineIters=5,
             )
             if m is not None and inl is not None:
                 inl = inl.reshape(-1).astype(bool)
-                n_in = int(inl.sum())
+                n_in = int(np.count_nonzero(inl))
                 if n_in >= self.min_inliers and n_in >= 0.4 * n_ok:
                     s = self.scale
-                    fm = m.astype(np.float64).copy()
+                    fm = m.astype(np.float64)  # a copy
                     fm[:, 2] /= s  # scaled px → frame px (rotation/scale part is unchanged)
                     motion = Motion(fm, n_in, n_ok)
-                    pts = b[inl].reshape(-1, 1, 2)
+                    pts = b if n_in == len(inl) else b[inl]
+                    pts = pts.reshape(-1, 1, 2)
                 else:
                     pts = b.reshape(-1, 1, 2)
             else:
@@ -207,7 +237,7 @@ class HeadMotion:
         self._age += 1
         if face_polygon is not None and (pts is None or len(pts) < 0.6 * MAX_POINTS or self._age >= RESEED_EVERY):
             if motion is not None or pts is None:
-                pts = self._pick(g, face_polygon, pts if motion is not None else None)
+                pts = self._pick(g, _polygon(face_polygon), pts if motion is not None else None)
                 self._age = 0
         self._pts = pts
         return motion
