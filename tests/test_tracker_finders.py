@@ -158,3 +158,17 @@ def test_clicks_a_few_pixels_off_still_calibrate():
     e = np.abs(cal.neutral.values() - t.values())
     assert e[:3].max() < 1 and e[3:7].max() < 1.5 and e[7] < 2
     assert math.isclose(cal.ipd, 80, abs_tol=1)
+
+
+def test_brow_clicks_next_to_the_lashes_still_calibrate():
+    """Low, sparse brows or a hurried click just above the lashes: the darkest band near the click
+    is the lash line, which is no brow — calibration looks above it and, failing that, takes the
+    click, and never refuses the face."""
+    c = clicks_for(BASE)
+    lm = face_landmarks(BASE)
+    for side in ("left", "right"):
+        px, py = lm[f"{side}_pupil"]
+        c[f"{side}_brow"] = [float(px), float(py - 0.1 * BASE.ipd)]
+    frame, _ = render_face(BASE)
+    cal = calibrate(frame, Clicks.from_dict(c))
+    assert all(0.08 * BASE.ipd < h < BASE.ipd for h in cal.brow_heights)

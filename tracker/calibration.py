@@ -564,11 +564,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         top = int(math.floor(py - 1.1 * wi))
         prof = column_profile(grey, px, top, int(py), 2)
         guess = int(round(b[1] - oy - top))
-        c = brow_centre(prof, guess, max(int(round(0.08 * wi)), 3))
+        radius = max(int(round(0.08 * wi)), 3)
+        c = brow_centre(prof, guess, radius)
+        if not 0.08 * wi < py - (top + c) < 1.0 * wi:
+            # the dark band found is the lashes or the lid crease (low, sparse brows; a click close
+            # to the eye): look again above them, and failing that take the click itself — a real
+            # face always has a brow where the person clicked it
+            limit = len(prof) - int(math.ceil(0.12 * wi))
+            c = brow_centre(prof[:limit], min(max(guess, 0), limit - 1), radius) if limit > 2 * radius else float(guess)
+            if not 0.08 * wi < py - (top + c) < 1.0 * wi:
+                c = float(min(max(guess, 0.0), py - top - 0.1 * wi))
         cy_b = top + c
         height = py - cy_b
-        if not (0.08 * wi < height < 1.0 * wi):
-            raise CalibrationError("calibration: no eyebrow found above a pupil near the brow click")
         start = int(math.floor(cy_b)) - half
         frac = cy_b - math.floor(cy_b)
         seg = column_profile(grey, px, start, start + 2 * half + 1, 2)
