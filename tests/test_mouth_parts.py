@@ -285,3 +285,24 @@ def test_a_dark_shadow_above_the_mouth_is_not_its_line():
     res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
     ew, eu, el = _errors(res, _truth_in_crop(BASE, ff, origin))
     assert ew < 3.0 and eu < 2.0 and el < 2.0
+
+
+def test_a_cheek_that_is_not_skin_at_calibration_borrows_the_other_side():
+    """Beside a small or turned face the columns where one cheek should be can be hair, a collar or
+    the background: that side takes the other side's cheek, and the corners stay on the mouth."""
+    import cv2
+    from tracker.mouth_model import learn_mouth
+    from tracker.synthetic import face_landmarks
+    lm = face_landmarks(BASE)
+    mx, my = lm["mouth"]
+    img, _ = render_face(BASE)
+    cv2.rectangle(img, (int(mx - 0.9 * WI), int(my - 0.2 * WI)), (int(mx - 0.58 * WI), int(my + 0.2 * WI)), (120, 140, 60), -1)
+    ff = _frame_of(BASE)
+    click = ff.to_face(lm["mouth"][None])[0]
+    crop, origin = _crop(img, ff, click)
+    trace = {}
+    model = learn_mouth(crop, tuple(click - origin), WI, _trace=trace)
+    assert trace["cheek_skin"]["left"] > 1.0 >= trace["cheek_skin"]["right"]
+    assert np.allclose(model.cheek_left, model.cheek_right)
+    true_width = float(np.hypot(*(lm["mouth_right"] - lm["mouth_left"]))) * ff.scale
+    assert abs(model.width - true_width) < 3.0

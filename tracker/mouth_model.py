@@ -549,6 +549,22 @@ def cheek_model(cols: np.ndarray, wi: float) -> tuple[np.ndarray, np.ndarray] | 
     return mu, np.maximum(1.4826 * np.median(np.abs(cheek - mu), axis=0), 1.0)
 
 
+CHEEK_SKIN = 1.0
+"""Mean squared distance (in twice the skin's spread) above which a calibrated cheek is not skin."""
+
+
+def cheek_skin_distance(cheek: tuple[np.ndarray, np.ndarray] | None, skin_f: np.ndarray) -> float:
+    """How unlike the skin round the mouth (``skin_f``, per-pixel features (n, 3)) a cheek model's
+    three bands are: mean squared distance of their medians from the skin's, in twice the skin's
+    spread (band means vary less than pixels; shading is allowed for). ``inf`` without a cheek."""
+    if cheek is None or len(skin_f) < 8:
+        return math.inf
+    med = np.median(skin_f, axis=0)
+    spread = np.maximum(1.4826 * np.median(np.abs(skin_f - med), axis=0), 1.0)
+    z = (np.asarray(cheek[0], dtype=np.float64).reshape(3, 3) - med) / (2.0 * spread)
+    return float((z * z).mean())
+
+
 def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """Per column: mean squared distance of its features from the cheek's, in the cheek's spread."""
     z = (cols - cheek[0]) / cheek[1]
@@ -667,12 +683,24 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     lum = cv2.GaussianBlur(luminance(crop), (0, 0), max(0.015 * wi, 1.0))
     n_side = int(min(0.95 * wi, W - 2))
     x0 = int(round(cx))
-    sides = {}
+    traced = {}
     for name, step in (("left", -1), ("right", +1)):
         n = min(n_side, x0 if step < 0 else W - 1 - x0)
         ys = trace_line(lum, x0, y_line, step, max(n, 1))
         cols = line_columns(crop, x0, ys, step, a1, a2, skin_level)
-        cheek = cheek_model(cols, wi)
+        traced[name] = (ys, cols, step, cheek_model(cols, wi))
+    skin_f = profile_features(skin.astype(np.float32), skin_level)
+    fit = {name: cheek_skin_distance(t[3], skin_f) for name, t in traced.items()}
+    if _trace is not None:
+        _trace["cheek_skin"] = dict(fit)
+    for name, other in (("left", "right"), ("right", "left")):
+        # a side whose cheek columns are not skin (hair, a collar, the background beside a small or
+        # turned face) takes the other side's cheek when that one is skin
+        if fit[name] > CHEEK_SKIN >= fit[other]:
+            ys, cols, step, _ = traced[name]
+            traced[name] = (ys, cols, step, traced[other][3])
+    sides = {}
+    for name, (ys, cols, step, cheek) in traced.items():
         half = (corner_distance(unlike_cheek(cols, cheek), 0.2 * wi, 0.75 * wi, cheek_run(wi), mouth_body(wi))[0] + CORNER_BIAS
                 if cheek is not None else 0.4 * wi)
         sides[name] = (ys, cols, half, step, cheek)
