@@ -119,6 +119,8 @@ ADAPT_FLOOR = 0.5
 """Share of the calibration pictures that always stays in the pictures used."""
 ADAPT_MIN_SCORE = 0.6
 """Both eyes open and scoring at least this before a frame adapts the pictures."""
+GAIN_RATE = 0.15
+"""Weight of one confident frame in the light's gain (it follows a change of the light in ~half a second)."""
 GAIN_LIMITS = (0.5, 2.0)
 """Range of the light's per-channel gain against calibration."""
 GAIN_DEAD_ZONE = 0.03
@@ -1261,20 +1263,21 @@ class EyeFinder:
             return False
         self._adapt_count += 1
         phase = self._adapt_count % ADAPT_EVERY
-        if phase > 2:
+        # the light on every confident frame: auto exposure and a lamp change it within a second,
+        # and the lids are read from colours it moves; the pictures follow the face slowly
+        centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
+        g = self.measure_gain(crop_bgr, centres)
+        if g is not None:
+            gr = GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)
+            self._gain_slow = (1.0 - gr) * self._gain_slow + gr * g
+            # shading and expressions move it by several per cent; only a change of the light
+            # itself (beyond the dead zone) is applied
+            self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+        if phase > 1:
             return True
-        # every ADAPT_EVERY-th confident frame counts for all of them; the three updates (iris
-        # pictures, eye pictures, light) fall on different frames so no frame pays for all
+        # every ADAPT_EVERY-th confident frame counts for all of them; the two picture updates
+        # (iris, eye) fall on different frames so no frame pays for both
         rate = min((ADAPT_RATE if rate is None else float(rate)) * ADAPT_EVERY, 1.0)
-        if phase == 2:
-            centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
-            g = self.measure_gain(crop_bgr, centres)
-            if g is not None:
-                self._gain_slow = (1.0 - rate) * self._gain_slow + rate * g
-                # shading and expressions move it by several per cent; only a change of the
-                # light itself (beyond the dead zone) is applied
-                self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
-            return True
         pics, calib = (self._adapted_iris, self._calib_iris) if phase == 0 else (self._adapted_eye, self._calib_eye)
         grey = crop_grey if crop_grey.dtype in (np.uint8, np.float32) else np.asarray(crop_grey, dtype=np.float32)
         for i, e in enumerate(result.eyes):
