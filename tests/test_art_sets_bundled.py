@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from art_sets.authoring.face import BAND_U, BROW_U, FOLD_U, LID_U, LIP_INNER_U, LIP_OUTER_U
-from art_sets.authoring.ink import Surface, Textures
+from art_sets.authoring.ink import Surface, Textures, on_curve
 from art_sets.io import load_artset
 from art_sets.library import list_bundled
 from art_sets.validate import validate
@@ -219,6 +219,35 @@ def test_stroke_tapers_and_is_deterministic():
     col = lambda x: (ink[:, x - 10] > 128).sum()
     assert col(50) >= 5 and col(17) < col(50)
     assert imgs[0].shape == (40, 80, 4) and imgs[0][..., 3].min() == 255
+
+
+def _grainy(shift=(0.0, 0.0), ref=None, bend=0.0):
+    s = Surface((0, 0), (96, 64), Textures.make((128, 128), 3, seed=2, grain_contrast=1.0), grain_ref=ref)
+    pts = np.array([(16.0, 30.0), (48.0, 30.0 - bend), (80.0, 30.0)]) + shift
+    s.stroke(pts, 4.0, (0, 0, 0), grain=0.8, taper=(0, 0), tip=1.0)
+    return s
+
+
+def test_a_stroke_carries_the_grain_of_its_reference_stroke():
+    """With ``grain_ref`` a stroke drawn elsewhere (as in another drawing of a part) has the grain of the
+    reference stroke, moved with it; without, it takes the paper's grain at its own place."""
+    ref = _grainy()
+    moved, paper = _grainy((7.0, 5.0), ref.strokes), _grainy((7.0, 5.0))
+    a = ref.a[:-15, :-21]  # shifted back by (7, 5) design px = (21, 15) surface px
+    core = a > 0.05
+    assert np.corrcoef(a[core], moved.a[15:, 21:][core])[0, 1] > 0.99
+    assert abs(np.corrcoef(a[core], paper.a[15:, 21:][core])[0, 1]) < 0.5
+    np.testing.assert_array_equal(_grainy(ref=ref.strokes).a, ref.a)  # the reference itself keeps the paper's grain
+    bent = _grainy(ref=ref.strokes, bend=6.0)  # a stroke of another shape: grain carried along it, no holes
+    assert bent.a.max() > 0.5 and len(bent.strokes) == 1
+
+
+def test_on_curve_places_points_in_the_curves_frame():
+    flat = np.array([(0.0, 10.0), (40.0, 10.0)])
+    np.testing.assert_allclose(on_curve(flat, [0.25, 0.5], [3.0, 0.0], [0.0, 2.0]), [(10.0, 7.0), (22.0, 10.0)])
+    arc = np.stack([np.cos(np.linspace(np.pi, 0, 200)) * 20, -np.sin(np.linspace(np.pi, 0, 200)) * 20], 1)  # over the top, left to right
+    p = on_curve(arc, [0.0, 0.5, 1.0], 5.0)  # up = away from the centre of this arc
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 1]), 25.0, atol=0.1)
 
 
 def test_punch_makes_feathered_holes():

@@ -40,7 +40,7 @@ def weights5(draw):
 @pytest.fixture(scope="module")
 def one_layer_pair(artset):
     part = artset.mouth
-    return PartMorpher([d.image for d in part.drawings], [d.lines for d in part.drawings], alpha_steps=6), \
+    return PartMorpher([d.image for d in part.drawings], [d.lines for d in part.drawings], alpha_steps=6, cross_terms=True), \
         LayeredMorpher(_one_layer(part), alpha_steps=6)
 
 
@@ -113,7 +113,7 @@ def _layer_by_layer(drawings, alpha_steps):
         lines = [d.layer_lines(k) for d in drawings]
         static = all(np.array_equal(im, images[0]) for im in images[1:]) and \
             all(np.array_equal(l, lines[0]) for l in lines[1:])
-        morphers.append(premultiply(images[0]) if static else PartMorpher(images, lines, alpha_steps=alpha_steps))
+        morphers.append(premultiply(images[0]) if static else PartMorpher(images, lines, alpha_steps=alpha_steps, cross_terms=True))
 
     def render(idx, w, jitter=None):
         layers = [m if isinstance(m, np.ndarray) else m.render(idx, w, jitter=jitter) for m in morphers]

@@ -200,6 +200,41 @@ def test_exact_three_way_option_matches_the_exact_field(mouths):
     assert np.abs(m.render((0, 1, 2), w).astype(np.float32) - exact).mean() < 0.5
 
 
+@pytest.fixture(scope="module")
+def cross_morpher(mouths):
+    return PartMorpher(*mouths, cross_terms=True)
+
+
+def test_cross_terms_bring_three_way_meshes_close_to_the_exact_field(morpher, cross_morpher, mouths):
+    _, lines = mouths
+    for idx, w in (((0, 1, 2), (0.5, 0.3, 0.2)), ((1, 3, 2), (0.2, 0.4, 0.4)), ((3, 0, 1), (0.1, 0.45, 0.45))):
+        target = sum(wi * lines[i] for i, wi in zip(idx, w))
+        for (ia, _, plain), (ib, _, cross) in zip(morpher.meshes(idx, w), cross_morpher.meshes(idx, w)):
+            assert ia == ib
+            ex, ey = bn.field_map(target, lines[ia], morpher.size)
+            errs = [np.hypot(mx - ex, my - ey) for mx, my in (morpher.grid.upsample(m) for m in (plain, cross))]
+            assert errs[1].mean() < 0.5 * errs[0].mean()
+            assert np.percentile(errs[1], 99) < np.percentile(errs[0], 99)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.permutations(range(4)), st.lists(st.floats(0.05, 1.0), min_size=2, max_size=2))
+def test_cross_terms_leave_one_and_two_drawing_frames_as_they_were(morpher, cross_morpher, order, raw):
+    idx = tuple(order[:2])
+    np.testing.assert_array_equal(cross_morpher.render(idx, raw), morpher.render(idx, raw))
+    np.testing.assert_array_equal(cross_morpher.render(idx[:1], raw[:1]), morpher.render(idx[:1], raw[:1]))
+    np.testing.assert_array_equal(cross_morpher.tables, morpher.tables)
+
+
+def test_cross_terms_are_zero_where_one_of_the_pair_has_no_weight(cross_morpher):
+    """A three-way frame with a vanishing weight tends to the two-way frame (the term grows as w_B·w_C)."""
+    near = cross_morpher.meshes((0, 1, 2), (0.6, 0.4 - 1e-7, 1e-7))
+    two = cross_morpher.meshes((0, 1), (0.6, 0.4))
+    for (ia, _, a), (ib, _, b) in zip(near, two):
+        assert ia == ib
+        np.testing.assert_allclose(a, b, atol=1e-3)
+
+
 def test_parts_without_control_lines_cross_dissolve(mouths):
     imgs, _ = mouths
     m = PartMorpher(imgs[:2], [np.zeros((0, 4)), np.zeros((0, 4))], alpha_steps=3)

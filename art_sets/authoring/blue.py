@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from art_sets.authoring.face import DEFAULT_EYES, Character, EyeGeom, EyePose, MouthGeom, closed, head_outline
-from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, point_at, sub_curve
+from art_sets.authoring.ink import Surface, bez, ellipse, hex_rgb, on_curve, point_at, sub_curve
 
 PAPER = hex_rgb("#f6f0e1")
 BLUE = hex_rgb("#1f3d8f")
@@ -99,16 +99,21 @@ class Blue(Character):
             s.stroke([point_at(edge0, u), point_at(edge, u)], 0.9, BLUE, rng=rng, grain=0.6, opacity=0.5, taper=(0, 0.5))
         self.pen(s, g.inner_dn, 2.8, rng, taper=(0.08, 0.08))
         self.pen(s, sub_curve(g.outer_dn, 0.32, 0.68), 1.5, rng, passes=1, opacity=0.7)
-        for u in np.linspace(0.3, 0.7, 14):  # hatched lower lip: strokes placed along the lip, so they line up under the morph
-            p = point_at(g.outer_dn, u)
-            s.stroke([p + (0.02 * sc, -0.12 * sc), p + (-0.01 * sc, 0.0)], 1.0, LIGHT, rng=rng, opacity=0.5, grain=0.7, taper=(0, 0))
+        # hatched lower lip: strokes placed along the lip and standing across it (``on_curve``), where
+        # they keep their place among the lip's control lines in every mouth, so they line up under the morph
+        for u in np.linspace(0.3, 0.7, 14):
+            a, b = on_curve(g.outer_dn, [u, u], [0.12 * sc, 0.0], [0.02 * sc, -0.01 * sc])
+            s.stroke([a, b], 1.0, LIGHT, rng=rng, opacity=0.5, grain=0.7, taper=(0, 0))
 
     def draw_upper_lip(self, s: Surface, g: MouthGeom, rng) -> None:
         sc = g.scale
         self.pen(s, g.inner_up, 3.4, rng, taper=(0.08, 0.08))
-        for end, sgn in ((g.left, -1), (g.right, 1)):  # corner creases (the same shape in every mouth, so they line up)
+        # corner creases: the same shape in every mouth, so they line up, and drawn like every other line
+        # (a light pass under a firm one): a lone faint hairline turns grey and twice as wide wherever
+        # the morph puts it between pixels
+        for end, sgn in ((g.left, -1), (g.right, 1)):
             self.pen(s, bez(end + (sgn * 0.02 * sc, 0.1 * sc), end + (sgn * 0.13 * sc, 0),
-                            end + (sgn * 0.07 * sc, -0.1 * sc)), 1.6, rng, passes=1)
+                            end + (sgn * 0.07 * sc, -0.1 * sc)), 1.6, rng)
 
     # --- body ----------------------------------------------------------------------------------
     def draw_body(self, s: Surface, rng) -> None:

@@ -382,12 +382,15 @@ class Character:
     def mouth(self, pose: MouthPose) -> MouthGeom:
         return mouth_geom(self.mouth_center, self.mouth_scale, pose)
 
-    def _surface(self, box, tex, background=None, wobble_ref: float | None = None) -> Surface:
-        return Surface(box[:2], box[2:], tex, background=background, place=self.place, wobble_ref=wobble_ref)
+    def _surface(self, box, tex, background=None, wobble_ref: float | None = None, grain_ref: list | None = None) -> Surface:
+        return Surface(box[:2], box[2:], tex, background=background, place=self.place, wobble_ref=wobble_ref,
+                       grain_ref=grain_ref)
 
-    def _part_surface(self, box, tex, background=None) -> Surface:
-        """A surface for one layer of a part drawing: strokes wobble by their share of their length."""
-        return self._surface(box, tex, background, wobble_ref=box[2] / self.scale / 2)
+    def _part_surface(self, box, tex, background=None, grain_ref: list | None = None) -> Surface:
+        """A surface for one layer of a part drawing: strokes wobble by their share of their length,
+        and with ``grain_ref`` (the first drawing's :attr:`Surface.strokes` of this layer) carry that
+        drawing's pencil grain."""
+        return self._surface(box, tex, background, wobble_ref=box[2] / self.scale / 2, grain_ref=grain_ref)
 
     def _to_box(self, lines, box) -> np.ndarray:
         """Design-space lines in pixels of the part drawing at canvas ``box``."""
@@ -447,25 +450,34 @@ class Character:
         geoms = {name: self.mouth(pose) for name, pose in self.mouths.items()}
         bottom = self.mouth_box[1] + self.mouth_box[3] + 10
         drawings = []
+        # the first mouth's strokes per layer: every mouth's pencil grain follows them (``Surface``'s
+        # ``grain_ref``). Lips travel far between mouths, so paper grain under them would differ. The eyes
+        # keep the paper's grain: their lines move less, and there carrying it measured no cleaner.
+        ref: dict[str, list] = {}
         for dname, pose in self.mouths.items():
             g = geoms[dname]
-            low = self._part_surface(box, tex)
+            low = self._part_surface(box, tex, grain_ref=ref.get("lower-lip"))
             # the lower skin runs out to the sides and the bottom of the box, under the upper layer's
             # skin: the corners move a lot between mouths, the two layers follow them a little
             # differently, and that must never open a gap onto the dark inside
             x0, x1 = self.mouth_box[0] - 10, self.mouth_box[0] + self.mouth_box[2] + 10
             low.fill(np.concatenate([g.inner_dn, [(x1, g.right[1]), (x1, bottom), (x0, bottom), (x0, g.left[1])]]), skin)
             self.draw_lower_lip(low, g, self._rng(2, 1))
-            up = self._part_surface(box, tex, skin)
+            up = self._part_surface(box, tex, skin, grain_ref=ref.get("upper-lip"))
             up.punch(up.mask(np.concatenate([g.inner_up, [(g.right[0], bottom), (g.left[0], bottom)]])))
             self.draw_upper_lip(up, g, self._rng(2, 2))
+            for name, srf in (("lower-lip", low), ("upper-lip", up)):
+                if len(ref.setdefault(name, srf.strokes)) != len(srf.strokes):
+                    raise ValueError(f"{self.slug}: mouth {dname!r} draws {len(srf.strokes)} strokes on its {name}, "
+                                     f"mouth {next(iter(self.mouths))!r} {len(ref[name])}: their grain cannot follow each other")
             layers = [inside,
                       Layer("lower-lip", low.to_rgba(), self._to_box(g.lower_lines(self.lip_band, self.teeth_top), box),
                             f"mouth/{dname}/lower-lip.png"),
                       Layer("upper-lip", up.to_rgba(), None, f"mouth/{dname}/upper-lip.png")]
             if self.tusks > 0:
-                ts = self._part_surface(box, tex)
+                ts = self._part_surface(box, tex, grain_ref=ref.get("tusks"))
                 self.draw_tusks(ts, g, self._rng(2, 3))
+                ref.setdefault("tusks", ts.strokes)
                 held = np.concatenate([chords(g.inner_dn, LIP_INNER_U), chords(g.inner_dn - (0, self.tusks * g.scale), LIP_BAND_U)])
                 layers.append(Layer("tusks", ts.to_rgba(), self._to_box(held, box), f"mouth/{dname}/tusks.png"))
             drawings.append(Drawing.from_layers(dname, layers, self._to_box(g.upper_lines(self.lip_band), box)))

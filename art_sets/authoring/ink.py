@@ -100,13 +100,24 @@ class Surface:
     """A supersampled RGBA painting surface covering ``size`` canvas pixels at ``origin``."""
 
     def __init__(self, origin: tuple[int, int], size: tuple[int, int], textures: Textures,
-                 background: Color | None = None, place: Placement = Placement(), wobble_ref: float | None = None):
+                 background: Color | None = None, place: Placement = Placement(), wobble_ref: float | None = None,
+                 grain_ref: list | None = None):
         """``origin`` and ``size`` in canvas pixels; drawing calls in design coordinates (``place``).
 
         ``wobble_ref`` (design px): when set, every stroke's wobble has ``wobble_ref / wobble_len``
         waves whatever its length, so the same stroke drawn longer or shorter in another drawing
-        of a part wobbles alike and lines up under the morph."""
+        of a part wobbles alike and lines up under the morph.
+
+        ``grain_ref``: the :attr:`strokes` of the same layer of another drawing of the part (made by
+        the same drawing calls in the same order). Stroke *i* then takes its pencil grain from where
+        stroke *i* of that drawing lies on the paper, carried along in the stroke's own frame (the
+        fraction of its length, the distance across it), instead of from the paper under it: the
+        grain moves with the stroke, as the morph moves the stroke, so the same stroke of two
+        drawings lands on itself grain for grain, where paper grain would give two different grains
+        that blend to a grey smear. The drawing the reference comes from keeps the paper's grain."""
         self.wobble_ref = wobble_ref
+        self.grain_ref = grain_ref
+        self.strokes: list[tuple[np.ndarray, np.ndarray]] = []  # per stroke: centre line and arc length, grain pixels
         self.ox, self.oy = origin
         self.w, self.h = size
         self.tex = textures
@@ -158,14 +169,15 @@ class Surface:
         return out
 
     def paint(self, m: np.ndarray, color: Color, opacity: float = 1.0, bb=None,
-              grain: float = 0.0, clip: np.ndarray | None = None) -> None:
-        """Lay ``color`` through mask ``m`` (whole surface, or the region ``bb``)."""
+              grain: float = 0.0, clip: np.ndarray | None = None, grain_map: np.ndarray | None = None) -> None:
+        """Lay ``color`` through mask ``m`` (whole surface, or the region ``bb``); ``grain_map``
+        (the region's size) replaces the paper's grain there."""
         if bb is None:
             bb = (0, 0, self.W, self.H)
         x0, y0, x1, y1 = bb
         k = m * opacity
         if grain > 0:
-            k = k * (1 - grain + grain * self._grain(bb))
+            k = k * (1 - grain + grain * (self._grain(bb) if grain_map is None else grain_map))
         if clip is not None:
             k = k * clip[y0:y1, x0:x1]
         k = k[..., None] if k.ndim == 2 else k
@@ -175,6 +187,48 @@ class Surface:
         a = self.a[y0:y1, x0:x1]
         a *= 1 - k[..., 0]
         a += k[..., 0]
+
+    def _stroke_grain(self, q: np.ndarray, bb, m: np.ndarray, grain: float) -> np.ndarray | None:
+        """Record a stroke's centre line ``q`` (surface px, relative to ``bb``) and, with a
+        ``grain_ref``, return its grain over ``bb`` carried from the reference stroke (None: the paper's)."""
+        x0, y0 = bb[0], bb[1]
+        here = resample(np.asarray(q, np.float64) + (x0 + self.ox * self.ss, y0 + self.oy * self.ss), 1.5)  # grain-texture pixels
+        s = np.concatenate([[0], np.cumsum(np.hypot(*np.diff(here, axis=0).T))]) if len(here) > 1 else np.zeros(1)
+        k = len(self.strokes)
+        self.strokes.append((here, s))
+        g = self.tex.grain
+        if grain <= 0 or g.size == 1 or self.grain_ref is None or k >= len(self.grain_ref) or len(here) < 2 or s[-1] <= 0:
+            return None
+        ref, rs = self.grain_ref[k]
+        if len(ref) < 2 or rs[-1] <= 0:
+            return None
+        ys, xs = np.nonzero(m > 0)
+        if len(ys) == 0:
+            return None
+        pix = np.stack([xs, ys], 1).astype(np.float64) + (x0 + self.ox * self.ss, y0 + self.oy * self.ss)
+        tan, ref_tan = _tangents(here), _tangents(ref)
+        nearest = np.empty(len(pix), np.int64)
+        for i in range(0, len(pix), 4096):
+            d = pix[i:i + 4096, None, :] - here[None]
+            nearest[i:i + 4096] = np.argmin((d ** 2).sum(-1), axis=1)
+        rel = pix - here[nearest]
+        t = tan[nearest]
+        along = (rel * t).sum(1)
+        across = rel[:, 0] * -t[:, 1] + rel[:, 1] * t[:, 0]
+        si = s[nearest] / s[-1] * rs[-1]
+        rp = np.stack([np.interp(si, rs, ref[:, 0]), np.interp(si, rs, ref[:, 1])], 1)
+        rt = np.stack([np.interp(si, rs, ref_tan[:, 0]), np.interp(si, rs, ref_tan[:, 1])], 1)
+        rt /= np.maximum(np.hypot(rt[:, 0], rt[:, 1]), 1e-9)[:, None]
+        src = rp + rt * along[:, None] + np.stack([-rt[:, 1], rt[:, 0]], 1) * across[:, None]
+        H, W = g.shape
+        sx, sy = np.clip(src[:, 0], 0, W - 1.001), np.clip(src[:, 1], 0, H - 1.001)
+        ix, iy = sx.astype(np.int64), sy.astype(np.int64)
+        fx, fy = sx - ix, sy - iy
+        val = (g[iy, ix] * (1 - fx) * (1 - fy) + g[iy, ix + 1] * fx * (1 - fy)
+               + g[iy + 1, ix] * (1 - fx) * fy + g[iy + 1, ix + 1] * fx * fy)
+        out = np.ones(m.shape, np.float32)
+        out[ys, xs] = val
+        return out
 
     # --- primitives --------------------------------------------------------------------------
     def fill(self, poly, color: Color, opacity: float = 1.0, blur: float = 0.0,
@@ -257,7 +311,8 @@ class Surface:
             d.ellipse([q[i, 0] - r, q[i, 1] - r, q[i, 0] + r, q[i, 1] + r], fill=255)
         if blur > 0:
             m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
-        self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
+        m = np.asarray(m, np.float32) / 255.0
+        self.paint(m, color, opacity, bb, grain, clip, self._stroke_grain(q, bb, m, grain))
 
     def hatch(self, region, angle: float, spacing: float, width: float, color: Color, rng: np.random.Generator,
               opacity: float = 0.7, grain: float = 0.0, clip_blur: float = 0.0, **kw) -> None:
@@ -293,7 +348,8 @@ class Surface:
             d.ellipse([v[0] - r, v[1] - r, v[0] + r, v[1] + r], fill=255)
         if blur > 0:
             m = m.filter(ImageFilter.GaussianBlur(blur * self.k))
-        self.paint(np.asarray(m, np.float32) / 255.0, color, opacity, bb, grain, clip)
+        m = np.asarray(m, np.float32) / 255.0
+        self.paint(m, color, opacity, bb, grain, clip, self._stroke_grain(q, bb, m, grain))
 
     def dot(self, c, r: float, color: Color, opacity: float = 1.0, blur: float = 0.0,
             clip: np.ndarray | None = None) -> None:
@@ -327,6 +383,11 @@ class Surface:
 
 
 # --- geometry helpers ------------------------------------------------------------------------
+def _tangents(p: np.ndarray) -> np.ndarray:
+    t = np.gradient(p, axis=0)
+    return t / np.maximum(np.hypot(t[:, 0], t[:, 1]), 1e-9)[:, None]
+
+
 def _smooth(x: np.ndarray) -> np.ndarray:
     return x * x * (3 - 2 * x)
 
@@ -367,6 +428,30 @@ def point_at(curve: np.ndarray, u: float) -> np.ndarray:
     s = np.concatenate([[0], np.cumsum(seg)])
     si = u * s[-1]
     return np.array([np.interp(si, s, curve[:, 0]), np.interp(si, s, curve[:, 1])])
+
+
+def on_curve(curve: np.ndarray, u, up=0.0, along=0.0) -> np.ndarray:
+    """Points ``(len(u), 2)`` placed in a curve's own frame: at arc-length fractions ``u``, moved
+    ``up`` px along its normal (to the left of travel in y-down: up for a curve running left to
+    right) and ``along`` px along its tangent (scalars or one per point).
+
+    A Beier–Neely warp keeps a pixel's place in the frame of the control lines along a curve (its
+    fraction along them, its distance from them in pixels), so a feature drawn in this frame lands
+    on itself when drawings whose curves bend and stretch differently are morphed into each other;
+    one drawn at fixed canvas offsets from the curve (a vertical shift, a fixed width) does not."""
+    u = np.atleast_1d(np.asarray(u, np.float64))
+    seg = np.hypot(*np.diff(curve, axis=0).T)
+    s = np.concatenate([[0], np.cumsum(seg)])
+    si = np.clip(u, 0, 1) * s[-1]
+    p = np.stack([np.interp(si, s, curve[:, 0]), np.interp(si, s, curve[:, 1])], 1)
+    tv = np.gradient(curve, axis=0)
+    tv /= np.maximum(np.hypot(tv[:, 0], tv[:, 1]), 1e-9)[:, None]
+    t = np.stack([np.interp(si, s, tv[:, 0]), np.interp(si, s, tv[:, 1])], 1)
+    t /= np.maximum(np.hypot(t[:, 0], t[:, 1]), 1e-9)[:, None]
+    n = np.stack([t[:, 1], -t[:, 0]], 1)
+    up = np.broadcast_to(np.asarray(up, np.float64), u.shape)[:, None]
+    along = np.broadcast_to(np.asarray(along, np.float64), u.shape)[:, None]
+    return p + n * up + t * along
 
 
 def sub_curve(curve: np.ndarray, u0: float, u1: float, n: int = 40) -> np.ndarray:
