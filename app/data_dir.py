@@ -192,7 +192,8 @@ def _same_tree(a: Path, b: Path) -> bool:
     if not (a.is_dir() and b.is_dir()):
         return False
     cmp = filecmp.dircmp(a, b)
-    if cmp.left_only or cmp.right_only or cmp.funny_files:
+    # common_funny: a name that is a file on one side and a folder on the other
+    if cmp.left_only or cmp.right_only or cmp.funny_files or cmp.common_funny:
         return False
     if filecmp.cmpfiles(a, b, cmp.common_files, shallow=False)[1:] != ([], []):
         return False

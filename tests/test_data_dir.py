@@ -12,7 +12,7 @@ import types
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from app import data_dir as dd
@@ -254,6 +254,7 @@ def _make(root: Path, tree) -> None:
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.dictionaries(names, trees, max_size=4), st.dictionaries(names, trees, max_size=4))
+@example({"noodle": {"ann": ""}}, {"noodle": {"ann": {}}})  # a file where the new folder has a folder of that name
 def test_any_two_trees_merge_without_losing_or_changing_a_file(tmp_path_factory, old_tree, new_tree):
     base = tmp_path_factory.mktemp("merge")
     old, root = base / "old", base / "new"
