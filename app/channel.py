@@ -20,8 +20,11 @@ polls; it never waits on an answer.
 
 from __future__ import annotations
 
+import base64
+import dataclasses
+import importlib
+import json
 import os
-import pickle
 import shutil
 import socket
 import struct
@@ -39,12 +42,85 @@ class ChannelClosed(OSError):
     """The other end has gone (the engine or the window exited)."""
 
 
-class Channel:
-    """Length-prefixed pickled messages over a non-blocking stream socket (see the module doc).
+_OURS = ("app.", "tracker.", "training.", "art_sets.", "morph.")
+"""Packages whose dataclasses may cross the channel (a message names its class; nothing else is built)."""
 
-    Pickle is only the wire format between the window and the engine process it spawned itself
-    (as multiprocessing's own pipes use it); nothing pickled is written to a file or read from
-    anywhere else — files are JSON and PNG."""
+
+def _enc(o: Any) -> Any:
+    """A message as plain JSON values: tuples, dicts with any keys, numpy arrays and scalars,
+    bytes, paths and this project's dataclasses are tagged so :func:`_dec` restores them."""
+    if o is None or isinstance(o, (bool, int, float, str)):
+        return o
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, list):
+        return [_enc(v) for v in o]
+    if isinstance(o, tuple):
+        return {"t": [_enc(v) for v in o]}
+    if isinstance(o, dict):
+        return {"d": [[_enc(k), _enc(v)] for k, v in o.items()]}
+    if isinstance(o, np.ndarray):
+        a = np.ascontiguousarray(o)
+        return {"a": [a.dtype.str, list(a.shape), base64.b64encode(a.tobytes()).decode("ascii")]}
+    if isinstance(o, (bytes, bytearray)):
+        return {"b": base64.b64encode(bytes(o)).decode("ascii")}
+    if isinstance(o, os.PathLike):
+        return {"p": os.fspath(o)}
+    cls = type(o)
+    if dataclasses.is_dataclass(o) and cls.__module__.startswith(_OURS):
+        return {"c": f"{cls.__module__}:{cls.__qualname__}",
+                "f": {f.name: _enc(getattr(o, f.name)) for f in dataclasses.fields(o) if f.init}}
+    raise TypeError(f"a {cls.__module__}.{cls.__qualname__} cannot go over the window-engine channel")
+
+
+def _dec(o: Any) -> Any:
+    """Inverse of :func:`_enc`."""
+    if isinstance(o, list):
+        return [_dec(v) for v in o]
+    if not isinstance(o, dict):
+        return o
+    if "c" in o:
+        return _dataclass(o)
+    (tag, v), = o.items()
+    if tag == "t":
+        return tuple(_dec(x) for x in v)
+    if tag == "d":
+        return {_dec(k): _dec(x) for k, x in v}
+    if tag == "a":
+        dtype, shape, data = v
+        return np.frombuffer(base64.b64decode(data), dtype=np.dtype(dtype)).reshape(shape).copy()
+    if tag == "b":
+        return base64.b64decode(v)
+    if tag == "p":
+        return Path(v)
+    raise ValueError(f"the channel carries no {tag!r}")
+
+
+def _dataclass(o: dict) -> Any:
+    """One of this project's dataclasses from its tagged fields (see :func:`_enc`)."""
+    module, _, name = o["c"].partition(":")
+    if not module.startswith(_OURS):
+        raise ValueError(f"the channel carries no {o['c']}")
+    cls = importlib.import_module(module)
+    for part in name.split("."):
+        cls = getattr(cls, part)
+    if not dataclasses.is_dataclass(cls):
+        raise ValueError(f"the channel carries no {o['c']}")
+    return cls(**{k: _dec(x) for k, x in o["f"].items()})
+
+
+def encode_message(msg: Any) -> bytes:
+    """One message's bytes on the channel (JSON, see :func:`_enc`)."""
+    return json.dumps(_enc(msg), separators=(",", ":")).encode("utf-8")
+
+
+def decode_message(data: bytes) -> Any:
+    """The message :func:`encode_message` wrote."""
+    return _dec(json.loads(data))
+
+
+class Channel:
+    """Length-prefixed JSON messages over a non-blocking stream socket (see the module doc)."""
 
     def __init__(self, sock: socket.socket):
         sock.setblocking(False)
@@ -78,7 +154,7 @@ class Channel:
                 if not self._pending:
                     return True
                 _, msg = self._pending.popleft()
-                data = pickle.dumps(msg, protocol=pickle.HIGHEST_PROTOCOL)
+                data = encode_message(msg)
                 self._out += _HEADER.pack(len(data))
                 self._out += data
             try:
@@ -113,7 +189,7 @@ class Channel:
             if len(buf) - pos - _HEADER.size < n:
                 break
             start = pos + _HEADER.size
-            out.append(pickle.loads(bytes(buf[start:start + n])))
+            out.append(decode_message(bytes(buf[start:start + n])))
             pos = start + n
         if pos:
             del buf[:pos]

@@ -308,3 +308,29 @@ def test_the_engine_starts_with_two_heap_arenas_unless_the_user_says_otherwise(m
     with workers._engine_environment():
         assert os.environ["MALLOC_ARENA_MAX"] == "8"
     assert os.environ["MALLOC_ARENA_MAX"] == "8"
+
+
+def test_messages_travel_as_json_and_come_back_whole():
+    """The wire format is JSON (no pickle): tuples, dicts with tuple keys, arrays, bytes, paths and
+    the project's dataclasses come back equal; a class from elsewhere is refused, both ways."""
+    import json
+    from pathlib import Path
+
+    import numpy as np
+    import pytest as _pytest
+
+    from app.channel import decode_message, encode_message
+    from app.workers import SourceSpec
+    from tracker.params import FaceParams
+
+    msg = ("frame", {("recording", 2): (1, None), "p": FaceParams(frame=3, mid_x=1.5)},
+           np.arange(6, dtype=np.float32).reshape(2, 3), b"\x00\xff", Path("/a/b"), SourceSpec(kind="video", video="x.mp4"))
+    data = encode_message(msg)
+    json.loads(data)  # plain JSON
+    back = decode_message(data)
+    assert back[0] == "frame" and back[1] == msg[1] and back[3:] == msg[3:]
+    assert back[2].dtype == np.float32 and np.array_equal(back[2], msg[2])
+    with _pytest.raises(TypeError):
+        encode_message(object())
+    with _pytest.raises(ValueError):
+        decode_message(b'{"c": "os:system", "f": {}}')
