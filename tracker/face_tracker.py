@@ -299,10 +299,10 @@ class FaceTracker:
     def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
         """A mouth of about the calibrated size, corners level, near where the head puts it."""
         w = self.cal.mouth_width
-        rise = m.level_rise if hasattr(m, "level_rise") else m.left[1] - m.right[1]
+        rise = m.level_rise
         if not (0.4 * w <= m.width <= 1.9 * w and abs(rise) < 0.35 * m.width):
             return False
-        c = m.line_centre if hasattr(m, "line_centre") else m.centre  # where calibration put it
+        c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]
         dy = c[1] + origin[1] - predicted[1]
         return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
@@ -481,7 +481,7 @@ class FaceTracker:
             ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
             ov.mouth_cue = mouth_res.cue
             # the jaw from the centre on the mouth line, where calibration measured the rigid place
-            lc = mouth_res.line_centre if hasattr(mouth_res, "line_centre") else mouth_res.centre
+            lc = mouth_res.line_centre
             at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
             self.jaw = np.minimum(np.maximum(at - rigid_mouth, -self._jaw_max), self._jaw_max)
         else:

@@ -138,7 +138,7 @@ SKIN_BIN_COUNT = 3
 """Pixels of one colour bin on the skin round the calibration's mouth that make it a skin colour."""
 
 
-def skin_bins(crop: np.ndarray, outline: np.ndarray, centre: tuple[float, float], wi: float) -> np.ndarray:
+def skin_colour_bins(crop: np.ndarray, outline: np.ndarray, centre: tuple[float, float], wi: float) -> np.ndarray:
     """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
     crop: an ellipse 0.75 × 0.6 wi about the mouth centre (the face, not the background or hair at
     the crop's sides), outside the mouth outline grown by 0.1 wi; bins with at least
@@ -788,5 +788,5 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         classes=classes,
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
-        cue=cue, crop_median=crop_median, skin_bins=skin_bins(crop, outline, centre, wi),
+        cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(crop, outline, centre, wi),
     )
