@@ -16,6 +16,7 @@ import io as _io
 import json
 import math
 import os
+import reprlib
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -193,7 +194,7 @@ class _Scan:
             self.add(self.manifest_file, f"missing key(s): {', '.join(missing)}")
             return None
         if data["format"] not in READ_FORMATS or isinstance(data["format"], bool) or not isinstance(data["format"], int):
-            self.add(self.manifest_file, f"format {data['format']!r} is not supported (this version reads formats "
+            self.add(self.manifest_file, f"format {reprlib.repr(data['format'])} is not supported (this version reads formats "
                                          f"{', '.join(map(str, READ_FORMATS))})")
             return None
         self.format = int(data["format"])

@@ -450,3 +450,20 @@ def test_sheet_of_a_set_whose_lines_do_not_correspond(tiny, tmp_path):
     assert out.exists()
     r = run_cli("check", str(tiny))
     assert r.returncode == 1 and "control lines" in r.stdout
+
+
+def test_an_absurd_format_value_is_named_briefly(tmp_path):
+    """A manifest whose ``format`` is a huge value (a fuzzer's, a broken writer's) gets a one-line
+    error of sensible length that still names the file."""
+    import json as _json
+
+    import pytest as _pytest
+
+    from art_sets.io import ArtSetError, load_artset
+
+    (tmp_path / "artset.json").write_text(_json.dumps(
+        {"format": ["9" * 5000], "name": "x", "canvas": [64, 64], "heads": [], "parts": {}}))
+    with _pytest.raises(ArtSetError) as e:
+        load_artset(tmp_path)
+    msg = str(e.value)
+    assert "artset.json" in msg and "format" in msg and len(msg) < 300 and "\n" not in msg
