@@ -1,0 +1,233 @@
+"""Harder copies of the real clips: what other cameras, rooms and people do to the same faces.
+
+The nine shared clips are well lit, sharp, 480–512 px and mostly still. The clips the tracker is
+judged on are not all like that, so this makes variants of each clip with the peer's points moved
+along with the pixels, in the same layout as ``../shared/real/`` (``NAME.mp4``, ``.clicks.json``,
+``.mp.csv``, ``.points.csv``), ready for ``python -m benchmarks.realfaces --dir OUT/VARIANT``:
+
+======== ==================================================================================
+half     half the resolution (a 256 px face crop: a cheap webcam, a face far away)
+small    the clip at 0.45× inside a 640×480 frame, drifting slowly (a small face in a room)
+shake    shifted and turned every frame (a hand-held phone, a fast-moving head)
+noisy    sensor noise σ 8 and JPEG quality 40 (a dark room's gain, a streaming codec)
+dim      the light falls to half over the clip, turning warm (auto-exposure, a lamp)
+pale     colour halved (pale or low-contrast lips, a washed-out camera)
+blur     out of focus (Gaussian σ 1.6 px)
+mirror   flipped left to right (every left/right rule must hold both ways)
+======== ==================================================================================
+
+``python -m benchmarks.stress_clips --out out/stress [--variants half,noisy]`` writes them (a few
+seconds a variant). Nothing here is committed data: the variants are made from the shared clips.
+The peer's parameters of a variant are recomputed from its moved points with the definitions of
+the shared folder's README, so they agree with the points exactly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Callable, Sequence
+
+import cv2
+import numpy as np
+
+from benchmarks.realfaces import clip_names, real_dir
+from tracker.params import PARAM_NAMES
+
+POINTS = (
+    "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
+    "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
+)
+VARIANTS = ("half", "small", "shake", "noisy", "dim", "pale", "blur", "mirror")
+
+
+def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple[list[np.ndarray], tuple[int, int]]:
+    """Per-frame 2×3 maps (source px → output px) and the output size (w, h) of a geometric variant."""
+    w, h = size
+    rng = np.random.default_rng(seed)
+    eye = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    if kind == "half":
+        s = 0.5
+        m = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5]])
+        return [m] * n, (int(round(w * s)), int(round(h * s)))
+    if kind == "mirror":
+        return [np.array([[-1.0, 0.0, w - 1.0], [0.0, 1.0, 0.0]])] * n, (w, h)
+    if kind == "small":
+        s, W, H = 0.45, 640, 480
+        t = np.arange(n) / 25.0
+        ox = 0.5 * (W - s * w) + 0.25 * (W - s * w) * np.sin(2 * math.pi * t / 9.0 + rng.uniform(0, 6.28))
+        oy = 0.5 * (H - s * h) + 0.2 * (H - s * h) * np.sin(2 * math.pi * t / 7.0 + rng.uniform(0, 6.28))
+        return [np.array([[s, 0.0, ox[i]], [0.0, s, oy[i]]]) for i in range(n)], (W, H)
+    if kind == "shake":
+        # a hand-held camera: a smooth random wander of ±30 px and ±8° with quick jolts
+        def wander(amp: float) -> np.ndarray:
+            k = np.cumsum(rng.normal(0.0, 1.0, n + 30))
+            k = np.convolve(k, np.ones(9) / 9.0, mode="same")[15 : 15 + n]
+            k -= k.mean()
+            return amp * k / max(np.abs(k).max(), 1e-6)
+
+        dx, dy, da = wander(30.0), wander(24.0), wander(8.0)
+        out = []
+        for i in range(n):
+            m = cv2.getRotationMatrix2D((0.5 * w, 0.5 * h), float(da[i]), 1.0)
+            m[:, 2] += (dx[i], dy[i])
+            out.append(m)
+        return out, (w, h)
+    return [eye] * n, (w, h)
+
+
+def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:
+    """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``."""
+    rng = np.random.default_rng(seed)
+    if kind == "noisy":
+        def noisy(img: np.ndarray, i: int) -> np.ndarray:
+            noise = rng.normal(0.0, 8.0, img.shape)
+            out = np.clip(img.astype(np.float32) + noise, 0, 255).astype(np.uint8)
+            ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, 40])
+            return cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        return noisy
+    if kind == "dim":
+        def dim(img: np.ndarray, i: int) -> np.ndarray:
+            t = i / max(n - 1, 1)
+            gain = np.array([1.0 - 0.6 * t, 1.0 - 0.5 * t, 1.0 - 0.4 * t], np.float32)  # B, G, R: warmer
+            return np.clip(img.astype(np.float32) * gain, 0, 255).astype(np.uint8)
+        return dim
+    if kind == "pale":
+        def pale(img: np.ndarray, i: int) -> np.ndarray:
+            grey = cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+            return cv2.addWeighted(img, 0.5, grey, 0.5, 0.0)
+        return pale
+    if kind == "blur":
+        return lambda img, i: cv2.GaussianBlur(img, (0, 0), 1.6)
+    return lambda img, i: img
+
+
+def peer_params(points: dict[str, np.ndarray]) -> np.ndarray:
+    """The ten parameters and the IPD, (n, 11), from the peer's points, as the shared README defines them."""
+    lp, rp = points["left_pupil"], points["right_pupil"]
+    d = rp - lp
+    ipd = np.hypot(d[:, 0], d[:, 1])
+    u = d / np.where(ipd > 0, ipd, np.nan)[:, None]
+    up = np.stack([u[:, 1], -u[:, 0]], axis=1)  # perpendicular, pointing up in the image (y down)
+    along = lambda v: (v * up).sum(axis=1)
+    mid = 0.5 * (lp + rp)
+    roll = np.degrees(np.arctan2(-d[:, 1], d[:, 0]))
+    lc, rc = points["left_mouth_corner"], points["right_mouth_corner"]
+    mc = 0.5 * (lc + rc)
+    cols = [
+        mid[:, 0], mid[:, 1], roll,
+        along(points["left_upper_lid"] - points["left_lower_lid"]),
+        along(points["right_upper_lid"] - points["right_lower_lid"]),
+        along(points["left_brow"] - lp), along(points["right_brow"] - rp),
+        np.hypot(*(rc - lc).T),
+        along(points["upper_lip_top"] - mc), along(mc - points["lower_lip_bottom"]),
+        ipd,
+    ]
+    return np.stack(cols, axis=1)
+
+
+def _read_points(path: Path) -> dict[str, np.ndarray]:
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    val = lambda s: float(s) if s not in ("", "nan") else np.nan
+    return {p: np.array([[val(r[f"{p}_x"]), val(r[f"{p}_y"])] for r in rows]) for p in POINTS}
+
+
+def _move(p: np.ndarray, m: np.ndarray) -> np.ndarray:
+    return p @ m[:, :2].T + m[:, 2]
+
+
+def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> Path:
+    """Write variant ``kind`` of clip ``name`` (from folder ``src``) into folder ``out``; its video path."""
+    out.mkdir(parents=True, exist_ok=True)
+    cap = cv2.VideoCapture(str(src / f"{name}.mp4"))
+    fps = cap.get(cv2.CAP_PROP_FPS) or 25.0
+    frames = []
+    while True:
+        ok, img = cap.read()
+        if not ok:
+            break
+        frames.append(img)
+    cap.release()
+    n = len(frames)
+    h, w = frames[0].shape[:2]
+    seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
+    maps, (W, H) = _affine_frames(n, kind, (w, h), seed)
+    pix = _photometric(kind, n, seed)
+    writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
+    if not writer.isOpened():
+        raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")
+    border = (40, 40, 40)
+    for i, img in enumerate(frames):
+        m = maps[i]
+        if kind != "mirror" and not np.allclose(m, [[1, 0, 0], [0, 1, 0]]):
+            interp = cv2.INTER_AREA if kind == "half" else cv2.INTER_LINEAR
+            if kind == "half":
+                img = cv2.resize(img, (W, H), interpolation=interp)
+            else:
+                img = cv2.warpAffine(img, m, (W, H), flags=interp, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
+        elif kind == "mirror":
+            img = img[:, ::-1]
+        writer.write(np.ascontiguousarray(pix(img, i)))
+    writer.release()
+
+    points = _read_points(src / f"{name}.points.csv")
+    n = min(n, len(points["left_pupil"]))
+    moved = {p: np.array([_move(points[p][i], maps[i]) for i in range(n)]) for p in POINTS}
+    if kind == "mirror":  # image-left is now what was image-right
+        for a in ("pupil", "upper_lid", "lower_lid", "brow", "mouth_corner"):
+            moved[f"left_{a}"], moved[f"right_{a}"] = moved[f"right_{a}"], moved[f"left_{a}"]
+    with open(out / f"{name}.points.csv", "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(["frame"] + [f"{p}_{c}" for p in POINTS for c in "xy"])
+        for i in range(n):
+            wr.writerow([i] + [f"{v:.2f}" for p in POINTS for v in moved[p][i]])
+    vals = peer_params(moved)
+    with open(out / f"{name}.mp.csv", "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(["frame", *PARAM_NAMES, "ipd"])
+        for i in range(n):
+            wr.writerow([i] + [f"{v:.3f}" for v in vals[i]])
+
+    clicks = json.loads((src / f"{name}.clicks.json").read_text())
+    m0 = maps[int(clicks.get("frame", 0))]
+    new = {"frame": clicks.get("frame", 0)}
+    for k in ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth"):
+        new[k] = [round(float(v), 1) for v in _move(np.array(clicks[k], float), m0)]
+    if kind == "mirror":
+        new["left_pupil"], new["right_pupil"] = new["right_pupil"], new["left_pupil"]
+        new["left_brow"], new["right_brow"] = new["right_brow"], new["left_brow"]
+    (out / f"{name}.clicks.json").write_text(json.dumps(new))
+    return out / f"{name}.mp4"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.stress_clips", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default="out/stress", help="folder to write one sub-folder per variant into")
+    ap.add_argument("--variants", default=",".join(VARIANTS), help=f"comma-separated, of {', '.join(VARIANTS)}")
+    ap.add_argument("--dir", default=None, help="folder of real clips (default ../shared/real)")
+    ap.add_argument("--clips", default=None, help="comma-separated clip names (default: all)")
+    args = ap.parse_args(argv)
+    src = real_dir(args.dir)
+    if src is None:
+        print("stress_clips: no folder of real clips (../shared/real); nothing to do")
+        return 0
+    kinds = [k for k in args.variants.split(",") if k]
+    bad = [k for k in kinds if k not in VARIANTS]
+    if bad:
+        print(f"stress_clips: unknown variant {bad[0]!r} (known: {', '.join(VARIANTS)})", file=sys.stderr)
+        return 2
+    names = args.clips.split(",") if args.clips else clip_names(src)
+    for k in kinds:
+        for nm in names:
+            make_variant(src, nm, k, Path(args.out) / k)
+        print(f"{k}: {len(names)} clips in {Path(args.out) / k}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
