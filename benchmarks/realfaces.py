@@ -73,6 +73,10 @@ CLOSED_FRACTION = 0.4
 ON_FACE = 8.0
 """Pupil-midpoint error (% IPD) under which a frame counts as on the face (re-acquisition)."""
 
+MOUTH_OFF = 25.0
+"""Mouth-centre error (% IPD) past which an ``ok`` frame's mouth is not on the mouth (a nostril,
+the chin): the mouth's own honest-status figure (not a target of issue 13, shown beside them)."""
+
 SETTLE = 10
 """Consecutive right frames (truth's status, on the face) that make a re-acquisition settled."""
 
@@ -206,6 +210,7 @@ class ClipRun:
     calibrate_ms: float = math.nan
     error: str | None = None
     overlays: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
+    mouth_centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
 
     @property
     def statuses(self) -> list[str]:
@@ -250,7 +255,7 @@ def run_clip(
     run.calibrate_ms = (time.perf_counter() - t0) * 1000.0
     keep = set(int(k) for k in keep)
     v = _Video(video)
-    times, cpu = [], []
+    times, cpu, mouths = [], [], []
     try:
         for i, img in v.frames():
             if max_frames is not None and i >= max_frames:
@@ -261,11 +266,13 @@ def run_clip(
             times.append((time.perf_counter() - t) * 1000.0)
             cpu.append((time.process_time() - c) * 1000.0)
             run.params.append(res.params)
+            mouths.append(res.overlay.mouth_centre)
             if i in keep:
                 run.overlays[i] = res.overlay.draw(img)
     finally:
         v.close()
     run.times_ms, run.cpu_ms = np.array(times), np.array(cpu)
+    run.mouth_centres = np.array(mouths, dtype=np.float64).reshape(-1, 2)
     return run
 
 
@@ -299,6 +306,9 @@ class Metrics:
     r_brow: float = math.nan
     reacquire: list[int | None] = field(default_factory=list)
     pupil_err: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    mouth_med: float = math.nan
+    mouth_p95: float = math.nan
+    mouth_off_pct: float = math.nan
 
 
 def _shapes(v: np.ndarray) -> dict[str, np.ndarray]:
@@ -337,10 +347,12 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
-def compare(ours: Sequence[FaceParams], peer: PeerTrack) -> Metrics:
+def compare(ours: Sequence[FaceParams], peer: PeerTrack, mouth: np.ndarray | None = None) -> Metrics:
     """Measure ``ours`` (one record per frame, frame ``i`` at position ``i``) against ``peer``.
 
     Only the frames both have are compared. See the module docstring for every definition.
+    ``mouth`` (n, 2), our mouth centre per frame (frame px, NaN where none), adds the mouth's
+    place: its distance from the midpoint of the peer's mouth corners on frames we report ``ok``.
     """
     n = min(len(ours), len(peer))
     m = Metrics(frames=n)
@@ -375,6 +387,15 @@ def compare(ours: Sequence[FaceParams], peer: PeerTrack) -> Metrics:
         m.pupil_p95 = float(np.percentile(err, 95))
         droll = (ov[okv, 2] - pv[okv, 2] + 180.0) % 360.0 - 180.0
         m.roll_med = float(np.median(np.abs(droll)))
+
+    lc, rc = peer.points.get("left_mouth_corner"), peer.points.get("right_mouth_corner")
+    if mouth is not None and lc is not None and rc is not None and len(mouth) >= n and okv.any():
+        pm = 0.5 * (lc[:n] + rc[:n])
+        e = np.hypot(*(mouth[:n] - pm).T) / ipd * 100.0
+        e = e[okv & np.isfinite(e)]
+        if len(e):
+            m.mouth_med, m.mouth_p95 = float(np.median(e)), float(np.percentile(e, 95))
+            m.mouth_off_pct = 100.0 * float((e > MOUTH_OFF).sum()) / m.ok_frames
 
     held = _hold(ov)
     so, sp = _shapes(held), _shapes(pv)
@@ -515,7 +536,7 @@ def measure_clip(folder: Path, name: str, auto: bool = False, sheets: bool = Fal
                    name=name, max_frames=max_frames)
     if run.error is not None:
         return ClipResult(name, run.mode, None, np.zeros(0), math.nan, error=run.error)
-    m = compare(run.params, peer)
+    m = compare(run.params, peer, run.mouth_centres)
     sheet = None
     if sheets:
         path = out_dir / (f"{name}.auto.png" if auto else f"{name}.png")
@@ -535,7 +556,7 @@ def measure_all(folder: Path, names: Sequence[str], modes: Sequence[bool] = (Fal
 # Tables
 
 COLUMNS = ["clip", "mode", "lost %", "lost/mouth/closed %", "run", "pupil med/p95 %IPD", "roll °",
-           "r open", "r width", "r eye", "r brow", "ms med/p95", "cpu ms med/p95"]
+           "r open", "r width", "r eye", "r brow", "mouth med/p95 %IPD, off %", "ms med/p95", "cpu ms med/p95"]
 
 
 def _c(v: float, fmt: str, miss: bool) -> str:
@@ -558,6 +579,7 @@ def result_row(r: ClipResult) -> list[str]:
         _c(m.roll_med, ".2f", x["roll_med"]),
         _c(m.r_open, ".2f", x["r_open"]), _c(m.r_width, ".2f", x["r_width"]),
         _c(m.r_eye, ".2f", x["r_eye"]), _c(m.r_brow, ".2f", x["r_brow"]),
+        "—" if not math.isfinite(m.mouth_med) else f"{m.mouth_med:.1f}/{m.mouth_p95:.1f}, {m.mouth_off_pct:.1f}",
         _c(v.get("ms_med", math.nan), ".2f", x.get("ms_med", False)) + "/"
         + _c(v.get("ms_p95", math.nan), ".2f", x.get("ms_p95", False)),
         f"{np.median(r.cpu_ms):.2f}/{np.percentile(r.cpu_ms, 95):.2f}" if len(r.cpu_ms) else "—",
@@ -569,7 +591,7 @@ def target_row(auto: bool) -> list[str]:
     f = lambda k: ("≤" if t[k][0] == "max" else "≥") + f"{t[k][1]:g}"
     return ["targets", "auto" if auto else "clicks", f("lost_pct"), "", "",
             f"{f('pupil_med')}/{f('pupil_p95')}", f("roll_med"), f("r_open"), f("r_width"), f("r_eye"),
-            f("r_brow"), f"{f('ms_med')}/{f('ms_p95')}", ""]
+            f("r_brow"), f"(off: >{MOUTH_OFF:g})", f"{f('ms_med')}/{f('ms_p95')}", ""]
 
 
 def summary(results: Sequence[ClipResult], auto: bool) -> str:
