@@ -151,7 +151,10 @@ class TrackResult:
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
 EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
-JAW_MAX = (0.25, 0.4)  # farthest the mouth centre may sit from its rigid place (x, y)
+JAW_MIN = (-0.3, -0.3)  # farthest the mouth centre may sit from its rigid place (x, y): left / up ...
+JAW_MAX = (0.3, 0.75)  # ... right / down (a wide-open mouth drops its centre ~0.6 wi; the head's pose lags a fast turn)
+CROP_DROP = 0.25  # farthest (× wi) the mouth crop's centre follows the jaw below the rigid place
+JAW_HOLD = 0.8  # per frame the mouth is not found, its offset's share kept (back towards the rigid place: a wrong last mouth is not held)
 FOLLOW_SHIFT = 0.05  # per frame pull of the rigid pose's position towards the measured pupils
 FOLLOW_TURN = 0.1  # ... of its roll and scale (the gaze does not change those)
 FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrated face"
@@ -186,7 +189,7 @@ class FaceTracker:
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
         self._pupils_eye_crop = self._pupils_face - self.eye_rect[:2]  # ... in the eye crop's px
-        self._jaw_max = np.array(JAW_MAX) * wi
+        self._jaw_min, self._jaw_max = np.array(JAW_MIN) * wi, np.array(JAW_MAX) * wi
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -413,7 +416,7 @@ class FaceTracker:
 
         rigid_mouth = ff.to_face(apply(self.pose, self._cal_mouth[None]))[0]
         predicted_mouth = rigid_mouth + self.jaw
-        mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth)
+        mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth, rigid_mouth)
         if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
@@ -483,11 +486,11 @@ class FaceTracker:
             # the jaw from the centre on the mouth line, where calibration measured the rigid place
             lc = mouth_res.line_centre
             at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
-            self.jaw = np.minimum(np.maximum(at - rigid_mouth, -self._jaw_max), self._jaw_max)
+            self.jaw = np.minimum(np.maximum(at - rigid_mouth, self._jaw_min), self._jaw_max)
         else:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
-            self.jaw *= 0.8
+            self.jaw *= JAW_HOLD
         if closed[0] and closed[1] and not (doubt[0] and doubt[1]):
             status = EYES_CLOSED
         scores = [o.score for o in obs]
@@ -556,9 +559,14 @@ class FaceTracker:
         half = 0.5 * np.array([v.real, v.imag])
         return np.array([mid - half, mid + half])
 
-    def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray):
-        """Crop around the predicted mouth centre (face coordinates) and run the mouth finder."""
-        rect = mouth_rect((float(centre[0]), float(centre[1])), self.wi)
+    def _mouth(self, frame: np.ndarray, ff: FaceFrame, centre: np.ndarray, rigid: np.ndarray | None = None):
+        """Crop around the predicted mouth centre (face coordinates) and run the mouth finder.
+
+        The crop follows a dropped jaw down by at most :data:`CROP_DROP` wi below the mouth's rigid
+        place (``rigid``): the middle of a yawn sits far below the corners, and a crop centred on
+        it would cut off the upper lip."""
+        cy = float(centre[1]) if rigid is None else min(float(centre[1]), float(rigid[1]) + CROP_DROP * self.wi)
+        rect = mouth_rect((float(centre[0]), cy), self.wi)
         crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
         self._last_mouth_crop = crop
         prev = getattr(self, "_mouth_prev", None)

@@ -89,11 +89,19 @@ CORNER_UNLIKE = 1.5
 body on a corner's column."""
 PREVIOUS_CAP = 8.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
+"""Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
 """Cost of one skin-like row between the lips of an open mouth: a tongue is skin-coloured, and the
 lower lip and the skin past it must still fit below it."""
 OPEN_ROWS = 2
 """Rows of the inside (dark, teeth) that make a gap an open mouth (where a tongue's rows are free)."""
+OUTSIDE_ROWS = 0.08
+"""Rows (× wi) past the skin below the lower lip where lip-coloured rows say the split is wrong: no
+lip lies under the skin below the lower lip, so the lower lip goes on further (teeth as light as the
+skin, taken for the skin below a thin "lower lip", leave the real one past them). Not above the
+upper lip: the shadow under the nose looks like lip on many faces."""
+OUTSIDE_PRICE = 1.0
+"""Cost of one such row that looks like lip by ``d`` more than like skin: ``PRICE · (d − 1)``."""
 REACH = (-0.55, 0.6)
 
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
@@ -303,8 +311,9 @@ class MouthFinder:
         self._off_sa = self._off_u - self.skin_w
         self._off_l = self._off[:, None] + lens_d[None, :]
         self._off_sb = self._off_l + self.skin_w
+        self._off_ob = self._off_sb + max(int(round(OUTSIDE_ROWS * wi)), 1)
         self._pu, self._pd = self._len[0][1][None, :], self._len[1][1][None, :]
-        self._pad = int(max(-self._off_sa.min(), self._off_sb.max())) + 2
+        self._pad = int(max(-self._off_sa.min(), self._off_ob.max())) + 2
         m = len(self._off)
         self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
         self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
@@ -443,6 +452,11 @@ class MouthFinder:
         c0, c1, c2, c3 = cum
         cu = c1[bs][:, None] - c1[yb + self._off_u] + c0[yb + self._off_u] - c0[yb + self._off_sa] + self._pu
         cl = c2[yb + self._off_l] - c2[bs][:, None] + c3[yb + self._off_sb] - c3[yb + self._off_l] + self._pd
+        # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
+        co = np.zeros(n + 2 * P + 1)
+        co[1 + m0 : 1 + m1] = OUTSIDE_PRICE * np.clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
+        np.cumsum(co, out=co)
+        cl += co[yb + self._off_ob] - co[yb + self._off_sb]
         U, L = cu.min(axis=1), cl.min(axis=1)
         cgb = cg[:, bs]
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
