@@ -436,3 +436,19 @@ def test_checking_a_guess_without_the_brows_finds_the_same_eyes_and_keeps_the_br
     for a, b in zip(res.eyes, quick.eyes):
         assert (a.x, a.y, a.score, a.open, a.upper, a.lower, a.iris) == (b.x, b.y, b.score, b.open, b.upper, b.lower, b.iris)
         assert math.isnan(b.brow) and math.isfinite(a.brow)
+
+
+def test_the_light_is_followed_as_it_falls_far_and_turns_warm():
+    """A room's light falling to 40-60 % per channel (warmer: blue falls most) over two seconds:
+    the gain follows past 2× (its old limit, where the skin round the eye stopped being skin and
+    the lid runs ran to their ends: 20 px for 9.6), so the lids are still measured."""
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    for k in range(60):
+        t = (k + 1) / 60.0
+        state = BASE.replace(light=(1.0 - 0.6 * t, 1.0 - 0.5 * t, 1.0 - 0.4 * t))
+        res, truth, _, (crop, grey, _) = _find(f, state)
+        f.adapt(crop, grey, res)
+    res, truth, _, _ = _find(f, state)
+    assert f._gain is not None and f._gain.max() > 2.2
+    _check(res, truth, lid=1.5)

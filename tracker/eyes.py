@@ -121,8 +121,10 @@ ADAPT_MIN_SCORE = 0.6
 """Both eyes open and scoring at least this before a frame adapts the pictures."""
 GAIN_RATE = 0.15
 """Weight of one confident frame in the light's gain (it follows a change of the light in ~half a second)."""
-GAIN_LIMITS = (0.5, 2.0)
-"""Range of the light's per-channel gain against calibration."""
+GAIN_LIMITS = (0.25, 4.0)
+"""Range of the light's per-channel gain against calibration: a room whose light falls to a
+quarter, or turns warm (a lamp: blue falls to 40 % while red keeps 60 %), is still followed
+(at 2× the skin above the eyes stopped looking like skin and the lid runs ran to their ends)."""
 GAIN_DEAD_ZONE = 0.03
 """A slow gain within this of 1 is not applied (shading and expressions, not the light)."""
 
