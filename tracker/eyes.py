@@ -121,8 +121,10 @@ ADAPT_MIN_SCORE = 0.6
 """Both eyes open and scoring at least this before a frame adapts the pictures."""
 GAIN_RATE = 0.15
 """Weight of one confident frame in the light's gain (it follows a change of the light in ~half a second)."""
-GAIN_LIMITS = (0.5, 2.0)
-"""Range of the light's per-channel gain against calibration."""
+GAIN_LIMITS = (0.25, 4.0)
+"""Range of the light's per-channel gain against calibration: a room whose light falls to a
+quarter, or turns warm (a lamp: blue falls to 40 % while red keeps 60 %), is still followed
+(at 2× the skin above the eyes stopped looking like skin and the lid runs ran to their ends)."""
 GAIN_DEAD_ZONE = 0.03
 """A slow gain within this of 1 is not applied (shading and expressions, not the light)."""
 
@@ -1305,72 +1307,114 @@ class EyeFinder:
 
 
 REFINE_PRIOR = (0.06, 0.04)
-"""How far (× the clicked ipd) :func:`refine_pupils` expects a careful click to be from the
-iris centre: its preference for irises near the clicks."""
-REFINE_DARK = 0.0
-"""Power of the disc darkness in :func:`refine_pupils`' scores: none, the drawn iris's
-correlation and the ring votes place the disc; dark lashes and make-up beside the iris
-would pull the darkest disc off it."""
-REFINE_MIN_MATCH = 0.3
-"""Correlation with a drawn iris below which :func:`refine_pupils` keeps the clicks."""
+"""How far (× the clicked ipd, along and across the eye line) :func:`refine_pupils` expects a
+careful click to be from the iris centre: its preference for irises near the clicks."""
+REFINE_REACH = 0.08
+"""How far (× the clicked ipd) from a click :func:`refine_pupils` looks for the iris centre."""
+LIMBUS_RADII = (0.07, 0.13)
+"""Iris radii (× ipd) :func:`refine_pupils` tries: a child's to an adult's, near and far."""
+LIMBUS_ARC = (20.0, 40.0)
+"""Degrees above and below the horizontal that the limbus arcs span on either side of the iris:
+the upper lid and its lashes cover the iris's top on most eyes (their edges are as strong as the
+limbus's, and a dark iris merges with dark lashes), the lower lid often its bottom (a circle
+fitted to the lid's edge sits too high); the sides show on every open eye, even a narrow one."""
+LIMBUS_POINTS = 8
+"""Points on each side's arc."""
+LIMBUS_MIN_EDGE = 1.0
+"""Mean outward grey step (grey levels per px at :data:`REFINE_WI`) on the arc below which
+there is no limbus there: the clicks stay."""
+REFINE_WI = 80.0
+"""The inter-pupil distance (px) the eyes are resampled to for :func:`refine_pupils`."""
+REFINE_STEP = 0.5
+"""Grid step (px at :data:`REFINE_WI`) of the centres and radii tried."""
 
 
-def _drawn_iris(r: float) -> np.ndarray:
-    """A grey picture of the size of :func:`iris_picture_size`: a dark disc of radius ``r``
-    between light sides (for finding irises before anything is learned)."""
-    hw, hh = iris_picture_size(r)
-    yy, xx = np.mgrid[-hh : hh + 1, -hw : hw + 1]
-    inside = np.clip(r + 0.5 - np.hypot(xx, yy), 0.0, 1.0)
-    return (200.0 - 150.0 * inside).astype(np.float32)
+class _LimbusGrid:
+    """The sample offsets of every circle :func:`refine_pupils` tries around an eye, at
+    :data:`REFINE_WI`: centres on a grid within :data:`REFINE_REACH`, radii in
+    :data:`LIMBUS_RADII`, points on the arc without its top (made once, reused)."""
+
+    def __init__(self) -> None:
+        wi, step = REFINE_WI, REFINE_STEP
+        n = int(math.floor(REFINE_REACH * wi / step))
+        self.offs = np.arange(-n, n + 1) * step
+        self.radii = np.arange(LIMBUS_RADII[0] * wi, LIMBUS_RADII[1] * wi + 1e-6, step)
+        # image y is down: the right side's arc runs from −above to +below, the left side's mirrors it
+        side = np.radians(np.linspace(-LIMBUS_ARC[0], LIMBUS_ARC[1], LIMBUS_POINTS))
+        th = np.concatenate([side, math.pi - side])
+        self.cos, self.sin = np.cos(th).astype(np.float32), np.sin(th).astype(np.float32)
+        X = self.offs[None, :, None, None] + self.radii[:, None, None, None] * self.cos
+        Y = self.offs[None, None, :, None] + self.radii[:, None, None, None] * self.sin
+        X, Y = np.broadcast_arrays(X, Y)  # (radius, x, y, point)
+        self.shape = X.shape
+        self.size = X.size
+        self.width = 1024
+        rows = -(-self.size // self.width)
+        self._x = np.zeros(rows * self.width, np.float32)
+        self._y = np.zeros(rows * self.width, np.float32)
+        self._x[: self.size], self._y[: self.size] = X.ravel(), Y.ravel()
+        self.reach = float(self.offs[-1] + self.radii[-1]) + 2.0
+        u, v = self.offs / (REFINE_PRIOR[0] * wi), self.offs / (REFINE_PRIOR[1] * wi)
+        self.prior = (np.exp(-0.5 * u * u)[:, None] * np.exp(-0.5 * v * v)[None, :]).astype(np.float32)
+
+    def scores(self, gx: np.ndarray, gy: np.ndarray, cx: float, cy: float) -> np.ndarray:
+        """Mean outward step on every arc centred around ``(cx, cy)`` (px of ``gx``/``gy``), as
+        ``(radius, x, y)``."""
+        rows = len(self._x) // self.width
+        mx = (self._x + np.float32(cx)).reshape(rows, self.width)
+        my = (self._y + np.float32(cy)).reshape(rows, self.width)
+        GX = cv2.remap(gx, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()[: self.size]
+        GY = cv2.remap(gy, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()[: self.size]
+        D = GX.reshape(self.shape) * self.cos + GY.reshape(self.shape) * self.sin
+        return D.mean(axis=-1)
 
 
-SLIT_CONTRAST = 12.0
-"""Grey levels the lids must be brighter than the eye's darkest row for :func:`slit_middle`."""
+_LIMBUS: _LimbusGrid | None = None
 
 
-def slit_middle(grey: np.ndarray, at: tuple[float, float], ipd: float) -> tuple[float, float]:
-    """``at`` (frame px) moved up or down to the middle of the dark run through it: the
-    visible part of an eye, between the lids, on the column through ``at``.
-
-    For an eye so narrow that the iris does not show as a disc (a squint, hooded or sleepy
-    lids) the iris's centre is hidden and the middle of the slit is where it shows (and
-    where a landmark tracker puts it); the point moves by at most a typical iris radius, and
-    stays where it is without a clear run (brighter lid skin above and below).
+def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> tuple[float, float, float, float]:
+    """The iris centre near ``at`` in a face-frame picture at :data:`REFINE_WI` (its x and y
+    grey gradients ``grad``, per px): the circle whose sides (:data:`LIMBUS_ARC`) the grey rises
+    across most steeply going outwards — the limbus, where the dark iris meets the white. The
+    rim is chosen among the circles within :data:`REFINE_REACH` weighted by
+    :data:`REFINE_PRIOR` around ``at``, then the steepest place near it is taken without that
+    weight (it would pull the centre a fraction of the way back to ``at``). Returns ``(x, y,
+    radius, edge)``: picture px, and the mean outward step there (grey levels per px).
     """
-    g = np.asarray(grey)
-    r = max(RADIUS_DEFAULT * ipd, 2.0)
-    hw, n = max(int(round(0.4 * r)), 1), int(round(2.5 * r))
-    x, y = float(at[0]), float(at[1])
-    xi, yi = int(round(x)), int(round(y))
-    h, w = g.shape[:2]
-    if not (hw <= xi < w - hw and n <= yi < h - n):
-        return x, y
-    col = g[yi - n : yi + n + 1, xi - hw : xi + hw + 1].astype(np.float32).mean(axis=1)
-    col = cv2.GaussianBlur(col.reshape(-1, 1), (1, 0), 1.0).ravel()
-    c, ri = n, int(r)
-    k = c - ri + int(np.argmin(col[c - ri : c + ri + 1]))
-    dark, up_lit, down_lit = float(col[k]), float(col[: k + 1].max()), float(col[k:].max())
-    if min(up_lit, down_lit) - dark < SLIT_CONTRAST:
-        return x, y
-    top, bottom = k, k
-    while top > 0 and col[top - 1] < 0.5 * (dark + up_lit):
-        top -= 1
-    while bottom < len(col) - 1 and col[bottom + 1] < 0.5 * (dark + down_lit):
-        bottom += 1
-    dy = min(max(0.5 * (top + bottom) - c + (yi - y), -r), r)
-    return x, y + dy
+    global _LIMBUS
+    if _LIMBUS is None:
+        _LIMBUS = _LimbusGrid()
+    g = _LIMBUS
+    S = g.scores(grad[0], grad[1], at[0], at[1])
+    P = np.maximum(S, 0.0) * g.prior
+    k, i, j = np.unravel_index(int(P.argmax()), P.shape)
+    # the prior picks the rim; its own steepest place is then found without it (the prior
+    # would pull the centre towards the click by a fraction of the click's error)
+    nr, n = S.shape[0], S.shape[1]
+    while True:
+        k0, k1, i0, i1, j0, j1 = max(k - 1, 0), min(k + 2, nr), max(i - 1, 0), min(i + 2, n), max(j - 1, 0), min(j + 2, n)
+        a, b, c = np.unravel_index(int(S[k0:k1, i0:i1, j0:j1].argmax()), (k1 - k0, i1 - i0, j1 - j0))
+        if (k0 + a, i0 + b, j0 + c) == (k, i, j):
+            break
+        k, i, j = k0 + a, i0 + b, j0 + c
+    best = float(S[k, i, j])
+    dx = parabola_offset(S[k, i - 1, j], S[k, i, j], S[k, i + 1, j]) if 0 < i < n - 1 else 0.0
+    dy = parabola_offset(S[k, i, j - 1], S[k, i, j], S[k, i, j + 1]) if 0 < j < n - 1 else 0.0
+    step = REFINE_STEP
+    return at[0] + g.offs[i] + dx * step, at[1] + g.offs[j] + dy * step, float(g.radii[k]), best
 
 
 def refine_pupils(
-    frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float], iterations: int = 2
+    frame_grey: np.ndarray, left: tuple[float, float], right: tuple[float, float]
 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Snap two clicked pupils (frame px) to the iris centres near them (sub-pixel, frame px).
 
-    Both eyes are searched together within about an eighth of the clicked inter-pupil
-    distance (twice: with a typical iris radius, then with the radius measured there), a
-    drawn iris as the picture and a preference for irises near careful clicks
-    (:data:`REFINE_PRIOR`). The clicks come back unchanged when nothing iris-like is there or the result is
-    not a plausible pair (a real face is never refused). ``frame_grey`` may also be BGR.
+    Each eye is resampled upright (the clicks' roll) at :data:`REFINE_WI` px between the eyes,
+    and its iris centre is the centre of the circle that best fits the limbus below the upper
+    lid (:func:`limbus_centre`) within :data:`REFINE_REACH` of the click, careful clicks
+    preferred (:data:`REFINE_PRIOR`). A click stays where nothing there has a limbus's edge
+    (:data:`LIMBUS_MIN_EDGE`), and both stay when the result is not a plausible pair (a real
+    face is never refused). ``frame_grey`` may also be BGR.
     """
     from tracker.calibration import FaceFrame
 
@@ -1378,38 +1422,28 @@ def refine_pupils(
     if grey.ndim == 3:
         grey = cv2.cvtColor(grey, cv2.COLOR_BGR2GRAY)
     lp, rp = (float(left[0]), float(left[1])), (float(right[0]), float(right[1]))
-    for it in range(iterations):
-        ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
-        if ipd < 8:
-            return lp, rp
-        wi = min(ipd, 80.0)
-        ff = FaceFrame.from_pupils(lp, rp, wi)
-        rect = (int(math.floor(-0.9 * wi)), int(math.floor(-0.4 * wi)), int(math.ceil(1.8 * wi)), int(math.ceil(0.8 * wi)))
-        crop = ff.crop(grey, rect).astype(np.float32)
-        o = np.array(rect[:2], dtype=np.float64)
-        centres = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - o
-        # the radius is measured once the centre is near (off-centre it looks too small)
-        if it == 0:
-            radius = [RADIUS_DEFAULT * wi] * 2
-        else:
-            radius = [iris_radius(crop, (float(c[0]), float(c[1])), wi) for c in centres]
-        # a drawn iris (a picture cut at the clicks would pull the search back to them)
-        pics = [_drawn_iris(r) for r in radius]
-        blank = np.zeros((5, 5), np.float32)
-        model = EyeModel(
-            work_ipd=wi, radius=radius, iris_pictures=pics, eye_pictures=[blank, blank],
-            brow_profiles=[np.zeros(5, np.float32)] * 2, brow_centres=[2.0, 2.0], brow_heights=[0.4 * wi] * 2,
-            lid_open=[1.0, 1.0], skin=SkinModel(np.zeros(3), np.eye(3)), skin_bgr=np.ones(3),
-        )
-        f = EyeFinder(model, wi, search=(0.12, 0.08), prior=REFINE_PRIOR, darkness=REFINE_DARK)
-        found = f.locate_irises(crop, centres)
-        if min(q[2] for q in found) < REFINE_MIN_MATCH:
-            # no disc: eyes too narrow for the iris to show round, or no eyes at all
-            return slit_middle(grey, lp, ipd), slit_middle(grey, rp, ipd)
-        found = np.array([q[:2] for q in found]) + o
-        img = ff.to_image(found)
-        nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
-        if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):
-            return lp, rp
-        lp, rp = nl, nr
-    return lp, rp
+    ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
+    if ipd < 8:
+        return lp, rp
+    global _LIMBUS
+    if _LIMBUS is None:
+        _LIMBUS = _LimbusGrid()
+    wi, reach = REFINE_WI, _LIMBUS.reach
+    ff = FaceFrame.from_pupils(lp, rp, wi)
+    x0, y0 = int(math.floor(-0.5 * wi - reach)), int(math.floor(-reach))
+    rect = (x0, y0, int(math.ceil(wi + 2 * reach)) + 1, int(math.ceil(2 * reach)) + 1)
+    src = grey.astype(np.float32)
+    if ff.scale < 0.7:  # a large face shrunk: smooth first so the resampling does not alias
+        src = cv2.GaussianBlur(src, (0, 0), 0.4 / ff.scale)
+    crop = cv2.GaussianBlur(ff.crop(src, rect), (0, 0), 1.0)
+    gx = cv2.Scharr(crop, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
+    gy = cv2.Scharr(crop, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+    found = []  # face coordinates: the clicks are at (∓wi/2, 0)
+    for sx in (-0.5 * wi, 0.5 * wi):
+        x, y, _, edge = limbus_centre((gx, gy), (sx - x0, -y0))
+        found.append((x + x0, y + y0) if edge >= LIMBUS_MIN_EDGE else (sx, 0.0))
+    img = ff.to_image(np.array(found))
+    nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
+    if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):
+        return lp, rp
+    return nl, nr
