@@ -42,6 +42,7 @@ from tracker.face_finder import DEFAULT_EYES, detect_faces, eyes_in_box, face_pa
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
+from tracker.mouth_finder import WIDE_REF
 from tracker.mouth_finder import MouthFinder
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
 
@@ -303,7 +304,7 @@ class FaceTracker:
         """A mouth of about the calibrated size, corners level, near where the head puts it."""
         w = self.cal.mouth_width
         rise = m.level_rise
-        if not (0.4 * w <= m.width <= 1.9 * w and abs(rise) < 0.35 * m.width):
+        if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.35 * m.width):
             return False
         c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]

@@ -76,6 +76,9 @@ SKIN_IN_LIP = 3.0
 """Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
 SKIN_CLEAR = 2.0
 """Row cost as skin under which a row is plainly skin (see :data:`SKIN_IN_LIP`)."""
+WIDE_REF = 0.65
+"""Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
+pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
 SEED_REACH = (-0.2, 0.3)
 """Rows (× wi, from the predicted line) where the mouth line's starting row is looked for."""
 CORNER_TILT = 0.04
@@ -677,10 +680,11 @@ class MouthFinder:
         (full within 0.2 wi)."""
         wi = self.wi
         ramp = lambda v, a, b: min(max((v - a) / (b - a), 0.0), 1.0)
-        s_fit = ramp(-max(fit), -5.0, -2.0)
+        s_fit = ramp(-max(fit), -6.0, -3.0)
         s_corner = ramp(0.5 * (strength[0] + strength[1]) / self.gain0, 0.0, 0.4)
         rho = width / max(self.width0, 1e-6)
-        s_size = ramp(rho, 0.4, 0.5) * ramp(-rho, -1.9, -1.8) * ramp(-height, -1.2 * wi, -1.1 * wi)
+        rho_wide = width / max(self.width0, WIDE_REF * wi)  # a pout at calibration: widths of any mouth
+        s_size = ramp(rho, 0.4, 0.5) * ramp(-rho_wide, -1.9, -1.8) * ramp(-height, -1.2 * wi, -1.1 * wi)
         dx = (on_line[0] - pred[0]) / (0.3 * wi)
         dy = (on_line[1] - pred[1]) / (0.4 * wi)
         d = math.sqrt(dx * dx + dy * dy)
