@@ -13,7 +13,9 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
 * the **gap** at the click: the darkest row near it and the rows around it that look like the
   inside of a mouth (dark and colourless, or the greys of teeth; past a tongue on the lower teeth);
 * the **outer lip edges**: on the vertical profile through the click, the strongest change of
-  colour above the gap within an upper lip's thickness, and below it within a lower lip's;
+  colour above the gap within an upper lip's thickness, and below it within a lower lip's — the
+  lower one then where the lip's own colour gives way to the skin's along a shading-free axis
+  (the shadow under a lower lip is often the strongest change);
 * the **corners**: the mouth line traced from the click outwards along its darkest row, and on
   each side where its columns (the bands above, on and below it) stop differing from the cheek
   further out (:func:`corner_distance`);
@@ -472,6 +474,48 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) ->
     return top, bottom, y_min
 
 
+LIP_SEEN = 1.5
+"""Shading-free d′ of a lip's inner half against the skin at and above which its colour places its
+outer edge (:func:`_colour_edge`)."""
+
+
+def _colour_edge(rows_bgr: np.ndarray, start: int, direction: int, first: float, skin_bgr: np.ndarray,
+                 reach: tuple[float, float], wi: float) -> float:
+    """A lip's outer edge on a profile of mean BGR rows (``rows_bgr`` (n, 3)) by its colour: where the
+    rows past the gap (``start``, the gap's last row; ``direction`` −1 up, +1 down) stop looking like
+    the lip's inner half and start looking like the skin along a shading-free axis (Fisher's
+    discriminant kept orthogonal to the skin's colour, :func:`fisher_axis`) — a shadow on the skin
+    (under the lower lip, a moustache's shade) is darker skin, not lip. ``first`` is the edge from
+    the mean-contrast split (:func:`_outer_edge`, a row): the lip's inner half is
+    taken from it, and it is kept when the lip's colour is not clearly apart from the skin
+    (:data:`LIP_SEEN`) or no crossing lies within ``reach`` (× wi from ``start``)."""
+    n = len(rows_bgr)
+    half = max(int(round(0.5 * abs(first - start))), 2)
+    idx = [start + direction * j for j in range(1, half + 1) if 0 <= start + direction * j < n]
+    if len(idx) < 2 or len(skin_bgr) < 8:
+        return first
+    # the skin: round the mouth, and just past the first edge (a philtrum or chin redder than the cheeks)
+    far = [int(round(first)) + direction * j for j in range(2, 2 + max(int(round(0.1 * wi)), 2))]
+    far = [y for y in far if 0 <= y < n]
+    skin = skin_bgr if not far else np.concatenate([skin_bgr, np.repeat(rows_bgr[far], max(len(skin_bgr) // (4 * len(far)), 1), axis=0)])
+    axis, sep = fisher_axis(rows_bgr[idx], skin)
+    if sep < LIP_SEEN:
+        return first
+    lv = rows_bgr @ axis[:3] + axis[3]
+    lo, hi = max(int(math.floor(reach[0] * wi)), 2), int(math.ceil(reach[1] * wi))
+    prev = None
+    for j in range(1, hi + 1):
+        y = start + direction * j
+        if not 0 <= y < n:
+            return first
+        v = float(lv[y])
+        if v < 0.5 and j >= lo:
+            t = 0.0 if prev is None else min(max((prev - 0.5) / max(prev - v, 1e-6), 0.0), 1.0)
+            return float(start + direction * (j - 1 + t))
+        prev = v
+    return first
+
+
 def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
     """The outer edge of a lip on a profile ``f`` (rows, c), from its inner edge ``start`` (the gap's
     last row) in ``direction`` (−1 up, +1 down), ``lo``..``hi`` wi away: the row that best splits the
@@ -671,8 +715,11 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         lum_rows = luminance(rows_bgr)
         top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi)
         f_rows = profile_features(rows_bgr, skin_level)
-        return (top, bottom, y_min, _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi),
-                lum_rows)
+        e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
+        # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
+        # lip: on pale lips the skin just above is as red as they are)
+        e_dn = _colour_edge(rows_bgr, bottom, +1, e_dn, skin, (0.05, 0.3), wi)
+        return (top, bottom, y_min, e_up, e_dn, lum_rows)
 
     # the gap through the click
     top, bottom, y_min, y_top, y_bottom, lum_rows = column(cx, cy)
