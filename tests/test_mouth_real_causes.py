@@ -1,0 +1,107 @@
+"""The mouth's real-face fixes, each on a synthetic case built to show its cause.
+
+* the lower lip's outer edge is placed by the lip's colour, not at the shadow under the lip;
+* lip-coloured rows under the skin below a thin "lower lip" make the split go on (teeth as light
+  as skin between the lips);
+* the mouth crop follows a dropped jaw down by at most :data:`~tracker.face_tracker.CROP_DROP`, and
+  the jaw's offset is bounded asymmetrically (far down, little up: the nostrils sit above the mouth);
+* a mouth is "too wide" only against max(calibrated width, :data:`~tracker.mouth_finder.WIDE_REF` wi).
+"""
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker import face_tracker as ft
+from tracker.mouth_finder import WIDE_REF, MouthFinder
+from tracker.mouth_model import _colour_edge, _outer_edge, profile_features
+
+SKIN = np.array([120.0, 150.0, 200.0])  # BGR: a warm skin
+LIP = np.array([125.0, 125.0, 215.0])  # redder, about as bright (a lit lower lip)
+WI = 80.0
+
+
+def _profile(rows: list[tuple[np.ndarray, int]]) -> np.ndarray:
+    """Stack (colour, count) runs into a (n, 3) float profile of mean BGR rows."""
+    return np.concatenate([np.repeat(c[None, :], k, axis=0) for c, k in rows]).astype(np.float64)
+
+
+def test_lower_edge_by_colour_skips_the_shadow_under_the_lip():
+    """Gap, 8 rows of a lit lower lip shading off to 80 %, 5 rows of its shadow on the skin (the skin
+    at 45 %), then lit skin, blurred a little: the mean-contrast split takes the shadow into the lip;
+    the colour edge stops where the lip ends."""
+    gap = np.array([40.0, 40.0, 50.0])
+    lip_rows = [(LIP * k, 1) for k in np.linspace(1.0, 0.8, 8)]
+    rows = _profile([(SKIN, 20), (LIP, 6), (gap, 2)] + lip_rows + [(0.45 * SKIN, 5), (SKIN, 30)])
+    rows = cv2.GaussianBlur(rows.reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
+    start = 27  # the gap's last row
+    f = profile_features(rows, float(SKIN @ [0.114, 0.587, 0.299]))
+    first = _outer_edge(f, start, +1, 0.05, 0.3, WI)
+    rng = np.random.default_rng(0)
+    skin_px = SKIN + rng.normal(0.0, 4.0, (400, 3))
+    edge = _colour_edge(rows, start, +1, first, skin_px, (0.05, 0.3), WI)
+    assert first > start + 10.5, "the contrast split should be fooled by the shadow (else this case shows nothing)"
+    assert abs(edge - (start + 8.5)) <= 1.0
+
+
+def test_colour_edge_keeps_the_first_edge_when_lips_are_skin_coloured():
+    rows = _profile([(SKIN, 20), (0.8 * SKIN, 16), (SKIN, 30)])
+    rng = np.random.default_rng(1)
+    skin_px = SKIN + rng.normal(0.0, 4.0, (400, 3))
+    assert _colour_edge(rows, 24, +1, 31.0, skin_px, (0.05, 0.3), WI) == 31.0
+
+
+def test_jaw_bounds_are_asymmetric():
+    """The mouth may drop far below its rigid place (a yawn) but rise little (the nose is there)."""
+    assert ft.JAW_MAX[1] >= 0.6 and -0.35 <= ft.JAW_MIN[1] <= -0.2
+    assert 0 < ft.CROP_DROP < ft.JAW_MAX[1]
+
+
+def test_wide_reference_lets_a_pout_at_calibration_grin_later():
+    assert 0.5 < WIDE_REF < 0.8
+
+
+@pytest.mark.parametrize("dropped", [0.0, 0.6])
+def test_mouth_crop_keeps_the_upper_lip_of_a_yawn(dropped):
+    """The crop's top edge stays above the rigid mouth place's upper lip whatever the jaw does."""
+    from tracker.calibration import mouth_rect
+    from tracker.mouth_model import MOUTH_RECT
+
+    wi = 40.0
+    rigid = np.array([0.0, 50.0])
+    centre = rigid + (0.0, dropped * wi)
+    cy = min(float(centre[1]), float(rigid[1]) + ft.CROP_DROP * wi)
+    rect = mouth_rect((float(centre[0]), cy), wi)
+    upper_lip_top = rigid[1] - 0.25 * wi
+    assert rect[1] <= upper_lip_top
+    assert rect[1] + rect[3] >= centre[1] + 0.3 * wi  # and the lower lip of the dropped jaw
+    assert MOUTH_RECT[1] < 0
+
+
+def test_teeth_as_light_as_skin_do_not_end_the_lower_lip(monkeypatch):
+    """A profile of the calibrated classes: skin, upper lip, the dark line under it, four rows that
+    look like skin (teeth in warm light), the lower lip, skin. The split must put the lower lip's
+    outer edge under the real lower lip; without the price on lip-coloured rows past the skin below
+    it took the dark line for a thin lower lip and the teeth for the skin below it."""
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    mf = MouthFinder(model, model.work_ipd)
+    mu = mf._mu
+    t_up, t_dn = int(round(mf.t_up)), int(round(mf.t_dn))
+    dark = mu[2].copy()
+    dark[0] *= 0.8
+    teeth = mu[4] + (1.5, 0.5, 0.0)
+    runs = [(mu[0], 14), (mu[1], t_up), (dark, 2), (teeth, 4), (mu[2], t_dn), (mu[3], 14)]
+    f = np.concatenate([np.repeat(c[None, :], k, axis=0) for c, k in runs]).astype(np.float32)
+    inside = np.zeros(len(f), np.float32)
+    gap_top = 14 + t_up
+    true_bottom = gap_top + 6 + t_dn
+
+    def bottom() -> float:
+        return mf.vertical(f, inside, gap_top + 1.0, spread=0.12)[3]
+
+    assert abs(bottom() - true_bottom) <= 1.5
+    monkeypatch.setattr(mfm, "OUTSIDE_PRICE", 0.0)
+    assert abs(bottom() - true_bottom) > 1.5, "without the price the teeth end the lip (else this case shows nothing)"
