@@ -562,6 +562,9 @@ LIP_MAX = (0.15, 0.2)
 """Thickest upper and lower lip (× wi): a lip's red is about 0.1–0.15 of the inter-eye distance high."""
 CHEEK = (0.62, 0.8)
 """Distances (× wi) from the click along the line whose columns are cheek at calibration."""
+CHEEK_FAR = 1.5
+"""A column is cheek-like within this factor of the most cheek-like column on its side (see
+:func:`corner_distance`)."""
 CHEEK_LEVEL = 6.0
 """Mean squared distance (per feature, in the cheek's own spread) above which a column is not cheek."""
 BODY_SHARE = 0.3
@@ -628,6 +631,10 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
     body_d = sorted(v[max(body[0], 0) : min(max(body[1], body[0] + 1), n)])
     level = max(CHEEK_LEVEL, BODY_SHARE * body_d[len(body_d) // 2]) if body_d else CHEEK_LEVEL
     a, b = max(int(lo), 1), min(int(hi), n - 2)
+    if b > a:
+        # the cheek as this frame shows it: a turned head shades it, the light changes it — the best
+        # match out here may stay above a level set by the calibration alone
+        level = max(level, CHEEK_FAR * min(v[a : b + 1]))
     if b <= a:
         return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
     cap = 5.0 * level
