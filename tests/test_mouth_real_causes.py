@@ -105,3 +105,17 @@ def test_teeth_as_light_as_skin_do_not_end_the_lower_lip(monkeypatch):
     assert abs(bottom() - true_bottom) <= 1.5
     monkeypatch.setattr(mfm, "OUTSIDE_PRICE", 0.0)
     assert abs(bottom() - true_bottom) > 1.5, "without the price the teeth end the lip (else this case shows nothing)"
+
+
+def test_corner_found_when_the_cheek_is_lit_unlike_the_calibration(monkeypatch):
+    """Unlikeness to the calibrated cheek along one side: the mouth's body (20), its dark corner (90),
+    then the cheek — shaded by a turned head, it stays at 8, above the calibration's level of 6. The
+    corner is where that plateau starts, not at the far end of the search."""
+    import tracker.mouth_model as mm
+
+    d = np.array([20.0] * 10 + [60.0, 90.0, 60.0, 30.0] + [8.0, 9.0, 8.5, 8.0] * 5)
+    x, _ = mm.corner_distance(d, 4, 30, 3, (2, 9))
+    assert 12.5 <= x <= 14.5
+    monkeypatch.setattr(mm, "CHEEK_FAR", 0.0)
+    x_old, _ = mm.corner_distance(d, 4, 30, 3, (2, 9))
+    assert x_old > 20, "with the calibration's level alone the corner runs out (else this case shows nothing)"
