@@ -187,11 +187,11 @@ _SKINS = np.array([0, 3, 4])
 """The row classes that are skin (above, below, round the mouth)."""
 
 
-def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int) -> tuple[float, float] | None:
+def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int, near_rows: int = CORNER_NEAR) -> tuple[float, float] | None:
     """The middle and the height (rows, sub-pixel edges) of the run of mouth rows on one column: rows
     unlike skin (``unlike``, row costs as skin) by more than half the most unlike row within
     ``reach`` rows of row ``y``, or inside-like (``inside``) — the run holding ``y`` or one ending at
-    most :data:`CORNER_NEAR` rows from it. None when there is none (the column looks like skin: a
+    most ``near_rows`` (:data:`CORNER_NEAR` at 40 px between the eyes) rows from it. None when there is none (the column looks like skin: a
     corner in shadow, a closed pale mouth). Plain lists: a column is a few dozen rows."""
     H = len(unlike)
     a, b = max(y - reach, 0), min(y + reach + 1, H)
@@ -202,7 +202,7 @@ def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int) -> 
         return None
     level = 0.5 * peak
     mouth = [u > level or i for u, i in zip(unlike, inside)]
-    near = [j for j in range(max(a, y - CORNER_NEAR), min(b, y + CORNER_NEAR + 1)) if mouth[j]]
+    near = [j for j in range(max(a, y - near_rows), min(b, y + near_rows + 1)) if mouth[j]]
     if not near:
         return None
     k = min(near, key=lambda j: abs(j - y))
@@ -291,6 +291,10 @@ class MouthFinder:
         self._small = None
         self._maps: _Maps | None = None
         self.k = k = wi / model.work_ipd  # the model's lengths → this crop's
+        # rows and columns at the working scale per row at the scale the priors were set at (40 px
+        # between the eyes): the lips' evidence is a sum over rows, so the priors grow with it
+        self.r = r = wi / 40.0
+        self.near_rows = max(int(round(CORNER_NEAR * r)), 1)
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
         self.line0 = model.line * k
@@ -303,9 +307,9 @@ class MouthFinder:
         self._len = []
         for t in (self.t_up, self.t_dn):
             ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(THICKNESS[1] * t)) + 1)
-            self._len.append((ln, (LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
+            self._len.append((ln, (r * LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
         lu, ld = self._len[0][2], self._len[1][2]
-        self._couple = COUPLE * (lu[:, None] - ld[None, :]) ** 2
+        self._couple = r * COUPLE * (lu[:, None] - ld[None, :]) ** 2
         # the vertical split's candidate rows as offsets from the line's row, and what they cost
         self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
         lens_u, lens_d = self._len[0][0], self._len[1][0]
@@ -463,16 +467,16 @@ class MouthFinder:
         U, L = cu.min(axis=1), cl.min(axis=1)
         cgb = cg[:, bs]
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
-        tot = np.where(gap[2] >= OPEN_ROWS, gap[0], gap[1])
+        tot = np.where(gap[2] >= OPEN_ROWS * self.r, gap[0], gap[1])
         tot += U[:, None] + L[None, :] + self._upper_only
         # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it)
         dl = y_line - yi
         off = np.maximum(np.maximum(self._gap_a - dl, dl - self._gap_b), 0.0)
-        tot += (3.0 / (spread * self.wi) ** 2) * off * off
+        tot += (3.0 * self.r / (spread * self.wi) ** 2) * off * off
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
             # capped: it settles what the rows leave open, and cannot hold on to a wrong gap
-            tot += np.minimum((2.0 / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2, PREVIOUS_CAP)
+            tot += np.minimum((2.0 * self.r / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2, PREVIOUS_CAP * self.r)
         m = len(bs)
         bs = bs - P
         (lu, pu, _), (ld, pd, _) = self._len
@@ -520,7 +524,7 @@ class MouthFinder:
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
-            out.append((x0 + step * (half + CORNER_BIAS), float(ys[k] * (1 - t) + ys[k + 1] * t)))
+            out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))
             strength.append(g)
         return out[0], out[1], strength
 
@@ -537,7 +541,7 @@ class MouthFinder:
         reach = int(math.ceil(0.2 * self.wi))
         ys = [min(max(int(round(c[1])), 0), H - 1) for c in (left, right)]
         a, b = max(min(ys) - reach, 0), min(max(ys) + reach + 1, H)
-        ins = np.asarray(CORNER_INSETS)
+        ins = np.asarray(CORNER_INSETS) * self.r
         xs = np.concatenate([left[0] + ins, right[0] - ins])
         x0 = np.clip(np.round(xs - 1.0).astype(np.int64), 0, W - 1)
         x1 = np.clip(np.round(xs + 1.0).astype(np.int64) + 1, x0 + 1, W)
@@ -555,7 +559,7 @@ class MouthFinder:
         for side, (corner, yi) in enumerate(zip((left, right), ys)):
             hs, ms = [], []
             for j in range(n_in):
-                r = body_middle(unlike_l[side * n_in + j], inside_l[side * n_in + j], yi - a, reach)
+                r = body_middle(unlike_l[side * n_in + j], inside_l[side * n_in + j], yi - a, reach, self.near_rows)
                 if r is not None:
                     ms.append(r[0] + a)
                     hs.append(r[1])
