@@ -47,11 +47,12 @@ def test_line_columns_from_the_running_sums_match_the_direct_ones(finder_and_cro
 
 def _corner_reference(d, lo, hi, run, body):
     """The corner search written plainly with numpy (the finder's runs in plain Python)."""
-    from tracker.mouth_model import BODY_SHARE, CHEEK_LEVEL
+    from tracker.mouth_model import BODY_SHARE, CHEEK_FAR, CHEEK_LEVEL
 
     n = len(d)
     level = max(CHEEK_LEVEL, BODY_SHARE * float(np.sort(d[body[0] : body[1]])[(body[1] - body[0]) // 2]))
     a, b = max(int(lo), 1), min(int(hi), n - 2)
+    level = max(level, CHEEK_FAR * float(d[a : b + 1].min()))
     gain = np.cumsum(np.minimum(d, 5.0 * level) - level)
     cheek = d < level
     runs = np.zeros(n + 1, int)
@@ -262,7 +263,7 @@ def test_corners_rise_together_and_tilt_only_a_little(finder_and_crop, monkeypat
     finder, small, _ = finder_and_crop
     maps = finder.prepare(small)
     shifts = iter([-6.0] * 3 + [0.0] * 3)  # the left side's lips 6 rows up, the right side's on the line
-    monkeypatch.setattr(mf, "body_middle", lambda unlike, inside, y, reach: (y + next(shifts), 4.0))
+    monkeypatch.setattr(mf, "body_middle", lambda unlike, inside, y, reach, near_rows=mf.CORNER_NEAR: (y + next(shifts), 4.0))
     left, right = (10.0, 20.0), (40.0, 20.0)  # the traced line at row 20
     yl, yr = finder.corner_heights(maps, left, right)
     assert 0.5 * ((yl - 20.0) + (yr - 20.0)) == pytest.approx(-3.0)  # the mean of the two

@@ -234,9 +234,15 @@ REAL_CASES = [
     pytest.param("expr_d18", False, id="expr_d18-clicks"),
     pytest.param("expr_d18", True, id="expr_d18-auto"),  # narrow eyes: calibration centres each iris on the sides of its rim
     pytest.param("talk_a", False, id="talk_a-clicks"),  # a blink without the flow must not set the head's scale
+    pytest.param("talk_a", True, id="talk_a-auto"),
     pytest.param("expr_d10", False, id="expr_d10-clicks"),
+    pytest.param("talk_b", False, id="talk_b-clicks"),  # the lower lip's edge by its colour, not its shadow
     pytest.param("talk_b", True, id="talk_b-auto"),  # studio light: a lit philtrum is no teeth; a flag beside one cheek
-    pytest.param("expr_d11", False, id="expr_d11-clicks", marks=NOT_YET),
+    pytest.param("expr_d11", False, id="expr_d11-clicks"),  # a child: teeth as light as skin; a shaded cheek
+    pytest.param("expr_d11", True, id="expr_d11-auto"),
+    pytest.param("expr_d19", True, id="expr_d19-auto"),
+    pytest.param("expr_d3", False, id="expr_d3-clicks", marks=NOT_YET),  # mouth width (the corners run into creases)
+    pytest.param("expr_d6", False, id="expr_d6-clicks", marks=NOT_YET),  # tongue out, lopsided mouths: opening, losses
 ]
 
 
