@@ -57,7 +57,7 @@ ROW_CAP = 6.0
 """Most one row of the profile can cost in any part (an outlier: a highlight, a crease, teeth)."""
 GAP_PRICE = 3.0
 """Cost of one row between the lips that does not look like the inside of a mouth (a tongue)."""
-LENGTH_PRICE = 12.0
+LENGTH_PRICE = 96.0
 """Cost of a lip ``k`` times as thick as calibrated: ``LENGTH_PRICE · ln(k)²`` (k = 1.5 or 0.67: two rows)."""
 COUPLE = 30.0
 """Cost of the two lips stretching differently, ``COUPLE · (ln k_up − ln k_down)²``: lips thin
@@ -90,7 +90,7 @@ CORNER_NEAR = 4
 CORNER_UNLIKE = 1.5
 """Least row cost as skin (see :meth:`MouthFinder.row_costs`) near the line that shows the mouth's
 body on a corner's column."""
-PREVIOUS_CAP = 8.0
+PREVIOUS_CAP = 16.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
