@@ -797,7 +797,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--serial", action="store_true",
                     help="one clip at a time on one pinned core (use this for speed figures)")
     ap.add_argument("--frames", type=int, help="track only the first N frames of each clip")
+    ap.add_argument("--stress", metavar="DIR", nargs="?", const="out/stress",
+                    help="instead: every harder variant of the clips (benchmarks.stress_clips; made in DIR, default "
+                         "out/stress, when missing) in both modes, one summary line per variant")
     args = ap.parse_args(argv)
+    if args.stress:
+        return stress_main(Path(args.stress), args.dir, args.serial)
 
     folder = real_dir(args.dir)
     if folder is None:
@@ -830,6 +835,71 @@ def main(argv: list[str] | None = None) -> int:
     if args.synth:
         print()
         print(synth_table(measure_synthetic(workers=workers)).render())
+    print(f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+STRESS_SHORT = {"lost_pct": "L", "pupil_med": "Pm", "pupil_p95": "P95", "roll_med": "R", "r_open": "O",
+                "r_width": "W", "r_eye": "E", "r_brow": "B"}
+"""One-letter names of the targets in the stress summary (speed is left out: run ``--serial`` for it)."""
+
+
+def stress_summary(variant: str, results: Sequence[ClipResult]) -> tuple[list[str], dict[str, int]]:
+    """One row of the stress table (variant, clips meeting every target with clicks / auto, each
+    failing clip-mode and the targets it misses) and how many clip-modes meet each target."""
+    passes = {k: 0 for k in STRESS_SHORT}
+    every = {"clicks": 0, "auto": 0}
+    fails = []
+    for r in results:
+        if r.metrics is None:
+            fails.append(f"{r.name}/{r.mode[0]}: no start")
+            continue
+        miss = [k for k, v in misses(r.metrics, auto=r.mode == "auto").items() if v and k in STRESS_SHORT]
+        for k in STRESS_SHORT:
+            passes[k] += k not in miss
+        if miss:
+            fails.append(f"{r.name}/{r.mode[0]}: {'+'.join(STRESS_SHORT[k] for k in miss)}")
+        else:
+            every[r.mode] += 1
+    n = len({r.name for r in results})
+    return [variant, f"{every['clicks']}/{n}", f"{every['auto']}/{n}", "  ".join(fails)], passes
+
+
+def stress_main(out: Path, src: str | None = None, serial: bool = False) -> int:
+    """``--stress``: every variant of :mod:`benchmarks.stress_clips` (made in ``out`` when missing),
+    both modes; one line per variant, then how many clip-modes meet each target over all of them."""
+    from benchmarks import stress_clips
+    from benchmarks.harness import Table
+
+    folder = real_dir(src)
+    if folder is None:
+        print(f"realfaces --stress: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
+        return 0
+    names = clip_names(folder)
+    sets = [("original", folder)]
+    for v in stress_clips.VARIANTS:
+        d = out / v
+        if not all((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists() for nm in names):
+            for nm in names:
+                stress_clips.make_variant(folder, nm, v, d)
+        sets.append((v, d))
+    cv2.setNumThreads(1)
+    rows, total, count = [], {k: 0 for k in STRESS_SHORT}, 0
+    t0 = time.perf_counter()
+    for v, d in sets:
+        res = measure_all(d, names, (False, True), workers=1 if serial else 2)
+        row, passes = stress_summary(v, res)
+        rows.append(row)
+        for k in total:
+            total[k] += passes[k]
+        count += len(res)
+        print(f"  {v}: {row[1]} clicks, {row[2]} auto", file=sys.stderr, flush=True)
+    t = Table("Real faces, harder: the clips made smaller, shaken, noisy, dimmed, paler, blurred and mirrored",
+              ["variant", "all targets, clicks", "all targets, auto", "misses (L lost, Pm/P95 pupil, R roll, O open, W width, E eye, B brow)"],
+              rows,
+              note=f"clip-modes meeting each target, of {count}: " + ", ".join(f"{STRESS_SHORT[k]} {total[k]}" for k in STRESS_SHORT)
+              + ".\nVariants: benchmarks.stress_clips (its docstring says what each one does); no timing here.")
+    print(t.render())
     print(f"({time.perf_counter() - t0:.1f} s)")
     return 0
 

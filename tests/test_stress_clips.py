@@ -1,0 +1,84 @@
+"""The harder copies of the real clips: points move with the pixels, parameters follow the points."""
+
+import csv
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from benchmarks import realfaces as rf
+from benchmarks import stress_clips as sc
+from tracker.params import PARAM_NAMES
+
+
+def _write_clip(folder, n=4, w=64, h=48):
+    """A tiny clip with a peer: pupils, lids, brows, corners and lip points at fixed places."""
+    vw = cv2.VideoWriter(str(folder / "c.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), 25.0, (w, h))
+    rng = np.random.default_rng(0)
+    for _ in range(n):
+        vw.write(rng.integers(0, 255, (h, w, 3), dtype=np.uint8))
+    vw.release()
+    pts = {"left_pupil": (20, 15), "right_pupil": (44, 13), "left_upper_lid": (20, 12), "left_lower_lid": (20, 18),
+           "right_upper_lid": (44, 10), "right_lower_lid": (44, 16), "left_brow": (19, 7), "right_brow": (45, 5),
+           "left_mouth_corner": (22, 36), "right_mouth_corner": (42, 35), "upper_lip_top": (32, 32), "lower_lip_bottom": (32, 41)}
+    with open(folder / "c.points.csv", "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(["frame"] + [f"{p}_{c}" for p in sc.POINTS for c in "xy"])
+        for i in range(n):
+            wr.writerow([i] + [v for p in sc.POINTS for v in pts[p]])
+    vals = sc.peer_params({p: np.array([pts[p]] * n, float) for p in sc.POINTS})
+    with open(folder / "c.mp.csv", "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(["frame", *PARAM_NAMES, "ipd"])
+        for i in range(n):
+            wr.writerow([i, *vals[i]])
+    (folder / "c.clicks.json").write_text(json.dumps({"frame": 0, "left_pupil": [20, 15], "right_pupil": [44, 13],
+                                                     "left_brow": [19, 7], "right_brow": [45, 5], "mouth": [32, 36]}))
+    return pts
+
+
+def test_peer_params_follow_the_readme_definitions():
+    p = {k: np.array([[0.0, 0.0]]) for k in sc.POINTS}
+    p["left_pupil"], p["right_pupil"] = np.array([[10.0, 20.0]]), np.array([[50.0, 20.0]])
+    p["left_upper_lid"], p["left_lower_lid"] = np.array([[10.0, 17.0]]), np.array([[10.0, 23.0]])
+    p["left_brow"] = np.array([[10.0, 8.0]])
+    p["left_mouth_corner"], p["right_mouth_corner"] = np.array([[20.0, 60.0]]), np.array([[40.0, 60.0]])
+    p["upper_lip_top"], p["lower_lip_bottom"] = np.array([[30.0, 55.0]]), np.array([[30.0, 70.0]])
+    v = dict(zip([*PARAM_NAMES, "ipd"], sc.peer_params(p)[0]))
+    assert (v["mid_x"], v["mid_y"], v["roll_deg"], v["ipd"]) == (30.0, 20.0, 0.0, 40.0)
+    assert v["eye_open_l"] == pytest.approx(6.0) and v["brow_l"] == pytest.approx(12.0)
+    assert v["mouth_width"] == 20.0 and v["lip_upper"] == pytest.approx(5.0) and v["lip_lower"] == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize("kind", ["half", "mirror", "shake"])
+def test_variant_moves_points_with_pixels(tmp_path, kind):
+    src, out = tmp_path / "src", tmp_path / kind
+    src.mkdir()
+    pts = _write_clip(src)
+    sc.make_variant(src, "c", kind, out)
+    cap = cv2.VideoCapture(str(out / "c.mp4"))
+    ok, img = cap.read()
+    cap.release()
+    assert ok
+    peer = rf.load_peer(out, "c")
+    clicks = json.loads((out / "c.clicks.json").read_text())
+    lp, rp = peer.points["left_pupil"][0], peer.points["right_pupil"][0]
+    if kind == "half":
+        assert img.shape[:2] == (24, 32)
+        assert lp == pytest.approx([(20 + 0.5) * 0.5 - 0.5, (15 + 0.5) * 0.5 - 0.5], abs=0.01)
+    elif kind == "mirror":
+        assert lp == pytest.approx([63 - 44, 13], abs=0.01) and rp == pytest.approx([63 - 20, 15], abs=0.01)
+        assert lp[0] < rp[0] and clicks["left_pupil"][0] < clicks["right_pupil"][0]
+    assert peer.ipd[0] == pytest.approx(float(np.hypot(*(rp - lp))), abs=0.01)
+    assert clicks["left_pupil"] == pytest.approx(list(lp), abs=0.06)
+
+
+def test_stress_summary_counts_targets():
+    ok = rf.Metrics(frames=10, visible=10, lost_pct=0.0, pupil_med=1.0, pupil_p95=2.0, roll_med=0.1, r_open=0.9,
+                    r_width=0.9, r_eye=0.9, r_brow=0.9)
+    bad = rf.Metrics(**{**ok.__dict__, "r_open": 0.5, "lost_pct": 5.0})
+    res = [rf.ClipResult("a", "clicks", ok, np.zeros(0), 1.0), rf.ClipResult("a", "auto", bad, np.zeros(0), 1.0)]
+    row, passes = rf.stress_summary("v", res)
+    assert row[:3] == ["v", "1/1", "0/1"] and "a/a: L+O" in row[3]
+    assert passes["r_open"] == 1 and passes["r_eye"] == 2
