@@ -237,9 +237,9 @@ REAL_CASES = [
     pytest.param("talk_a", True, id="talk_a-auto"),
     pytest.param("expr_d10", False, id="expr_d10-clicks"),
     pytest.param("talk_b", False, id="talk_b-clicks"),  # the lower lip's edge by its colour, not its shadow
-    # studio light: a lit philtrum is no teeth; a flag beside one cheek. Not yet: for ten frames the mouth
-    # line starts on the shadow under her pouted lower lip (darker than the gap, at the end of its reach)
-    pytest.param("talk_b", True, id="talk_b-auto", marks=NOT_YET),
+    # studio light: a lit philtrum is no teeth; a flag beside one cheek; an open gap must not swallow her
+    # pouted lower lip (with the shadow under it taken for the lower lip)
+    pytest.param("talk_b", True, id="talk_b-auto"),
     pytest.param("expr_d11", False, id="expr_d11-clicks"),  # a child: teeth as light as skin; a shaded cheek
     pytest.param("expr_d11", True, id="expr_d11-auto"),
     pytest.param("expr_d19", True, id="expr_d19-auto"),

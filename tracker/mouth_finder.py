@@ -96,6 +96,9 @@ PREVIOUS_CAP = 16.0
 OPEN_SKIN = 1.0
 """Cost of one skin-like row between the lips of an open mouth: a tongue is skin-coloured, and the
 lower lip and the skin past it must still fit below it."""
+OPEN_LIP = 1.0
+"""Cost of one lip-like row between the lips of an open mouth: a tongue looks like lip, but so does
+the lower lip, which an open gap must not swallow (with the shadow under it taken for the lower lip)."""
 OPEN_ROWS = 2
 """Rows of the inside (dark, teeth) that make a gap an open mouth (where a tongue's rows are free)."""
 OUTSIDE_ROWS = 0.08
@@ -448,6 +451,8 @@ class MouthFinder:
         cg = np.zeros((3, n + 2 * P + 1))
         cg[0, 1:] = cg[1, 1:] = GAP_PRICE
         cg[0, 1 + m0 : 1 + m1] = (OPEN_SKIN / SKIN_UNLIKE) * out * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        if OPEN_LIP > 0:
+            cg[0, 1 + m0 : 1 + m1] += (OPEN_LIP / SKIN_UNLIKE) * out * np.clip(SKIN_UNLIKE - lip_like, 0.0, SKIN_UNLIKE)
         cg[1, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
         cg[2, 1 + m0 : 1 + m1] = inside > 0.5
         np.cumsum(cg, axis=1, out=cg)
