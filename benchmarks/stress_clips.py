@@ -7,6 +7,7 @@ along with the pixels, in the same layout as ``../shared/real/`` (``NAME.mp4``, 
 
 ======== ==================================================================================
 half     half the resolution (a 256 px face crop: a cheap webcam, a face far away)
+third    a third of the resolution (about 35 px between the eyes: the smallest face worth tracking)
 small    the clip at 0.45× inside a 640×480 frame, drifting slowly (a small face in a room)
 shake    shifted and turned every frame (a hand-held phone, a fast-moving head)
 noisy    sensor noise σ 8 and JPEG quality 40 (a dark room's gain, a streaming codec)
@@ -42,7 +43,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "small", "shake", "noisy", "dim", "pale", "blur", "mirror")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "pale", "blur", "mirror")
 
 
 def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple[list[np.ndarray], tuple[int, int]]:
@@ -50,8 +51,8 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
     w, h = size
     rng = np.random.default_rng(seed)
     eye = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    if kind == "half":
-        s = 0.5
+    if kind in ("half", "third"):
+        s = 0.5 if kind == "half" else 1.0 / 3.0
         m = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5]])
         return [m] * n, (int(round(w * s)), int(round(h * s)))
     if kind == "mirror":
@@ -165,8 +166,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     for i, img in enumerate(frames):
         m = maps[i]
         if kind != "mirror" and not np.allclose(m, [[1, 0, 0], [0, 1, 0]]):
-            interp = cv2.INTER_AREA if kind == "half" else cv2.INTER_LINEAR
-            if kind == "half":
+            interp = cv2.INTER_AREA if kind in ("half", "third") else cv2.INTER_LINEAR
+            if kind in ("half", "third"):
                 img = cv2.resize(img, (W, H), interpolation=interp)
             else:
                 img = cv2.warpAffine(img, m, (W, H), flags=interp, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
