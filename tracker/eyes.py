@@ -59,6 +59,11 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move against the other's when both are searched together
 (a crop predicted a few degrees or per cent off)."""
 FINE = 3
+IRIS_MATCH_WEIGHT = 3.0
+"""How much the iris picture's correlation counts against the disc's darkness when an iris is
+placed at full resolution (score = darkness × (1 + this × correlation)). Blur spreads dark lashes
+and make-up into the disc above the iris, so the darkest disc leans to the lash line (blurred
+clips 1–1.5 px high); the calibrated picture, lashes and all, still matches where it was cut."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
@@ -956,7 +961,7 @@ class EyeFinder:
             np.maximum(s, 0.0, out=s)
             if self.dark_power != 1.0:
                 s **= self.dark_power
-            s *= np.maximum(ncc, 0.0) + 1.0
+            s *= IRIS_MATCH_WEIGHT * np.maximum(ncc, 0.0) + 1.0
         out = []
         for i, (x, y) in enumerate(peaks):
             k = int(s[i].argmax())
