@@ -305,6 +305,32 @@ def test_refine_pupils_keeps_a_narrow_eyes_light_iris_off_its_lash_line(dy):
         assert abs(p[0] - x) < 1.0 and abs(p[1] - (60.0 + dy)) < 1.5
 
 
+def _iris_eye(iris: float, highlight: bool) -> np.ndarray:
+    """One open eye (grey, 160 × 120 px, an eye distance of 160 px): a white almond, an iris of
+    radius 18 and grey ``iris`` round a dark pupil, and (``highlight``) a bright reflection just
+    right of the pupil."""
+    img = np.full((120, 160), 170.0, np.float32)
+    yy, xx = np.mgrid[0:120, 0:160].astype(np.float32)
+    almond = ((xx - 80.0) / 34.0) ** 2 + ((yy - 60.0) / 14.0) ** 2 <= 1.0
+    img[almond] = 215.0
+    img[almond & (np.hypot(xx - 80.0, yy - 60.0) <= 18.0)] = iris
+    img[np.hypot(xx - 80.0, yy - 60.0) <= 4.5] = 25.0
+    if highlight:
+        img[(np.abs(xx - 89.0) <= 3.0) & (np.abs(yy - 59.0) <= 2.5)] = 250.0
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+@pytest.mark.parametrize("light", [150.0, 170.0])
+def test_refine_pupils_fits_both_irises_at_one_size(light):
+    """A light iris whose dark pupil and highlight make a small circle's edges beside the centre
+    (stronger there than its own faint rim), next to a plain dark iris: the two irises are one
+    size, so the light one's rim is the one at the dark one's radius (fitted alone, it went
+    6.5 px to the side)."""
+    frame = cv2.cvtColor(np.hstack([_iris_eye(70.0, False), _iris_eye(light, True)]).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    l, r = refine_pupils(frame, (81.0, 61.0), (241.0, 59.0))
+    assert np.hypot(l[0] - 80.0, l[1] - 60.0) < 1.0 and np.hypot(r[0] - 240.0, r[1] - 60.0) < 1.5
+
+
 def test_limbus_centre_prefers_the_rim_near_the_click():
     """Two equal irises in reach: the one nearer the click wins; a flat picture has no edge."""
     img = np.full((60, 100), 200.0, np.float32)

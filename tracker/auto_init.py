@@ -5,9 +5,10 @@ from. Steps, each using only what every face has:
 
 1. the face: OpenCV's bundled frontal-face cascade (:func:`tracker.face_finder.detect_faces`);
    the largest face wins;
-2. pupils: the detector's box says roughly where the eyes are (about 5 % of the inter-pupil
-   distance off on real faces); near there, each iris is the dark disc with the brighter
-   white of the eye on both sides (:func:`iris_centre`);
+2. pupils: the detector's box says roughly where the eyes are (5–10 %, at times 20 %, of the
+   inter-pupil distance off on real faces); near there, candidates for each eye from three
+   cues, and the best *pair* of them: both dark round centres with white beside them, mirror
+   images of each other, level and about the box's distance apart (:func:`find_pupils`);
 3. brows: the darkest band on the column above each pupil;
 4. mouth: the darkest line across the lower face, a little more than one inter-pupil
    distance below the eyes — the gap between closed lips or the inside of an open mouth
@@ -26,6 +27,7 @@ import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import Clicks
+from tracker.eyes import REFINE_WI, limbus_scores
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
 
 IRIS_RADIUS = 0.09
@@ -40,24 +42,84 @@ class AutoInitError(RuntimeError):
     """The detectors found no usable face (one-line message)."""
 
 
-def iris_centre(grey: np.ndarray, prior: tuple[float, float], ipd: float, reach: tuple[float, float] = (0.15, 0.1)) -> tuple[tuple[float, float], float]:
-    """The iris nearest ``prior`` (frame px) and its contrast (grey levels).
+EYE_WI = REFINE_WI
+"""Inter-pupil distance (px, the face box's estimate) of the upright picture the eyes are looked for
+in (the limbus arcs of :func:`tracker.eyes.limbus_scores` are sized for it)."""
+EYE_REACH = (0.35, 0.25)
+"""How far (× the box's inter-pupil distance, across and along the face) each eye is looked for
+around the box's guess: the box puts real eyes 5–10 %, at times 20 % (a rolled head), off."""
+PEAKS = 4
+"""Local maxima each cue map gives as candidates, per eye."""
+PAIR_DISTANCE = 0.2
+"""|log(pair distance / the box's estimate)| that costs nothing (real faces' boxes: 0.9–1.17)."""
+PAIR_WEIGHTS = {"votes": 4.0, "iris": 0.5, "rim": 0.5, "mirror": 2.0, "tilt": 4.0, "distance": 10.0, "near": 2.0}
+"""Weights of a candidate pair's score (see :func:`find_pupils`): ``votes``, ``iris`` and ``rim``
+per eye (each against the best of its eye's candidates), ``mirror`` for the eyes' likeness,
+``tilt`` per unit of the pair's slope, ``distance`` per unit of |log| distance past
+:data:`PAIR_DISTANCE`, ``near`` at the edge of :data:`EYE_REACH` (0 at the box's guess)."""
 
-    Score of a place: the mean of two small boxes left and right of an iris-sized disc there
-    (the white of the eye) minus the mean of the disc — high on an iris, low on brows, lashes
-    and shadows, which are dark but have no white beside them. ``reach`` is the search
-    half-width across and along the face, in inter-pupil distances.
-    """
-    r = max(IRIS_RADIUS * ipd, 2.0)
-    rx, ry = max(reach[0] * ipd, 1.0), max(reach[1] * ipd, 1.0)
-    pad = int(math.ceil(max(rx, ry) + 2.2 * r)) + 2
-    h, w = grey.shape
-    xi, yi = int(round(prior[0])), int(round(prior[1]))
-    x0, x1 = max(xi - pad, 0), min(xi + pad + 1, w)
-    y0, y1 = max(yi - pad, 0), min(yi + pad + 1, h)
-    if x1 - x0 < 3 or y1 - y0 < 3:
-        return (float(prior[0]), float(prior[1])), 0.0
-    win = grey[y0:y1, x0:x1].astype(np.float32)
+
+def _upright(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The eye band, upright and scaled to :data:`EYE_WI` px between ``left`` and ``right``
+    (frame px, the box's guess, level), and the affine (2×3) from frame px to its px; the
+    guessed eyes sit at ``(w/2 ∓ EYE_WI/2, h/2)``."""
+    ipd = max(math.dist(left, right), 1e-6)
+    k = EYE_WI / ipd
+    mid = 0.5 * (np.asarray(left, np.float64) + np.asarray(right, np.float64))
+    w = int(round(2 * (0.5 + EYE_REACH[0] + 0.3) * EYE_WI))
+    h = int(round(2 * (EYE_REACH[1] + 0.3) * EYE_WI))
+    m = np.array([[k, 0.0, 0.5 * w - k * mid[0]], [0.0, k, 0.5 * h - k * mid[1]]])
+    src = grey if k >= 0.7 else cv2.GaussianBlur(grey, (0, 0), 0.4 / k)  # no aliasing when shrinking
+    return cv2.warpAffine(src, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE), m
+
+
+def centre_votes(band: np.ndarray, centre: tuple[float, float], reach: tuple[float, float]) -> np.ndarray:
+    """How well each place within ``reach`` (px, half-size) of ``centre`` (px) of ``band`` is the
+    centre of a dark round thing: the mean squared share of the strong grey gradients around it
+    that point straight away from it (Timm & Barth 2011, "Accurate eye centre localisation by
+    means of gradients"), times how dark it is (0 at the window's 95th percentile of grey, 1 at
+    its 5th). Every edge of an iris or a pupil points away from its centre, whatever the iris's
+    colour and however much of it the lids hide; a lash line, a crease or a brow's edges point
+    away from a line, not a point. Returns the map (rows: y from ``centre[1] - reach[1]``)."""
+    cx, cy = int(round(centre[0])), int(round(centre[1]))
+    rx, ry = int(round(reach[0])), int(round(reach[1]))
+    gr = int(round(0.15 * EYE_WI))  # gradients come from a little further out than the centres
+    h, w = band.shape
+    x0, x1 = max(cx - rx - gr, 1), min(cx + rx + gr + 1, w - 1)
+    y0, y1 = max(cy - ry - gr, 1), min(cy + ry + gr + 1, h - 1)
+    sub = cv2.GaussianBlur(band, (0, 0), 1.0)[y0:y1, x0:x1]
+    gx = cv2.Sobel(sub, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(sub, cv2.CV_32F, 0, 1, ksize=3)
+    mag = cv2.magnitude(gx, gy)
+    ys, xs = np.nonzero(mag > mag.mean() + 0.3 * mag.std())
+    cxs = np.arange(cx - rx, cx + rx + 1, dtype=np.float32)
+    cys = np.arange(cy - ry, cy + ry + 1, dtype=np.float32)
+    if len(xs) == 0:
+        return np.zeros((len(cys), len(cxs)), np.float32)
+    m = mag[ys, xs]
+    ux, uy = gx[ys, xs] / m, gy[ys, xs] / m
+    px, py = (xs + x0).astype(np.float32), (ys + y0).astype(np.float32)
+    out = np.empty((len(cys), len(cxs)), np.float32)
+    for j, yc in enumerate(cys):  # a row of centres at a time: (centres × gradients)
+        dx = px[None, :] - cxs[:, None]
+        dy = (py - yc)[None, :]
+        dot = (dx * ux + dy * uy) / (np.sqrt(dx * dx + dy * dy) + 1e-3)
+        np.maximum(dot, 0.0, out=dot)
+        out[j] = (dot * dot).mean(axis=1)
+    smooth = cv2.GaussianBlur(band, (0, 0), 2.0)
+    win = smooth[max(cy - ry, 0): cy + ry + 1, max(cx - rx, 0): cx + rx + 1]
+    lo, hi = np.percentile(win, (5, 95))
+    yy = np.clip(cys.astype(int), 0, h - 1)[:, None]
+    xx = np.clip(cxs.astype(int), 0, w - 1)[None, :]
+    dark = np.clip((hi - smooth[yy, xx]) / max(hi - lo, 1.0), 0.0, 1.0)
+    return out * dark
+
+
+def iris_contrast(band: np.ndarray) -> np.ndarray:
+    """At every place of ``band``: the mean grey of two small boxes left and right of an
+    iris-sized disc there (the white of the eye) minus the disc's mean — high on an iris, low
+    on brows, lashes and shadows, which are dark but have no white beside them."""
+    r = IRIS_RADIUS * EYE_WI
     kd = int(round(1.6 * r)) | 1
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kd, kd)).astype(np.float32)
     disc /= disc.sum()
@@ -68,12 +130,113 @@ def iris_centre(grey: np.ndarray, prior: tuple[float, float], ipd: float, reach:
     side[:, :bw] = 1.0
     side[:, -bw:] = 1.0
     side /= side.sum()
-    score = cv2.filter2D(win, -1, side, borderType=cv2.BORDER_REPLICATE) - cv2.filter2D(win, -1, disc, borderType=cv2.BORDER_REPLICATE)
-    yy, xx = np.mgrid[y0:y1, x0:x1]
-    inside = ((xx - prior[0]) / rx) ** 2 + ((yy - prior[1]) / ry) ** 2 <= 1.0
-    masked = np.where(inside, score, -np.inf)
-    j, i = np.unravel_index(int(np.argmax(masked)), masked.shape)
-    return (float(x0 + i), float(y0 + j)), float(score[j, i])
+    return cv2.filter2D(band, -1, side, borderType=cv2.BORDER_REPLICATE) - cv2.filter2D(band, -1, disc, borderType=cv2.BORDER_REPLICATE)
+
+
+def _blobs(band: np.ndarray, sigma: float) -> np.ndarray:
+    """Dark-blob strength (grey levels) at scale ``sigma`` px: σ²·√det(Hessian) where both
+    curvatures are upward (a dark spot: a pupil, an iris), 0 on lines and bright things."""
+    g = cv2.GaussianBlur(band, (0, 0), sigma)
+    xx = cv2.Sobel(g, cv2.CV_32F, 2, 0, ksize=3)
+    yy = cv2.Sobel(g, cv2.CV_32F, 0, 2, ksize=3)
+    xy = cv2.Sobel(g, cv2.CV_32F, 1, 1, ksize=3)
+    d = xx * yy - xy * xy
+    d[(xx <= 0) | (yy <= 0)] = 0.0
+    return sigma * sigma * np.sqrt(np.maximum(d, 0.0))
+
+
+def _peaks(m: np.ndarray, k: int, apart: int = 4) -> list[tuple[int, int]]:
+    """The ``k`` highest local maxima (x, y) of ``m``, at least ``apart`` px from a higher one."""
+    dil = cv2.dilate(m, np.ones((2 * apart + 1, 2 * apart + 1), np.uint8))
+    ys, xs = np.nonzero((m >= dil) & (m > 0))
+    order = np.argsort(-m[ys, xs])[:k]
+    return [(int(xs[j]), int(ys[j])) for j in order]
+
+
+def _rim(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> float:
+    """The limbus's strength at ``p`` (band px): the best mean outward grey step on the sides
+    of an iris-sized circle centred within 2 px of it (see :func:`tracker.eyes.limbus_centre`)."""
+    s = limbus_scores(grad, p)
+    c = s.shape[1] // 2
+    return float(s[:, c - 2 : c + 3, c - 2 : c + 3].max())
+
+
+def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Normalised correlation of the eye round ``a`` with the mirrored eye round ``b`` (both
+    cut upright along the line a→b): two real eyes are mirror images; an iris and a lid
+    crease, or a brow, are not."""
+    ang = math.atan2(b[1] - a[1], b[0] - a[0])
+    pw, ph = int(round(0.44 * EYE_WI)), int(round(0.24 * EYE_WI))
+    c, s = math.cos(ang), math.sin(ang)
+    cuts = []
+    for p in (a, b):
+        m = np.array([[c, s, 0.5 * pw - (c * p[0] + s * p[1])], [-s, c, 0.5 * ph - (-s * p[0] + c * p[1])]])
+        cuts.append(cv2.warpAffine(band, m, (pw, ph), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
+    return float(cv2.matchTemplate(cuts[0], cv2.flip(cuts[1], 1), cv2.TM_CCOEFF_NORMED)[0, 0])
+
+
+def find_pupils(grey: np.ndarray, box: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Both pupils (frame px, image-left first) of the face in the detector's ``box``.
+
+    The box guesses the eyes (:func:`eyes_in_box`); around each guess, in an upright picture
+    at :data:`EYE_WI`, the candidates are the best places of three cues — gradients pointing
+    away from a dark centre (:func:`centre_votes`), an iris-sized disc with white beside it
+    (:func:`iris_contrast`) and a dark blob (:func:`_blobs`). Every pair of a left and a right
+    candidate is scored by each one's votes, disc contrast and limbus (each against the best
+    of its eye), how alike the two eyes are mirrored (:func:`_mirror`), less its tilt, how far its
+    length is from the box's estimate and how far each eye is from the box's guess; the best
+    pair wins. One eye alone can be fooled
+    (a lid crease, a made-up corner, a frame of glasses); both fooled alike, mirror images of
+    each other, level and the right distance apart, rarely are."""
+    prior = eyes_in_box(box)
+    band, m = _upright(grey, prior[0], prior[1])
+    h, w = band.shape
+    rx, ry = EYE_REACH[0] * EYE_WI, EYE_REACH[1] * EYE_WI
+    contrast = iris_contrast(band)
+    blobs = _blobs(band, 0.0625 * EYE_WI)
+    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
+    grad = (cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0))
+    eyes = []
+    for cx in (0.5 * w - 0.5 * EYE_WI, 0.5 * w + 0.5 * EYE_WI):
+        cy = 0.5 * h
+        votes = centre_votes(band, (cx, cy), (rx, ry))
+        ox, oy = int(round(cx)) - int(round(rx)), int(round(cy)) - int(round(ry))
+        vh, vw = votes.shape
+        cands: list[tuple[int, int]] = []
+        for mp in (votes, contrast[oy : oy + vh, ox : ox + vw], blobs[oy : oy + vh, ox : ox + vw]):
+            for x, y in _peaks(np.ascontiguousarray(mp, dtype=np.float32), PEAKS):
+                if all(abs(x - u) > 2 or abs(y - v) > 2 for u, v in cands):
+                    cands.append((x, y))
+        if not cands:
+            cands = [(vw // 2, vh // 2)]
+        vmax = max(float(votes.max()), 1e-6)
+        cmax = max(float(contrast[oy : oy + vh, ox : ox + vw].max()), 1e-6)
+        rims = [_rim(grad, (x + ox, y + oy)) for x, y in cands]
+        rmax = max(max(rims), 1e-6)
+        near = PAIR_WEIGHTS["near"]
+        eyes.append([((x + ox, y + oy), float(votes[max(y - 1, 0) : y + 2, max(x - 1, 0) : x + 2].max()) / vmax,
+                      float(contrast[y + oy, x + ox]) / cmax, r / rmax,
+                      near * (((x + ox - cx) / rx) ** 2 + ((y + oy - cy) / ry) ** 2)) for (x, y), r in zip(cands, rims)])
+    wt = PAIR_WEIGHTS
+    best, pick = -math.inf, None
+    for pa, va, ca, ra, na in eyes[0]:
+        for pb, vb, cb, rb, nb in eyes[1]:
+            dx, dy = pb[0] - pa[0], pb[1] - pa[1]
+            d = math.hypot(dx, dy)
+            if not 0.6 * EYE_WI < d < 1.6 * EYE_WI:
+                continue
+            score = (wt["votes"] * (va + vb) + wt["iris"] * (ca + cb) + wt["rim"] * (ra + rb) - na - nb
+                     - wt["tilt"] * abs(dy) / d - wt["distance"] * max(abs(math.log(d / EYE_WI)) - PAIR_DISTANCE, 0.0))
+            if score + wt["mirror"] <= best:
+                continue  # the mirror cannot lift it past the best
+            score += wt["mirror"] * _mirror(band, pa, pb)
+            if score > best:
+                best, pick = score, (pa, pb)
+    if pick is None:
+        return prior[0].copy(), prior[1].copy()
+    inv = cv2.invertAffineTransform(m)
+    pts = np.array(pick, dtype=np.float64) @ inv[:, :2].T + inv[:, 2]
+    return pts[0], pts[1]
 
 
 def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.ndarray, n: int, half: int) -> np.ndarray:
@@ -131,14 +294,8 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
         raise AutoInitError("no face found by the bundled face detector (use --init CLICKS.json instead)")
     grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     face = faces[0]
-    prior = eyes_in_box(face)
-    ipd0 = math.dist(prior[0], prior[1])
-    (lp, cl), (rp, cr) = iris_centre(grey, tuple(prior[0]), ipd0), iris_centre(grey, tuple(prior[1]), ipd0)
-    left, right = np.array(lp), np.array(rp)
-    ipd = math.dist(lp, rp)
-    if min(cl, cr) <= 0 or not (0.75 * ipd0 < ipd < 1.3 * ipd0) or abs(right[1] - left[1]) > 0.25 * ipd:
-        left, right = prior[0], prior[1]  # no clear irises (shut, dark or glinting eyes): the box's guess
-        ipd = ipd0
+    left, right = find_pupils(grey, face)
+    ipd = math.dist(left, right)
     up = np.array([(right[1] - left[1]) / ipd, -(right[0] - left[0]) / ipd])
     brows = [_brow(grey, tuple(p), ipd, up) for p in (left, right)]
     mouth = _mouth(grey, left, right)

@@ -59,6 +59,11 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move against the other's when both are searched together
 (a crop predicted a few degrees or per cent off)."""
 FINE = 3
+IRIS_MATCH_WEIGHT = 3.0
+"""How much the iris picture's correlation counts against the disc's darkness when an iris is
+placed at full resolution (score = darkness × (1 + this × correlation)). Blur spreads dark lashes
+and make-up into the disc above the iris, so the darkest disc leans to the lash line (blurred
+clips 1–1.5 px high); the calibrated picture, lashes and all, still matches where it was cut."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 """Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
@@ -956,7 +961,7 @@ class EyeFinder:
             np.maximum(s, 0.0, out=s)
             if self.dark_power != 1.0:
                 s **= self.dark_power
-            s *= np.maximum(ncc, 0.0) + 1.0
+            s *= IRIS_MATCH_WEIGHT * np.maximum(ncc, 0.0) + 1.0
         out = []
         for i, (x, y) in enumerate(peaks):
             k = int(s[i].argmax())
@@ -1327,6 +1332,8 @@ REFINE_WI = 80.0
 """The inter-pupil distance (px) the eyes are resampled to for :func:`refine_pupils`."""
 REFINE_STEP = 0.5
 """Grid step (px at :data:`REFINE_WI`) of the centres and radii tried."""
+RADIUS_SLACK = 2
+"""Steps (of :data:`REFINE_STEP`) the two eyes' limbus radii may differ by (see :func:`common_radius`)."""
 
 
 class _LimbusGrid:
@@ -1372,27 +1379,41 @@ class _LimbusGrid:
 _LIMBUS: _LimbusGrid | None = None
 
 
-def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> tuple[float, float, float, float]:
+def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> np.ndarray:
+    """The mean outward grey step (grey levels per px) on the limbus arcs (:data:`LIMBUS_ARC`) of
+    every circle :func:`limbus_centre` tries around ``at``, in a picture at :data:`REFINE_WI` px
+    between the eyes (its x and y gradients ``grad``): ``(radius, x, y)``, radii
+    :data:`LIMBUS_RADII`, centres every :data:`REFINE_STEP` px within :data:`REFINE_REACH` of
+    ``at`` (the middle index is ``at``)."""
+    global _LIMBUS
+    if _LIMBUS is None:
+        _LIMBUS = _LimbusGrid()
+    return _LIMBUS.scores(grad[0], grad[1], at[0], at[1])
+
+
+def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
+                  scores: np.ndarray | None = None, radii: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
     """The iris centre near ``at`` in a face-frame picture at :data:`REFINE_WI` (its x and y
     grey gradients ``grad``, per px): the circle whose sides (:data:`LIMBUS_ARC`) the grey rises
     across most steeply going outwards — the limbus, where the dark iris meets the white. The
     rim is chosen among the circles within :data:`REFINE_REACH` weighted by
     :data:`REFINE_PRIOR` around ``at``, then the steepest place near it is taken without that
-    weight (it would pull the centre a fraction of the way back to ``at``). Returns ``(x, y,
-    radius, edge)``: picture px, and the mean outward step there (grey levels per px).
+    weight (it would pull the centre a fraction of the way back to ``at``). ``scores``: the
+    :func:`limbus_scores` at ``at`` when already made; ``radii``: the range ``[lo, hi)`` of
+    radius indices (of :data:`LIMBUS_RADII` in :data:`REFINE_STEP` steps) allowed. Returns
+    ``(x, y, radius, edge)``: picture px, and the mean outward step there (grey levels per px).
     """
-    global _LIMBUS
-    if _LIMBUS is None:
-        _LIMBUS = _LimbusGrid()
+    S = limbus_scores(grad, at) if scores is None else scores
     g = _LIMBUS
-    S = g.scores(grad[0], grad[1], at[0], at[1])
-    P = np.maximum(S, 0.0) * g.prior
+    nr, n = S.shape[0], S.shape[1]
+    r0, r1 = (0, nr) if radii is None else (max(radii[0], 0), min(radii[1], nr))
+    P = np.maximum(S[r0:r1], 0.0) * g.prior
     k, i, j = np.unravel_index(int(P.argmax()), P.shape)
+    k += r0
     # the prior picks the rim; its own steepest place is then found without it (the prior
     # would pull the centre towards the click by a fraction of the click's error)
-    nr, n = S.shape[0], S.shape[1]
     while True:
-        k0, k1, i0, i1, j0, j1 = max(k - 1, 0), min(k + 2, nr), max(i - 1, 0), min(i + 2, n), max(j - 1, 0), min(j + 2, n)
+        k0, k1, i0, i1, j0, j1 = max(k - 1, r0), min(k + 2, r1), max(i - 1, 0), min(i + 2, n), max(j - 1, 0), min(j + 2, n)
         a, b, c = np.unravel_index(int(S[k0:k1, i0:i1, j0:j1].argmax()), (k1 - k0, i1 - i0, j1 - j0))
         if (k0 + a, i0 + b, j0 + c) == (k, i, j):
             break
@@ -1402,6 +1423,19 @@ def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) 
     dy = parabola_offset(S[k, i, j - 1], S[k, i, j], S[k, i, j + 1]) if 0 < j < n - 1 else 0.0
     step = REFINE_STEP
     return at[0] + g.offs[i] + dx * step, at[1] + g.offs[j] + dy * step, float(g.radii[k]), best
+
+
+def common_radius(scores: tuple[np.ndarray, np.ndarray]) -> tuple[int, int]:
+    """The radius indices ``[lo, hi)`` both eyes' limbus fits keep to: a person's two irises are
+    the same size, so the radius is the one at which the two eyes' best rims (each weighted by
+    :data:`REFINE_PRIOR`) add up to most, give or take :data:`RADIUS_SLACK` steps (a turned
+    head narrows one eye a little). One eye's rim can be missed — a light iris whose pupil and
+    highlight make a small circle's edges beside it — where the other's is plain."""
+    g = _LIMBUS
+    best = [np.maximum(S, 0.0).reshape(S.shape[0], -1) for S in scores]
+    best = [(b * g.prior.reshape(1, -1)).max(axis=1) for b in best]
+    k = int(np.argmax(best[0] + best[1]))
+    return k - RADIUS_SLACK, k + RADIUS_SLACK + 1
 
 
 def refine_pupils(
@@ -1439,9 +1473,12 @@ def refine_pupils(
     gx = cv2.Scharr(crop, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
     gy = cv2.Scharr(crop, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
     found = []  # face coordinates: the clicks are at (∓wi/2, 0)
-    for sx in (-0.5 * wi, 0.5 * wi):
-        x, y, _, edge = limbus_centre((gx, gy), (sx - x0, -y0))
-        found.append((x + x0, y + y0) if edge >= LIMBUS_MIN_EDGE else (sx, 0.0))
+    ats = [(sx - x0, -y0) for sx in (-0.5 * wi, 0.5 * wi)]
+    scores = [limbus_scores((gx, gy), at) for at in ats]
+    radii = common_radius((scores[0], scores[1]))
+    for at, S in zip(ats, scores):
+        x, y, _, edge = limbus_centre((gx, gy), at, S, radii)
+        found.append((x + x0, y + y0) if edge >= LIMBUS_MIN_EDGE else (at[0] + x0, 0.0))
     img = ff.to_image(np.array(found))
     nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
     if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):

@@ -178,3 +178,46 @@ def patch_similarity(patch: np.ndarray, reference: np.ndarray) -> float:
     if patch.shape != reference.shape:
         return 0.0
     return float(cv2.matchTemplate(patch, reference, cv2.TM_CCOEFF_NORMED)[0, 0])
+
+
+def reference_vector(reference: np.ndarray) -> np.ndarray:
+    """The face picture as a flat zero-mean unit vector (for :func:`face_turn`'s correlations)."""
+    z = np.asarray(reference, dtype=np.float32).ravel()
+    z = z - float(z.mean())
+    return z / max(float(np.linalg.norm(z)), 1e-6)
+
+
+def face_similarity(grey: np.ndarray, scale: float, pupils: np.ndarray, ref: np.ndarray) -> float:
+    """Normalised correlation (−1..1) of the face picture at eyes ``pupils`` (frame px) with ``ref``
+    (:func:`reference_vector`); ``grey`` is the frame in grey scaled by ``scale``."""
+    m, size, _, _ = _patch_warp(scale, pupils, 0)
+    p = cv2.GaussianBlur(cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float32),
+                         (0, 0), 1.0).ravel()
+    s1, s2 = float(p.sum()), float(p @ p)
+    return float(ref @ p) / max(math.sqrt(max(s2 - s1 * s1 / p.size, 0.0)), 1e-6)
+
+
+def face_turn(grey: np.ndarray, scale: float, pupils: np.ndarray, ref: np.ndarray, turn: float) -> float:
+    """Which roll of the face picture matches best round eyes at ``pupils`` (frame px): the
+    picture is also cut turned by ±``turn`` (radians) about the eyes' middle, and a parabola
+    through the three correlations gives the turn (radians, positive turning the image-right eye
+    down) that would match best, at most one step either way. The flow's rotation drifts with
+    every frame and a face pulled or turned can fool it for good; the calibrated picture does
+    not drift, and a face's expressions (brows up, eyes wide, a yawn) are mostly symmetric, so
+    they leave its roll alone — not its size: raised brows look like a larger face. ``grey`` is
+    the frame in grey scaled by ``scale``; ``ref`` is :func:`reference_vector`."""
+    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2)
+    mx, my = 0.5 * (p[0] + p[1])
+    z = complex(0.5 * (p[1, 0] - p[0, 0]), 0.5 * (p[1, 1] - p[0, 1]))
+    c0 = face_similarity(grey, scale, p, ref)
+    cs = []
+    for a in (-turn, turn):
+        v = z * complex(math.cos(a), math.sin(a))
+        cs.append(face_similarity(grey, scale, np.array([[mx - v.real, my - v.imag], [mx + v.real, my + v.imag]]), ref))
+    lo, hi = cs
+    den = lo - 2.0 * c0 + hi
+    if den < -1e-9:
+        d = min(max(0.5 * (lo - hi) / den, -1.0), 1.0)
+    else:  # no peak between the three: a full step towards the better side
+        d = 0.0 if lo == hi else math.copysign(1.0, hi - lo)
+    return d * turn

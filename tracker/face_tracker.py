@@ -38,7 +38,8 @@ import numpy as np
 
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.eyes import EyeFinder, EyeResult
-from tracker.face_finder import DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, locate_face, patch_similarity
+from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
+                                 locate_face, patch_similarity, reference_vector)
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
@@ -162,8 +163,8 @@ FACE_PRESENT = 0.45  # face-picture correlation that says "this is the calibrate
 FACE_ABSENT = 0.3  # ... below which it is not, whatever the eye and mouth finders say
 FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the flow's prediction
 FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
-SCALE_STEP = 1.06  # the face picture is also compared this much larger and smaller: its best size
-SCALE_PULL = 0.5  # per frame pull of the head's scale onto the face picture's best size
+ROLL_STEP = math.radians(3.0)  # the face picture is also compared this much turned each way: its best roll
+ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's best roll
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye finder goes back to the calibration
@@ -199,6 +200,7 @@ class FaceTracker:
         self._cal_mouth = ff0.to_image(np.array([cal.mouth_offset]))[0]
         self._outline = np.array(FACE_OUTLINE, dtype=np.float64)
         self._box_eyes = cal.face_box_eyes or DEFAULT_EYES
+        self._face_ref = None if cal.face_patch is None else reference_vector(cal.face_patch)
         self.motion = HeadMotion()
         self.motion.set_scale(cal.ipd)
         self.reset()
@@ -345,7 +347,8 @@ class FaceTracker:
         return self._track(frame_bgr, index, time, flow is not None)
 
     def _pin(self, anchors: np.ndarray, flow_ok: bool) -> tuple[np.ndarray, float | None]:
-        """Pull the anchors onto the face picture's match near them; (anchors, presence)."""
+        """Pull the anchors onto the face picture's match near them — its place and its roll
+        (:func:`face_turn`); (anchors, presence)."""
         if self.cal.face_patch is None:
             return anchors, None
         shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
@@ -357,15 +360,27 @@ class FaceTracker:
                 anchors = anchors + FACE_FOLLOW * trust * shift
             elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
                 anchors = anchors + shift  # no flow to trust: the picture says where the head went
+            # roll: the flow's drift, and a face pulled or turned that fooled it, would
+            # stay for good (one eye then disagrees with the pose and is doubted, so the eyes
+            # cannot set it right); the calibrated picture does not drift
+            turn = ROLL_PULL * face_turn(self._grey, self.motion.scale, anchors, self._face_ref, ROLL_STEP)
+            z = complex(*(0.5 * (anchors[1] - anchors[0]))) * complex(math.cos(turn), math.sin(turn))
+            mx, my = 0.5 * (anchors[0] + anchors[1])
+            anchors = np.array([[mx - z.real, my - z.imag], [mx + z.real, my + z.imag]])
             self.pose = similarity_from_pairs(self._cal_pupils, anchors)
         return anchors, presence
 
-    def _judge_eyes(self, res: EyeResult, found: np.ndarray, flow_ok: bool, face_there: bool) -> tuple[list[bool], bool]:
+    def _judge_eyes(self, res: EyeResult, found: np.ndarray, flow_ok: bool, face_there: bool,
+                    eyes_win=None) -> tuple[list[bool], bool]:
         """Which eyes are doubtful (not on this person's eye, or where no gaze can put it), and
         whether both are sure enough to turn the head's pose.
 
         A shut eye does not look like the calibrated open one, so its low score is not doubt
         when the face itself is there (``face_there``: its picture matched, or the flow follows it).
+        Two open eyes whose distance or tilt disagree with the head's pose doubt the less sure
+        one — unless ``eyes_win()`` says the face picture matches better at the eyes than at the
+        pose: then the pose has drifted (the flow's scale and roll do), and the eyes stay to set
+        it right (blaming an eye every frame would keep the wrong pose for good).
         """
         wi = self.wi
         preds = self._pupils_face.tolist()
@@ -387,7 +402,7 @@ class FaceTracker:
             ratio = math.hypot(*d) / wi
             # with the flow the head's roll and scale are known: open eyes must agree with them
             tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
-            if not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi:
+            if (not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi) and not (eyes_win is not None and eyes_win()):
                 doubt[int(np.argmin([o.score for o in obs]))] = True
                 strong = False
         return doubt, strong
@@ -406,7 +421,12 @@ class FaceTracker:
         obs = res.eyes
         found = np.array([[o.x + ox, o.y + oy] for o in obs])
         face_there = presence >= FACE_PRESENT if presence is not None else flow_ok
-        doubt, strong = self._judge_eyes(res, found, flow_ok, face_there)
+        eyes_win = None
+        if self._face_ref is not None:
+            def eyes_win() -> bool:
+                at_eyes = face_similarity(self._grey, self.motion.scale, ff.to_image(found), self._face_ref)
+                return at_eyes > face_similarity(self._grey, self.motion.scale, anchors, self._face_ref)
+        doubt, strong = self._judge_eyes(res, found, flow_ok, face_there, eyes_win)
         closed = [not o.open for o in obs]
         pup_f = found.copy()
         for i in range(2):
