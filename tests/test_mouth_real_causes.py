@@ -93,11 +93,11 @@ def test_teeth_as_light_as_skin_do_not_end_the_lower_lip(monkeypatch):
     dark = mu[2].copy()
     dark[0] *= 0.8
     teeth = mu[4] + (1.5, 0.5, 0.0)
-    runs = [(mu[0], 14), (mu[1], t_up), (dark, 2), (teeth, 4), (mu[2], t_dn), (mu[3], 14)]
+    runs = [(mu[0], 14), (mu[1], t_up), (dark, 3), (teeth, 4), (mu[2], t_dn), (mu[3], 14)]
     f = np.concatenate([np.repeat(c[None, :], k, axis=0) for c, k in runs]).astype(np.float32)
     inside = np.zeros(len(f), np.float32)
     gap_top = 14 + t_up
-    true_bottom = gap_top + 6 + t_dn
+    true_bottom = gap_top + 7 + t_dn
 
     def bottom() -> float:
         return mf.vertical(f, inside, gap_top + 1.0, spread=0.12)[3]
