@@ -77,7 +77,11 @@ LASH_CONTRAST = 25.0
 """Grey levels from the lash line to the white under it that make a lid margin."""
 CLOSING = (0.3, 0.7)
 """Lid gaps (fractions of the calibrated one) over which the eye point moves from the middle
-of the slit (closed) to the iris (open); the eye counts as open above the middle."""
+of the slit (closed) to the iris (open)."""
+OPEN_SHARE = 0.25
+"""Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
+lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
+eye shut below about 40 % of its usual opening."""
 SLIT_HW, SLIT_HH = 0.22, 0.1
 """Half-size of the window a closed eye's slit is looked for in."""
 SOCKET_HW, SOCKET_HH = 0.3, 0.17
@@ -1250,7 +1254,7 @@ class EyeFinder:
             x, y, match = found[i]
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
-                open=w >= 0.5, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
+                open=w >= OPEN_SHARE, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
                 radius=self.radius[i], iris_match=float(match), brow_match=brow_match,
             ))
         return EyeResult((eyes[0], eyes[1]))
