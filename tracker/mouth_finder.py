@@ -76,6 +76,11 @@ SKIN_IN_LIP = 3.0
 """Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
 SKIN_CLEAR = 2.0
 """Row cost as skin under which a row is plainly skin (see :data:`SKIN_IN_LIP`)."""
+SEED_UNIT = 0.05
+"""Luminance step (× the skin's) that one unit of darkness is worth when choosing the line's start."""
+SEED_LIP = 2.0
+"""Darkness units that the lower lip's colour all along under a dark valley is worth (see
+:meth:`MouthFinder.line_seed`)."""
 WIDE_REF = 0.65
 """Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
 pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
@@ -389,17 +394,40 @@ class MouthFinder:
         return f, np.maximum(inside, dark, out=inside)
 
     def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
-        """The darkest row (smoothed luminance, band through column ``x``) within :data:`SEED_REACH`
-        of row ``y_line``, the nearer of equals: where the mouth line is traced from. Upwards the
-        reach is short: the gap does not rise far above the head's prediction, and the shadow under
-        the nose, darker than a closed mouth's gap on many faces, is 0.25–0.4 wi above it."""
+        """The row the mouth line is traced from: of the dark valleys (smoothed luminance, band through
+        column ``x``) within :data:`SEED_REACH` of row ``y_line``, the dark one with the lower lip's
+        colour under it (its shading-free lip value, :attr:`MouthModel.axis_down`, over a lower lip's
+        thickness) — the gap between the lips, not the shadow under the lower lip, which is often
+        darker but has the chin under it. Upwards the reach is short: the gap does not rise far above
+        the head's prediction, and the shadow under the nose is 0.25–0.4 wi above it."""
         H, W = maps.shape
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
         b = min(max(int(y_line + SEED_REACH[1] * self.wi) + 1, a + 1), H)
         col = maps.lum[a:b, x0:x1].mean(axis=1)
         d = np.abs(np.arange(a, b) - y_line)
-        return float(a + int(np.argmin(col + 0.05 * d)))
+        best = int(np.argmin(col + 0.05 * d))
+        if SEED_LIP <= 0 or b - a < 3:
+            return float(a + best)
+        v = np.flatnonzero((col[1:-1] < col[:-2]) & (col[1:-1] <= col[2:])) + 1
+        cands = sorted(set(v.tolist()) | {best})
+        if len(cands) == 1:
+            return float(a + best)
+        # the lower lip's value on the rows of the band (mean BGR), from the running sums: the gap has
+        # the lower lip under it, the shadow under the lower lip has the chin
+        c = maps.colour[:, x1] - maps.colour[:, x0]
+        bgr = (c[1:] - c[:-1]).astype(np.float64) * (1.0 / (x1 - x0))
+        ld = bgr @ self.model.axis_down[:3] + self.model.axis_down[3]
+        cd = np.concatenate([[0.0], np.cumsum(np.clip(ld, 0.0, 1.0))])
+        nd = max(int(round(self.t_dn)), 1)
+        unit = SEED_UNIT * max(self.model.skin_level, 8.0)
+        scores = []
+        for k in cands:
+            y = a + k
+            za, zb = min(y + 2, H), min(y + 2 + nd, H)
+            below = (cd[zb] - cd[za]) / max(zb - za, 1)
+            scores.append(col[k] / unit - SEED_LIP * below + 0.05 * d[k])
+        return float(a + cands[int(np.argmin(scores))])
 
     def row_costs(self, f: np.ndarray) -> np.ndarray:
         """What each row of a profile costs (4, rows) as the skin above, the upper lip, the lower lip
