@@ -302,8 +302,11 @@ class FaceTracker:
             return None
         return patch_similarity(face_patch(self._grey, self.motion.scale, anchors), ref)
 
-    def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float]) -> bool:
-        """A mouth of about the calibrated size, corners level, near where the head puts it."""
+    def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float],
+                         rigid: tuple[float, float] | None = None) -> bool:
+        """A mouth of about the calibrated size, corners level, near where the head puts it: near the
+        prediction (the rigid place moved by the last jaw), or — a jaw closing fast after a yawn —
+        back up to its rigid place (``rigid``, face px) but not above it."""
         w = self.cal.mouth_width
         rise = m.level_rise
         if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.35 * m.width):
@@ -311,7 +314,10 @@ class FaceTracker:
         c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]
         dy = c[1] + origin[1] - predicted[1]
-        return abs(dx) <= 0.3 * self.wi and -0.25 * self.wi <= dy <= 0.45 * self.wi
+        lo = -0.25 * self.wi
+        if rigid is not None:
+            lo = min(lo, rigid[1] + self._jaw_min[1] - predicted[1])
+        return abs(dx) <= 0.3 * self.wi and lo <= dy <= 0.45 * self.wi
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
@@ -438,7 +444,7 @@ class FaceTracker:
         rigid_mouth = ff.to_face(apply(self.pose, self._cal_mouth[None]))[0]
         predicted_mouth = rigid_mouth + self.jaw
         mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth, rigid_mouth)
-        if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin):
+        if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
