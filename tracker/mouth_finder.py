@@ -714,7 +714,7 @@ class MouthFinder:
         plausibility of the width (0.5–1.8× the calibrated mouth's) and height (under 1.1 wi), the
         place of the centre on the traced line (``on_line``) against the prediction (full within ~0.3
         wi) and, with a previous result, how far the centre between the corners (``centre``) moved
-        (full within 0.2 wi)."""
+        (full within 0.25 wi, none past 0.5 wi: a pulled face moves its mouth that far in a frame)."""
         wi = self.wi
         ramp = lambda v, a, b: min(max((v - a) / (b - a), 0.0), 1.0)
         s_fit = ramp(-max(fit), -6.0, -3.0)
@@ -731,5 +731,5 @@ class MouthFinder:
             # the mouth's place cannot jump; its opening can change fast (speech), which the split
             # of the profile already weighs against the last frame's gap
             jump = math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1])
-            s_prev = ramp(-jump, -0.4 * wi, -0.2 * wi)
+            s_prev = ramp(-jump, -0.5 * wi, -0.25 * wi)
         return float(s_fit * s_corner * s_size * s_place * s_prev)
