@@ -119,3 +119,30 @@ def test_corner_found_when_the_cheek_is_lit_unlike_the_calibration(monkeypatch):
     monkeypatch.setattr(mm, "CHEEK_FAR", 0.0)
     x_old, _ = mm.corner_distance(d, 4, 30, 3, (2, 9))
     assert x_old > 20, "with the calibration's level alone the corner runs out (else this case shows nothing)"
+
+
+def _mouth_at(line_centre, width, rise):
+    """A stand-in for a mouth result: the traced line's ends about ``line_centre`` (face px)."""
+    from types import SimpleNamespace
+
+    cx, cy = line_centre
+    return SimpleNamespace(width=width, level_rise=rise, line_centre=(cx, cy))
+
+
+def test_mouth_place_and_tilt_checks():
+    """A lopsided mouth tilted by 0.4 of its width is a mouth; a mouth coming back up to its rigid place
+    after a yawn is one too; above the rigid place by more than the jaw allows it is not (a nostril)."""
+    from tests.test_tracker_track import BASE, clicks_for
+    from tracker.calibration import calibrate
+    from tracker.clicks import Clicks
+    from tracker.synthetic import render_face
+
+    frame, _ = render_face(BASE)
+    tr = ft.FaceTracker(calibrate(frame, Clicks.from_dict(clicks_for(BASE))))
+    wi, w = tr.wi, tr.cal.mouth_width
+    rigid = (0.0, 100.0)
+    here = lambda dy, rise=0.0, pred_dy=0.0: tr._plausible_mouth(
+        _mouth_at((0.0, rigid[1] + dy * wi), w, rise * w), (0.0, rigid[1] + pred_dy * wi), (0.0, 0.0), rigid)
+    assert here(0.0) and here(0.0, rise=0.4) and not here(0.0, rise=0.5)
+    assert here(0.0, pred_dy=0.6)  # the jaw closed in one frame: back at its rigid place
+    assert not here(-0.4, pred_dy=0.0) and not here(-0.4, pred_dy=0.6)  # above the rigid place: the nose

@@ -304,12 +304,13 @@ class FaceTracker:
 
     def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float],
                          rigid: tuple[float, float] | None = None) -> bool:
-        """A mouth of about the calibrated size, corners level, near where the head puts it: near the
+        """A mouth of about the calibrated size, its line tilted by under 0.45 of its width (a pulled,
+        lopsided mouth: 0.4 seen on real faces), near where the head puts it: near the
         prediction (the rigid place moved by the last jaw), or — a jaw closing fast after a yawn —
         back up to its rigid place (``rigid``, face px) but not above it."""
         w = self.cal.mouth_width
         rise = m.level_rise
-        if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.35 * m.width):
+        if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.45 * m.width):
             return False
         c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]
