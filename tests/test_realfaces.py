@@ -246,7 +246,7 @@ REAL_CASES = [
     pytest.param("expr_d11", True, id="expr_d11-auto"),
     pytest.param("expr_d19", True, id="expr_d19-auto"),
     pytest.param("expr_d3", False, id="expr_d3-clicks", marks=NOT_YET),  # mouth width (the corners run into creases)
-    pytest.param("expr_d6", False, id="expr_d6-clicks", marks=NOT_YET),  # tongue out, lopsided mouths: opening, losses
+    pytest.param("expr_d6", False, id="expr_d6-clicks", marks=NOT_YET),  # tongue out, lopsided mouths: opening (0.55)
 ]
 
 
