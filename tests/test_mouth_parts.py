@@ -307,3 +307,31 @@ def test_a_cheek_that_is_not_skin_at_calibration_borrows_the_other_side():
     assert np.allclose(model.cheek_left, model.cheek_right)
     true_width = float(np.hypot(*(lm["mouth_right"] - lm["mouth_left"]))) * ff.scale
     assert abs(model.width - true_width) < 3.0
+
+
+@pytest.mark.parametrize("expr", ["ah", "neutral"])
+@pytest.mark.parametrize("retrace", [True, False])
+def test_a_shadow_under_the_lower_lip_is_not_the_mouth_line(retrace, expr, monkeypatch):
+    """An open mouth over a dark shadow under the lower lip, the prediction down on the shadow (the
+    jaw's last offset): the mouth is found on the mouth — the lips' opening is above the traced line,
+    so the line is traced again from inside it. Without that, the line stays on the shadow."""
+    import cv2
+    import tracker.mouth_finder as mf
+    from test_mouth_finder import _errors, _truth_in_crop
+    from tracker.synthetic import face_landmarks
+
+    if not retrace:
+        monkeypatch.setattr(mf, "RETRACE", 1e9)
+    model, centre = _calibrate()
+    st = BASE.with_expression(expr)
+    img, _ = render_face(st)
+    lm = face_landmarks(st)
+    lx, ly = lm["lip_lower"]
+    cv2.rectangle(img, (int(lx - 0.3 * WI), int(ly + 0.02 * WI)), (int(lx + 0.3 * WI), int(ly + 0.08 * WI)), (25, 25, 40), -1)
+    ff = _frame_of(st)
+    crop, origin = _crop(img, ff, centre)
+    shadow = ff.to_face(np.array([[lx, ly + 0.08 * WI]]))[0] - origin
+    res = MouthFinder(model, WI).find(crop, (float(centre[0] - origin[0]), float(shadow[1])))
+    truth = _truth_in_crop(st, ff, origin)
+    dy = abs(res.centre[1] - truth["mouth"][1]) if res is not None else math.inf
+    assert (dy < 0.1 * WI) == retrace

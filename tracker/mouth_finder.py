@@ -81,6 +81,9 @@ SEED_UNIT = 0.05
 SEED_LIP = 2.0
 """Darkness units that the lower lip's colour all along under a dark valley is worth (see
 :meth:`MouthFinder.line_seed`)."""
+RETRACE = 0.03
+"""How far (× wi) below the lips' opening the traced line may run before it is traced again from
+inside the opening."""
 WIDE_REF = 0.65
 """Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
 pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
@@ -691,6 +694,17 @@ class MouthFinder:
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
         f, inside = self.profile(maps, cx)
         v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        if cy + self.line0 > v[1] + RETRACE * self.wi and v[1] - v[0] > 1.0:
+            # the lips put the mouth's opening above the traced line (which ran along the shadow under
+            # the lower lip): trace again from the darkest row of that opening
+            a, b = max(int(math.ceil(v[0])), 0), min(int(math.floor(v[1])) + 1, maps.shape[0])
+            if b > a:
+                x0, x1 = band_columns(cx, self.half, maps.shape[1])
+                seed = a + int(np.argmin(maps.lum[a:b, x0:x1].mean(axis=1)))
+                left, right, strength = self.corners(maps, cx, float(seed))
+                cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
+                f, inside = self.profile(maps, cx)
+                v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         # the corners' height from the mouth's own body next to them (the line runs through the gap
         # or the dark inside, which in a grin ends below the corners)
