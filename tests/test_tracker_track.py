@@ -120,6 +120,19 @@ def test_performance_with_roll_blinks_and_an_absence():
         pytest.xfail(MOUTH_PRECISION + f" (width, lips: {e[7:].round(2)})")
 
 
+def test_a_face_sliding_out_of_the_picture_is_not_ok_once_an_eye_is_out():
+    """The performer slides out to the left fast (seed 4 of the slide-away benchmark): on the frame
+    the face leaves the picture its left eye is already outside it and cannot have been measured,
+    so the frame is lost, not ok (the pupils were allowed 0.1 of the eye distance past the edge)."""
+    perf = Performance(seconds=3.0, seed=4, away=[(2.0, 3.0)], away_mode="slide")
+    tr = FaceTracker(calibrate(perf.frame(0), Clicks.from_dict(perf.clicks())))
+    for i in range(len(perf)):
+        img, t = perf.render(i)
+        r = tr.track(img, i, i / 30)
+        if t.status == LOST:
+            assert r.params.status != "ok", f"frame {i}: ok while the face is out of the picture"
+
+
 def test_lost_holds_the_last_values(cal):
     tr = FaceTracker(cal)
     r0 = tr.track(render_face(BASE)[0])

@@ -419,7 +419,7 @@ class FaceTracker:
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
         (lx, ly), (rx, ry) = anchors.tolist()
-        lo, hx, hy = -0.1 * wi, W + 0.1 * wi, H + 0.1 * wi
+        lo, hx, hy = 0.0, W - 1.0, H - 1.0  # an eye outside the picture cannot be measured
         if not (lo < lx < hx and lo < rx < hx and lo < ly < hy and lo < ry < hy):
             return self._lost_result(index, time, "left the frame")
         anchors, presence = self._pin(anchors, flow_ok)
