@@ -21,6 +21,7 @@ from tracker.eyes import (
     learn_eyes,
     limbus_centre,
     refine_pupils,
+    walk_length,
 )
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -423,6 +424,35 @@ def test_run_length_is_bounded_and_stops_at_a_gap(e):
     assert 0.0 <= r <= max(len(e) - 0.5, 0.0) + 1e-6
     if len(e) >= 3 and e[1] < 0.5 and e[2] < 0.5:
         assert r == pytest.approx(0.5 * e[0])
+
+
+def test_a_lid_far_from_the_calibrated_skin_still_ends_the_run():
+    # a walk up from the iris (distance 9 from the skin) through a shadowed lid (5.5: past the
+    # calibrated ramp 2..5, like the iris by colour) to the brow (7), never reaching skin like the
+    # calibrated one (deep-set eyes at low resolution): the lid's edge is after the 4 iris
+    # samples, not at the walk's end
+    walk = [9.0] * 4 + [5.5] * 6 + [7.0] * 3
+    assert walk_length(walk, 2.0, 5.0, 3, None) > 12.0  # the calibrated ramp alone: on to the walk's end
+    assert walk_length(walk, 2.0, 5.0, 3, 8.0) == pytest.approx(3.5, abs=0.3)
+    # a walk that reaches the calibrated skin keeps the calibrated ramp
+    plain = [9.0] * 4 + [0.5] * 6
+    assert walk_length(plain, 2.0, 5.0, 3, 8.0) == pytest.approx(walk_length(plain, 2.0, 5.0, 3, None))
+
+
+def test_the_white_beside_the_iris_stays_inside_the_run():
+    # iris (9), then the white above it (4.5, as calibrated), then a lid lit off the skin (2.5):
+    # the ramp moves half-way to the white, not to the iris, so the white stays interior
+    walk = [9.0] * 3 + [4.5] * 3 + [2.5] * 4
+    assert walk_length(walk, 2.0, 5.0, 3, 4.5) == pytest.approx(5.0, abs=0.3)
+    assert walk_length(walk, 2.0, 5.0, 3, math.inf) < 3.0  # the iris's level alone cuts the white off
+
+
+def test_a_model_without_a_white_level_loads_and_keeps_the_calibrated_ramp(finder):
+    d = json.loads(json.dumps(finder.model.to_dict()))
+    assert d["white"] == pytest.approx(finder.model.white)
+    d.pop("white")
+    m = EyeModel.from_dict(d, finder.model.images())
+    assert m.white is None
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

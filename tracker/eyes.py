@@ -279,6 +279,33 @@ def _run(e) -> float:
     return total
 
 
+def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None) -> float:
+    """Soft length (samples) of the interior run of one lid walk whose samples lie ``dist``
+    (Mahalanobis units) from the skin, ``dist[0]`` at the eye point.
+
+    The calibrated interior ramp (``lo`` to ``hi``) sits half-way between the calibrated skin
+    and the eye's interior; a lid whose skin is far from the calibrated skin — shadowed under
+    the brow ridge, lit paler under the eye, or blurred with lashes at low resolution — then
+    lies on the interior side of it, and the run goes on to the brow or the cheek (deep-set eyes
+    at half resolution: upper runs 0.3 ipd long, twice the real lid). So the ramp's middle
+    moves to half-way between the walk's own skin (its most skin-like sample, ``b``) and its
+    interior (the median of the first ``k`` samples, at most the calibrated white ``white``: a
+    white above or below the iris is interior too), but never below the calibrated middle nor
+    more than ``b`` above it (a walk that reaches skin like the calibrated one keeps the
+    calibrated ramp). A blurred edge crosses half-way exactly at the edge. ``white`` None: the
+    calibrated ramp only."""
+    if not dist:
+        return 0.0
+    mid, width = 0.5 * (lo + hi), hi - lo
+    if white is not None:
+        inner = sorted(dist[: max(k, 1)])
+        a = min(inner[len(inner) // 2], white)
+        b = min(dist)
+        mid = max(mid, min(mid + b, 0.5 * (a + b)))
+    start = mid - 0.5 * width
+    return _run([min(max((d - start) / width, 0.0), 1.0) for d in dist])
+
+
 # ---------------------------------------------------------------------------------------------
 # colours: what is the eye's interior
 
@@ -389,6 +416,18 @@ class SkinModel:
             return v, v
         return e.tolist(), np.maximum(e, np.minimum(z[:, 0, 3], 1.0)).tolist()
 
+    def distances(self, column: np.ndarray, gain: np.ndarray | None = None) -> tuple[list[float], list[float]]:
+        """The Mahalanobis distances of a column of colours ``(n, 1, 3)`` float32 from the skin
+        (see :func:`walk_length`) and its :meth:`profile` with the dark rule, in one pass."""
+        z = self._transform(column, gain)
+        d = self._distance(z)
+        e = d - self.lo
+        e *= self._scale
+        if self.dark > 0:
+            np.maximum(e, z[:, 0, 3], out=e)
+        np.clip(e, 0.0, 1.0, out=e)
+        return d.tolist(), e.tolist()
+
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":
         """The skin from named groups of BGR samples, pooled; a ``doubtful`` group whose own
@@ -471,7 +510,9 @@ class EyeModel:
     of its middle line and its height above the iris; ``lid_open`` the calibrated lid gap;
     ``lash`` the thickness of the upper lash line where it lies on the white or a light iris.
     ``skin`` what is skin around the eyes; ``skin_bgr`` the median BGR of the skin around
-    them (the light is followed on it, see :meth:`EyeFinder.skin_colour`).
+    them (the light is followed on it, see :meth:`EyeFinder.skin_colour`); ``white`` the
+    sclera's median distance from the skin (Mahalanobis units; None: not measured, the lid
+    ramp stays where calibration put it, see :func:`walk_length`).
     """
 
     work_ipd: float
@@ -485,6 +526,7 @@ class EyeModel:
     skin: SkinModel
     skin_bgr: np.ndarray
     lash: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    white: float | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -506,6 +548,7 @@ class EyeModel:
             "brow_heights": [float(v) for v in self.brow_heights],
             "lid_open": [float(v) for v in self.lid_open],
             "lash": [float(v) for v in self.lash],
+            **({} if self.white is None else {"white": float(self.white)}),
             "skin": self.skin.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
         }
@@ -536,6 +579,7 @@ class EyeModel:
                 brow_heights=[float(v) for v in d["brow_heights"]],
                 lid_open=[float(v) for v in d["lid_open"]],
                 lash=[float(v) for v in d["lash"]],
+                white=None if d.get("white") is None else float(d["white"]),
                 skin=SkinModel.from_dict(d["skin"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
             )
@@ -701,7 +745,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
-        skin_bgr=np.ones(3),
+        skin_bgr=np.ones(3), white=float(np.median(skin.distance(sclera))) if len(sclera) >= 3 else None,
     )
     f = EyeFinder(model, wi)
     ref = f.skin_colour(crop, pupils)
@@ -776,6 +820,7 @@ class EyeFinder:
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
+        self._walk_k = [max(int(round(r)), 2) for r in self.radius]  # samples of a walk's interior level
         self.skin = model.skin
         self._luma = _YCC[:1].astype(np.float32).reshape(1, 3)
         self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
@@ -1017,13 +1062,25 @@ class EyeFinder:
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
+    def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
+        """``(upper, lower)`` by colour from the strip's distances from the skin ``dist`` (row ``c``
+        is ``at``'s), each walk's ramp set by :func:`walk_length`."""
+        dy = round(at[1]) - at[1]
+        lo, hi, k, white = self.skin.lo, self.skin.hi, self._walk_k[i], self.model.white
+        up = walk_length(dist[c::-1], lo, hi, k, white)
+        down = walk_length(dist[c:], lo, hi, k, white)
+        return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
+
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
              dark: bool = True) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
         of the interior runs up and down the strip through ``at``, each row classified by its
         mean colour, the lash line off the upper one. With ``dark`` (the default, how the
-        calibrated gap is measured) what is much darker than any skin is interior too."""
+        calibrated gap is measured) what is much darker than any skin is interior too, on the
+        calibrated ramp; without it the runs are :meth:`_lid_walks` (where the skin ends)."""
         col, c = self._column(crop, i, at)
+        if not dark:
+            return self._lid_walks(self.skin.distances(col, gain)[0], c, i, at)
         return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at)
 
     def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float, float]]:
@@ -1033,12 +1090,12 @@ class EyeFinder:
         are the lash line and a shadowed crease beside the lids, so the rule tells that the
         iris shows, not where the lids are."""
         (c0, k0), (c1, k1) = self._column(crop, 0, ats[0]), self._column(crop, 1, ats[1])
-        e, ed = self.skin.profiles(np.concatenate((c0, c1)), gain)
+        dist, ed = self.skin.distances(np.concatenate((c0, c1)), gain)
         n = len(c0)
         out = []
         for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
-            up, down = self._lid_runs(e[a:b], k, i, ats[i])
-            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i]) if ed is not e else (up, down)
+            up, down = self._lid_walks(dist[a:b], k, i, ats[i])
+            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i])
             out.append((up, down, gu + gd))
         return out
 
