@@ -104,6 +104,33 @@ def test_expressions_match_truth(calibrated, expr):
     assert ew < 2.5 and eu < 1.5 and el < 1.5, (expr, round(ew, 2), round(eu, 2), round(el, 2))
 
 
+def test_grin_corners_found_along_the_line_bent_to_their_height(calibrated):
+    """In a grin the traced line runs along the lower teeth and the corners rise in dark triangles
+    above it: the columns along the straight line turn to cheek inside the corners (width 3.1 px
+    short at 80 px between the eyes). Looked for again along the line bent to the corners' height,
+    they end at the triangles' tips."""
+    model, centre = calibrated
+    res, t = _find(model, centre, BASE.with_expression("grin"))
+    assert res is not None and res.score >= SCORE_OK
+    ew, _, _ = _errors(res, t)
+    assert ew < 2.0, round(ew, 2)
+
+
+def test_bent_line_reaches_the_corner_height_only_near_the_corner(calibrated):
+    """:meth:`MouthFinder.bent` leaves the traced rows alone up to CORNER_BEND wi before the corner,
+    ramps them to the corner's height over that stretch and keeps that height past the corner."""
+    model, _ = calibrated
+    finder = MouthFinder(model, WI)
+    ys = np.full(31, 20.0)
+    (left, right) = finder.bent(15, [ys, None], [20.0, None], (14.0, 0.0))
+    assert right is None
+    start = 20.0 - finder.bend
+    k = np.arange(31)
+    assert np.all(left[k <= start] == 20.0)
+    assert np.all(left[k >= 20] == 14.0)
+    assert np.all(np.diff(left) <= 0.0)
+
+
 def test_open_mouth_counts_teeth_and_inside_as_mouth(calibrated):
     """A wide-open mouth with teeth: the outer lip edges, not the teeth or the dark inside."""
     model, centre = calibrated

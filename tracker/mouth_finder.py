@@ -95,6 +95,9 @@ CORNER_SHIFT = 0.2
 """Farthest (× wi) a corner's height may be from the traced line's row."""
 CORNER_NEAR = 4
 """Rows (working scale) between the traced line and the nearest mouth row on a corner's column."""
+CORNER_BEND = 0.1
+"""Columns (× wi) before a corner over which the traced line is bent to the corner's height before
+the corner is looked for again (:meth:`MouthFinder.bent`)."""
 CORNER_UNLIKE = 1.5
 """Least row cost as skin (see :meth:`MouthFinder.row_costs`) near the line that shows the mouth's
 body on a corner's column."""
@@ -306,6 +309,7 @@ class MouthFinder:
         # between the eyes): the lips' evidence is a sum over rows, so the priors grow with it
         self.r = r = wi / 40.0
         self.near_rows = max(int(round(CORNER_NEAR * r)), 1)
+        self.bend = max(CORNER_BEND * wi, 1.0)
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
         self.line0 = model.line * k
@@ -539,21 +543,35 @@ class MouthFinder:
         """The corners from the line through ``(x, y_line)``: ``(left, right, strengths)`` — each
         corner (x, y) and how clearly the mouth's columns differed from the cheek on that side
         (:func:`~tracker.mouth_model.corner_distance`'s sum)."""
+        x0, traced = self.trace(maps, x, y_line)
+        left, right, strength, _ = self._search(maps, x0, traced, y_line)
+        return left, right, strength
+
+    def trace(self, maps: "_Maps", x: float, y_line: float) -> tuple[int, list[np.ndarray | None]]:
+        """The mouth line's column ``x0`` (column ``x`` inside the crop) and its rows traced from
+        ``(x0, y_line)`` to the left and to the right (:func:`~tracker.mouth_model.trace_line`; None
+        for a side with fewer than four columns in the crop)."""
         H, W = maps.shape
         x0 = min(max(int(round(x)), 0), W - 1)
         traced = []
         for step in (-1, +1):
             n = min(self.n_side, x0 if step < 0 else W - 1 - x0)
             traced.append(trace_line(maps.lum, x0, y_line, step, n) if n >= 4 else None)
+        return x0, traced
+
+    def _search(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], y_line: float):
+        """The corners along the rows ``traced`` from column ``x0`` (see :meth:`corners`), and each
+        side's distance (columns from ``x0``, before :data:`~tracker.mouth_model.CORNER_BIAS`)."""
         live = [(step, ys) for step, ys in zip((-1, +1), traced) if ys is not None]
         if live:  # the columns along both sides in one go
             xs = np.concatenate([x0 + step * self._cols[: len(ys)] for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
-        out, strength, at = [], [], 0
+        out, strength, halves, at = [], [], [], 0
         for step, ys, cheek in zip((-1, +1), traced, self.cheeks):
             if ys is None:
                 out.append((float(x0), float(y_line)))
                 strength.append(0.0)
+                halves.append(None)
                 continue
             d = unlike_cheek(cols[at : at + len(ys)], (cheek[0], cheek[1]))
             at += len(ys)
@@ -562,7 +580,27 @@ class MouthFinder:
             t = half - k
             out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))
             strength.append(g)
-        return out[0], out[1], strength
+            halves.append(half)
+        return out[0], out[1], strength, halves
+
+    def bent(self, x0: int, traced: list[np.ndarray | None], halves: list[float | None],
+             heights: tuple[float, float]) -> list[np.ndarray | None]:
+        """The traced rows bent, over the last :data:`CORNER_BEND` wi before each corner (``halves``,
+        columns from ``x0``) and on past it, to that corner's height (``heights``, rows from
+        :meth:`corner_heights`): a grin's corners rise steeply in dark triangles above the line, an
+        open mouth is widest below it, and the columns along the line there end inside the mouth —
+        along the bent rows they end where the lips meet. Rounded to whole rows."""
+        out = []
+        for ys, half, yc in zip(traced, halves, heights):
+            if ys is None or half is None:
+                out.append(ys)
+                continue
+            k = min(int(half), len(ys) - 2)
+            t = half - k
+            dy = yc - float(ys[k] * (1 - t) + ys[k + 1] * t)
+            ramp = np.clip((self._cols[: len(ys)] - (half - self.bend)) * (1.0 / self.bend), 0.0, 1.0)
+            out.append(np.round(ys + dy * ramp))
+        return out
 
     def corner_heights(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float]) -> tuple[float, float]:
         """The corners' rows: on narrow columns :data:`CORNER_INSETS` px inside each corner, the middle
@@ -688,7 +726,9 @@ class MouthFinder:
             px = 0.5 * (px + previous.centre[0])
         # the mouth line: from the darkest row near the prediction (the gap, or an open mouth's inside)
         # on the column through it, traced out to the corners
-        left, right, strength = self.corners(maps, px, self.line_seed(maps, px, y_line))
+        seed = self.line_seed(maps, px, y_line)
+        x0, traced = self.trace(maps, px, seed)
+        left, right, strength, halves = self._search(maps, x0, traced, seed)
         # the lips on the column through the corners' midpoint, the gap near their line (where the
         # calibration had it)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
@@ -710,6 +750,12 @@ class MouthFinder:
         # or the dark inside, which in a grin ends below the corners)
         line_c, line_ends = (cx, cy), (left, right)
         yl, yr = self.corner_heights(maps, left, right)
+        # the corners again along the line bent to those heights: a grin's corners rise above the
+        # line, an open mouth is widest below it, and the straight line left the mouth too soon there
+        # (each path ends where it leaves the mouth, so the mouth reaches at least the farther end)
+        if CORNER_BEND > 0:
+            bl, br, _, _ = self._search(maps, x0, self.bent(x0, traced, halves, (yl, yr)), seed)
+            left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
         left, right = (left[0], yl), (right[0], yr)
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
