@@ -739,9 +739,10 @@ class MouthFinder:
             # the lower lip): trace again from the darkest row of that opening
             a, b = max(int(math.ceil(v[0])), 0), min(int(math.floor(v[1])) + 1, maps.shape[0])
             if b > a:
-                x0, x1 = band_columns(cx, self.half, maps.shape[1])
-                seed = a + int(np.argmin(maps.lum[a:b, x0:x1].mean(axis=1)))
-                left, right, strength = self.corners(maps, cx, float(seed))
+                c0, c1 = band_columns(cx, self.half, maps.shape[1])
+                seed = float(a + int(np.argmin(maps.lum[a:b, c0:c1].mean(axis=1))))
+                x0, traced = self.trace(maps, cx, seed)
+                left, right, strength, halves = self._search(maps, x0, traced, seed)
                 cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
                 f, inside = self.profile(maps, cx)
                 v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
