@@ -121,6 +121,21 @@ def test_corner_found_when_the_cheek_is_lit_unlike_the_calibration(monkeypatch):
     assert x_old > 20, "with the calibration's level alone the corner runs out (else this case shows nothing)"
 
 
+def test_corner_of_a_low_contrast_mouth_is_where_its_columns_meet_the_cheek(monkeypatch):
+    """Pale lips, or a camera with little colour: the mouth's body is only 8 unlike the cheek and its
+    tapering ends (teeth and lower lip in a grin) 5, the cheek 0.5-1. The corner is where the columns
+    meet the cheek (after column 21), not where the body gives way to the ends (10): no absolute floor
+    above the mouth's own contrast ends it early."""
+    import tracker.mouth_model as mm
+
+    d = np.array([8.0] * 10 + [5.0] * 12 + [0.5, 1.0, 0.8] * 6)
+    x, _ = mm.corner_distance(d, 4, 30, 3, (2, 9))
+    assert 21.0 <= x <= 22.0
+    monkeypatch.setattr(mm, "CHEEK_LEVEL", 6.0)
+    x_old, _ = mm.corner_distance(d, 4, 30, 3, (2, 9))
+    assert x_old < 12, "with a floor of 6 the corner ends where the body does (else this case shows nothing)"
+
+
 def _mouth_at(line_centre, width, rise):
     """A stand-in for a mouth result: the traced line's ends about ``line_centre`` (face px)."""
     from types import SimpleNamespace

@@ -565,15 +565,19 @@ CHEEK = (0.62, 0.8)
 CHEEK_FAR = 1.5
 """A column is cheek-like within this factor of the most cheek-like column on its side (see
 :func:`corner_distance`)."""
-CHEEK_LEVEL = 6.0
-"""Mean squared distance (per feature, in the cheek's own spread) above which a column is not cheek."""
+CHEEK_LEVEL = 4.0
+"""Mean squared distance (per feature, in the cheek's own spread) above which a column is never
+cheek-like: two spreads per feature (a cheek column is about 1). Only a floor under the levels that
+follow the mouth's own contrast (:data:`BODY_SHARE`) and the side's cheek (:data:`CHEEK_FAR`): pale
+lips or a camera with little colour leave the whole mouth at 5-10, and a floor of 6 ended the
+corner where the lips begin to taper (pale expr_d0's grin: 20 columns short on one side)."""
 BODY_SHARE = 0.3
+"""A corner is where the columns are less unlike the cheek than this share of the lips' body."""
 CORNER_BIAS = 1.0
 """Columns a corner from :func:`corner_distance` is moved outwards: the columns about the line turn
 to cheek where the lips have tapered to a point, one column (at any scale: measured on synthetic
 faces whose corners are known, 80 and 40 px between the eyes) inside where the corner is. A
 constant, so it moves no correlation."""
-"""A corner is where the columns are less unlike the cheek than this share of the lips' body."""
 
 
 def mouth_body(wi: float) -> tuple[int, int]:
