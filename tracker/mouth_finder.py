@@ -9,10 +9,12 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    matched to the calibration's (:meth:`MouthFinder.gains`); integral images of the colours and
    of the inside-like pixels and a smoothed luminance are made once, so every profile and every
    column along the line below is a few look-ups;
-2. **the corners** (:meth:`MouthFinder.corners`): the mouth line is traced from the darkest row
-   near the prediction (the gap, or an open mouth's inside) outwards along the darkest valley, and
-   on each side the corner is where the columns along it (the bands above, on and below the line)
-   start to look like the calibrated cheek;
+2. **the corners** (:meth:`MouthFinder.corners`): the mouth line is traced from a dark valley near
+   the prediction that has the lower lip's colour under it (the gap, or an open mouth's inside —
+   not the shadow under the lower lip, :meth:`MouthFinder.line_seed`) outwards along the darkest
+   valley, and on each side the corner is where the columns along it (the bands above, on and below
+   the line) start to look like the cheek; once the corners' heights are known (step 3) the search
+   is repeated along the line bent to them (a grin's corners rise above the line);
 3. **the lips on the vertical profile through the corners' midpoint** (:meth:`MouthFinder.vertical`):
    the calibrated templates of the upper and the lower lip — from each lip's inner edge out over
    the skin beyond it — are matched to the profile, each lip stretched within :data:`THICKNESS`,
@@ -22,8 +24,12 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    look like neither (a tongue, the red back of a yawn). The best pair gives the inner lip edges
    (the gap) and the outer ones: the outer edge cannot drift into the philtrum, a chin's shadow or
    stubble, since the whole lip — its colour, its shading, the skin past it — must fit, and the
-   dark inside and teeth are counted inside the mouth. With the last frame's mouth (``previous``)
-   the gap's height is weighed against it;
+   dark inside and teeth are counted inside the mouth. Each lip keeps close to its calibrated
+   thickness (the gap is the strong evidence, the outer edges the weak one); lip colour right under
+   the skin below the lower lip, and lip-like rows swallowed by an open gap, cost extra (the lower
+   lip goes on past teeth as light as skin; an open gap must not take a pouted lower lip). With the
+   last frame's mouth (``previous``) the gap's height is weighed against it; when the lips put the
+   opening above the traced line, the line is traced again from inside it;
 4. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
    clearly the columns between the corners differ from the cheek against the calibration, the
    plausibility of the size, the place against the prediction and, with the previous frame's
