@@ -761,8 +761,10 @@ class MouthFinder:
         # line, an open mouth is widest below it, and the straight line left the mouth too soon there
         # (each path ends where it leaves the mouth, so the mouth reaches at least the farther end)
         if CORNER_BEND > 0:
-            bl, br, _, _ = self._search(maps, x0, self.bent(x0, traced, halves, (yl, yr)), seed)
-            left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
+            rows = self.bent(x0, traced, halves, (yl, yr))
+            if any(b is not None and not np.array_equal(b, t) for b, t in zip(rows, traced)):  # else: the same search
+                bl, br, _, _ = self._search(maps, x0, rows, seed)
+                left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
         left, right = (left[0], yl), (right[0], yr)
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
