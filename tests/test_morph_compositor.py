@@ -83,7 +83,10 @@ def test_character_rotates_about_the_pivot_and_translates(roll, dx, dy, gain):
     want = np.array(pivot) + [rel[0] * math.cos(t) + rel[1] * math.sin(t),
                               -rel[0] * math.sin(t) + rel[1] * math.cos(t)] + np.array([dx, dy]) * gain
     assert np.allclose(_centroid(out), want, atol=0.05)
-    assert abs(out[:, :, 3].sum() / 255.0 - 64) < 1.0
+    # bilinear resampling of a hard-edged square, rounded to uint8, keeps its mass only to a few
+    # per cent at oblique angles (worst seen over a fine sweep of roll × gain × sub-pixel shifts:
+    # 1.57 of 64, at 134.6°); a lost or doubled blob is off by 64
+    assert abs(out[:, :, 3].sum() / 255.0 - 64) < 2.0
 
 
 def test_positive_roll_raises_the_right_side():
