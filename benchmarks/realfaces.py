@@ -26,7 +26,11 @@ How the comparison is made (all in :func:`compare`):
   slide-away clips of :func:`synthetic_away` do).
 
 Times are ``time.perf_counter`` around each frame's ``FaceTracker.track`` call, every frame
-included (re-acquisition too); decoding and drawing are outside the timed region.
+included (re-acquisition too); decoding and drawing are outside the timed region. The clip is
+decoded on one thread: a threaded decoder keeps decoding later frames in the background, and on a
+process pinned to one core it takes that core from the timed calls (expr_d0, three runs each: p95
+8.8–9.3 ms with the threaded decoder, 5.6–6.1 ms with one thread; wall clock above the calls' own
+thread time only with the threaded decoder).
 """
 
 from __future__ import annotations
@@ -257,7 +261,7 @@ def run_clip(
         return run
     run.calibrate_ms = (time.perf_counter() - t0) * 1000.0
     keep = set(int(k) for k in keep)
-    v = _Video(video)
+    v = _Video(video, threads=1)  # no decoding in the background while a frame is timed
     times, cpu, mouths = [], [], []
     try:
         for i, img in v.frames():

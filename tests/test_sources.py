@@ -274,3 +274,23 @@ def test_video_closed_from_another_thread_while_playing(tmp_path):
     assert seen[-1] < 10 and src.closed
     with pytest.raises(SourceError, match="closed"):
         iter(src).__next__()
+
+
+def test_one_decoder_thread_reads_the_same_frames(tmp_path):
+    """Timed runs decode on one thread (no decoding in the background of a timed call): the
+    frames are the same as the library's threaded decoder gives."""
+    from tracker.track_cli import _Video
+
+    rng = np.random.default_rng(3)
+    frames = [np.clip(rng.normal(128, 40, (48, 64, 3)), 0, 255).astype(np.uint8) for _ in range(12)]
+    path = tmp_path / "v.mp4"
+    write_video(path, frames)
+    got = []
+    for threads in (0, 1):
+        v = _Video(path, threads=threads)
+        try:
+            got.append([img for _, img in v.frames()])
+        finally:
+            v.close()
+    assert len(got[0]) == len(got[1]) == len(frames)
+    assert all(np.array_equal(a, b) for a, b in zip(*got))

@@ -53,13 +53,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 class _Video:
     """Sequential frames of a video file, with one-line errors."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, threads: int = 0):
+        """``threads``: decoder threads (0: the library's choice). One keeps decoding inside
+        :meth:`frames`' own calls: with more, the decoder goes on working on later frames in the
+        background, on the same core when the process is pinned to one (timed runs)."""
         if not path.exists():
             raise TrackCliError(f"{path}: no such video file")
         if path.is_dir():
             raise TrackCliError(f"{path}: is a folder, not a video file")
         self.path = path
-        self.cap = cv2.VideoCapture(str(path))
+        self.cap = cv2.VideoCapture(str(path), cv2.CAP_ANY, [cv2.CAP_PROP_N_THREADS, threads]) if threads > 0 else None
+        if self.cap is None or not self.cap.isOpened():
+            self.cap = cv2.VideoCapture(str(path))
         if not self.cap.isOpened():
             raise TrackCliError(f"{path}: cannot open as a video")
         fps = self.cap.get(cv2.CAP_PROP_FPS)
