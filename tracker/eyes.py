@@ -59,6 +59,7 @@ PAIR_SLACK_X, PAIR_SLACK_Y = 0.06, 0.08
 """How far one eye's iris may move against the other's when both are searched together
 (a crop predicted a few degrees or per cent off)."""
 FINE = 3
+"""Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 IRIS_MATCH_WEIGHT = 3.0
 """How much the iris picture's correlation counts against the disc's darkness when an iris is
 placed at full resolution (score = darkness × (1 + this × correlation)). Blur spreads dark lashes
@@ -66,7 +67,6 @@ and make-up into the disc above the iris, so the darkest disc leans to the lash 
 clips 1–1.5 px high); the calibrated picture, lashes and all, still matches where it was cut."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
-"""Half-size (full px) of the neighbourhood the iris is refined in at full resolution."""
 LID_RANGE = 0.3
 """How far the lid runs go up and down from the eye point."""
 LID_HW = 0.3
@@ -384,8 +384,11 @@ class SkinModel:
         np.maximum(d2, 0.0, out=d2)
         return np.sqrt(d2, out=d2)
 
-    def _membership(self, z: np.ndarray, dark: bool = True) -> np.ndarray:
-        d = self._distance(z)
+    def _membership(self, z: np.ndarray, dark: bool = True, d: np.ndarray | None = None) -> np.ndarray:
+        """Interior membership 0..1 of the pixels transformed to ``z`` (their :meth:`_distance`
+        ``d`` when already made, left as it is)."""
+        if d is None:
+            d = self._distance(z)
         e = d - self.lo
         e *= self._scale
         if dark and self.dark > 0:
@@ -407,26 +410,12 @@ class SkinModel:
         ``dark=False`` leaves the dark rule out (colour only)."""
         return self._membership(self._transform(column, gain), dark).tolist()
 
-    def profiles(self, column: np.ndarray, gain: np.ndarray | None = None) -> tuple[list[float], list[float]]:
-        """:meth:`profile` of a column by colour only and with the dark rule, in one pass."""
-        z = self._transform(column, gain)
-        e = self._membership(z, False)
-        if self.dark <= 0:
-            v = e.tolist()
-            return v, v
-        return e.tolist(), np.maximum(e, np.minimum(z[:, 0, 3], 1.0)).tolist()
-
     def distances(self, column: np.ndarray, gain: np.ndarray | None = None) -> tuple[list[float], list[float]]:
         """The Mahalanobis distances of a column of colours ``(n, 1, 3)`` float32 from the skin
         (see :func:`walk_length`) and its :meth:`profile` with the dark rule, in one pass."""
         z = self._transform(column, gain)
         d = self._distance(z)
-        e = d - self.lo
-        e *= self._scale
-        if self.dark > 0:
-            np.maximum(e, z[:, 0, 3], out=e)
-        np.clip(e, 0.0, 1.0, out=e)
-        return d.tolist(), e.tolist()
+        return d.tolist(), self._membership(z, True, d).tolist()
 
     @classmethod
     def fit(cls, groups: dict[str, np.ndarray], iris: np.ndarray, doubtful: tuple[str, ...] = ()) -> "SkinModel":

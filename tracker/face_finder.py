@@ -190,9 +190,7 @@ def reference_vector(reference: np.ndarray) -> np.ndarray:
 def face_similarity(grey: np.ndarray, scale: float, pupils: np.ndarray, ref: np.ndarray) -> float:
     """Normalised correlation (−1..1) of the face picture at eyes ``pupils`` (frame px) with ``ref``
     (:func:`reference_vector`); ``grey`` is the frame in grey scaled by ``scale``."""
-    m, size, _, _ = _patch_warp(scale, pupils, 0)
-    p = cv2.GaussianBlur(cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float32),
-                         (0, 0), 1.0).ravel()
+    p = face_patch(grey, scale, pupils).ravel()
     s1, s2 = float(p.sum()), float(p @ p)
     return float(ref @ p) / max(math.sqrt(max(s2 - s1 * s1 / p.size, 0.0)), 1e-6)
 

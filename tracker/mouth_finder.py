@@ -109,7 +109,6 @@ CORNER_UNLIKE = 1.5
 body on a corner's column."""
 PREVIOUS_CAP = 16.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
-"""Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
 """Cost of one skin-like row between the lips of an open mouth: a tongue is skin-coloured, and the
 lower lip and the skin past it must still fit below it."""
@@ -730,16 +729,10 @@ class MouthFinder:
         y_line = py + self.line0
         if previous is not None and previous.score >= SCORE_OK:
             px = 0.5 * (px + previous.centre[0])
-        # the mouth line: from the darkest row near the prediction (the gap, or an open mouth's inside)
-        # on the column through it, traced out to the corners
+        # the mouth line from a dark valley near the prediction with the lower lip under it, traced out
+        # to the corners; the lips on the column through the corners' midpoint
         seed = self.line_seed(maps, px, y_line)
-        x0, traced = self.trace(maps, px, seed)
-        left, right, strength, halves = self._search(maps, x0, traced, seed)
-        # the lips on the column through the corners' midpoint, the gap near their line (where the
-        # calibration had it)
-        cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
-        f, inside = self.profile(maps, cx)
-        v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        x0, traced, left, right, strength, halves, (cx, cy), v = self._line_and_lips(maps, px, seed, previous)
         if cy + self.line0 > v[1] + RETRACE * self.wi and v[1] - v[0] > 1.0:
             # the lips put the mouth's opening above the traced line (which ran along the shadow under
             # the lower lip): trace again from the darkest row of that opening
@@ -747,11 +740,7 @@ class MouthFinder:
             if b > a:
                 c0, c1 = band_columns(cx, self.half, maps.shape[1])
                 seed = float(a + int(np.argmin(maps.lum[a:b, c0:c1].mean(axis=1))))
-                x0, traced = self.trace(maps, cx, seed)
-                left, right, strength, halves = self._search(maps, x0, traced, seed)
-                cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
-                f, inside = self.profile(maps, cx)
-                v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+                x0, traced, left, right, strength, halves, (cx, cy), v = self._line_and_lips(maps, cx, seed, previous)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         # the corners' height from the mouth's own body next to them (the line runs through the gap
         # or the dark inside, which in a grin ends below the corners)
@@ -761,10 +750,8 @@ class MouthFinder:
         # line, an open mouth is widest below it, and the straight line left the mouth too soon there
         # (each path ends where it leaves the mouth, so the mouth reaches at least the farther end)
         if CORNER_BEND > 0:
-            rows = self.bent(x0, traced, halves, (yl, yr))
-            if any(b is not None and not np.array_equal(b, t) for b, t in zip(rows, traced)):  # else: the same search
-                bl, br, _, _ = self._search(maps, x0, rows, seed)
-                left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
+            bl, br, _, _ = self._search(maps, x0, self.bent(x0, traced, halves, (yl, yr)), seed)
+            left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
         left, right = (left[0], yl), (right[0], yr)
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
@@ -775,6 +762,18 @@ class MouthFinder:
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
             stretch=stretch, shape=(H, W), line_ends=line_ends,
         )
+
+    def _line_and_lips(self, maps: "_Maps", x: float, seed: float, previous: MouthResult | None):
+        """The mouth line traced from ``(x, seed)`` and the corners along it (:meth:`trace`,
+        :meth:`_search`), then the lips split on the profile through the corners' midpoint, the gap
+        expected on their line where the calibration had it (:meth:`vertical`): ``(x0, traced, left,
+        right, strengths, halves, midpoint, split)``."""
+        x0, traced = self.trace(maps, x, seed)
+        left, right, strength, halves = self._search(maps, x0, traced, seed)
+        cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
+        f, inside = self.profile(maps, cx)
+        v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        return x0, traced, left, right, strength, halves, (cx, cy), v
 
     def _score(self, width, height, on_line, centre, pred, fit, strength, previous) -> float:
         """Fit of the lip templates (mean cost per row: full under 2, none at 5), clarity of the
