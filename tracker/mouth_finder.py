@@ -42,7 +42,6 @@ edges, ``raw_polygon`` through the corners and the inner ones.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -52,7 +51,7 @@ import numpy as np
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
     BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
-    profile_features, trace_line, unlike_cheek,
+    profile_features, trace_line,
 )
 
 SCORE_OK = 0.5
@@ -186,6 +185,14 @@ class MouthResult:
         return self._blob
 
 
+def _replaced(res: MouthResult, **changes) -> MouthResult:
+    """``dataclasses.replace(res, **changes)`` without its per-field work (a few times a frame);
+    :class:`MouthResult` has no ``__post_init__`` to run."""
+    new = object.__new__(MouthResult)
+    new.__dict__.update(res.__dict__, **changes)
+    return new
+
+
 def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float, float], float, float]:
     """Corners (the extreme points along x) of a closed polygon, and its upper and lower extent on
     the vertical through their midpoint, as distances from it (``lip_upper``, ``lip_lower``)."""
@@ -200,6 +207,16 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     t = (cx - x0[hit]) / (x1[hit] - x0[hit])
     ys = poly[hit, 1] + t * (p1[hit, 1] - poly[hit, 1])
     return left, right, float(cy - ys.min()), float(ys.max() - cy)
+
+
+def _clip(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``np.clip`` of an array by scalars, without its argument checks (a few µs a call)."""
+    return np.minimum(np.maximum(v, lo), hi)
+
+
+def _row_means(block: np.ndarray) -> np.ndarray:
+    """``block.mean(axis=1)`` of a uint8 block (float64), without ``mean``'s Python overhead."""
+    return np.add.reduce(block, axis=1, dtype=np.float64) / block.shape[1]
 
 
 _SKINS = np.array([0, 3, 4])
@@ -341,6 +358,10 @@ class MouthFinder:
         self._off_ob = self._off_sb + max(int(round(OUTSIDE_ROWS * wi)), 1)
         self._pu, self._pd = self._len[0][1][None, :], self._len[1][1][None, :]
         self._pad = int(max(-self._off_sa.min(), self._off_ob.max())) + 2
+        # ... and from the row ``P`` above the line's row in the padded sums (all ≥ 0)
+        P = self._pad
+        self._at_b, self._at_u, self._at_sa = self._off + P, self._off_u + P, self._off_sa + P
+        self._at_l, self._at_sb, self._at_ob = self._off_l + P, self._off_sb + P, self._off_ob + P
         m = len(self._off)
         self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
         self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
@@ -352,6 +373,8 @@ class MouthFinder:
         self.sigma_line = max(0.015 * wi, 1.0)
         self.n_side = int(math.ceil(0.95 * wi))
         self._cols = np.arange(self.n_side + 1)
+        self._insets = np.asarray(CORNER_INSETS) * r
+        self._mu_skins, self._inv_skins = self._mu[_SKINS][None, :, None, :], self._inv[_SKINS]
         self.cheeks = (model.cheek_left, model.cheek_right)
         self.run = cheek_run(wi)
         self.body = mouth_body(wi)
@@ -370,7 +393,7 @@ class MouthFinder:
             return None
         sub = crop[::4, ::4].reshape(-1, 3)
         med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].astype(np.float64)
-        g = np.clip(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33, 3.0)
+        g = np.minimum(np.maximum(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33), 3.0)
         return None if np.all(np.abs(g - 1.0) < 0.04) else g
 
     # ------------------------------------------------------------------ the vertical profile
@@ -402,7 +425,8 @@ class MouthFinder:
         i = maps.inside[:, x1] - maps.inside[:, x0]
         inside = (i[1:] - i[:-1]).astype(np.float32) * inv
         dark = (np.float32(0.85 * self.lip_l) - f[:, 0]) * np.float32(1.0 / max(0.2 * self.lip_l, 1e-3))
-        np.clip(dark, 0.0, 1.0, out=dark)
+        np.maximum(dark, 0.0, out=dark)
+        np.minimum(dark, 1.0, out=dark)
         return f, np.maximum(inside, dark, out=inside)
 
     def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
@@ -416,7 +440,7 @@ class MouthFinder:
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
         b = min(max(int(y_line + SEED_REACH[1] * self.wi) + 1, a + 1), H)
-        col = maps.lum[a:b, x0:x1].mean(axis=1)
+        col = _row_means(maps.lum[a:b, x0:x1])
         d = np.abs(np.arange(a, b) - y_line)
         best = int(np.argmin(col + 0.05 * d))
         if SEED_LIP <= 0 or b - a < 3:
@@ -430,7 +454,7 @@ class MouthFinder:
         c = maps.colour[:, x1] - maps.colour[:, x0]
         bgr = (c[1:] - c[:-1]).astype(np.float64) * (1.0 / (x1 - x0))
         ld = bgr @ self.model.axis_down[:3] + self.model.axis_down[3]
-        cd = np.concatenate([[0.0], np.cumsum(np.clip(ld, 0.0, 1.0))])
+        cd = np.concatenate([[0.0], np.cumsum(np.minimum(np.maximum(ld, 0.0), 1.0))])
         nd = max(int(round(self.t_dn)), 1)
         unit = SEED_UNIT * max(self.model.skin_level, 8.0)
         scores = []
@@ -457,7 +481,7 @@ class MouthFinder:
         out = np.minimum(e[:4], np.float32(ROW_CAP))
         # a row as lip that is plainly skin costs more than one like nothing calibrated (a highlight):
         # skin where a lip should be says the lip is not there
-        out[1:3] += np.float32(SKIN_IN_LIP) * np.clip(1.0 - out[0] * np.float32(1.0 / SKIN_CLEAR), 0.0, 1.0)
+        out[1:3] += np.float32(SKIN_IN_LIP) * np.minimum(np.maximum(1.0 - out[0] * np.float32(1.0 / SKIN_CLEAR), 0.0), 1.0)
         return out
 
     def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
@@ -490,27 +514,27 @@ class MouthFinder:
         k = GAP_PRICE / SKIN_UNLIKE
         cg = np.zeros((3, n + 2 * P + 1))
         cg[0, 1:] = cg[1, 1:] = GAP_PRICE
-        cg[0, 1 + m0 : 1 + m1] = (OPEN_SKIN / SKIN_UNLIKE) * out * np.clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        cg[0, 1 + m0 : 1 + m1] = (OPEN_SKIN / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
         if OPEN_LIP > 0:
-            cg[0, 1 + m0 : 1 + m1] += (OPEN_LIP / SKIN_UNLIKE) * out * np.clip(SKIN_UNLIKE - lip_like, 0.0, SKIN_UNLIKE)
-        cg[1, 1 + m0 : 1 + m1] = k * out * np.clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
+            cg[0, 1 + m0 : 1 + m1] += (OPEN_LIP / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - lip_like, 0.0, SKIN_UNLIKE)
+        cg[1, 1 + m0 : 1 + m1] = k * out * _clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
         cg[2, 1 + m0 : 1 + m1] = inside > 0.5
         np.cumsum(cg, axis=1, out=cg)
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
         # the lower lip (b3 = b2: lips closed, no gap row); offsets precomputed in the constructor
         yi = min(max(int(y_line), 0), n - 1)
-        yb = yi + P
-        bs = yb + self._off
-        c0, c1, c2, c3 = cum
-        cu = c1[bs][:, None] - c1[yb + self._off_u] + c0[yb + self._off_u] - c0[yb + self._off_sa] + self._pu
-        cl = c2[yb + self._off_l] - c2[bs][:, None] + c3[yb + self._off_sb] - c3[yb + self._off_l] + self._pd
+        at_b, at_u, at_l, at_sb = self._at_b, self._at_u, self._at_l, self._at_sb
+        c0, c1, c2, c3 = cum[:, yi:]  # from the row P above the line's row (the offsets are from there)
+        cu = c1[at_b][:, None] - c1[at_u] + c0[at_u] - c0[self._at_sa] + self._pu
+        cl = c2[at_l] - c2[at_b][:, None] + c3[at_sb] - c3[at_l] + self._pd
         # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
         co = np.zeros(n + 2 * P + 1)
-        co[1 + m0 : 1 + m1] = OUTSIDE_PRICE * np.clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
+        co[1 + m0 : 1 + m1] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
         np.cumsum(co, out=co)
-        cl += co[yb + self._off_ob] - co[yb + self._off_sb]
+        co = co[yi:]
+        cl += co[self._at_ob] - co[at_sb]
         U, L = cu.min(axis=1), cl.min(axis=1)
-        cgb = cg[:, bs]
+        cgb = cg[:, yi + at_b]
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
         tot = np.where(gap[2] >= OPEN_ROWS * self.r, gap[0], gap[1])
         tot += U[:, None] + L[None, :] + self._upper_only
@@ -522,20 +546,21 @@ class MouthFinder:
             g0 = previous.gap_bottom - previous.gap_top
             # capped: it settles what the rows leave open, and cannot hold on to a wrong gap
             tot += np.minimum((2.0 * self.r / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2, PREVIOUS_CAP * self.r)
-        m = len(bs)
-        bs = bs - P
+        m = len(at_b)
+        bs = yi + self._off
         (lu, pu, _), (ld, pd, _) = self._len
         w = self.skin_w
-        a, b = np.unravel_index(int(np.argmin(tot)), tot.shape)
+        a, b = divmod(int(tot.argmin()), m)
         # the two lips' thicknesses together at the best pair of inner edges
         joint = cu[a][:, None] + cl[b][None, :] + self._couple
-        p, q = np.unravel_index(int(np.argmin(joint)), joint.shape)
+        p, q = divmod(int(joint.argmin()), joint.shape[1])
         # each outer edge inside its rows: the lip's share of the row on either side of it
         r_up, r_dn = int(bs[a] - lu[p]), int(bs[b] + ld[q] - 1)  # the lips' outermost rows
         fu = _edge_shift(f, r_up, -1, self._mu[1], self._mu[0])
         fd = _edge_shift(f, r_dn, +1, self._mu[2], self._mu[3])
-        fa = _parabola(tot[a - 1, b], tot[a, b], tot[a + 1, b]) if 0 < a and a + 1 <= b and np.isfinite(tot[a - 1, b]) else 0.0
-        fb = _parabola(tot[a, b - 1], tot[a, b], tot[a, b + 1]) if b + 1 < m and b - 1 >= a else 0.0
+        t_ab = float(tot[a, b])
+        fa = _parabola(float(tot[a - 1, b]), t_ab, float(tot[a + 1, b])) if 0 < a and a + 1 <= b and math.isfinite(tot[a - 1, b]) else 0.0
+        fb = _parabola(float(tot[a, b - 1]), t_ab, float(tot[a, b + 1])) if b + 1 < m and b - 1 >= a else 0.0
         gap_top, gap_bottom = bs[a] - 0.5 + fa, bs[b] - 0.5 + fb
         len_u, len_d = lu[p] + fu, ld[q] + fd
         rows = len_u + len_d + 2 * w
@@ -578,7 +603,10 @@ class MouthFinder:
                 strength.append(0.0)
                 halves.append(None)
                 continue
-            d = unlike_cheek(cols[at : at + len(ys)], (cheek[0], cheek[1]))
+            z = cols[at : at + len(ys)] - cheek[0]
+            z /= cheek[1]
+            z *= z
+            d = np.add.reduce(z, axis=1) / np.float32(z.shape[1])  # unlike_cheek, without mean's overhead
             at += len(ys)
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
@@ -603,8 +631,8 @@ class MouthFinder:
             k = min(int(half), len(ys) - 2)
             t = half - k
             dy = yc - float(ys[k] * (1 - t) + ys[k + 1] * t)
-            ramp = np.clip((self._cols[: len(ys)] - (half - self.bend)) * (1.0 / self.bend), 0.0, 1.0)
-            out.append(np.round(ys + dy * ramp))
+            ramp = _clip((self._cols[: len(ys)] - (half - self.bend)) * (1.0 / self.bend), 0.0, 1.0)
+            out.append(np.rint(ys + dy * ramp))
         return out
 
     def corner_heights(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float]) -> tuple[float, float]:
@@ -620,15 +648,15 @@ class MouthFinder:
         reach = int(math.ceil(0.2 * self.wi))
         ys = [min(max(int(round(c[1])), 0), H - 1) for c in (left, right)]
         a, b = max(min(ys) - reach, 0), min(max(ys) + reach + 1, H)
-        ins = np.asarray(CORNER_INSETS) * self.r
+        ins = self._insets
         xs = np.concatenate([left[0] + ins, right[0] - ins])
-        x0 = np.clip(np.round(xs - 1.0).astype(np.int64), 0, W - 1)
-        x1 = np.clip(np.round(xs + 1.0).astype(np.int64) + 1, x0 + 1, W)
+        x0 = _clip(np.rint(xs - 1.0).astype(np.int64), 0, W - 1)
+        x1 = np.minimum(np.maximum(np.rint(xs + 1.0).astype(np.int64) + 1, x0 + 1), W)
         inv = (1.0 / (x1 - x0)).astype(np.float32)[:, None]
         c = maps.colour[a : b + 1][:, x1] - maps.colour[a : b + 1][:, x0]  # (n+1, k, 3)
         f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
-        d = f[:, None, :, :] - self._mu[_SKINS][None, :, None, :]
-        unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv[_SKINS]).min(axis=1)  # (k, n)
+        d = f[:, None, :, :] - self._mu_skins
+        unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins).min(axis=1)  # (k, n)
         np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
         i = maps.inside[a : b + 1][:, x1] - maps.inside[a : b + 1][:, x0]
         inside = ((i[1:] - i[:-1]).astype(np.float32) * inv[:, 0]).T > 0.5
@@ -668,7 +696,8 @@ class MouthFinder:
         the line, of its own three rows and of the band below."""
         H = maps.shape[0]
         bounds = ys.astype(np.int32)[None, :] + self._band_rows  # [start, end) of the three bands
-        np.clip(bounds, 0, H, out=bounds)
+        np.maximum(bounds, 0, out=bounds)
+        np.minimum(bounds, H, out=bounds)
         sums = maps.crow[bounds, xs[None, :]]  # (6, n, 3)
         cnt = np.maximum(bounds[1::2] - bounds[0::2], 1).astype(np.float32)  # (3, n)
         means = (sums[1::2] - sums[0::2]).astype(np.float32) / cnt[:, :, None]  # (3, n, 3)
@@ -677,7 +706,7 @@ class MouthFinder:
     @staticmethod
     def shifted(res: MouthResult, dx: float, dy: float) -> MouthResult:
         """``res`` moved by ``(dx, dy)`` crop px (the last frame's mouth in this frame's crop)."""
-        return dataclasses.replace(
+        return _replaced(
             res, left=(res.left[0] + dx, res.left[1] + dy), right=(res.right[0] + dx, res.right[1] + dy),
             centre=(res.centre[0] + dx, res.centre[1] + dy), gap_top=res.gap_top + dy, gap_bottom=res.gap_bottom + dy,
             line_ends=None if res.line_ends is None else tuple((x + dx, y + dy) for x, y in res.line_ends),
@@ -704,7 +733,7 @@ class MouthFinder:
         down = lambda p: ((p[0] + 0.5) * sx - 0.5, (p[1] + 0.5) * sy - 0.5)
         prev = None
         if previous is not None:
-            prev = dataclasses.replace(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
+            prev = _replaced(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
                                        gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
                                        lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None,
                                        line_ends=None if previous.line_ends is None else tuple(down(p) for p in previous.line_ends))
@@ -714,7 +743,7 @@ class MouthFinder:
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
         scale = np.array([1.0 / sx, 1.0 / sy])
         off = 0.5 * scale - 0.5
-        return dataclasses.replace(
+        return _replaced(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
             line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),
             polygon=r.polygon * scale + off, raw_polygon=r.raw_polygon * scale + off,
@@ -739,7 +768,7 @@ class MouthFinder:
             a, b = max(int(math.ceil(v[0])), 0), min(int(math.floor(v[1])) + 1, maps.shape[0])
             if b > a:
                 c0, c1 = band_columns(cx, self.half, maps.shape[1])
-                seed = float(a + int(np.argmin(maps.lum[a:b, c0:c1].mean(axis=1))))
+                seed = float(a + int(np.argmin(_row_means(maps.lum[a:b, c0:c1]))))
                 x0, traced, left, right, strength, halves, (cx, cy), v = self._line_and_lips(maps, cx, seed, previous)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         # the corners' height from the mouth's own body next to them (the line runs through the gap

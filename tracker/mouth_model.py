@@ -381,13 +381,15 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
     for x in xs:
         c = cols.get(x)
         if c is not None:
-            best, by = None, y
-            for v in (y, y - 1, y + 1):
-                if 0 < v < h - 1:
-                    cv = c[v]
-                    if cv < c[v - 1] and cv < c[v + 1] and (best is None or cv < best):
-                        best, by = cv, v
-            y = lo if by < lo else hi if by > hi else by
+            # rows y-2 .. y+2 exist (y stays in [2, h-3]); a valley at y excludes one at y±1
+            m2, m1, c0, p1, p2 = c[y - 2 : y + 3]
+            if not (c0 < m1 and c0 < p1):
+                up, down = m1 < m2 and m1 < c0, p1 < c0 and p1 < p2
+                if down and (not up or p1 < m1):
+                    y += 1
+                elif up:
+                    y -= 1
+            y = lo if y < lo else hi if y > hi else y
         out.append(float(y))
     return np.array(out)
 
