@@ -303,7 +303,8 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
         b = min(dist)
         mid = max(mid, min(mid + b, 0.5 * (a + b)))
     start = mid - 0.5 * width
-    return _run([min(max((d - start) / width, 0.0), 1.0) for d in dist])
+    ramp = [(d - start) / width for d in dist]
+    return _run([0.0 if r < 0.0 else 1.0 if r > 1.0 else r for r in ramp])  # clamped, without min/max calls
 
 
 # ---------------------------------------------------------------------------------------------

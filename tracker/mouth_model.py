@@ -374,15 +374,16 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
     h, w = lum.shape
     lo, hi = 2, h - 3
     y = min(max(int(round(y0)), lo), hi)
-    out = [float(y)]
-    xs = [x0 + step * k for k in range(1, n + 1)]
-    inside = [x for x in xs if 0 <= x < w]
-    cols = dict(zip(inside, lum[:, inside].T.tolist())) if inside else {}
-    for x in xs:
-        c = cols.get(x)
-        if c is not None:
+    # the columns inside the image are steps ka..kb (a run: the columns go one way)
+    ka, kb = (max(1, -x0), min(n, w - 1 - x0)) if step > 0 else (max(1, x0 - w + 1), min(n, x0))
+    out = [y] * min(ka, n + 1)
+    if kb >= ka:
+        block = lum[:, x0 + ka : x0 + kb + 1] if step > 0 else lum[:, x0 - kb : x0 - ka + 1][:, ::-1]
+        cols = np.ascontiguousarray(block.T)  # one column after the other, in the walk's order
+        vals = cols.tobytes() if cols.dtype == np.uint8 else cols.ravel().tolist()
+        for base in range(0, len(vals), h):
             # rows y-2 .. y+2 exist (y stays in [2, h-3]); a valley at y excludes one at y±1
-            m2, m1, c0, p1, p2 = c[y - 2 : y + 3]
+            m2, m1, c0, p1, p2 = vals[base + y - 2 : base + y + 3]
             if not (c0 < m1 and c0 < p1):
                 up, down = m1 < m2 and m1 < c0, p1 < c0 and p1 < p2
                 if down and (not up or p1 < m1):
@@ -390,8 +391,9 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
                 elif up:
                     y -= 1
             y = lo if y < lo else hi if y > hi else y
-        out.append(float(y))
-    return np.array(out)
+            out.append(y)
+    out += [y] * (n + 1 - len(out))
+    return np.array(out, dtype=np.float64)
 
 
 def line_columns(strip: np.ndarray, x0: int, ys: np.ndarray, step: int, a1: int, a2: int, skin_level: float,
@@ -644,23 +646,32 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
     if b <= a:
         return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
     cap = 5.0 * level
-    gain, g = [], 0.0
-    for q in v:
-        g += (q if q < cap else cap) - level
-        gain.append(g)
-    # runs[i]: how many columns from i on look like the cheek
-    runs = [0] * (n + 1)
-    for i in range(n - 1, -1, -1):
-        runs[i] = runs[i + 1] + 1 if v[i] < level else 0
     need = min(run, n - 1 - b + run)
-    k = next((i for i in range(a, b + 1) if v[i] >= level and runs[i + 1] >= need), None)
+    k = None
+    for i in range(a, b + 1):  # the first column with ``need`` cheek-like columns after it
+        if v[i] >= level:
+            j, end = i + 1, min(i + need, n - 1)
+            while j <= end and v[j] < level:
+                j += 1
+            if j - i - 1 >= need:
+                k = i
+                break
     if k is None:
+        gain, g = [], 0.0
+        for q in v[: b + 1]:
+            g += (q if q < cap else cap) - level
+            gain.append(g)
         k = max(range(a, b + 1), key=gain.__getitem__)
+        g = gain[k]
+    else:
+        g = 0.0
+        for q in v[: k + 1]:
+            g += (q if q < cap else cap) - level
     x = float(k)
     d0, d1 = v[k], v[k + 1]
     if d0 >= level > d1:
         x += (d0 - level) / (d0 - d1)
-    return x, float(gain[k])
+    return x, float(g)
 
 
 def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
