@@ -490,7 +490,7 @@ class FaceTracker:
                 mouth_res.polygon + mo,
                 mouth_res.raw_polygon + mo,
             ]
-        img_pts = ff.to_image(np.concatenate([np.asarray(q, dtype=np.float64).reshape(-1, 2) for q in pts]))
+        img_pts = ff.to_image(np.concatenate(pts, dtype=np.float64))  # every part is (k, 2)
         pupils_img = img_pts[0:2]
         left, right = pupils_img
         mid = 0.5 * (left + right)

@@ -207,7 +207,7 @@ class HeadMotion:
         h, w = g.shape
         if nxt is not None:
             q = nxt.reshape(-1, 2)
-            ok = (st.reshape(-1) != 0) & np.all((q >= 0) & (q < (w, h)), axis=1)
+            ok = (st.reshape(-1) != 0) & ((q >= 0) & (q < (w, h))).all(axis=1)
         else:
             ok = st.reshape(-1) != 0
         n_ok = int(np.count_nonzero(ok))

@@ -394,7 +394,7 @@ class MouthFinder:
         sub = crop[::4, ::4].reshape(-1, 3)
         med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].astype(np.float64)
         g = np.minimum(np.maximum(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33), 3.0)
-        return None if np.all(np.abs(g - 1.0) < 0.04) else g
+        return None if (np.abs(g - 1.0) < 0.04).all() else g
 
     # ------------------------------------------------------------------ the vertical profile
     def prepare(self, crop: np.ndarray) -> "_Maps":
@@ -442,10 +442,10 @@ class MouthFinder:
         b = min(max(int(y_line + SEED_REACH[1] * self.wi) + 1, a + 1), H)
         col = _row_means(maps.lum[a:b, x0:x1])
         d = np.abs(np.arange(a, b) - y_line)
-        best = int(np.argmin(col + 0.05 * d))
+        best = int((col + 0.05 * d).argmin())
         if SEED_LIP <= 0 or b - a < 3:
             return float(a + best)
-        v = np.flatnonzero((col[1:-1] < col[:-2]) & (col[1:-1] <= col[2:])) + 1
+        v = ((col[1:-1] < col[:-2]) & (col[1:-1] <= col[2:])).nonzero()[0] + 1
         cands = sorted(set(v.tolist()) | {best})
         if len(cands) == 1:
             return float(a + best)
@@ -454,7 +454,8 @@ class MouthFinder:
         c = maps.colour[:, x1] - maps.colour[:, x0]
         bgr = (c[1:] - c[:-1]).astype(np.float64) * (1.0 / (x1 - x0))
         ld = bgr @ self.model.axis_down[:3] + self.model.axis_down[3]
-        cd = np.concatenate([[0.0], np.cumsum(np.minimum(np.maximum(ld, 0.0), 1.0))])
+        cd = np.zeros(len(ld) + 1)
+        np.cumsum(np.minimum(np.maximum(ld, 0.0), 1.0), out=cd[1:])
         nd = max(int(round(self.t_dn)), 1)
         unit = SEED_UNIT * max(self.model.skin_level, 8.0)
         scores = []
@@ -463,7 +464,7 @@ class MouthFinder:
             za, zb = min(y + 2, H), min(y + 2 + nd, H)
             below = (cd[zb] - cd[za]) / max(zb - za, 1)
             scores.append(col[k] / unit - SEED_LIP * below + 0.05 * d[k])
-        return float(a + cands[int(np.argmin(scores))])
+        return float(a + cands[min(range(len(scores)), key=scores.__getitem__)])  # the first lowest (finite scores)
 
     def row_costs(self, f: np.ndarray) -> np.ndarray:
         """What each row of a profile costs (4, rows) as the skin above, the upper lip, the lower lip
@@ -768,7 +769,7 @@ class MouthFinder:
             a, b = max(int(math.ceil(v[0])), 0), min(int(math.floor(v[1])) + 1, maps.shape[0])
             if b > a:
                 c0, c1 = band_columns(cx, self.half, maps.shape[1])
-                seed = float(a + int(np.argmin(_row_means(maps.lum[a:b, c0:c1]))))
+                seed = float(a + int(_row_means(maps.lum[a:b, c0:c1]).argmin()))
                 x0, traced, left, right, strength, halves, (cx, cy), v = self._line_and_lips(maps, cx, seed, previous)
         gap_top, gap_bottom, top, bottom, stretch, fit = v
         # the corners' height from the mouth's own body next to them (the line runs through the gap

@@ -83,7 +83,7 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     c = np.asarray(bgr, dtype=np.float32)
     out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2
     out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
-    den = c.sum(axis=-1, keepdims=True)
+    den = np.add.reduce(c, axis=-1, keepdims=True)  # c.sum without the method's wrapper
     den += np.float32(24.0)
     np.divide(out[..., 1:], den, out=out[..., 1:])
     out[..., 1:] *= np.float32(1.0 / C_UNIT)
