@@ -260,23 +260,31 @@ def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int, nea
     return 0.5 * (top + bottom), bottom - top
 
 
-def _share(f: np.ndarray, lip: np.ndarray, skin: np.ndarray) -> float:
-    """How much of a row with features ``f`` is lip (0..1): its place between the skin's and the
-    lip's medians along the line joining them."""
+def _share_axis(lip: np.ndarray, skin: np.ndarray) -> tuple[np.ndarray, float]:
+    """The line from the skin's to the lip's median and its squared length (for :func:`_share`)."""
     d = lip - skin
-    den = float(d @ d)
+    return d, float(d @ d)
+
+
+def _share(f: np.ndarray, lip: np.ndarray, skin: np.ndarray, axis: tuple[np.ndarray, float] | None = None) -> float:
+    """How much of a row with features ``f`` is lip (0..1): its place between the skin's and the
+    lip's medians along the line joining them (``axis``: :func:`_share_axis` of the two, if made)."""
+    d, den = _share_axis(lip, skin) if axis is None else axis
     return min(max(float((f - skin) @ d) / den, 0.0), 1.0) if den > 1e-6 else 0.5
 
 
-def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.ndarray) -> float:
+def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.ndarray,
+                axis: tuple[np.ndarray, float] | None = None) -> float:
     """How far (rows, −0.5…0.5, positive outwards) a lip's outer edge lies from the boundary after
     its outermost row ``row`` (``out`` = −1 up, +1 down): the lip's share of the skin row past it
     moves the edge out, the skin's share of the lip row moves it in (a blurred or anti-aliased edge
-    falls inside a row, not between two)."""
+    falls inside a row, not between two). ``axis``: :func:`_share_axis` of ``lip`` and ``skin``."""
     n = len(f)
     if not (0 <= row < n and 0 <= row + out < n):
         return 0.0
-    shift = _share(f[row + out], lip, skin) - (1.0 - _share(f[row], lip, skin))
+    if axis is None:
+        axis = _share_axis(lip, skin)
+    shift = _share(f[row + out], lip, skin, axis) - (1.0 - _share(f[row], lip, skin, axis))
     return min(max(shift, -0.5), 0.5)
 
 
@@ -375,6 +383,7 @@ class MouthFinder:
         self._cols = np.arange(self.n_side + 1)
         self._insets = np.asarray(CORNER_INSETS) * r
         self._mu_skins, self._inv_skins = self._mu[_SKINS][None, :, None, :], self._inv[_SKINS]
+        self._axis_up, self._axis_down = _share_axis(self._mu[1], self._mu[0]), _share_axis(self._mu[2], self._mu[3])
         self.cheeks = (model.cheek_left, model.cheek_right)
         self.run = cheek_run(wi)
         self.body = mouth_body(wi)
@@ -557,8 +566,8 @@ class MouthFinder:
         p, q = divmod(int(joint.argmin()), joint.shape[1])
         # each outer edge inside its rows: the lip's share of the row on either side of it
         r_up, r_dn = int(bs[a] - lu[p]), int(bs[b] + ld[q] - 1)  # the lips' outermost rows
-        fu = _edge_shift(f, r_up, -1, self._mu[1], self._mu[0])
-        fd = _edge_shift(f, r_dn, +1, self._mu[2], self._mu[3])
+        fu = _edge_shift(f, r_up, -1, self._mu[1], self._mu[0], self._axis_up)
+        fd = _edge_shift(f, r_dn, +1, self._mu[2], self._mu[3], self._axis_down)
         t_ab = float(tot[a, b])
         fa = _parabola(float(tot[a - 1, b]), t_ab, float(tot[a + 1, b])) if 0 < a and a + 1 <= b and math.isfinite(tot[a - 1, b]) else 0.0
         fb = _parabola(float(tot[a, b - 1]), t_ab, float(tot[a, b + 1])) if b + 1 < m and b - 1 >= a else 0.0
