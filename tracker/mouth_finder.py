@@ -42,6 +42,7 @@ edges, ``raw_polygon`` through the corners and the inner ones.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -51,7 +52,7 @@ import numpy as np
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
     BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
-    profile_features, trace_line,
+    profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -185,14 +186,6 @@ class MouthResult:
         return self._blob
 
 
-def _replaced(res: MouthResult, **changes) -> MouthResult:
-    """``dataclasses.replace(res, **changes)`` without its per-field work (a few times a frame);
-    :class:`MouthResult` has no ``__post_init__`` to run."""
-    new = object.__new__(MouthResult)
-    new.__dict__.update(res.__dict__, **changes)
-    return new
-
-
 def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float, float], float, float]:
     """Corners (the extreme points along x) of a closed polygon, and its upper and lower extent on
     the vertical through their midpoint, as distances from it (``lip_upper``, ``lip_lower``)."""
@@ -209,8 +202,8 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
     return left, right, float(cy - ys.min()), float(ys.max() - cy)
 
 
-def _clip(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """``np.clip`` of an array by scalars, without its argument checks (a few µs a call)."""
+def _clip(v: np.ndarray, lo: float | np.ndarray, hi: float | np.ndarray) -> np.ndarray:
+    """``np.clip`` of an array, without its argument checks (a few µs a call)."""
     return np.minimum(np.maximum(v, lo), hi)
 
 
@@ -402,7 +395,7 @@ class MouthFinder:
             return None
         sub = crop[::4, ::4].reshape(-1, 3)
         med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].astype(np.float64)
-        g = np.minimum(np.maximum(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33), 3.0)
+        g = _clip(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33, 3.0)
         return None if (np.abs(g - 1.0) < 0.04).all() else g
 
     # ------------------------------------------------------------------ the vertical profile
@@ -464,7 +457,7 @@ class MouthFinder:
         bgr = (c[1:] - c[:-1]).astype(np.float64) * (1.0 / (x1 - x0))
         ld = bgr @ self.model.axis_down[:3] + self.model.axis_down[3]
         cd = np.zeros(len(ld) + 1)
-        np.cumsum(np.minimum(np.maximum(ld, 0.0), 1.0), out=cd[1:])
+        np.cumsum(_clip(ld, 0.0, 1.0), out=cd[1:])
         nd = max(int(round(self.t_dn)), 1)
         unit = SEED_UNIT * max(self.model.skin_level, 8.0)
         scores = []
@@ -491,7 +484,7 @@ class MouthFinder:
         out = np.minimum(e[:4], np.float32(ROW_CAP))
         # a row as lip that is plainly skin costs more than one like nothing calibrated (a highlight):
         # skin where a lip should be says the lip is not there
-        out[1:3] += np.float32(SKIN_IN_LIP) * np.minimum(np.maximum(1.0 - out[0] * np.float32(1.0 / SKIN_CLEAR), 0.0), 1.0)
+        out[1:3] += np.float32(SKIN_IN_LIP) * _clip(1.0 - out[0] * np.float32(1.0 / SKIN_CLEAR), 0.0, 1.0)
         return out
 
     def vertical(self, f: np.ndarray, inside: np.ndarray, y_line: float, previous=None, spread: float = 0.25):
@@ -613,10 +606,7 @@ class MouthFinder:
                 strength.append(0.0)
                 halves.append(None)
                 continue
-            z = cols[at : at + len(ys)] - cheek[0]
-            z /= cheek[1]
-            z *= z
-            d = np.add.reduce(z, axis=1) / np.float32(z.shape[1])  # unlike_cheek, without mean's overhead
+            d = unlike_cheek(cols[at : at + len(ys)], cheek)
             at += len(ys)
             half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
             k = min(int(half), len(ys) - 2)
@@ -661,7 +651,7 @@ class MouthFinder:
         ins = self._insets
         xs = np.concatenate([left[0] + ins, right[0] - ins])
         x0 = _clip(np.rint(xs - 1.0).astype(np.int64), 0, W - 1)
-        x1 = np.minimum(np.maximum(np.rint(xs + 1.0).astype(np.int64) + 1, x0 + 1), W)
+        x1 = _clip(np.rint(xs + 1.0).astype(np.int64) + 1, x0 + 1, W)
         inv = (1.0 / (x1 - x0)).astype(np.float32)[:, None]
         c = maps.colour[a : b + 1][:, x1] - maps.colour[a : b + 1][:, x0]  # (n+1, k, 3)
         f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
@@ -716,7 +706,7 @@ class MouthFinder:
     @staticmethod
     def shifted(res: MouthResult, dx: float, dy: float) -> MouthResult:
         """``res`` moved by ``(dx, dy)`` crop px (the last frame's mouth in this frame's crop)."""
-        return _replaced(
+        return dataclasses.replace(
             res, left=(res.left[0] + dx, res.left[1] + dy), right=(res.right[0] + dx, res.right[1] + dy),
             centre=(res.centre[0] + dx, res.centre[1] + dy), gap_top=res.gap_top + dy, gap_bottom=res.gap_bottom + dy,
             line_ends=None if res.line_ends is None else tuple((x + dx, y + dy) for x, y in res.line_ends),
@@ -743,7 +733,7 @@ class MouthFinder:
         down = lambda p: ((p[0] + 0.5) * sx - 0.5, (p[1] + 0.5) * sy - 0.5)
         prev = None
         if previous is not None:
-            prev = _replaced(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
+            prev = dataclasses.replace(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
                                        gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
                                        lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None,
                                        line_ends=None if previous.line_ends is None else tuple(down(p) for p in previous.line_ends))
@@ -753,7 +743,7 @@ class MouthFinder:
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
         scale = np.array([1.0 / sx, 1.0 / sy])
         off = 0.5 * scale - 0.5
-        return _replaced(
+        return dataclasses.replace(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
             line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),
             polygon=r.polygon * scale + off, raw_polygon=r.raw_polygon * scale + off,
