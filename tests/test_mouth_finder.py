@@ -296,3 +296,97 @@ def test_fisher_axis_maps_skin_to_zero_and_lip_to_one_whatever_the_shading():
     assert v(lip) == pytest.approx(1.0, abs=0.05) and abs(v(skin)) < 0.05
     assert abs(v(0.6 * skin)) < 0.05 and abs(v(1.1 * skin)) < 0.05  # shading leaves skin at 0
     assert sep > 5
+
+
+# ---------------------------------------------------------------------------------------------
+# adaptation: the lips learned again from well-fitted frames
+
+
+def _crops_of(states, centre_face):
+    """(crop, predicted centre in crop px, truth) for each state."""
+    out = []
+    for state in states:
+        img, _ = render_face(state)
+        ff = _frame_of(state)
+        crop, origin = _crop(img, ff, centre_face)
+        out.append((crop, tuple(centre_face - origin), _truth_in_crop(state, ff, origin)))
+    return out
+
+
+TALK = [BASE.replace(cx=320.0 + 0.37 * i, cy=210.0 - 0.23 * i, mouth_open=0.15 * (i % 3)) for i in range(24)]
+
+
+def test_adaptation_mends_a_lip_thickness_calibration_got_wrong(calibrated):
+    """A calibration frame can measure a lip at twice its thickness (the edge search ran into the
+    shadow under it): the well-fitted frames that follow take the expected thickness most of the way
+    back, and the lips are still measured right."""
+    model, centre = calibrated
+    wrong = MouthModel.from_dict({**model.to_dict(), "thick_down": 2.0 * model.thick_down})
+    frames = _crops_of(TALK, centre)
+    finder = MouthFinder(wrong, WI)
+    used = sum(finder.adapt(finder.find(c, p)) for _ in range(2) for c, p, _ in frames)
+    assert used == 2 * len(frames)  # these frames all fit well
+    true_t = model.thick_down * finder.k
+    assert abs(finder.t_dn - true_t) < 0.5 * true_t, (finder.t_dn, true_t)
+    for c, p, t in frames:
+        res = finder.find(c, p)
+        assert res.score >= SCORE_OK
+        ew, eu, el = _errors(res, t)
+        assert ew < 2.5 and eu < 1.5 and el < 1.5, (round(ew, 2), round(eu, 2), round(el, 2))
+
+
+def test_adaptation_stays_near_the_calibration(calibrated):
+    """Frames of another face (paler lips, another skin) can move the colours used only part of the
+    way and only so far, and the thicknesses only within their reach of the calibration's."""
+    import tracker.mouth_finder as mf
+
+    model, centre = calibrated
+    finder = MouthFinder(model, WI)
+    mu0 = finder._mu.copy()
+    pale = STYLES["default"].replace(lip=STYLES["pale_lips"].lip, skin=STYLES["dark_skin"].skin)
+    img, _ = render_face(BASE, pale)
+    crop, origin = _crop(img, _frame_of(BASE), centre)
+    for _ in range(200):
+        res = finder.find(crop, tuple(centre - origin))
+        if res is not None:
+            res.score = 1.0  # count every frame, whatever its fit
+            res._split = (res._split[0], res._split[1][:5] + ((0.0, 0.0),))
+            finder.adapt(res)
+    limit = (1.0 - mf.ADAPT_FLOOR) * mf.ADAPT_REACH * np.asarray(model.classes)[:4, 1] + 1e-4
+    assert np.all(np.abs(finder._mu[:4] - mu0[:4]) <= limit)
+    assert np.array_equal(finder._mu[4], mu0[4])  # the skin round the mouth is the calibration's
+    t0 = np.array([model.thick_up, model.thick_down]) * finder.k
+    t = np.array([finder.t_up, finder.t_dn])
+    assert np.all(t <= t0 * mf.THICK_REACH + 1e-9) and np.all(t >= t0 / mf.THICK_REACH - 1e-9)
+
+
+def test_frames_that_fit_badly_do_not_adapt(calibrated):
+    """No mouth where it was predicted (the forehead), or a poor fit: nothing is learned."""
+    model, centre = calibrated
+    finder = MouthFinder(model, WI)
+    mu0, t0 = finder._mu.copy(), (finder.t_up, finder.t_dn)
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    up = centre + np.array([0.0, -1.6 * WI])
+    crop, origin = _crop(img, ff, up)
+    res = finder.find(crop, tuple(up - origin))
+    assert res is None or not finder.adapt(res)
+    c, p, _ = _crops_of([BASE], centre)[0]
+    res = finder.find(c, p)
+    res._split = (res._split[0], res._split[1][:5] + ((9.0, 9.0),))  # as if the rows fitted badly
+    assert not finder.adapt(res)
+    assert np.array_equal(finder._mu, mu0) and (finder.t_up, finder.t_dn) == t0
+
+
+def test_reset_adaptation_is_the_calibration_again(calibrated):
+    model, centre = calibrated
+    wrong = MouthModel.from_dict({**model.to_dict(), "thick_down": 2.0 * model.thick_down})
+    frames = _crops_of(TALK[:12], centre)
+    finder, fresh = MouthFinder(wrong, WI), MouthFinder(wrong, WI)
+    for c, p, _ in frames:
+        finder.adapt(finder.find(c, p))
+    assert finder.t_dn != fresh.t_dn and not np.array_equal(finder._mu, fresh._mu)
+    finder.reset_adaptation()
+    c, p, _ = frames[0]
+    a, b = finder.find(c, p), fresh.find(c, p)
+    assert (a.lip_upper, a.lip_lower, a.left, a.right) == (b.lip_upper, b.lip_lower, b.left, b.right)

@@ -167,7 +167,7 @@ ROLL_STEP = math.radians(3.0)  # the face picture is also compared this much tur
 ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's best roll
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
-RESET_ADAPTATION = 30  # lost frames after which the eye finder goes back to the calibration
+RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
@@ -218,8 +218,14 @@ class FaceTracker:
         self.lost = False
         self.lost_frames = 0
         self.motion.reset()
-        self.eye_finder.reset_adaptation()
+        self._reset_adaptation()
         self._forget_eyes()
+
+    def _reset_adaptation(self) -> None:
+        """The eye pictures, the light and the lips back to the calibration's."""
+        self.eye_finder.reset_adaptation()
+        if hasattr(self.mouth_finder, "reset_adaptation"):
+            self.mouth_finder.reset_adaptation()
 
     def _forget_eyes(self) -> None:
         """The eye finder forgets the last frame (a new start, or a face found again)."""
@@ -333,7 +339,7 @@ class FaceTracker:
             if found is None:
                 self.lost_frames += 1
                 if self.lost_frames == RESET_ADAPTATION:
-                    self.eye_finder.reset_adaptation()
+                    self._reset_adaptation()
                 return self._lost_result(index, time, "not found")
             self.pose = similarity_from_pairs(self._cal_pupils, found)
             self.anchors = found
@@ -530,6 +536,8 @@ class FaceTracker:
                      strong)
         if status == OK and all(usable):
             self.eye_finder.adapt(crop, grey, res)
+        if status == OK and mouth_res is not None and hasattr(self.mouth_finder, "adapt"):
+            self.mouth_finder.adapt(mouth_res)
         self.pupils = pupils_img
         self.last = params
         if not self.motion.active:

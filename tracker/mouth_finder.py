@@ -125,6 +125,23 @@ upper lip: the shadow under the nose looks like lip on many faces."""
 OUTSIDE_PRICE = 1.0
 """Cost of one such row that looks like lip by ``d`` more than like skin: ``PRICE · (d − 1)``."""
 REACH = (-0.55, 0.6)
+ADAPT_RATE = 0.1
+"""Weight of one well-fitted frame in the lips' adapted colours and thicknesses (about ten such
+frames, a third of a second, to move most of the way)."""
+ADAPT_FLOOR = 0.5
+"""Share of the calibration's colours that always stays in the colours used."""
+ADAPT_REACH = 2.0
+"""Farthest (in the calibration's spreads) the adapted colours may move from the calibration's."""
+ADAPT_FIT = 2.0
+"""Most mean cost per row of the lips and the skin beside them (the fit the score counts in full)
+for a frame to adapt from."""
+ADAPT_SCORE = 0.7
+"""Least score for a frame to adapt from."""
+THICK_REACH = 2.0
+"""Factor within which the adapted thicknesses stay of the calibration's."""
+LOG_THICK_REACH = math.log(THICK_REACH)
+THICK_EVERY = 10
+"""Adapted frames between rebuilds of the split's tables for new thicknesses (when one moved by 5 %)."""
 
 """Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 
@@ -160,6 +177,7 @@ class MouthResult:
     shape: tuple[int, int] = (0, 0)
     line_ends: tuple[tuple[float, float], tuple[float, float]] | None = None
     _blob: np.ndarray | None = field(default=None, repr=False)
+    _split: tuple | None = field(default=None, repr=False)
 
     @property
     def line_centre(self) -> tuple[float, float]:
@@ -338,20 +356,49 @@ class MouthFinder:
         self.line0 = model.line * k
         self.half = max(BAND * wi, 1.5)
         cls = np.asarray(model.classes, dtype=np.float32)
-        self._mu = cls[:, 0]
+        self._split = None
         self._inv = (1.0 / (3.0 * cls[:, 1] ** 2)).astype(np.float32)
-        self.t_up, self.t_dn = model.thick_up * k, model.thick_down * k
         self.skin_w = max(int(round(SKIN_ROWS * wi)), 3)
+        self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
+        self._off = np.arange(self.reach[0], self.reach[1] + 1)
+        m = len(self._off)
+        self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
+        self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
+        self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
+        # what the lips look like and how thick they are, adapted from well-fitted frames (adapt)
+        self._mu0, self._spread0 = cls[:, 0].copy(), cls[:, 1].astype(np.float64)
+        self._thick0 = (model.thick_up * k, model.thick_down * k)
+        self._log_t0 = np.log(self._thick0)
+        self.a1, self.a2 = line_geometry(wi)
+        a1, a2 = self.a1, self.a2
+        self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
+        self.strip_half = int(math.ceil(0.32 * wi)) + self.a2 + 2
+        self.sigma_line = max(0.015 * wi, 1.0)
+        self.n_side = int(math.ceil(0.95 * wi))
+        self._cols = np.arange(self.n_side + 1)
+        self._insets = np.asarray(CORNER_INSETS) * r
+        self._inv_skins = self._inv[_SKINS]
+        self.reset_adaptation()
+        self.cheeks = (model.cheek_left, model.cheek_right)
+        self.run = cheek_run(wi)
+        self.body = mouth_body(wi)
+        # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
+        self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
+        self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
+
+    def _set_thickness(self, t_up: float, t_dn: float) -> None:
+        """The lips' expected thicknesses (rows at the working scale) and everything the vertical
+        split precomputes from them: each lip's candidate lengths and their prices, and the
+        candidate rows' offsets from the line's row."""
+        r, wi = self.r, self.wi
+        self.t_up, self.t_dn = float(t_up), float(t_dn)
         self._len = []
         for t in (self.t_up, self.t_dn):
             ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(THICKNESS[1] * t)) + 1)
             self._len.append((ln, (r * LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
         lu, ld = self._len[0][2], self._len[1][2]
         self._couple = r * COUPLE * (lu[:, None] - ld[None, :]) ** 2
-        # the vertical split's candidate rows as offsets from the line's row, and what they cost
-        self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
         lens_u, lens_d = self._len[0][0], self._len[1][0]
-        self._off = np.arange(self.reach[0], self.reach[1] + 1)
         self._off_u = self._off[:, None] - lens_u[None, :]
         self._off_sa = self._off_u - self.skin_w
         self._off_l = self._off[:, None] + lens_d[None, :]
@@ -363,26 +410,57 @@ class MouthFinder:
         P = self._pad
         self._at_b, self._at_u, self._at_sa = self._off + P, self._off_u + P, self._off_sa + P
         self._at_l, self._at_sb, self._at_ob = self._off_l + P, self._off_sb + P, self._off_ob + P
-        m = len(self._off)
-        self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
-        self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
-        self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
-        self.a1, self.a2 = line_geometry(wi)
-        a1, a2 = self.a1, self.a2
-        self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
-        self.strip_half = int(math.ceil(0.32 * wi)) + self.a2 + 2
-        self.sigma_line = max(0.015 * wi, 1.0)
-        self.n_side = int(math.ceil(0.95 * wi))
-        self._cols = np.arange(self.n_side + 1)
-        self._insets = np.asarray(CORNER_INSETS) * r
-        self._mu_skins, self._inv_skins = self._mu[_SKINS][None, :, None, :], self._inv[_SKINS]
+
+    # ------------------------------------------------------------------ adaptation
+    def adapt(self, res: MouthResult) -> bool:
+        """Learn the lips slowly from a frame whose split fitted well (the tracker calls it on the
+        frames it reports ``ok``): the colours of the four parts of the profile (skin, upper lip, lower
+        lip, skin) and the two lips' thicknesses move :data:`ADAPT_RATE` of the way to this frame's.
+
+        Calibration measures them on one frame, where a lip's thickness can come out half or twice
+        the truth depending on where the crop falls (and a lip's colour with it); light and pose move
+        the colours later. The colours used keep :data:`ADAPT_FLOOR` of the calibration's and stay
+        within :data:`ADAPT_REACH` of its spreads, the thicknesses within :data:`THICK_REACH` of its
+        own, so drift cannot take them further. Returns whether the frame was used."""
+        if res._split is None or res.score < ADAPT_SCORE:
+            return False
+        f, (gap_top, gap_bottom, top, bottom, _, fit) = res._split
+        if fit[0] > ADAPT_FIT:
+            return False
+        n = len(f)
+        meds = []
+        for a, b in ((top - self.skin_w, top), (top, gap_top), (gap_bottom, bottom), (bottom, bottom + self.skin_w)):
+            i0, i1 = max(int(math.ceil(a + 0.5)), 0), min(int(math.floor(b - 0.5)) + 1, n)
+            if i1 <= i0:  # a part without a whole row of its own
+                return False
+            meds.append(np.median(f[i0:i1], axis=0))
+        mu0, reach = self._mu0[:4], ADAPT_REACH * self._spread0[:4]
+        self._mu_seen = _clip(self._mu_seen + ADAPT_RATE * (np.asarray(meds) - self._mu_seen), mu0 - reach, mu0 + reach)
+        self._mu[:4] = ADAPT_FLOOR * mu0 + (1.0 - ADAPT_FLOOR) * self._mu_seen
+        self._colours_changed()
+        seen = np.log(np.maximum([gap_top - top, bottom - gap_bottom], 0.5))
+        self._log_t = _clip(self._log_t + ADAPT_RATE * (seen - self._log_t), self._log_t0 - LOG_THICK_REACH,
+                            self._log_t0 + LOG_THICK_REACH)
+        self._adapted += 1
+        if self._adapted % THICK_EVERY == 0:
+            t = np.exp(self._log_t)
+            if np.any(np.abs(t / (self.t_up, self.t_dn) - 1.0) > 0.05):
+                self._set_thickness(*t)
+        return True
+
+    def reset_adaptation(self) -> None:
+        """Back to the calibration's colours and thicknesses."""
+        self._mu = self._mu0.copy()
+        self._mu_seen = self._mu0[:4].astype(np.float64)
+        self._log_t = self._log_t0.copy()
+        self._adapted = 0
+        self._colours_changed()
+        self._set_thickness(*self._thick0)
+
+    def _colours_changed(self) -> None:
+        """What the split precomputes from the parts' colours."""
+        self._mu_skins = self._mu[_SKINS][None, :, None, :]
         self._axis_up, self._axis_down = _share_axis(self._mu[1], self._mu[0]), _share_axis(self._mu[2], self._mu[3])
-        self.cheeks = (model.cheek_left, model.cheek_right)
-        self.run = cheek_run(wi)
-        self.body = mouth_body(wi)
-        # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
-        self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
-        self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
 
     # ------------------------------------------------------------------ light
     def gains(self, crop: np.ndarray) -> np.ndarray | None:
@@ -789,7 +867,7 @@ class MouthFinder:
         return MouthResult(
             left=left, right=right, centre=(mx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
-            stretch=stretch, shape=(H, W), line_ends=line_ends,
+            stretch=stretch, shape=(H, W), line_ends=line_ends, _split=self._split,
         )
 
     def _line_and_lips(self, maps: "_Maps", x: float, seed: float, previous: MouthResult | None):
@@ -802,6 +880,7 @@ class MouthFinder:
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
         f, inside = self.profile(maps, cx)
         v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)
+        self._split = (f, v)
         return x0, traced, left, right, strength, halves, (cx, cy), v
 
     def _score(self, width, height, on_line, centre, pred, fit, strength, previous) -> float:
