@@ -33,7 +33,11 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
 4. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
    clearly the columns between the corners differ from the cheek against the calibration, the
    plausibility of the size, the place against the prediction and, with the previous frame's
-   result, how far the mouth moved. :data:`SCORE_OK` is the threshold.
+   result, how far the mouth moved. :data:`SCORE_OK` is the threshold;
+5. **adaptation** (:meth:`MouthFinder.adapt`, on the frames the tracker reports ``ok``): when the
+   split fitted well, the four parts' colours and the two lips' thicknesses move a little towards
+   this frame's — one calibration frame can measure a lip at half or twice its thickness — within
+   bounds round the calibration's.
 
 Everything runs on a few profiles (one column band, a strip along the line), never pixel by
 pixel after step 1; the outline (``polygon``) is drawn through the corners and the outer lip
@@ -125,6 +129,7 @@ upper lip: the shadow under the nose looks like lip on many faces."""
 OUTSIDE_PRICE = 1.0
 """Cost of one such row that looks like lip by ``d`` more than like skin: ``PRICE · (d − 1)``."""
 REACH = (-0.55, 0.6)
+"""Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
 ADAPT_RATE = 0.1
 """Weight of one well-fitted frame in the lips' adapted colours and thicknesses (about ten such
 frames, a third of a second, to move most of the way)."""
@@ -143,8 +148,6 @@ LOG_THICK_REACH = math.log(THICK_REACH)
 THICK_EVERY = 10
 """Adapted frames between rebuilds of the split's tables for new thicknesses (when one moved by 5 %)."""
 
-"""Where (× wi, relative to the predicted gap) the gap's edges are looked for: a yawn drops the jaw."""
-
 
 @dataclass
 class MouthResult:
@@ -160,6 +163,8 @@ class MouthResult:
     calibration's. ``line_ends`` are the corners on the traced mouth line (x as ``left``/``right``,
     the line's rows there), whose midpoint ``line_centre`` is where calibration put the mouth's
     centre: the corners' own height is measured from the lips next to them (None: the corners).
+    ``_split`` is the profile and the split it was measured from (at the finder's working scale),
+    for :meth:`MouthFinder.adapt`.
     """
 
     left: tuple[float, float]
@@ -223,6 +228,13 @@ def polygon_measures(poly: np.ndarray) -> tuple[tuple[float, float], tuple[float
 def _clip(v: np.ndarray, lo: float | np.ndarray, hi: float | np.ndarray) -> np.ndarray:
     """``np.clip`` of an array, without its argument checks (a few µs a call)."""
     return np.minimum(np.maximum(v, lo), hi)
+
+
+def _median_rows(block: np.ndarray) -> np.ndarray:
+    """``np.median(block, axis=0)`` of a few rows, without its Python overhead."""
+    s = np.sort(block, axis=0)
+    k = len(s) // 2
+    return s[k] if len(s) % 2 else (s[k - 1] + s[k]) * s.dtype.type(0.5)
 
 
 def _row_means(block: np.ndarray) -> np.ndarray:
@@ -359,12 +371,14 @@ class MouthFinder:
         self._split = None
         self._inv = (1.0 / (3.0 * cls[:, 1] ** 2)).astype(np.float32)
         self.skin_w = max(int(round(SKIN_ROWS * wi)), 3)
+        # the vertical split's candidate rows as offsets from the line's row, and what they cost
         self.reach = (int(math.floor(REACH[0] * wi)), int(math.ceil(REACH[1] * wi)))
         self._off = np.arange(self.reach[0], self.reach[1] + 1)
         m = len(self._off)
         self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
         self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
         self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
+        # (the offsets that depend on the lips' thicknesses: _set_thickness)
         # what the lips look like and how thick they are, adapted from well-fitted frames (adapt)
         self._mu0, self._spread0 = cls[:, 0].copy(), cls[:, 1].astype(np.float64)
         self._thick0 = (model.thick_up * k, model.thick_down * k)
@@ -430,10 +444,14 @@ class MouthFinder:
         n = len(f)
         meds = []
         for a, b in ((top - self.skin_w, top), (top, gap_top), (gap_bottom, bottom), (bottom, bottom + self.skin_w)):
-            i0, i1 = max(int(math.ceil(a + 0.5)), 0), min(int(math.floor(b - 0.5)) + 1, n)
-            if i1 <= i0:  # a part without a whole row of its own
+            i0, i1 = int(math.ceil(a + 0.5)), int(math.floor(b - 0.5)) + 1
+            if i1 <= i0:  # a thin lip without a whole row of its own: the row through its middle
+                i0 = int(math.floor(0.5 * (a + b) + 0.5))
+                i1 = i0 + 1
+            i0, i1 = max(i0, 0), min(i1, n)
+            if i1 <= i0:
                 return False
-            meds.append(np.median(f[i0:i1], axis=0))
+            meds.append(_median_rows(f[i0:i1]))
         mu0, reach = self._mu0[:4], ADAPT_REACH * self._spread0[:4]
         self._mu_seen = _clip(self._mu_seen + ADAPT_RATE * (np.asarray(meds) - self._mu_seen), mu0 - reach, mu0 + reach)
         self._mu[:4] = ADAPT_FLOOR * mu0 + (1.0 - ADAPT_FLOOR) * self._mu_seen
