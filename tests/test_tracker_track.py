@@ -149,6 +149,24 @@ def test_lost_holds_the_last_values(cal):
     assert abs(r4.params.mid_x - t.mid_x) < 1 and abs(r4.params.mid_y - t.mid_y) < 1
 
 
+def test_the_mouth_adapts_on_ok_frames_and_forgets_after_a_long_loss(cal):
+    """The tracker lets the mouth finder learn the lips from the frames it reports ok, and sends it
+    back to the calibration with the eyes once the face has been lost for RESET_ADAPTATION frames."""
+    from tracker.face_tracker import RESET_ADAPTATION
+
+    tr = FaceTracker(cal)
+    mf = tr.mouth_finder
+    for i in range(6):
+        state = BASE.replace(cx=320.0 + i, mouth_open=0.1 * (i % 2))
+        assert tr.track(render_face(state)[0], i).params.status == "ok"
+    assert mf._adapted == 6 and not np.array_equal(mf._mu, mf._mu0)
+    empty = render_face(BASE.replace(visible=False))[0]
+    for i in range(RESET_ADAPTATION + 1):
+        assert tr.track(empty, 6 + i).params.status == LOST
+    assert mf._adapted == 0 and np.array_equal(mf._mu, mf._mu0)
+    assert (mf.t_up, mf.t_dn) == mf._thick0
+
+
 def test_overlay_draws(cal, tmp_path):
     img, _ = render_face(BASE.with_expression("grin").replace(roll_deg=-12))
     tr = FaceTracker(cal)
