@@ -317,17 +317,17 @@ TALK = [BASE.replace(cx=320.0 + 0.37 * i, cy=210.0 - 0.23 * i, mouth_open=0.15 *
 
 
 def test_adaptation_mends_a_lip_thickness_calibration_got_wrong(calibrated):
-    """A calibration frame can measure a lip at twice its thickness (the edge search ran into the
-    shadow under it): the well-fitted frames that follow take the expected thickness most of the way
-    back, and the lips are still measured right."""
+    """A calibration frame can measure a lip too thick (the edge search ran into the shadow under
+    it): the well-fitted frames that follow take the expected thickness most of the way back, and
+    the lips are still measured right."""
     model, centre = calibrated
-    wrong = MouthModel.from_dict({**model.to_dict(), "thick_down": 2.0 * model.thick_down})
+    wrong = MouthModel.from_dict({**model.to_dict(), "thick_down": 1.3 * model.thick_down})
     frames = _crops_of(TALK, centre)
     finder = MouthFinder(wrong, WI)
     used = sum(finder.adapt(finder.find(c, p)) for _ in range(2) for c, p, _ in frames)
     assert used == 2 * len(frames)  # these frames all fit well
     true_t = model.thick_down * finder.k
-    assert abs(finder.t_dn - true_t) < 0.5 * true_t, (finder.t_dn, true_t)
+    assert abs(finder.t_dn - true_t) < 0.5 * 0.3 * true_t, (finder.t_dn, true_t)
     for c, p, t in frames:
         res = finder.find(c, p)
         assert res.score >= SCORE_OK
