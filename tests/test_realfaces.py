@@ -236,7 +236,7 @@ REAL_CASES = [
     pytest.param("talk_a", False, id="talk_a-clicks"),  # a blink without the flow must not set the head's scale
     # her calibration frame measures the upper lip ~30 % thicker without the clicks; a lip class that
     # wide took the red inside under her upper teeth for lip in a wide smile (r open 0.78) until the
-    # mouth finder learned her lips again from the frames that fit well (0.98)
+    # mouth finder learned her lips again from the frames that fit well (0.97)
     pytest.param("talk_a", True, id="talk_a-auto"),
     pytest.param("expr_d10", False, id="expr_d10-clicks"),
     pytest.param("talk_b", False, id="talk_b-clicks"),  # the lower lip's edge by its colour, not its shadow
