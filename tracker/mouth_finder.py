@@ -293,10 +293,10 @@ def _share_axis(lip: np.ndarray, skin: np.ndarray) -> tuple[np.ndarray, float]:
     return d, float(d @ d)
 
 
-def _share(f: np.ndarray, lip: np.ndarray, skin: np.ndarray, axis: tuple[np.ndarray, float] | None = None) -> float:
+def _share(f: np.ndarray, skin: np.ndarray, axis: tuple[np.ndarray, float]) -> float:
     """How much of a row with features ``f`` is lip (0..1): its place between the skin's and the
-    lip's medians along the line joining them (``axis``: :func:`_share_axis` of the two, if made)."""
-    d, den = _share_axis(lip, skin) if axis is None else axis
+    lip's medians along the line joining them (``axis``: :func:`_share_axis` of the two)."""
+    d, den = axis
     return min(max(float((f - skin) @ d) / den, 0.0), 1.0) if den > 1e-6 else 0.5
 
 
@@ -311,7 +311,7 @@ def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.nda
         return 0.0
     if axis is None:
         axis = _share_axis(lip, skin)
-    shift = _share(f[row + out], lip, skin, axis) - (1.0 - _share(f[row], lip, skin, axis))
+    shift = _share(f[row + out], skin, axis) - (1.0 - _share(f[row], skin, axis))
     return min(max(shift, -0.5), 0.5)
 
 
@@ -384,9 +384,12 @@ class MouthFinder:
         self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
         # (the offsets that depend on the lips' thicknesses: _set_thickness)
         # what the lips look like and how thick they are, adapted from well-fitted frames (adapt)
-        self._mu0, self._spread0 = cls[:, 0].copy(), cls[:, 1].astype(np.float64)
+        self._mu0 = cls[:, 0].copy()
+        reach = ADAPT_REACH * cls[:4, 1].astype(np.float64)
+        self._mu_bounds = (self._mu0[:4] - reach, self._mu0[:4] + reach)
         self._thick0 = (model.thick_up * k, model.thick_down * k)
         self._log_t0 = np.log(self._thick0)
+        self._log_t_bounds = (self._log_t0 - LOG_THICK_REACH, self._log_t0 + LOG_THICK_REACH)
         self.a1, self.a2 = line_geometry(wi)
         a1, a2 = self.a1, self.a2
         self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
@@ -456,13 +459,11 @@ class MouthFinder:
             if i1 <= i0:
                 return False
             meds.append(_median_rows(f[i0:i1]))
-        mu0, reach = self._mu0[:4], ADAPT_REACH * self._spread0[:4]
-        self._mu_seen = _clip(self._mu_seen + ADAPT_RATE * (np.asarray(meds) - self._mu_seen), mu0 - reach, mu0 + reach)
-        self._mu[:4] = ADAPT_FLOOR * mu0 + (1.0 - ADAPT_FLOOR) * self._mu_seen
+        self._mu_seen = _clip(self._mu_seen + ADAPT_RATE * (np.asarray(meds) - self._mu_seen), *self._mu_bounds)
+        self._mu[:4] = ADAPT_FLOOR * self._mu0[:4] + (1.0 - ADAPT_FLOOR) * self._mu_seen
         self._colours_changed()
         seen = np.log(np.maximum([gap_top - top, bottom - gap_bottom], 0.5))
-        self._log_t = _clip(self._log_t + ADAPT_RATE * (seen - self._log_t), self._log_t0 - LOG_THICK_REACH,
-                            self._log_t0 + LOG_THICK_REACH)
+        self._log_t = _clip(self._log_t + ADAPT_RATE * (seen - self._log_t), *self._log_t_bounds)
         self._adapted += 1
         if self._adapted % THICK_EVERY == 0:
             t = np.exp(self._log_t)
