@@ -13,6 +13,7 @@ from tracker.calibration import FaceFrame
 from tracker.eyes import (
     EyeFinder,
     EyeModel,
+    LID_SHOW,
     EyeModelError,
     SkinModel,
     _run,
@@ -82,6 +83,27 @@ def _check(res, truth, pupil=0.6, lid=1.5, brow=1.5):
         assert abs(e.upper - (t["pupil"][1] - t["lid_upper"][1])) <= lid, (side, e.upper, t)
         assert abs(e.lower - (t["lid_lower"][1] - t["pupil"][1])) <= lid, (side, e.lower, t)
         assert abs(e.brow - (t["pupil"][1] - t["brow"][1])) <= brow, (side, e.brow, t)
+
+
+def test_a_shadow_under_the_eyes_cannot_take_the_lower_lid_past_what_an_eye_can_show(finder):
+    """Dark make-up or an eye bag's shadow joined to the lower lid: the colour run goes on through
+    it (three times the lid's distance), and the lid reported stops at the iris radius plus the
+    most white an eye shows below it."""
+    frame, _ = render_face(BASE)
+    lm = face_landmarks(BASE)
+    d = BASE.ipd
+    for side in ("left", "right"):
+        x, y = lm[f"{side}_lid_lower"]
+        bag = [[x - 0.22 * d, y - 1], [x + 0.22 * d, y - 1], [x + 0.15 * d, y + 0.2 * d], [x - 0.15 * d, y + 0.2 * d]]
+        cv2.fillConvexPoly(frame, np.array(bag, np.int32), (70, 60, 90))
+    frame = cv2.GaussianBlur(frame, (0, 0), 1.0)
+    res, truth, _, (crop, _, _) = _find(finder, BASE, frame=frame)
+    for i, (e, side) in enumerate(zip(res.eyes, ("left", "right"))):
+        t = truth[side]
+        most = finder.radius[i] + LID_SHOW[1] * finder.wi
+        assert finder.lids(crop, i, (e.x, e.y), dark=False)[1] > 1.5 * most  # the run went on into the shadow
+        assert e.lower == pytest.approx(most)
+        assert abs(e.upper - (t["pupil"][1] - t["lid_upper"][1])) <= 1.5  # the upper lid is as it was
 
 
 @pytest.mark.parametrize("expr", ["neutral", "brows_up", "brows_angry", "wide", "smile", "sad"])

@@ -78,6 +78,12 @@ LASH_CONTRAST = 25.0
 CLOSING = (0.3, 0.7)
 """Lid gaps (fractions of the calibrated one) over which the eye point moves from the middle
 of the slit (closed) to the iris (open)."""
+LID_SHOW = (0.10, 0.06)
+"""The most white an open eye shows past its iris above and below (wi): a lid's distance from the
+eye point is at most the iris radius plus this. Real eyes open no wider (a landmark tracker's
+widest surprise on the shared clips: 0.093 and 0.05 wi past the iris), and a run past it went on
+into make-up, an eye bag's shadow or the brow's (at 35 px between the eyes, runs three times the
+lid's real distance)."""
 OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
@@ -773,6 +779,7 @@ class EyeFinder:
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
+        self._lid_most = [(r + LID_SHOW[0] * self.wi, r + LID_SHOW[1] * self.wi) for r in self.radius]
         # iris search: a half-resolution strip for both eyes, then full resolution near the peak
         self.sx, self.sy = _even(search[0] * wi), _even(search[1] * wi)
         self.slack = (max(int(round(PAIR_SLACK_X * wi / 2)), 1), max(int(round(PAIR_SLACK_Y * wi / 2)), 1))
@@ -1299,6 +1306,7 @@ class EyeFinder:
         eyes = []
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]
+            up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
                 open=w >= OPEN_SHARE, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
