@@ -136,6 +136,28 @@ def test_corner_of_a_low_contrast_mouth_is_where_its_columns_meet_the_cheek(monk
     assert x_old < 12, "with a floor of 6 the corner ends where the body does (else this case shows nothing)"
 
 
+def test_a_corner_holds_its_place_along_a_crease_as_unlike_the_cheek_as_its_level():
+    """Past the lips (body 40, level 0.3 × 40 = 12) a crease runs on for six columns at 11.5-12.5,
+    then the cheek. Noise puts the crease's columns either side of the level from frame to frame, so
+    the corner would jump between the lips' end (column 12-13) and the crease's (18); with the last
+    frame's corner it stays where it was, at either end. A mouth that really widens (lip columns
+    well above the level) still moves it, and without a last corner the rule is the plain one."""
+    import tracker.mouth_model as mm
+
+    lips, cheek = [40.0] * 13, [1.0] * 12
+    above = np.array(lips + [12.5, 12.2, 12.4, 12.3, 12.6, 12.1] + cheek)
+    below = np.array(lips + [11.5, 11.8, 11.6, 11.7, 11.4, 11.9] + cheek)
+    assert mm.corner_distance(above, 4, 30, 3, (2, 9))[0] > 18
+    assert mm.corner_distance(below, 4, 30, 3, (2, 9))[0] < 13  # what noise alone does without a hold
+    for d in (above, below):
+        assert mm.corner_distance(d, 4, 30, 3, (2, 9), previous=13.2)[0] == pytest.approx(13.2)
+        assert mm.corner_distance(d, 4, 30, 3, (2, 9), previous=17.6)[0] == pytest.approx(17.6)
+        assert mm.corner_distance(d, 4, 30, 3, (2, 9), previous=25.0)[0] < 19.5  # not past the crease
+        assert mm.corner_distance(d, 4, 30, 3, (2, 9), previous=5.0)[0] > 11.9  # nor inside the lips
+    wider = np.array(lips + [40.0] * 5 + cheek + cheek)
+    assert mm.corner_distance(wider, 4, 30, 3, (2, 9), previous=12.4)[0] > 17  # a smile widens it
+
+
 def _mouth_at(line_centre, width, rise):
     """A stand-in for a mouth result: the traced line's ends about ``line_centre`` (face px)."""
     from types import SimpleNamespace

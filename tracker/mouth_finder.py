@@ -693,15 +693,23 @@ class MouthFinder:
             traced.append(trace_line(maps.lum, x0, y_line, step, n) if n >= 4 else None)
         return x0, traced
 
-    def _search(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], y_line: float):
+    def _search(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], y_line: float,
+                previous: MouthResult | None = None):
         """The corners along the rows ``traced`` from column ``x0`` (see :meth:`corners`), and each
-        side's distance (columns from ``x0``, before :data:`~tracker.mouth_model.CORNER_BIAS`)."""
+        side's distance (columns from ``x0``, before :data:`~tracker.mouth_model.CORNER_BIAS`).
+        ``previous`` (a result in this crop's pixels scoring at least :data:`SCORE_OK`): each corner
+        holds its last place where the columns past it are as unlike the cheek as the corner level
+        (:func:`~tracker.mouth_model.corner_distance`)."""
+        last = (None, None)
+        if previous is not None and previous.score >= SCORE_OK:
+            bias = CORNER_BIAS * self.r
+            last = (x0 - previous.left[0] - bias, previous.right[0] - x0 - bias)
         live = [(step, ys) for step, ys in zip((-1, +1), traced) if ys is not None]
         if live:  # the columns along both sides in one go
             xs = np.concatenate([x0 + step * self._cols[: len(ys)] for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
         out, strength, halves, at = [], [], [], 0
-        for step, ys, cheek in zip((-1, +1), traced, self.cheeks):
+        for step, ys, cheek, prev in zip((-1, +1), traced, self.cheeks, last):
             if ys is None:
                 out.append((float(x0), float(y_line)))
                 strength.append(0.0)
@@ -709,7 +717,7 @@ class MouthFinder:
                 continue
             d = unlike_cheek(cols[at : at + len(ys)], cheek)
             at += len(ys)
-            half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body)
+            half, g = corner_distance(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
             k = min(int(half), len(ys) - 2)
             t = half - k
             out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))
@@ -880,7 +888,7 @@ class MouthFinder:
         # line, an open mouth is widest below it, and the straight line left the mouth too soon there
         # (each path ends where it leaves the mouth, so the mouth reaches at least the farther end)
         if CORNER_BEND > 0:
-            bl, br, _, _ = self._search(maps, x0, self.bent(x0, traced, halves, (yl, yr)), seed)
+            bl, br, _, _ = self._search(maps, x0, self.bent(x0, traced, halves, (yl, yr)), seed, previous)
             left, right = (bl if bl[0] < left[0] else left), (br if br[0] > right[0] else right)
         left, right = (left[0], yl), (right[0], yr)
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
@@ -899,7 +907,7 @@ class MouthFinder:
         expected on their line where the calibration had it (:meth:`vertical`): ``(x0, traced, left,
         right, strengths, halves, midpoint, split)``."""
         x0, traced = self.trace(maps, x, seed)
-        left, right, strength, halves = self._search(maps, x0, traced, seed)
+        left, right, strength, halves = self._search(maps, x0, traced, seed, previous)
         cx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
         f, inside = self.profile(maps, cx)
         v = self.vertical(f, inside, cy + self.line0, previous=previous, spread=0.12)

@@ -577,6 +577,9 @@ lips or a camera with little colour leave the whole mouth at 5-10, and a floor o
 corner where the lips begin to taper (pale expr_d0's grin: 20 columns short on one side)."""
 BODY_SHARE = 0.3
 """A corner is where the columns are less unlike the cheek than this share of the lips' body."""
+CORNER_HOLD = 0.15
+"""Share of the corner level (above and below it) over which a corner holds its last frame's place
+(:func:`corner_distance`)."""
 CORNER_BIAS = 1.0
 """Columns a corner from :func:`corner_distance` is moved outwards: the columns about the line turn
 to cheek where the lips have tapered to a point, one column (at any scale: measured on synthetic
@@ -627,14 +630,41 @@ def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.n
     return np.add.reduce(z, axis=1) / np.float32(z.shape[1])  # the mean, without mean's Python overhead
 
 
-def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int, int]) -> tuple[float, float]:
+def _cheek_from(v: list[float], level: float, a: int, b: int, need: int) -> int | None:
+    """The first column ``k`` in ``[a, b]`` at or above ``level`` with ``need`` columns under it
+    after it (None when there is none)."""
+    n = len(v)
+    for i in range(a, b + 1):
+        if v[i] >= level:
+            j, end = i + 1, min(i + need, n - 1)
+            while j <= end and v[j] < level:
+                j += 1
+            if j - i - 1 >= need:
+                return i
+    return None
+
+
+def _crossing(v: list[float], k: int, level: float) -> float:
+    """Column ``k`` moved sub-pixel to where ``v`` falls through ``level`` after it."""
+    d0, d1 = v[k], v[k + 1]
+    return k + (d0 - level) / (d0 - d1) if d0 >= level > d1 else float(k)
+
+
+def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int, int],
+                    previous: float | None = None) -> tuple[float, float]:
     """Where the mouth ends along one side of the line, from the columns' unlikeness to the cheek
     ``d`` (column 0 at the centre): the first column in ``[lo, hi]`` after which ``run`` columns in a
     row are less unlike the cheek than :data:`BODY_SHARE` of the mouth's body (the median over columns
     ``body``; at least :data:`CHEEK_LEVEL`) — a short crease or blotch beyond the corner does not
     move it, nor hair, a collar or the background further out — placed sub-pixel where ``d``
     crosses that level; and how clearly the mouth's columns up to it differed from the cheek
-    (``Σ min(d, 5·level) − level``). Without such a run, where that sum is largest."""
+    (``Σ min(d, 5·level) − level``). Without such a run, where that sum is largest.
+
+    ``previous`` (the last frame's distance on this side, columns): where the columns past the lips
+    are about as unlike the cheek as that level (a crease running on from the corner), the corner
+    with the level :data:`CORNER_HOLD` higher and the one with it that much lower can lie apart;
+    the corner then stays as near the last one as that range allows instead of jumping from one
+    end to the other with the noise."""
     v = d.tolist()  # short (one side of a mouth): plain Python is quicker than numpy here
     n = len(v)
     body_d = sorted(v[max(body[0], 0) : min(max(body[1], body[0] + 1), n)])
@@ -648,30 +678,27 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
         return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
     cap = 5.0 * level
     need = min(run, n - 1 - b + run)
-    k = None
-    for i in range(a, b + 1):  # the first column with ``need`` cheek-like columns after it
-        if v[i] >= level:
-            j, end = i + 1, min(i + need, n - 1)
-            while j <= end and v[j] < level:
-                j += 1
-            if j - i - 1 >= need:
-                k = i
-                break
+    k = _cheek_from(v, level, a, b, need)
     if k is None:
         gain, g = [], 0.0
         for q in v[: b + 1]:
             g += (q if q < cap else cap) - level
             gain.append(g)
         k = max(range(a, b + 1), key=gain.__getitem__)
-        g = gain[k]
-    else:
-        g = 0.0
-        for q in v[: k + 1]:
-            g += (q if q < cap else cap) - level
-    x = float(k)
-    d0, d1 = v[k], v[k + 1]
-    if d0 >= level > d1:
-        x += (d0 - level) / (d0 - d1)
+        return _crossing(v, k, level), float(gain[k])
+    x = _crossing(v, k, level)
+    if previous is not None and CORNER_HOLD > 0:
+        k_in = _cheek_from(v, (1.0 + CORNER_HOLD) * level, a, b, need)
+        k_out = _cheek_from(v, (1.0 - CORNER_HOLD) * level, a, b, need)
+        if k_in is not None and k_out is not None:
+            x_in = _crossing(v, k_in, (1.0 + CORNER_HOLD) * level)
+            x_out = _crossing(v, k_out, (1.0 - CORNER_HOLD) * level)
+            lo_x, hi_x = min(x_in, x_out, x), max(x_in, x_out, x)
+            x = min(max(float(previous), lo_x), hi_x)
+            k = min(int(x), b)
+    g = 0.0
+    for q in v[: k + 1]:
+        g += (q if q < cap else cap) - level
     return x, float(g)
 
 
