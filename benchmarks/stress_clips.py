@@ -15,7 +15,15 @@ dim      the light falls to half over the clip, turning warm (auto-exposure, a l
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
+leave    the face slides out of the frame sideways, stays away a second, and slides back
+covered  a skin-coloured hand passes over the face and covers it for a second
 ======== ==================================================================================
+
+In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
+blank (NaN), and a frame with any point blank has no parameters: the face is not in view there,
+so it counts neither as lost nor in the correlations, and its return is timed (frames to our first
+``ok``). A frame whose two pupils are both blank is one where the face is away: reporting ``ok``
+there is a dishonest status.
 
 ``python -m benchmarks.stress_clips --out out/stress [--variants half,noisy]`` writes them (a few
 seconds a variant). Nothing here is committed data: the variants are made from the shared clips.
@@ -43,7 +51,27 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "pale", "blur", "mirror")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "pale", "blur", "mirror", "leave", "covered")
+AWAY = (0.4, 15, 25)
+"""The away variants' event: it starts at this share of the clip, takes this many frames to go (and
+as many to come back) and stays away this many frames. Leaving the frame in 15 frames moves the
+face about 0.4 IPD a frame (a brisk lean out of view, 0.6 m/s); in 6 frames it was a whole IPD a
+frame (1.5 m/s), faster than any frame-to-frame search can follow on re-entry."""
+
+
+def _away_curve(n: int) -> np.ndarray:
+    """(n,) 0 → 1 → 0: how far the face has gone (``leave``) or the hand has come (``covered``)."""
+    a, ramp, hold = int(AWAY[0] * n), AWAY[1], AWAY[2]
+    t = np.zeros(n)
+    for i in range(n):
+        k = i - a
+        if 0 <= k < ramp:
+            t[i] = (k + 1) / ramp
+        elif ramp <= k < ramp + hold:
+            t[i] = 1.0
+        elif ramp + hold <= k < 2 * ramp + hold:
+            t[i] = 1.0 - (k - ramp - hold + 1) / ramp
+    return t
 
 
 def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple[list[np.ndarray], tuple[int, int]]:
@@ -78,7 +106,53 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
             m[:, 2] += (dx[i], dy[i])
             out.append(m)
         return out, (w, h)
+    if kind == "leave":  # slides out to the left, past the frame's edge, and back
+        t = _away_curve(n)
+        return [np.array([[1.0, 0.0, -1.15 * w * t[i]], [0.0, 1.0, 0.0]]) for i in range(n)], (w, h)
     return [eye] * n, (w, h)
+
+
+def _room(first: np.ndarray) -> np.ndarray:
+    """A background for a frame the face has left: the first frame's top-left corner (away from the
+    face), blown up and blurred — the room's colours, no face."""
+    h, w = first.shape[:2]
+    corner = first[: max(h // 6, 4), : max(w // 6, 4)]
+    return cv2.GaussianBlur(cv2.resize(corner, (w, h), interpolation=cv2.INTER_LINEAR), (0, 0), 6.0)
+
+
+def _hand(frames: list[np.ndarray], points: dict[str, np.ndarray], seed: int):
+    """What ``covered`` draws: a per-frame function painting a hand (a shaded, textured ellipse of
+    the face's own skin colour, about the face's size) that comes in from the right, covers the face
+    and leaves; and per frame the hand's centre and axes (px) to tell which points it hides."""
+    n = len(frames)
+    h, w = frames[0].shape[:2]
+    t = _away_curve(n)
+    lp, rp = points["left_pupil"], points["right_pupil"]
+    ipd = float(np.nanmedian(np.hypot(*(rp - lp).T)))
+    centre = 0.5 * (lp + rp) + np.array([0.0, 0.45 * ipd])  # between the eyes and the mouth
+    centre = np.where(np.isfinite(centre), centre, np.nanmedian(centre, axis=0))
+    ax = (1.25 * ipd, 1.6 * ipd)
+    start_x = w + ax[0] + 2.0
+    cx = start_x + (centre[:, 0] - start_x) * t
+    cy = centre[:, 1]
+    box = frames[0][int(max(centre[0, 1] - 0.6 * ipd, 0)) : int(centre[0, 1] + 0.6 * ipd),
+                    int(max(centre[0, 0] - 0.6 * ipd, 0)) : int(centre[0, 0] + 0.6 * ipd)].reshape(-1, 3)
+    skin = np.median(box, axis=0).astype(np.float32) * 0.92
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    texture = cv2.GaussianBlur(rng.normal(0.0, 1.0, (h, w)).astype(np.float32), (0, 0), 2.0) * 12.0
+
+    def paint(img: np.ndarray, i: int) -> np.ndarray:
+        if t[i] <= 0.0:
+            return img
+        u, v = (xx - cx[i]) / ax[0], (yy - cy[i]) / ax[1]
+        r2 = u * u + v * v
+        inside = np.clip((1.0 - r2) * 12.0, 0.0, 1.0)[..., None]  # a soft edge of a few px
+        shade = (1.05 - 0.25 * np.clip(r2, 0.0, 1.0) + 0.1 * u)[..., None]  # lit from the left
+        colour = skin[None, None, :] * shade + texture[..., None]
+        return np.clip(img * (1.0 - inside) + colour * inside, 0, 255).astype(np.uint8)
+
+    return paint, cx, cy, ax
 
 
 def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:
@@ -138,6 +212,10 @@ def _read_points(path: Path) -> dict[str, np.ndarray]:
     return {p: np.array([[val(r[f"{p}_x"]), val(r[f"{p}_y"])] for r in rows]) for p in POINTS}
 
 
+def _num(v: float, fmt: str) -> str:
+    return format(v, fmt) if math.isfinite(v) else "nan"
+
+
 def _move(p: np.ndarray, m: np.ndarray) -> np.ndarray:
     return p @ m[:, :2].T + m[:, 2]
 
@@ -159,6 +237,9 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
     maps, (W, H) = _affine_frames(n, kind, (w, h), seed)
     pix = _photometric(kind, n, seed)
+    points = _read_points(src / f"{name}.points.csv")
+    room = _room(frames[0]) if kind == "leave" else None
+    hand = _hand(frames, points, seed) if kind == "covered" else None
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")
@@ -169,16 +250,26 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             interp = cv2.INTER_AREA if kind in ("half", "third") else cv2.INTER_LINEAR
             if kind in ("half", "third"):
                 img = cv2.resize(img, (W, H), interpolation=interp)
+            elif room is not None:
+                img = cv2.warpAffine(img, m, (W, H), dst=room.copy(), flags=interp, borderMode=cv2.BORDER_TRANSPARENT)
             else:
                 img = cv2.warpAffine(img, m, (W, H), flags=interp, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
         elif kind == "mirror":
             img = img[:, ::-1]
+        if hand is not None:
+            img = hand[0](img, i)
         writer.write(np.ascontiguousarray(pix(img, i)))
     writer.release()
 
-    points = _read_points(src / f"{name}.points.csv")
     n = min(n, len(points["left_pupil"]))
     moved = {p: np.array([_move(points[p][i], maps[i]) for i in range(n)]) for p in POINTS}
+    for p in POINTS if kind in ("leave", "covered") else ():  # out of the frame or under the hand: unseen
+        q = moved[p]
+        hidden = ~((q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1))
+        if hand is not None:
+            _, cx, cy, (axx, axy) = hand
+            hidden |= ((q[:, 0] - cx[:n]) / axx) ** 2 + ((q[:, 1] - cy[:n]) / axy) ** 2 <= 1.0
+        q[hidden] = np.nan
     if kind == "mirror":  # image-left is now what was image-right
         for a in ("pupil", "upper_lid", "lower_lid", "brow", "mouth_corner"):
             moved[f"left_{a}"], moved[f"right_{a}"] = moved[f"right_{a}"], moved[f"left_{a}"]
@@ -186,13 +277,14 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
         wr = csv.writer(f)
         wr.writerow(["frame"] + [f"{p}_{c}" for p in POINTS for c in "xy"])
         for i in range(n):
-            wr.writerow([i] + [f"{v:.2f}" for p in POINTS for v in moved[p][i]])
+            wr.writerow([i] + [_num(v, ".2f") for p in POINTS for v in moved[p][i]])
     vals = peer_params(moved)
     with open(out / f"{name}.mp.csv", "w", newline="") as f:
         wr = csv.writer(f)
         wr.writerow(["frame", *PARAM_NAMES, "ipd"])
         for i in range(n):
-            wr.writerow([i] + [f"{v:.3f}" for v in vals[i]])
+            row = vals[i] if np.isfinite(vals[i]).all() else np.full(len(vals[i]), np.nan)  # any point unseen: no face
+            wr.writerow([i] + [_num(v, ".3f") for v in row])
 
     clicks = json.loads((src / f"{name}.clicks.json").read_text())
     m0 = maps[int(clicks.get("frame", 0))]

@@ -108,6 +108,27 @@ def test_frames_the_peer_does_not_see_are_left_out_and_returns_are_timed():
     assert never.reacquire == [None]
 
 
+def test_ok_frames_while_the_face_is_away_are_counted_and_the_slowest_return_is_the_target():
+    p = _peer()
+    p.values[40:50] = np.nan
+    p.points = {"left_pupil": np.full((100, 2), 5.0), "right_pupil": np.full((100, 2), 9.0)}
+    p.points["left_pupil"][42:48] = np.nan  # both pupils unseen on 42-47: the face is away
+    p.points["right_pupil"][42:48] = np.nan
+    st_ = [OK] * 100
+    st_[44:52] = [LOST] * 8  # ok on 42 and 43 while away, back ok 2 frames after the return at 50
+    m = rf.compare(_ours(np.nan_to_num(p.values), st_), p)
+    assert (m.away_frames, m.away_ok) == (6, 2)
+    vals = rf.metric_values(m)
+    assert vals["return_frames"] == 2 and vals["away_ok"] == 2
+    assert not rf.misses(m)["return_frames"] and not rf.misses(m)["away_ok"]
+    never = rf.compare(_ours(np.nan_to_num(p.values), [OK] * 40 + [LOST] * 60), p)
+    assert rf.metric_values(never)["return_frames"] == math.inf and rf.misses(never)["return_frames"]
+    still = rf.compare(_ours(np.nan_to_num(p.values)), p)  # ok all the way through the face's absence
+    assert still.away_ok == 6 and rf.misses(still)["away_ok"]
+    no_event = rf.compare(_ours(np.nan_to_num(_peer().values)), _peer())
+    assert rf.metric_values(no_event)["return_frames"] == 0 and not rf.misses(no_event)["return_frames"]
+
+
 def test_correlations_use_our_held_values_on_lost_frames():
     p = _peer(n=60)
     v = p.values.copy()

@@ -82,3 +82,53 @@ def test_stress_summary_counts_targets():
     row, passes = rf.stress_summary("v", res)
     assert row[:3] == ["v", "1/1", "0/1"] and "a/a: L+O" in row[3]
     assert passes["r_open"] == 1 and passes["r_eye"] == 2
+
+
+@pytest.mark.parametrize("kind", ["leave", "covered"])
+def test_away_variants_hide_the_face_and_blank_the_peer_there(tmp_path, kind):
+    """While the face is out of the frame or under the hand the peer's points are blank (and the row
+    of parameters with them); before and after the event the clip and its peer are the original's."""
+    n = 120
+    src, out = tmp_path / "src", tmp_path / kind
+    src.mkdir()
+    pts = _write_clip(src, n=n, w=160, h=120)
+    sc.make_variant(src, "c", kind, out)
+    peer = rf.load_peer(out, "c")
+    start, ramp, hold = int(sc.AWAY[0] * n), sc.AWAY[1], sc.AWAY[2]
+    gone = start + ramp + hold // 2  # the middle of the stay away
+    assert not peer.visible[gone]
+    assert np.isnan(peer.points["left_pupil"][gone]).all() and np.isnan(peer.points["right_pupil"][gone]).all()
+    assert peer.visible[0] and peer.visible[n - 1]
+    assert peer.points["left_pupil"][0] == pytest.approx(pts["left_pupil"])
+    assert peer.points["right_pupil"][n - 1] == pytest.approx(pts["right_pupil"])
+    assert json.loads((out / "c.clicks.json").read_text())["left_pupil"] == pytest.approx(list(pts["left_pupil"]))
+    cap = cv2.VideoCapture(str(out / "c.mp4"))
+    frames = []
+    while True:
+        ok, img = cap.read()
+        if not ok:
+            break
+        frames.append(img)
+    cap.release()
+    assert len(frames) == n
+    src_cap = cv2.VideoCapture(str(src / "c.mp4"))
+    src_frames = [src_cap.read()[1] for _ in range(n)]
+    src_cap.release()
+    x, y = (int(v) for v in pts["left_pupil"])
+    assert np.abs(frames[0].astype(int) - src_frames[0].astype(int)).mean() < 8  # untouched (but for the codec)
+    assert np.abs(frames[gone][y, x].astype(int) - src_frames[gone][y, x].astype(int)).max() > 0  # something else is there
+
+
+def test_the_hand_is_skin_coloured_and_covers_the_face(tmp_path):
+    n = 120
+    src, out = tmp_path / "src", tmp_path / "covered"
+    src.mkdir()
+    pts = _write_clip(src, n=n, w=160, h=120)
+    sc.make_variant(src, "c", "covered", out)
+    cap = cv2.VideoCapture(str(out / "c.mp4"))
+    frames = [cap.read()[1] for _ in range(n)]
+    cap.release()
+    gone = int(sc.AWAY[0] * n) + sc.AWAY[1] + sc.AWAY[2] // 2
+    x, y = (int(v) for v in pts["left_pupil"])
+    patch = frames[gone][y - 3 : y + 4, x - 3 : x + 4].reshape(-1, 3).astype(float)
+    assert patch.std(axis=0).max() < 25  # smooth skin, not the random clip under it

@@ -133,6 +133,88 @@ def test_a_face_sliding_out_of_the_picture_is_not_ok_once_an_eye_is_out():
             assert r.params.status != "ok", f"frame {i}: ok while the face is out of the picture"
 
 
+def _hand_over(img: np.ndarray, state: FaceState, share: float) -> np.ndarray:
+    """``img`` with a flat, shaded, skin-coloured hand that has come ``share`` (0..1) of the way in
+    from the right to cover the face (an ellipse 2.5 × 3.2 eye distances)."""
+    from tracker.synthetic import face_landmarks
+
+    lm = face_landmarks(state)
+    c = 0.5 * (lm["left_pupil"] + lm["right_pupil"]) + (0.0, 0.45 * state.ipd)
+    h, w = img.shape[:2]
+    cheek = img[int(c[1]) - 10 : int(c[1]) + 10, int(c[0] + 0.5 * state.ipd) : int(c[0] + 0.5 * state.ipd) + 10]
+    skin = 0.92 * np.median(cheek.reshape(-1, 3), axis=0)
+    x = w + 1.3 * state.ipd + (c[0] - w - 1.3 * state.ipd) * share
+    yy, xx = np.mgrid[0:h, 0:w]
+    u, v = (xx - x) / (1.25 * state.ipd), (yy - c[1]) / (1.6 * state.ipd)
+    r2 = u * u + v * v
+    shade = (1.05 - 0.25 * np.clip(r2, 0.0, 1.0) + 0.1 * u)[..., None]
+    return np.where((r2 <= 1.0)[..., None], np.clip(skin * shade, 0, 255), img).astype(np.uint8)
+
+
+def test_a_hand_over_the_face_is_not_the_face(cal):
+    """A hand (skin-coloured, lit like a face) passes over the face: once it covers both eyes the
+    frames are lost within two frames — neither ok nor "mouth lost" with the eyes held as if seen —
+    and the face is ok again as soon as the hand has left the eyes."""
+    tr = FaceTracker(cal)
+    shares = [0.0] * 5 + [0.25, 0.5, 0.75] + [1.0] * 10 + [0.75, 0.5, 0.25] + [0.0] * 5
+    status = []
+    for i, share in enumerate(shares):
+        state = BASE.replace(cx=320.0 + 0.3 * i)
+        img = render_face(state)[0]
+        status.append(tr.track(_hand_over(img, state, share) if share else img, i, i / 30).params.status)
+    covered = [s for s, share in zip(status, shares) if share == 1.0]
+    assert "ok" not in covered and all(s == LOST for s in covered[2:]), covered
+    assert all(s == "ok" for s, share in zip(status, shares) if share <= 0.5), status
+
+
+def test_a_second_look_finds_the_face_where_the_tracker_is_not(cal):
+    """The face finder's second look (detector, eye pictures, face picture) gives the face's pupils
+    when the tracker's are an eye-distance off, and nothing when they are right; the tracker takes
+    it after RECHECK_EVERY unsure frames, then no sooner than RECHECK_GAP frames apart."""
+    from tracker.face_tracker import RECHECK_EVERY, RECHECK_GAP
+
+    img, t = render_face(BASE)
+    tr = FaceTracker(cal)
+    tr.track(img, 0)
+    right = tr.pupils.copy()
+    assert tr._second_look(img) is None
+    tr.pupils = right - (BASE.ipd, 0.0)
+    found = tr._second_look(img)
+    assert found is not None and np.abs(found - right).max() < 2.0
+    tr = FaceTracker(cal)
+    looks = []
+    tr._second_look = lambda frame: looks.append(len(looks)) or None
+    for i in range(RECHECK_EVERY + 2 * RECHECK_GAP + 1):
+        state = BASE.replace(mouth_open=0.0)
+        frame = render_face(state)[0]
+        frame[int(t.mid_y + 0.7 * BASE.ipd) : int(t.mid_y + 1.4 * BASE.ipd), int(t.mid_x - BASE.ipd) : int(t.mid_x + BASE.ipd)] = (40, 40, 40)
+        assert tr.track(frame, i).params.status != "ok"  # the mouth is hidden: unsure frames
+    assert len(looks) == 3
+
+
+def test_a_face_found_again_may_have_glancing_eyes_when_its_picture_vouches_for_it(cal, monkeypatch):
+    """Found again in a detector's box, eyes that a glance or a stare make only half like the
+    calibrated ones (scores 0.45-0.6) are taken when the face picture there is plainly this face's,
+    and refused when it is not (the same eyes on a blank wall)."""
+    from tracker.face_finder import detect_faces
+    from tracker.face_tracker import EYE_LOOSE, EYE_STRONG
+
+    img, _ = render_face(BASE)
+    tr = FaceTracker(cal)
+    tr.track(img, 0)
+    box = detect_faces(img, BASE.ipd)[0]
+    true_pair = tr._eye_pair
+    # eyes that score 0.5 (under EYE_STRONG, over EYE_LOOSE) where the box puts them, in this picture
+    glance = lambda frame, guess, sure: None if (p := true_pair(img, guess, sure)) is None else (p[0], 0.5)
+    monkeypatch.setattr(tr, "_eye_pair", glance)
+    assert EYE_LOOSE <= 0.5 < EYE_STRONG
+    found = tr._face_in_box(img, box)
+    assert found is not None and np.abs(found - tr.pupils).max() < 2.0
+    wall = render_face(BASE.replace(visible=False))[0]
+    tr._grey = tr.motion.grey(wall)  # the face picture is looked for in this frame
+    assert tr._face_in_box(wall, box) is None
+
+
 def test_lost_holds_the_last_values(cal):
     tr = FaceTracker(cal)
     r0 = tr.track(render_face(BASE)[0])

@@ -168,6 +168,14 @@ ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's bes
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
+EYE_LOOSE = 0.45  # in a face the detector found and whose picture matches well (FACE_SURE), eyes this sure will do
+FACE_SURE = 0.7  # face-picture correlation that, with a detector's box, vouches for eyes a glance or a stare has changed
+FACE_UNSURE = 0.6  # a face picture matching less than this leaves a frame unsure (1-5 % of real frames; one eye over: 0.55)
+EYE_BLIND = 0.5  # neither eye scoring this much (a hand: 0.26-0.44; eyes a quick nod moved off the pose: 0.45-0.55) ...
+BLIND_FRAMES = 2  # ... and the picture under FACE_UNSURE, this many frames in a row: the face is not there
+RECHECK_EVERY = 10  # unsure frames (not ok, or not both eyes seen; a sure frame takes one back) after which the face finder takes a second look
+RECHECK_GAP = 5  # frames at least between two second looks
+RECHECK_MOVE = 0.25  # a face the second look finds this far (× the IPD) from where we are is where the face went
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
@@ -217,6 +225,9 @@ class FaceTracker:
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
+        self.unsure_frames = 0
+        self._since_look = 0
+        self._blind = 0
         self.motion.reset()
         self._reset_adaptation()
         self._forget_eyes()
@@ -334,6 +345,7 @@ class FaceTracker:
         flow = None
         self._grey = self.motion.grey(frame_bgr)
         reacquired = self.lost
+        found = None
         if self.lost:
             found = self._reacquire(frame_bgr)
             if found is None:
@@ -341,6 +353,13 @@ class FaceTracker:
                 if self.lost_frames == RESET_ADAPTATION:
                     self._reset_adaptation()
                 return self._lost_result(index, time, "not found")
+        elif self.unsure_frames >= RECHECK_EVERY and self._since_look >= RECHECK_GAP:
+            self._since_look = 0
+            found = self._second_look(frame_bgr)
+            reacquired = found is not None
+            if reacquired:
+                self.unsure_frames = 0
+        if found is not None:
             self.pose = similarity_from_pairs(self._cal_pupils, found)
             self.anchors = found
             self.velocity[:] = 0.0
@@ -357,7 +376,14 @@ class FaceTracker:
         if flow is None and not self.motion.active and not reacquired:
             # no flow to follow (first frame, a face without texture): the eyes' own motion
             self.pose = similarity_from_pairs(self._cal_pupils, self.anchors + self.damping * self.velocity)
-        return self._track(frame_bgr, index, time, flow is not None)
+        res = self._track(frame_bgr, index, time, flow is not None)
+        # unsure frames in the last while: a stretch of them with a sure frame here and there counts
+        presence = res.debug.get("presence")
+        sure = (res.params.status == OK and not any(res.debug.get("doubtful", ()))
+                and (presence is None or presence >= FACE_UNSURE))
+        self.unsure_frames = 0 if self.lost else max(self.unsure_frames - 1, 0) if sure else self.unsure_frames + 1
+        self._since_look += 1
+        return res
 
     def _pin(self, anchors: np.ndarray, flow_ok: bool) -> tuple[np.ndarray, float | None]:
         """Pull the anchors onto the face picture's match near them — its place and its roll
@@ -455,13 +481,19 @@ class FaceTracker:
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
+        blind = n_seen == 0 and max(o.score for o in obs) < EYE_BLIND and (presence is None or presence < FACE_UNSURE)
+        self._blind = self._blind + 1 if blind else 0
         why = ""
         if presence is not None and presence < FACE_ABSENT:
             why = "not this face"  # something else is where the face was (a hand, the background)
         elif n_seen == 2:
             pass
-        elif presence is not None and presence >= FACE_PRESENT:
-            pass  # it looks like this face where the head is: eyes unsure, mouth hidden
+        elif presence is not None and presence >= FACE_PRESENT and not (n_seen == 0 and self._blind >= BLIND_FRAMES):
+            # it looks like this face where the head is: eyes unsure, mouth hidden — but not for long
+            # with neither eye seen and the picture matching worse than on nearly every real frame (a
+            # hand over the face, lit like one, still matches the picture's broad shading at 0.5-0.55;
+            # a quick nod blurs the eyes for a frame or two)
+            pass
         elif flow_ok and presence is None:
             pass
         elif mouth_res is None or n_seen == 0:
@@ -619,26 +651,53 @@ class FaceTracker:
     # -------------------------------------------------------------- re-acquisition
     def _check_eyes(self, frame: np.ndarray, guess: np.ndarray) -> np.ndarray | None:
         """Pupils (frame px) if both eyes are found, open and sure, near the guessed centres."""
+        pair = self._eye_pair(frame, guess, EYE_STRONG)
+        return None if pair is None else pair[0]
+
+    def _eye_pair(self, frame: np.ndarray, guess: np.ndarray, sure: float) -> tuple[np.ndarray, float] | None:
+        """Pupils (frame px) and the lowest eye score if both eyes are found open, each scoring at
+        least ``sure``, a plausible distance apart near the guessed centres; else None."""
         H, W = frame.shape[:2]
         pupils = np.asarray(guess, dtype=np.float64)
         if not (np.all(pupils >= 0) and np.all(pupils[:, 0] < W) and np.all(pupils[:, 1] < H)):
             return None
+        low = 1.0
         for _ in range(2):  # a second pass in the frame the first pass's pupils define
             ff = self._frame(pupils)
             # the brows are not part of the check (and the tracker forgets them on a found face)
             _, _, res, (ox, oy) = self._eyes(frame, ff, self._pupils_face, brows=False)
-            if not all(o.open and o.score >= EYE_STRONG for o in res.eyes):
+            if not all(o.open and o.score >= sure for o in res.eyes):
                 return None
+            low = min(low, *(o.score for o in res.eyes))
             found = np.array([[o.x + ox, o.y + oy] for o in res.eyes])
             dd = found[1] - found[0]
             if not (0.75 < math.hypot(*dd) / self.wi < 1.3) or abs(dd[1]) > 0.4 * self.wi:
                 return None
             pupils = ff.to_image(found)
-        return pupils
+        return pupils, low
 
     def _looks_like_face(self, pupils: np.ndarray) -> bool:
         p = self.presence(pupils)
         return p is None or p >= FACE_PRESENT
+
+    def _second_look(self, frame: np.ndarray) -> np.ndarray | None:
+        """The pupils (frame px) of a face the face finder sees clearly somewhere else, or None.
+
+        A stretch of frames with the mouth missing or an eye unseen is what the tracker shows both
+        when something covers part of the face and when it has followed something else (a hand
+        that passed over the face took the flow with it, and an eye search settled on the other
+        eye): the frames stay "unsure" for good while the face is in plain view. The detector
+        and the calibrated eye pictures decide, as when the face is lost; where they find it far
+        from where the tracker is, the tracker moves there."""
+        ipd = float(math.hypot(*(self.pupils[1] - self.pupils[0])))
+        for box in detect_faces(frame, ipd, 1.6, grey=(self._grey, self.motion.scale))[:3]:  # every size: rare
+            found = self._face_in_box(frame, box)
+            if found is None:
+                continue
+            move = float(np.hypot(*(found.mean(axis=0) - self.pupils.mean(axis=0))))
+            if move > RECHECK_MOVE * max(ipd, 1.0):
+                return found
+        return None
 
     def _reacquire(self, frame: np.ndarray) -> np.ndarray | None:
         """Find the face again: the two pupils (frame px) or None.
@@ -655,10 +714,29 @@ class FaceTracker:
         # one third of the sizes per frame: a lost frame costs a third of a full search
         for box in detect_faces(frame, ipd, spread, band=(self.lost_frames, REACQUIRE_BANDS),
                                 grey=(self._grey, self.motion.scale))[:3]:
-            found = self._check_eyes(frame, eyes_in_box(box, self._box_eyes))
-            if found is not None and self._looks_like_face(found):
+            found = self._face_in_box(frame, box)
+            if found is not None:
                 return found
         return self._reacquire_by_lips(frame)
+
+    def _face_in_box(self, frame: np.ndarray, box) -> np.ndarray | None:
+        """The pupils (frame px) of this performer in a face detector's box, or None: both eyes sure
+        where the box puts them and the face picture there this face's — or, a glance to the side or
+        a wide stare changing the eye pictures, the eyes less sure (:data:`EYE_LOOSE`) but the face
+        picture plainly this face's (:data:`FACE_SURE`): three cues agree."""
+        guess = eyes_in_box(box, self._box_eyes)
+        pair = self._eye_pair(frame, guess, EYE_LOOSE)
+        if pair is None:
+            return None
+        found, low = pair
+        if low >= EYE_STRONG and self._looks_like_face(found):
+            return found
+        if self.cal.face_patch is not None:
+            # the picture where the box puts the eyes (found, the irises a glance moved tilt and shift it)
+            _, p = locate_face(self._grey, self.motion.scale, guess, self.cal.face_patch, 2 * FACE_REACH)
+            if p >= FACE_SURE:
+                return found
+        return None
 
     def _check_face(self, frame: np.ndarray, mouth: np.ndarray, mo: np.ndarray, ipd: float, ang: float) -> np.ndarray | None:
         """Pupils (frame px) if the eyes are found where a face with its mouth at ``mouth``,
