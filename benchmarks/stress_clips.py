@@ -220,10 +220,9 @@ def _move(p: np.ndarray, m: np.ndarray) -> np.ndarray:
     return p @ m[:, :2].T + m[:, 2]
 
 
-def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> Path:
-    """Write variant ``kind`` of clip ``name`` (from folder ``src``) into folder ``out``; its video path."""
-    out.mkdir(parents=True, exist_ok=True)
-    cap = cv2.VideoCapture(str(src / f"{name}.mp4"))
+def read_frames(path: Path) -> tuple[list[np.ndarray], float]:
+    """Every frame of a video (BGR) and its frame rate (25 when the file does not say)."""
+    cap = cv2.VideoCapture(str(path))
     fps = cap.get(cv2.CAP_PROP_FPS) or 25.0
     frames = []
     while True:
@@ -232,6 +231,13 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             break
         frames.append(img)
     cap.release()
+    return frames, fps
+
+
+def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> Path:
+    """Write variant ``kind`` of clip ``name`` (from folder ``src``) into folder ``out``; its video path."""
+    out.mkdir(parents=True, exist_ok=True)
+    frames, fps = read_frames(src / f"{name}.mp4")
     n = len(frames)
     h, w = frames[0].shape[:2]
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))

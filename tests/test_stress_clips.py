@@ -102,18 +102,8 @@ def test_away_variants_hide_the_face_and_blank_the_peer_there(tmp_path, kind):
     assert peer.points["left_pupil"][0] == pytest.approx(pts["left_pupil"])
     assert peer.points["right_pupil"][n - 1] == pytest.approx(pts["right_pupil"])
     assert json.loads((out / "c.clicks.json").read_text())["left_pupil"] == pytest.approx(list(pts["left_pupil"]))
-    cap = cv2.VideoCapture(str(out / "c.mp4"))
-    frames = []
-    while True:
-        ok, img = cap.read()
-        if not ok:
-            break
-        frames.append(img)
-    cap.release()
-    assert len(frames) == n
-    src_cap = cv2.VideoCapture(str(src / "c.mp4"))
-    src_frames = [src_cap.read()[1] for _ in range(n)]
-    src_cap.release()
+    frames, src_frames = sc.read_frames(out / "c.mp4")[0], sc.read_frames(src / "c.mp4")[0]
+    assert len(frames) == len(src_frames) == n
     x, y = (int(v) for v in pts["left_pupil"])
     assert np.abs(frames[0].astype(int) - src_frames[0].astype(int)).mean() < 8  # untouched (but for the codec)
     assert np.abs(frames[gone][y, x].astype(int) - src_frames[gone][y, x].astype(int)).max() > 0  # something else is there
@@ -125,9 +115,7 @@ def test_the_hand_is_skin_coloured_and_covers_the_face(tmp_path):
     src.mkdir()
     pts = _write_clip(src, n=n, w=160, h=120)
     sc.make_variant(src, "c", "covered", out)
-    cap = cv2.VideoCapture(str(out / "c.mp4"))
-    frames = [cap.read()[1] for _ in range(n)]
-    cap.release()
+    frames = sc.read_frames(out / "c.mp4")[0]
     gone = int(sc.AWAY[0] * n) + sc.AWAY[1] + sc.AWAY[2] // 2
     x, y = (int(v) for v in pts["left_pupil"])
     patch = frames[gone][y - 3 : y + 4, x - 3 : x + 4].reshape(-1, 3).astype(float)
