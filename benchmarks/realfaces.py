@@ -773,8 +773,7 @@ def synthetic_away(seed: int, seconds: float = 10.0, away: tuple[float, float] =
         k = np.flatnonzero(ok[b:])
         first_ok.append(int(k[0]) if len(k) else None)
         settled.append(_settled(right, b))
-    false_ok = int((ok & (tst[: len(ok)] == LOST)).sum())
-    return SynthResult(seed, returns, first_ok, settled, false_ok, m)
+    return SynthResult(seed, returns, first_ok, settled, m.away_ok, m)  # away: the truth's lost frames
 
 
 def _settled(right: np.ndarray, start: int, length: int = SETTLE) -> int | None:

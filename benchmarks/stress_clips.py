@@ -139,20 +139,29 @@ def _hand(frames: list[np.ndarray], points: dict[str, np.ndarray], seed: int):
                     int(max(centre[0, 0] - 0.6 * ipd, 0)) : int(centre[0, 0] + 0.6 * ipd)].reshape(-1, 3)
     skin = np.median(box, axis=0).astype(np.float32) * 0.92
     rng = np.random.default_rng(seed)
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     texture = cv2.GaussianBlur(rng.normal(0.0, 1.0, (h, w)).astype(np.float32), (0, 0), 2.0) * 12.0
 
     def paint(img: np.ndarray, i: int) -> np.ndarray:
-        if t[i] <= 0.0:
-            return img
-        u, v = (xx - cx[i]) / ax[0], (yy - cy[i]) / ax[1]
-        r2 = u * u + v * v
-        inside = np.clip((1.0 - r2) * 12.0, 0.0, 1.0)[..., None]  # a soft edge of a few px
-        shade = (1.05 - 0.25 * np.clip(r2, 0.0, 1.0) + 0.1 * u)[..., None]  # lit from the left
-        colour = skin[None, None, :] * shade + texture[..., None]
-        return np.clip(img * (1.0 - inside) + colour * inside, 0, 255).astype(np.uint8)
+        return img if t[i] <= 0.0 else paint_hand(img, (cx[i], cy[i]), ax, skin, texture)
 
     return paint, cx, cy, ax
+
+
+def paint_hand(img: np.ndarray, centre, axes: tuple[float, float], skin: np.ndarray,
+               texture: np.ndarray | None = None) -> np.ndarray:
+    """``img`` (uint8 BGR) with a hand painted over it: an ellipse (``centre``, semi-axes ``axes``,
+    px) of the colour ``skin`` (BGR), shaded like a rounded thing lit from the left, with a soft edge
+    of a few px and ``texture`` (float, the image's size: added grey levels) on it."""
+    h, w = img.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    u, v = (xx - centre[0]) / axes[0], (yy - centre[1]) / axes[1]
+    r2 = u * u + v * v
+    inside = np.clip((1.0 - r2) * 12.0, 0.0, 1.0)[..., None]  # a soft edge of a few px
+    shade = (1.05 - 0.25 * np.clip(r2, 0.0, 1.0) + 0.1 * u)[..., None]  # lit from the left
+    colour = skin[None, None, :] * shade
+    if texture is not None:
+        colour = colour + texture[..., None]
+    return np.clip(img * (1.0 - inside) + colour * inside, 0, 255).astype(np.uint8)
 
 
 def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:

@@ -134,21 +134,19 @@ def test_a_face_sliding_out_of_the_picture_is_not_ok_once_an_eye_is_out():
 
 
 def _hand_over(img: np.ndarray, state: FaceState, share: float) -> np.ndarray:
-    """``img`` with a flat, shaded, skin-coloured hand that has come ``share`` (0..1) of the way in
-    from the right to cover the face (an ellipse 2.5 × 3.2 eye distances)."""
+    """``img`` with a flat, shaded, skin-coloured hand (the stress clips' ``covered`` hand, without its
+    texture) that has come ``share`` (0..1) of the way in from the right to cover the face (an ellipse
+    2.5 × 3.2 eye distances)."""
+    from benchmarks.stress_clips import paint_hand
     from tracker.synthetic import face_landmarks
 
     lm = face_landmarks(state)
     c = 0.5 * (lm["left_pupil"] + lm["right_pupil"]) + (0.0, 0.45 * state.ipd)
-    h, w = img.shape[:2]
+    w = img.shape[1]
     cheek = img[int(c[1]) - 10 : int(c[1]) + 10, int(c[0] + 0.5 * state.ipd) : int(c[0] + 0.5 * state.ipd) + 10]
     skin = 0.92 * np.median(cheek.reshape(-1, 3), axis=0)
     x = w + 1.3 * state.ipd + (c[0] - w - 1.3 * state.ipd) * share
-    yy, xx = np.mgrid[0:h, 0:w]
-    u, v = (xx - x) / (1.25 * state.ipd), (yy - c[1]) / (1.6 * state.ipd)
-    r2 = u * u + v * v
-    shade = (1.05 - 0.25 * np.clip(r2, 0.0, 1.0) + 0.1 * u)[..., None]
-    return np.where((r2 <= 1.0)[..., None], np.clip(skin * shade, 0, 255), img).astype(np.uint8)
+    return paint_hand(img, (x, c[1]), (1.25 * state.ipd, 1.6 * state.ipd), skin)
 
 
 def test_a_hand_over_the_face_is_not_the_face(cal):
