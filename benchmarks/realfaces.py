@@ -452,7 +452,6 @@ def metric_values(m: Metrics, times_ms: np.ndarray | None = None) -> dict[str, f
     """Target name → this clip's value (``ms_*`` from ``times_ms``, per-frame wall clock)."""
     vals = {k: getattr(m, k) for k in TARGETS if hasattr(m, k)}
     vals["return_frames"] = max((math.inf if r is None else float(r) for r in m.reacquire), default=0.0)
-    vals["away_ok"] = float(m.away_ok)
     if times_ms is not None and len(times_ms):
         vals["ms_med"] = float(np.median(times_ms))
         vals["ms_p95"] = float(np.percentile(times_ms, 95))
