@@ -12,6 +12,10 @@ small    the clip at 0.45× inside a 640×480 frame, drifting slowly (a small fa
 shake    shifted and turned every frame (a hand-held phone, a fast-moving head)
 noisy    sensor noise σ 8 and JPEG quality 40 (a dark room's gain, a streaming codec)
 dim      the light falls to half over the clip, turning warm (auto-exposure, a lamp)
+step     the light jumps between full and 55 % every quarter of the clip (a lamp switched, an
+         exposure step)
+side     light from one side: full on the frame's left, falling smoothly to 40 % on its right (a
+         window beside the desk)
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
@@ -51,7 +55,11 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "pale", "blur", "mirror", "leave", "covered")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "pale", "blur", "mirror", "leave", "covered")
+STEP_LIGHT = 0.55
+"""The light in the dark quarters of ``step`` (× the clip's)."""
+SIDE_LIGHT = 0.4
+"""The light on the frame's right edge in ``side`` (× the clip's; the left edge keeps all of it)."""
 AWAY = (0.4, 15, 25)
 """The away variants' event: it starts at this share of the clip, takes this many frames to go (and
 as many to come back) and stays away this many frames. Leaving the frame in 15 frames moves the
@@ -180,6 +188,22 @@ def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np
             gain = np.array([1.0 - 0.6 * t, 1.0 - 0.5 * t, 1.0 - 0.4 * t], np.float32)  # B, G, R: warmer
             return np.clip(img.astype(np.float32) * gain, 0, 255).astype(np.uint8)
         return dim
+    if kind == "step":
+        quarter = max(n // 4, 1)
+        def step(img: np.ndarray, i: int) -> np.ndarray:
+            gain = STEP_LIGHT if (i // quarter) % 2 else 1.0
+            return np.clip(img.astype(np.float32) * np.float32(gain), 0, 255).astype(np.uint8)
+        return step
+    if kind == "side":
+        ramps: dict[tuple[int, int], np.ndarray] = {}
+        def side(img: np.ndarray, i: int) -> np.ndarray:
+            h, w = img.shape[:2]
+            if (h, w) not in ramps:
+                x = np.linspace(0.0, 1.0, w, dtype=np.float32)
+                fall = (1.0 - SIDE_LIGHT) * x * x * (3.0 - 2.0 * x)  # smoothstep: flat at both edges
+                ramps[(h, w)] = np.repeat((1.0 - fall)[None, :, None], h, axis=0)
+            return np.clip(img.astype(np.float32) * ramps[(h, w)], 0, 255).astype(np.uint8)
+        return side
     if kind == "pale":
         def pale(img: np.ndarray, i: int) -> np.ndarray:
             grey = cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)

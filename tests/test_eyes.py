@@ -518,6 +518,44 @@ def test_checking_a_guess_without_the_brows_finds_the_same_eyes_and_keeps_the_br
         assert math.isnan(b.brow) and math.isfinite(a.brow)
 
 
+@pytest.mark.parametrize("light", [0.5, 1.35])
+def test_a_sudden_change_of_the_light_is_taken_at_once(light):
+    """A lamp switched off or on, an exposure step: from the first frame in the new light the lids
+    are measured as before it. The skin round the eyes, picked out under the old light's gain, no
+    longer looks like skin (at half the light none of it did, so the gain was never measured
+    again and the lids stayed wrong for good)."""
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    for _ in range(3):  # a few confident frames in the calibration's light
+        res, truth, _, (crop, grey, _) = _find(f, BASE)
+        assert f.adapt(crop, grey, res)
+    state = BASE.replace(light=(light, light, light))
+    res, truth, _, (crop, grey, _) = _find(f, state)
+    _check(res, truth, lid=1.5)
+    # (the median channel: the brighter render clips the skin's red at 255)
+    assert f._gain is not None and abs(np.median(np.log(f._gain)) + math.log(light)) < 0.1
+    for _ in range(10):  # and it stays: the slow measurement agrees
+        f.adapt(crop, grey, res)
+        res, truth, _, (crop, grey, _) = _find(f, state)
+    _check(res, truth, lid=1.5)
+
+
+@pytest.mark.parametrize("expr", ["eyes_closed", "brows_up", "wide", "squint"])
+def test_a_face_pulled_in_the_same_light_is_no_jump_of_the_light(expr):
+    """The jump check looks at the whole grid round the eyes, so closing the eyes or raising the
+    brows in an unchanged light measures nothing again: the gain stays as the slow measurement
+    left it, in a light a little dimmer than the calibration's."""
+    model, wi = _learn()
+    f = EyeFinder(model, wi)
+    dim = BASE.replace(light=(0.9, 0.9, 0.9))
+    for _ in range(20):
+        res, truth, _, (crop, grey, _) = _find(f, dim)
+        f.adapt(crop, grey, res)
+    before = f._gain.copy()
+    _find(f, dim.with_expression(expr))
+    assert np.array_equal(before, f._gain)
+
+
 def test_the_light_is_followed_as_it_falls_far_and_turns_warm():
     """A room's light falling to 40-60 % per channel (warmer: blue falls most) over two seconds:
     the gain follows past 2× (its old limit, where the skin round the eye stopped being skin and

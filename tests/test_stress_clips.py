@@ -120,3 +120,17 @@ def test_the_hand_is_skin_coloured_and_covers_the_face(tmp_path):
     x, y = (int(v) for v in pts["left_pupil"])
     patch = frames[gone][y - 3 : y + 4, x - 3 : x + 4].reshape(-1, 3).astype(float)
     assert patch.std(axis=0).max() < 25  # smooth skin, not the random clip under it
+
+
+def test_the_light_steps_by_quarters_and_falls_across_the_side_lit_frame():
+    """``step``: every other quarter of the clip at STEP_LIGHT; ``side``: the left edge untouched,
+    the right edge at SIDE_LIGHT, darker from left to right."""
+    n = 8
+    img = np.full((10, 50, 3), 200, np.uint8)
+    step = sc._photometric("step", n, 0)
+    levels = [float(step(img, i).mean()) for i in range(n)]
+    assert levels[:2] == levels[4:6] == [200.0, 200.0]
+    assert levels[2:4] == levels[6:8] == [pytest.approx(200 * sc.STEP_LIGHT, abs=1)] * 2
+    lit = sc._photometric("side", n, 0)(img, 0)[5, :, 1].astype(float)
+    assert lit[0] == 200 and lit[-1] == pytest.approx(200 * sc.SIDE_LIGHT, abs=1)
+    assert np.all(np.diff(lit) <= 0) and lit[25] < 150

@@ -142,6 +142,10 @@ quarter, or turns warm (a lamp: blue falls to 40 % while red keeps 60 %), is sti
 (at 2× the skin above the eyes stopped looking like skin and the lid runs ran to their ends)."""
 GAIN_DEAD_ZONE = 0.03
 """A slow gain within this of 1 is not applied (shading and expressions, not the light)."""
+LIGHT_JUMP = 1.25
+"""Factor by which the skin around the eyes, under the gain so far, must have got brighter or darker
+since the last measured frame for the light to have jumped (a lamp, an exposure step): the gain is
+then measured at once, before the lids (a slow change is followed over confident frames)."""
 
 _YCC = np.array(
     [[0.114, 0.587, 0.299], [-0.081312, -0.418688, 0.5], [0.5, -0.331264, -0.168736]], dtype=np.float64
@@ -790,6 +794,7 @@ class EyeFinder:
         self._adapted_eye = [p.copy() for p in self._calib_eye]
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
+        self._grid_ref: np.ndarray | None = None  # the light's grid in the calibration's light (measure_gain)
         self._adapt_count = 0
         self._half: tuple[np.ndarray | None, int, int] = (None, 0, 0)
         rm = 0.5 * (self.radius[0] + self.radius[1])
@@ -1246,32 +1251,84 @@ class EyeFinder:
         best = float((q @ z).max()) / norm
         return min(max(best, 0.0), 1.0)
 
-    def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
-        """Median BGR of what looks like skin around both eyes (a sparse grid over the brows,
-        lids, bridge and cheeks; a pixel counts when within :data:`SKIN_SELECT` of the start
-        of the skin model's interior ramp under ``gain``), or None when too little does."""
+    def _skin_grid(self, crop: np.ndarray, centres) -> np.ndarray | None:
+        """The sparse grid of BGR pixels (n, 3) over the brows, lids, bridge and cheeks around both
+        eyes that the light is measured on, or None when the crop holds too little of it."""
         c = np.asarray(centres, dtype=np.float64).reshape(2, 2)
         h, w = crop.shape[:2]
         x0, x1 = int(max(c[:, 0].min() - 0.45 * self.wi, 0)), int(min(c[:, 0].max() + 0.45 * self.wi, w))
         y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
         px = np.ascontiguousarray(crop[y0:y1:self._skin_step, x0:x1:self._skin_step]).reshape(-1, 3)
-        if len(px) < 16:
-            return None
+        return px if len(px) >= 16 else None
+
+    def _skin_median(self, px: np.ndarray, gain: np.ndarray | None) -> np.ndarray | None:
+        """Median BGR of the grid pixels ``px`` that look like skin under ``gain`` (within
+        :data:`SKIN_SELECT` of the start of the skin model's interior ramp), or None when too few do."""
         g = np.ones(3, np.float32) if gain is None else np.asarray(gain, dtype=np.float32)
         near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
         if near.sum() < max(16, 0.1 * len(px)):
             return None
         sel = px[near]
-        return np.partition(sel, len(sel) // 2, axis=0)[len(sel) // 2].astype(np.float64)  # the median
+        return np.partition(sel, len(sel) // 2, axis=0)[len(sel) // 2].astype(np.float64)
 
-    def measure_gain(self, crop: np.ndarray, centres) -> np.ndarray | None:
-        """This frame's per-channel gain from the skin around the eyes (:meth:`skin_colour`,
-        found with the gain so far) to its calibrated colour, or None without enough skin."""
-        now = self.skin_colour(crop, centres, self._gain)
+    def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
+        """Median BGR of what looks like skin around both eyes (:meth:`_skin_grid`) under ``gain``
+        (:meth:`_skin_median`), or None when too little does."""
+        px = self._skin_grid(crop, centres)
+        return None if px is None else self._skin_median(px, gain)
+
+    def measure_gain(self, crop: np.ndarray, centres) -> tuple[np.ndarray, bool] | None:
+        """This frame's per-channel gain from the skin around the eyes to its calibrated colour, and
+        whether the light jumped; or None without enough skin (see :meth:`_gain_from`)."""
+        px = self._skin_grid(crop, centres)
+        return None if px is None else self._gain_from(px)
+
+    def _gain_from(self, px: np.ndarray, jump: bool = False) -> tuple[np.ndarray, bool] | None:
+        """The gain of :meth:`measure_gain` from the grid pixels ``px``.
+
+        The skin is picked out under the gain so far. When the light has jumped (a lamp switched,
+        a camera's exposure stepping) nothing may look like skin under it any more, and a gain that is
+        never measured again would stay wrong for good: then (and when ``jump`` says the light
+        jumped) the skin is picked out under the gain that takes the whole grid back to its colour at
+        the last measured frame (the grid's median in the calibration's light, :attr:`_grid_ref`) —
+        eyes, brows and skin all move with the light, so the grid's median follows the light
+        whatever the face does."""
+        lo, hi = GAIN_LIMITS
+        grid = np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+        now = None if jump else self._skin_median(px, self._gain)
+        if now is None and self._grid_ref is not None:
+            trial = np.clip(self._grid_ref / np.maximum(grid, 1.0), lo, hi)
+            now, jump = self._skin_median(px, trial), True
         if now is None:
             return None
-        lo, hi = GAIN_LIMITS
-        return np.array([min(max(r / max(c, 1.0), lo), hi) for r, c in zip(self.model.skin_bgr.tolist(), now.tolist())])
+        gain = np.clip(self.model.skin_bgr / np.maximum(now, 1.0), lo, hi)
+        self._grid_ref = grid * gain
+        return gain, jump
+
+    def _follow_jump(self, crop: np.ndarray, centres) -> None:
+        """Take a jump of the light at once, before the lids are read with the old gain (called where
+        both irises match their pictures, which the light does not change): when the grid around
+        the eyes (:meth:`_skin_grid`) under the gain so far is more than :data:`LIGHT_JUMP` times
+        brighter or darker than at the last measured frame, the gain is measured on this frame and
+        used from it on."""
+        if self._grid_ref is None:
+            return
+        px = self._skin_grid(crop, centres)
+        if px is None:
+            return
+        grid = np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+        seen = grid * (1.0 if self._gain is None else self._gain)
+        if np.all(np.abs(np.log(np.maximum(seen, 1.0) / np.maximum(self._grid_ref, 1.0))) < math.log(LIGHT_JUMP)):
+            return
+        m = self._gain_from(px, jump=True)
+        if m is not None:
+            self._set_gain(m[0])
+
+    def _set_gain(self, slow: np.ndarray) -> None:
+        """The light's slow gain, and the gain used: none within :data:`GAIN_DEAD_ZONE` of 1 (shading
+        and expressions move it by several per cent; only a change of the light itself is applied)."""
+        self._gain_slow = slow
+        self._gain = None if np.all(np.abs(slow - 1.0) < GAIN_DEAD_ZONE) else slow.copy()
 
     # ------------------------------------------------------------------ main entry
     def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop, brows: bool = True) -> EyeResult:
@@ -1285,6 +1342,8 @@ class EyeFinder:
         if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
         found = self._locate(crop_grey, centres)
+        if min(found[0][2], found[1][2]) >= ADAPT_MIN_SCORE:  # on both irises, not a hand or a wall
+            self._follow_jump(crop_bgr, [f[:2] for f in found])
         gain = self._gain
         lids = self._both_lids(crop_bgr, found, gain)
         lo, hi = CLOSING
@@ -1332,13 +1391,11 @@ class EyeFinder:
         # the light on every confident frame: auto exposure and a lamp change it within a second,
         # and the lids are read from colours it moves; the pictures follow the face slowly
         centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
-        g = self.measure_gain(crop_bgr, centres)
-        if g is not None:
-            gr = GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)
-            self._gain_slow = (1.0 - gr) * self._gain_slow + gr * g
-            # shading and expressions move it by several per cent; only a change of the light
-            # itself (beyond the dead zone) is applied
-            self._gain = None if np.all(np.abs(self._gain_slow - 1.0) < GAIN_DEAD_ZONE) else self._gain_slow.copy()
+        m = self.measure_gain(crop_bgr, centres)
+        if m is not None:
+            g, jumped = m
+            gr = 1.0 if jumped else GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)
+            self._set_gain((1.0 - gr) * self._gain_slow + gr * g)
         if phase > 1:
             return True
         # every ADAPT_EVERY-th confident frame counts for all of them; the two picture updates
