@@ -18,6 +18,7 @@ from tracker.eyes import (
     SkinModel,
     _run,
     calibration_crop,
+    eye_light,
     iris_radius,
     learn_eyes,
     limbus_centre,
@@ -29,8 +30,9 @@ from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 BASE = FaceState(cx=320.0, cy=210.0, ipd=80.0)
 
 
-def _learn(state=BASE, style=None):
-    frame, _ = render_face(state, style)
+def _learn(state=BASE, style=None, frame=None):
+    if frame is None:
+        frame, _ = render_face(state, style)
     lm = face_landmarks(state)
     wi = min(state.ipd, 80.0)
     ff = FaceFrame.from_pupils(tuple(lm["left_pupil"]), tuple(lm["right_pupil"]), wi)
@@ -254,6 +256,9 @@ def test_model_round_trips_through_json(finder):
         lambda d, i: i.update(iris_l=np.zeros((4, 6), np.uint8)),
         lambda d, i: d["skin"].update(levels=[3.0, 2.0]),
         lambda d, i: d["skin"].update(cov=[[1, 2, 0], [2, 1, 0], [0, 0, 1]]),
+        lambda d, i: d.update(light=[[1.0, 1.0, 1.0]]),
+        lambda d, i: d.update(light=[[1.0, 1.0, 1.0], [1.0, -1.0, 1.0]]),
+        lambda d, i: d.update(light=[[1.0, 1.0], [1.0, 1.0]]),
     ],
 )
 def test_malformed_models_give_one_line_errors(finder, change):
@@ -516,6 +521,40 @@ def test_checking_a_guess_without_the_brows_finds_the_same_eyes_and_keeps_the_br
     for a, b in zip(res.eyes, quick.eyes):
         assert (a.x, a.y, a.score, a.open, a.upper, a.lower, a.iris) == (b.x, b.y, b.score, b.open, b.upper, b.lower, b.iris)
         assert math.isnan(b.brow) and math.isfinite(a.brow)
+
+
+def _side_lit(frame: np.ndarray, far: float) -> np.ndarray:
+    """The frame lit from its left: full light left of the face, ``far`` of it right of the face."""
+    x = np.clip((np.arange(frame.shape[1], dtype=np.float32) - (BASE.cx - 1.2 * BASE.ipd)) / (2.4 * BASE.ipd), 0.0, 1.0)
+    ramp = 1.0 - (1.0 - far) * x * x * (3.0 - 2.0 * x)
+    return np.clip(frame.astype(np.float32) * ramp[None, :, None], 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("far", [0.35, 0.5])
+def test_a_face_lit_from_one_side_has_both_eyes_measured(far):
+    """A window beside the desk: one eye's side of the face in full light, the other's in the
+    shade. One skin model learned from both sides as they are took every row of either eye for
+    skin (the lids were 0 px from the iris); each eye's colours are taken to the light both share
+    first (:func:`eye_light`), at calibration and on every frame."""
+    frame = _side_lit(render_face(BASE)[0], far)
+    model, wi = _learn(frame=frame)
+    assert model.light is not None and np.all(model.light[1] > 1.1) and np.all(model.light[0] < 0.95)
+    back = EyeModel.from_dict(json.loads(json.dumps(model.to_dict())), model.images())
+    assert np.allclose(back.light, model.light, atol=1e-4)
+    f = EyeFinder(model, wi)
+    res, truth, _, _ = _find(f, BASE, frame=frame)
+    _check(res, truth, lid=1.5)
+    for expr in ("wide", "brows_up"):
+        state = BASE.with_expression(expr)
+        res, truth, _, _ = _find(f, state, frame=_side_lit(render_face(state)[0], far))
+        _check(res, truth, lid=1.5)
+
+
+def test_eyes_lit_alike_have_no_light_factors(finder):
+    assert finder.model.light is None
+    assert eye_light([np.full((20, 3), 100.0), np.full((20, 3), 103.0)]) is None
+    f = eye_light([np.full((20, 3), 100.0), np.full((20, 3), 400.0)])
+    assert f[0] == pytest.approx([2.0] * 3) and f[1] == pytest.approx([0.5] * 3)
 
 
 @pytest.mark.parametrize("light", [0.5, 1.35])

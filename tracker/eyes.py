@@ -142,6 +142,11 @@ quarter, or turns warm (a lamp: blue falls to 40 % while red keeps 60 %), is sti
 (at 2× the skin above the eyes stopped looking like skin and the lid runs ran to their ends)."""
 GAIN_DEAD_ZONE = 0.03
 """A slow gain within this of 1 is not applied (shading and expressions, not the light)."""
+EYE_LIGHT_EVEN = 0.05
+"""Two eyes whose skins differ by less than this (a share, per channel) are lit alike: no per-eye factors."""
+EYE_LIGHT_MOST = 2.0
+"""Most one eye's light factor may be (and least its inverse): a side light darkening one eye's
+side to a quarter of the other's."""
 LIGHT_JUMP = 1.25
 """Factor by which the skin around the eyes, under the gain so far, must have got brighter or darker
 since the last measured frame for the light to have jumped (a lamp, an exposure step): the gain is
@@ -512,7 +517,9 @@ class EyeModel:
     ``skin`` what is skin around the eyes; ``skin_bgr`` the median BGR of the skin around
     them (the light is followed on it, see :meth:`EyeFinder.skin_colour`); ``white`` the
     sclera's median distance from the skin (Mahalanobis units; None: not measured, the lid
-    ramp stays where calibration put it, see :func:`walk_length`).
+    ramp stays where calibration put it, see :func:`walk_length`); ``light`` per eye, the factors
+    (B, G, R) that take its colours to the light both eyes share (a face lit from one side; None:
+    lit alike, see :func:`eye_light`).
     """
 
     work_ipd: float
@@ -527,6 +534,7 @@ class EyeModel:
     skin_bgr: np.ndarray
     lash: list[float] = field(default_factory=lambda: [0.0, 0.0])
     white: float | None = None
+    light: list[np.ndarray] | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -549,6 +557,7 @@ class EyeModel:
             "lid_open": [float(v) for v in self.lid_open],
             "lash": [float(v) for v in self.lash],
             **({} if self.white is None else {"white": float(self.white)}),
+            **({} if self.light is None else {"light": [np.asarray(f, dtype=float).round(4).tolist() for f in self.light]}),
             "skin": self.skin.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
         }
@@ -580,6 +589,7 @@ class EyeModel:
                 lid_open=[float(v) for v in d["lid_open"]],
                 lash=[float(v) for v in d["lash"]],
                 white=None if d.get("white") is None else float(d["white"]),
+                light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
                 skin=SkinModel.from_dict(d["skin"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
             )
@@ -587,9 +597,11 @@ class EyeModel:
             raise
         except (KeyError, TypeError, ValueError, AttributeError) as e:
             raise EyeModelError(f"eye model: malformed ({type(e).__name__}: {e})") from None
-        lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash)
+        lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash) + (() if m.light is None else (m.light,))
         if any(len(v) != 2 for v in lists) or not m.work_ipd > 0 or not all(r > 0 for r in m.radius):
             raise EyeModelError("eye model: every per-eye entry needs two values and the sizes must be positive")
+        if m.light is not None and not all(np.all(np.isfinite(f)) and np.all(f > 0) for f in m.light):
+            raise EyeModelError("eye model: the eyes' light factors must be positive numbers")
         return m
 
 
@@ -687,8 +699,26 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
     mx, my = 0.5 * (pupils[0] + pupils[1])
     bx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
     bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - bx, 0) : int(round(mx)) + bx + 1].reshape(-1, 3)
+    light = eye_light([np.concatenate((b, a)) for b, a in zip(below, above)])
+    if light is not None:  # each eye's samples as if both eyes were lit alike
+        below, above, middle, ring, sclera = ([(g * f).astype(np.float32) for g, f in zip(group, light)]
+                                              for group in (below, above, middle, ring, sclera))
     skin = {"below the eyes": np.concatenate(below), "above the eyes": np.concatenate(above), "between the eyes": bridge}
-    return skin, np.concatenate(middle), np.concatenate(ring), np.concatenate(sclera)
+    return skin, np.concatenate(middle), np.concatenate(ring), np.concatenate(sclera), light
+
+
+def eye_light(skins: list[np.ndarray]) -> np.ndarray | None:
+    """Per-eye light factors (2, 3) from each eye's skin samples (BGR rows): what takes each eye's
+    skin to the two eyes' common colour (the geometric mean of their medians), so that one skin
+    model serves an eye in a window's light and one in the shade; None when both sides are lit
+    within :data:`EYE_LIGHT_EVEN` of each other (or a side has too little skin to say)."""
+    if any(len(k) < 8 for k in skins):
+        return None
+    m = np.array([np.maximum(np.median(k, axis=0), 1.0) for k in skins], dtype=np.float64)
+    f = np.sqrt(m[::-1] / m)  # left: sqrt(m_right / m_left), right: the inverse
+    if np.all(np.abs(np.log(f)) < math.log(1.0 + EYE_LIGHT_EVEN)):
+        return None
+    return np.clip(f, 1.0 / EYE_LIGHT_MOST, EYE_LIGHT_MOST)
 
 
 def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_crop, work_ipd: float) -> EyeModel:
@@ -736,7 +766,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
-    groups, middle, ring, sclera = _colour_samples(crop, pupils, radius, brow_heights, wi)
+    groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi)
     doubtful = ("above the eyes",)
     skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])
@@ -746,6 +776,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
         skin_bgr=np.ones(3), white=float(np.median(skin.distance(sclera))) if len(sclera) >= 3 else None,
+        light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
     )
     f = EyeFinder(model, wi)
     ref = f.skin_colour(crop, pupils)
@@ -795,6 +826,7 @@ class EyeFinder:
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
         self._grid_ref: np.ndarray | None = None  # the light's grid in the calibration's light (measure_gain)
+        self._light = None if model.light is None else [np.asarray(f, dtype=np.float32).reshape(1, 1, 3) for f in model.light]
         self._adapt_count = 0
         self._half: tuple[np.ndarray | None, int, int] = (None, 0, 0)
         rm = 0.5 * (self.radius[0] + self.radius[1])
@@ -1055,9 +1087,13 @@ class EyeFinder:
 
     def _column(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
         """Mean colour of each row of eye ``i``'s lid strip through ``at`` ``(n, 1, 3)`` float32
-        (the columns average the noise away) and the row of ``at``."""
+        (the columns average the noise away; in the light both eyes share, see :attr:`EyeModel.light`)
+        and the row of ``at``."""
         strip, c = self._strip(crop, i, at)
-        return cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F), c
+        col = cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F)
+        if self._light is not None:
+            col *= self._light[i]
+        return col, c
 
     def _lid_runs(self, e: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
         """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s)."""
@@ -1107,7 +1143,8 @@ class EyeFinder:
         dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
         step (the lashes on a dark iris cannot be told from it)."""
         strip, c = self._strip(crop, i, at)
-        e = self.skin.profile(cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F))
+        col = cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F)
+        e = self.skin.profile(col if self._light is None else col * self._light[i])
         up = _run(e[c::-1])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
@@ -1119,6 +1156,13 @@ class EyeFinder:
         steps = lum[lo + 1 : hi + 1] - lum[lo:hi]
         j = int(np.argmax(steps))
         return float(max(up - (c - (lo + j + 0.5)), 0.0)) if steps[j] >= LASH_CONTRAST else 0.0
+
+    def _eye_gain(self, i: int, gain: np.ndarray | None) -> np.ndarray | None:
+        """The gain for eye ``i``'s own pixels: the light's, times the eye's factor (:attr:`EyeModel.light`)."""
+        if self._light is None:
+            return gain
+        f = self._light[i].reshape(3)
+        return f if gain is None else np.asarray(gain, dtype=np.float32) * f
 
     def _slit(self, crop: np.ndarray, at: tuple[float, float], gain) -> tuple[float, float]:
         """Centroid of the interior around ``at`` (a closed eye: the slit between the lids), twice;
@@ -1258,7 +1302,11 @@ class EyeFinder:
         h, w = crop.shape[:2]
         x0, x1 = int(max(c[:, 0].min() - 0.45 * self.wi, 0)), int(min(c[:, 0].max() + 0.45 * self.wi, w))
         y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
-        px = np.ascontiguousarray(crop[y0:y1:self._skin_step, x0:x1:self._skin_step]).reshape(-1, 3)
+        block = crop[y0:y1:self._skin_step, x0:x1:self._skin_step]
+        if self._light is not None:  # each side in the light both eyes share
+            side = np.arange(x0, x1, self._skin_step)[: block.shape[1]] >= 0.5 * (c[0, 0] + c[1, 0])
+            block = block * np.where(side[:, None], self._light[1].reshape(1, 3), self._light[0].reshape(1, 3))[None]
+        px = np.ascontiguousarray(block).reshape(-1, 3)
         return px if len(px) >= 16 else None
 
     def _skin_median(self, px: np.ndarray, gain: np.ndarray | None) -> np.ndarray | None:
@@ -1354,7 +1402,7 @@ class EyeFinder:
             w = min(max((gap / self.model.lid_open[i] - lo) / (hi - lo), 0.0), 1.0)
             pt = iris
             if w < 1.0:
-                sx, sy = self._slit(crop_bgr, iris, gain)
+                sx, sy = self._slit(crop_bgr, iris, self._eye_gain(i, gain))
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
                 lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
             pts.append((pt, w))
