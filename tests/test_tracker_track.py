@@ -213,6 +213,21 @@ def test_a_face_found_again_may_have_glancing_eyes_when_its_picture_vouches_for_
     assert tr._face_in_box(wall, box) is None
 
 
+def test_two_clear_eyes_outvote_a_face_picture_a_side_light_has_spoiled(cal, monkeypatch):
+    """A strong side light lays a ramp over the face picture (real clips: 0.9 in even light, 0.3
+    with one side in deep shade) while both eyes still match their pictures at 0.8-0.9 where the
+    pose puts them: the face is there. Shut eyes cannot vouch for it: then the picture decides."""
+    import tracker.face_tracker as ft
+
+    tr = FaceTracker(cal)
+    tr.track(render_face(BASE)[0], 0)
+    monkeypatch.setattr(ft, "locate_face", lambda *a, **k: (np.zeros(2), 0.25))
+    status = [tr.track(render_face(BASE.replace(cx=320.0 + 0.3 * i))[0], i, i / 30).params.status for i in range(1, 6)]
+    assert status == ["ok"] * 5, status
+    shut = tr.track(render_face(BASE.replace(cx=321.8).with_expression("eyes_closed"))[0], 6, 0.2)
+    assert shut.params.status == LOST and shut.debug.get("lost") == "not this face"
+
+
 def test_lost_holds_the_last_values(cal):
     tr = FaceTracker(cal)
     r0 = tr.track(render_face(BASE)[0])

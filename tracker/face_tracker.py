@@ -153,6 +153,7 @@ class TrackResult:
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
 EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
+EYE_CLEAR = 0.8  # ... and at least this sure: they outvote a face picture under FACE_ABSENT (a side light's ramp)
 JAW_MIN = (-0.3, -0.3)  # farthest the mouth centre may sit from its rigid place (x, y): left / up ...
 JAW_MAX = (0.3, 0.75)  # ... right / down (a wide-open mouth drops its centre ~0.6 wi; the head's pose lags a fast turn)
 CROP_DROP = 0.25  # farthest (× wi) the mouth crop's centre follows the jaw below the rigid place
@@ -484,8 +485,12 @@ class FaceTracker:
         blind = n_seen == 0 and max(o.score for o in obs) < EYE_BLIND and (presence is None or presence < FACE_UNSURE)
         self._blind = self._blind + 1 if blind else 0
         why = ""
-        if presence is not None and presence < FACE_ABSENT:
-            why = "not this face"  # something else is where the face was (a hand, the background)
+        if presence is not None and presence < FACE_ABSENT and not (strong and min(o.score for o in obs) >= EYE_CLEAR):
+            # something else is where the face was (a hand, the background) — unless both eyes match
+            # their pictures clearly where the pose puts them: light from one side lays a ramp across
+            # the face picture that the correlation does not forgive (0.9 in even light, 0.3 in a
+            # strong side light), while the small eye pictures hardly see it
+            why = "not this face"
         elif n_seen == 2:
             pass
         elif presence is not None and presence >= FACE_PRESENT and not (n_seen == 0 and self._blind >= BLIND_FRAMES):
