@@ -16,6 +16,8 @@ step     the light jumps between full and 55 % every quarter of the clip (a lamp
          exposure step)
 side     light from one side: full on the frame's left, falling smoothly to 40 % on its right (a
          window beside the desk)
+shade    the side light of ``side`` comes up over the clip, from none to all of it (the sun going
+         off a window, a lamp on one side): calibration sees even light
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
@@ -55,7 +57,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "pale", "blur", "mirror", "leave", "covered")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 SIDE_LIGHT = 0.4
@@ -194,15 +196,16 @@ def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np
             gain = STEP_LIGHT if (i // quarter) % 2 else 1.0
             return np.clip(img.astype(np.float32) * np.float32(gain), 0, 255).astype(np.uint8)
         return step
-    if kind == "side":
-        ramps: dict[tuple[int, int], np.ndarray] = {}
+    if kind in ("side", "shade"):
+        falls: dict[tuple[int, int], np.ndarray] = {}
         def side(img: np.ndarray, i: int) -> np.ndarray:
             h, w = img.shape[:2]
-            if (h, w) not in ramps:
+            if (h, w) not in falls:
                 x = np.linspace(0.0, 1.0, w, dtype=np.float32)
                 fall = (1.0 - SIDE_LIGHT) * x * x * (3.0 - 2.0 * x)  # smoothstep: flat at both edges
-                ramps[(h, w)] = np.repeat((1.0 - fall)[None, :, None], h, axis=0)
-            return np.clip(img.astype(np.float32) * ramps[(h, w)], 0, 255).astype(np.uint8)
+                falls[(h, w)] = np.repeat(fall[None, :, None], h, axis=0)
+            t = 1.0 if kind == "side" else i / max(n - 1, 1)
+            return np.clip(img.astype(np.float32) * (1.0 - np.float32(t) * falls[(h, w)]), 0, 255).astype(np.uint8)
         return side
     if kind == "pale":
         def pale(img: np.ndarray, i: int) -> np.ndarray:

@@ -124,7 +124,7 @@ def test_the_hand_is_skin_coloured_and_covers_the_face(tmp_path):
 
 def test_the_light_steps_by_quarters_and_falls_across_the_side_lit_frame():
     """``step``: every other quarter of the clip at STEP_LIGHT; ``side``: the left edge untouched,
-    the right edge at SIDE_LIGHT, darker from left to right."""
+    the right edge at SIDE_LIGHT, darker from left to right; ``shade``: from none of it to all."""
     n = 8
     img = np.full((10, 50, 3), 200, np.uint8)
     step = sc._photometric("step", n, 0)
@@ -134,3 +134,6 @@ def test_the_light_steps_by_quarters_and_falls_across_the_side_lit_frame():
     lit = sc._photometric("side", n, 0)(img, 0)[5, :, 1].astype(float)
     assert lit[0] == 200 and lit[-1] == pytest.approx(200 * sc.SIDE_LIGHT, abs=1)
     assert np.all(np.diff(lit) <= 0) and lit[25] < 150
+    shade = sc._photometric("shade", n, 0)
+    assert np.array_equal(shade(img, 0), img)  # even light at the start, the side light at the end
+    assert np.array_equal(shade(img, n - 1), sc._photometric("side", n, 0)(img, 0))
