@@ -707,6 +707,11 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
     return skin, np.concatenate(middle), np.concatenate(ring), np.concatenate(sclera), light
 
 
+def _median_bgr(px: np.ndarray) -> np.ndarray:
+    """Per-channel median (3,) float64 of pixels ``px`` (n, 3) (the upper one of an even count)."""
+    return np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+
+
 def eye_light(skins: list[np.ndarray]) -> np.ndarray | None:
     """Per-eye light factors (2, 3) from each eye's skin samples (BGR rows): what takes each eye's
     skin to the two eyes' common colour (the geometric mean of their medians), so that one skin
@@ -1316,8 +1321,7 @@ class EyeFinder:
         near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
         if near.sum() < max(16, 0.1 * len(px)):
             return None
-        sel = px[near]
-        return np.partition(sel, len(sel) // 2, axis=0)[len(sel) // 2].astype(np.float64)
+        return _median_bgr(px[near])
 
     def skin_colour(self, crop: np.ndarray, centres, gain: np.ndarray | None = None) -> np.ndarray | None:
         """Median BGR of what looks like skin around both eyes (:meth:`_skin_grid`) under ``gain``
@@ -1342,7 +1346,7 @@ class EyeFinder:
         eyes, brows and skin all move with the light, so the grid's median follows the light
         whatever the face does."""
         lo, hi = GAIN_LIMITS
-        grid = np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+        grid = _median_bgr(px)
         now = None if jump else self._skin_median(px, self._gain)
         if now is None and self._grid_ref is not None:
             trial = np.clip(self._grid_ref / np.maximum(grid, 1.0), lo, hi)
@@ -1364,7 +1368,7 @@ class EyeFinder:
         px = self._skin_grid(crop, centres)
         if px is None:
             return
-        grid = np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+        grid = _median_bgr(px)
         seen = grid * (1.0 if self._gain is None else self._gain)
         if np.all(np.abs(np.log(np.maximum(seen, 1.0) / np.maximum(self._grid_ref, 1.0))) < math.log(LIGHT_JUMP)):
             return
