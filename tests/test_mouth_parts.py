@@ -309,6 +309,19 @@ def test_a_cheek_that_is_not_skin_at_calibration_borrows_the_other_side():
     assert abs(model.width - true_width) < 3.0
 
 
+@pytest.mark.parametrize("fit, other, borrows", [
+    (1.16, 0.04, True),   # expr_d11's shadowed fold, the shared clip: plainly not skin
+    (0.82, 0.02, True),   # ... the same with the colours halved: far worse than the other side
+    (0.83, 0.15, False),  # ... with the other side in a side light's shade: not far enough apart
+    (0.30, 0.02, False),  # a cheek a little off the skin (shading) keeps its own model
+    (2.0, 1.5, False),    # neither side is skin: nothing better to borrow
+    (math.inf, 0.1, True),  # no cheek columns at all
+])
+def test_a_cheek_borrows_the_other_sides_when_it_is_not_skin_or_far_worse(fit, other, borrows):
+    from tracker.mouth_model import borrows_cheek
+    assert borrows_cheek(fit, other) is borrows
+
+
 @pytest.mark.parametrize("expr", ["ah", "neutral"])
 @pytest.mark.parametrize("retrace", [True, False])
 def test_a_shadow_under_the_lower_lip_is_not_the_mouth_line(retrace, expr, monkeypatch):

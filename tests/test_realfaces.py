@@ -306,6 +306,36 @@ def test_real_clip_meets_the_targets(real_results, name, auto):
     assert not missed, f"{name} {r.mode}: " + ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
 
 
+STRESS_CASES = [
+    # a child's shadowed mouth fold, lip-dark beside her left corner, fits the skin 0.82 with the colours
+    # halved (1.16 on the shared clip): taken for her cheek, it made the lips on that side look like
+    # cheek, the corner ran off and the mouth was lost on 3.6 % of the frames (width 0.60)
+    pytest.param("expr_d11", "pale", False, None, id="expr_d11-pale-clicks"),
+    # lit from one side (calibration too): one skin model for both eyes took every row of either eye
+    # for skin; his eyes were reported shut on 15 % of the frames (his mouth's opening misses as on
+    # the shared clip, so only the rest is asserted)
+    pytest.param("expr_d19", "side", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_eye", "r_brow"),
+                 id="expr_d19-side-clicks"),
+]
+
+
+@pytest.mark.realfaces
+@pytest.mark.parametrize("name,kind,auto,targets", STRESS_CASES)
+def test_harder_copy_of_a_real_clip_meets_the_targets(tmp_path, name, kind, auto, targets):
+    """The stress copies (``benchmarks.stress_clips``) where a fix was measured: the targets it
+    concerned (``None``: every one)."""
+    from benchmarks import stress_clips
+
+    if REAL is None or name not in rf.clip_names(REAL):
+        pytest.skip(f"real clip {name} not available (../shared/real or ${rf.REAL_DIR_ENV})")
+    stress_clips.make_variant(REAL, name, kind, tmp_path)
+    r = rf.measure_clip(tmp_path, name, auto=auto)
+    assert r.error is None, f"{name} {kind}: {r.error}"
+    missed = [k for k, v in rf.misses(r.metrics, auto=auto).items() if v and (targets is None or k in targets)]
+    vals = rf.metric_values(r.metrics)
+    assert not missed, f"{name} {kind} {r.mode}: " + ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
+
+
 def test_settled_needs_a_run_of_right_frames():
     right = np.array([1, 1, 0, 0, 1, 1, 1, 0, 1, 1, 1, 1], bool)
     assert rf._settled(right, 0, 3) == 4  # the first run is too short

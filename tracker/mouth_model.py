@@ -609,6 +609,12 @@ def cheek_model(cols: np.ndarray, wi: float) -> tuple[np.ndarray, np.ndarray] | 
 
 CHEEK_SKIN = 1.0
 """Mean squared distance (in twice the skin's spread) above which a calibrated cheek is not skin."""
+CHEEK_SKIN_PART, CHEEK_SKIN_RATIO = 0.5, 8.0
+"""A calibrated cheek at least this share of :data:`CHEEK_SKIN` from the skin, and this many times
+farther from it than the other side's, is not skin either. The absolute level alone depends on how
+much colour the camera shows: a child's shadowed mouth fold, lip-dark beside the left corner, fitted
+the skin 1.16 on the shared clip but 0.82 with the colours halved (the other side: 0.02), and the
+lips on that side then looked like cheek (the corner ran off, 3.6 % of the frames lost)."""
 
 
 def cheek_skin_distance(cheek: tuple[np.ndarray, np.ndarray] | None, skin_f: np.ndarray) -> float:
@@ -621,6 +627,14 @@ def cheek_skin_distance(cheek: tuple[np.ndarray, np.ndarray] | None, skin_f: np.
     spread = np.maximum(1.4826 * np.median(np.abs(skin_f - med), axis=0), 1.0)
     z = (np.asarray(cheek[0], dtype=np.float64).reshape(3, 3) - med) / (2.0 * spread)
     return float((z * z).mean())
+
+
+def borrows_cheek(fit: float, other: float) -> bool:
+    """Whether a side of the mouth takes the other side's cheek at calibration, from how unlike the
+    skin round the mouth each side's cheek columns are (:func:`cheek_skin_distance`): the other's
+    is skin, and this one is not (hair, a collar, the background beside a small or turned face) or
+    fits the skin far worse (a shadowed fold beside a child's mouth; see :data:`CHEEK_SKIN_RATIO`)."""
+    return other <= CHEEK_SKIN and (fit > CHEEK_SKIN or fit > max(CHEEK_SKIN_PART * CHEEK_SKIN, CHEEK_SKIN_RATIO * other))
 
 
 def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
@@ -793,9 +807,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     if _trace is not None:
         _trace["cheek_skin"] = dict(fit)
     for name, other in (("left", "right"), ("right", "left")):
-        # a side whose cheek columns are not skin (hair, a collar, the background beside a small or
-        # turned face) takes the other side's cheek when that one is skin
-        if fit[name] > CHEEK_SKIN >= fit[other]:
+        if borrows_cheek(fit[name], fit[other]):
             ys, cols, step, _ = traced[name]
             traced[name] = (ys, cols, step, traced[other][3])
     sides = {}
