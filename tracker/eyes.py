@@ -831,6 +831,7 @@ class EyeFinder:
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
         self._grid_ref: np.ndarray | None = None  # the light's grid in the calibration's light (measure_gain)
+        self._grid_cut: tuple[tuple, np.ndarray] | None = None  # this frame's grid at the irises (find → adapt)
         self._light = None if model.light is None else [np.asarray(f, dtype=np.float32).reshape(1, 1, 3) for f in model.light]
         self._adapt_count = 0
         self._half: tuple[np.ndarray | None, int, int] = (None, 0, 0)
@@ -1148,8 +1149,7 @@ class EyeFinder:
         dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
         step (the lashes on a dark iris cannot be told from it)."""
         strip, c = self._strip(crop, i, at)
-        col = cv2.reduce(strip, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F)
-        e = self.skin.profile(col if self._light is None else col * self._light[i])
+        e = self.skin.profile(self._column(crop, i, at)[0])
         up = _run(e[c::-1])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
@@ -1335,6 +1335,14 @@ class EyeFinder:
         px = self._skin_grid(crop, centres)
         return None if px is None else self._gain_from(px)
 
+    def _grid_at_irises(self, crop: np.ndarray, centres) -> np.ndarray | None:
+        """:meth:`_skin_grid` round ``centres``, the one :meth:`find` cut for this frame's jump check
+        when the centres are its irises (adapt follows find on the same crop)."""
+        key = tuple(np.asarray(centres, dtype=np.float64).ravel().tolist())
+        if self._grid_cut is not None and self._grid_cut[0] == key:
+            return self._grid_cut[1]
+        return self._skin_grid(crop, centres)
+
     def _gain_from(self, px: np.ndarray, jump: bool = False) -> tuple[np.ndarray, bool] | None:
         """The gain of :meth:`measure_gain` from the grid pixels ``px``.
 
@@ -1368,6 +1376,7 @@ class EyeFinder:
         px = self._skin_grid(crop, centres)
         if px is None:
             return
+        self._grid_cut = (tuple(np.asarray(centres, dtype=np.float64).ravel().tolist()), px)
         grid = _median_bgr(px)
         seen = grid * (1.0 if self._gain is None else self._gain)
         if np.all(np.abs(np.log(np.maximum(seen, 1.0) / np.maximum(self._grid_ref, 1.0))) < math.log(LIGHT_JUMP)):
@@ -1394,6 +1403,7 @@ class EyeFinder:
         if not all(map(math.isfinite, centres.ravel().tolist())):
             raise ValueError(f"eye centres must be finite, got {centres.tolist()}")
         found = self._locate(crop_grey, centres)
+        self._grid_cut = None
         if min(found[0][2], found[1][2]) >= ADAPT_MIN_SCORE:  # on both irises, not a hand or a wall
             self._follow_jump(crop_bgr, [f[:2] for f in found])
         gain = self._gain
@@ -1443,7 +1453,8 @@ class EyeFinder:
         # the light on every confident frame: auto exposure and a lamp change it within a second,
         # and the lids are read from colours it moves; the pictures follow the face slowly
         centres = np.array([[e.iris[0], e.iris[1]] for e in result.eyes])
-        m = self.measure_gain(crop_bgr, centres)
+        px = self._grid_at_irises(crop_bgr, centres)
+        m = None if px is None else self._gain_from(px)
         if m is not None:
             g, jumped = m
             gr = 1.0 if jumped else GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)

@@ -634,7 +634,7 @@ def borrows_cheek(fit: float, other: float) -> bool:
     skin round the mouth each side's cheek columns are (:func:`cheek_skin_distance`): the other's
     is skin, and this one is not (hair, a collar, the background beside a small or turned face) or
     fits the skin far worse (a shadowed fold beside a child's mouth; see :data:`CHEEK_SKIN_RATIO`)."""
-    return other <= CHEEK_SKIN and (fit > CHEEK_SKIN or fit > max(CHEEK_SKIN_PART * CHEEK_SKIN, CHEEK_SKIN_RATIO * other))
+    return other <= CHEEK_SKIN and fit > min(CHEEK_SKIN, max(CHEEK_SKIN_PART * CHEEK_SKIN, CHEEK_SKIN_RATIO * other))
 
 
 def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
