@@ -23,6 +23,8 @@ blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
 leave    the face slides out of the frame sideways, stays away a second, and slides back
 covered  a skin-coloured hand passes over the face and covers it for a second
+beard    a dark, full beard and moustache round the mouth, following the face (hair where the
+         tracker expects the skin beside the lips)
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -57,7 +59,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 SIDE_LIGHT = 0.4
@@ -174,6 +176,56 @@ def paint_hand(img: np.ndarray, centre, axes: tuple[float, float], skin: np.ndar
     return np.clip(img * (1.0 - inside) + colour * inside, 0, 255).astype(np.uint8)
 
 
+BEARD_BGR = (38.0, 48.0, 62.0)
+"""Colour (BGR) of the ``beard`` variant's hair: dark brown."""
+
+
+def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
+    """What ``beard`` draws: a per-frame function painting a full beard and moustache round the
+    mouth, placed on each frame from the peer's points (the pupils give the face's scale and tilt,
+    the corners and the outer lip edges the lips, which stay bare)."""
+    h, w = shape
+    rng = np.random.default_rng(seed)
+    # strands: noise stretched along the face's down direction (roughly vertical), about ±14 grey levels
+    strands = cv2.GaussianBlur(rng.normal(0.0, 1.0, (h, w)).astype(np.float32), (0, 0), sigmaX=0.8, sigmaY=4.0)
+    strands *= np.float32(14.0 / max(float(strands.std()), 1e-6))
+    colour = np.array(BEARD_BGR, np.float32)
+
+    def outline(c: np.ndarray, u: np.ndarray, dn: np.ndarray, pts: list[tuple[float, float]]) -> np.ndarray:
+        return np.array([c + x * u + y * dn for x, y in pts], np.float32)
+
+    def paint(img: np.ndarray, i: int) -> np.ndarray:
+        lp, rp = points["left_pupil"][i], points["right_pupil"][i]
+        lc, rc = points["left_mouth_corner"][i], points["right_mouth_corner"][i]
+        top, bottom = points["upper_lip_top"][i], points["lower_lip_bottom"][i]
+        if not all(np.all(np.isfinite(q)) for q in (lp, rp, lc, rc, top, bottom)):
+            return img
+        d = float(np.hypot(*(rp - lp)))
+        u = (rp - lp) / max(d, 1e-6)
+        dn = np.array([-u[1], u[0]])
+        c = 0.5 * (lc + rc)
+        half = 0.5 * float(np.dot(rc - lc, u))
+        t_up, t_dn = float(np.dot(c - top, dn)), float(np.dot(bottom - c, dn))
+        hair = np.zeros((h, w), np.float32)
+        # moustache from under the nose down past the corners, and the beard from the corners round
+        # the chin (face units: x along the eye line, y down, from the mouth's centre)
+        ms = [(-half - 0.12 * d, 0.08 * d), (-half - 0.05 * d, -t_up - 0.12 * d), (0.0, -t_up - 0.2 * d),
+              (half + 0.05 * d, -t_up - 0.12 * d), (half + 0.12 * d, 0.08 * d)]
+        bd = [(-half - 0.2 * d, -0.05 * d), (-half - 0.25 * d, 0.35 * d), (-0.3 * d, t_dn + 0.55 * d), (0.0, t_dn + 0.62 * d),
+              (0.3 * d, t_dn + 0.55 * d), (half + 0.25 * d, 0.35 * d), (half + 0.2 * d, -0.05 * d)]
+        for poly in (ms, bd):
+            cv2.fillPoly(hair, [np.round(outline(c, u, dn, poly) * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+        # the lips stay bare: a lens through the corners and the outer lip edges
+        th = np.linspace(0.0, np.pi, 16)
+        lens = [(-half * np.cos(a), -t_up * np.sin(a)) for a in th] + [(half * np.cos(a), t_dn * np.sin(a)) for a in th]
+        cv2.fillPoly(hair, [np.round(outline(c, u, dn, lens) * 8).astype(np.int32)], 0.0, cv2.LINE_AA, shift=3)
+        hair = cv2.GaussianBlur(hair, (0, 0), max(0.03 * d, 0.7))[..., None] * np.float32(0.88)
+        fur = colour[None, None, :] + strands[..., None]
+        return np.clip(img * (1.0 - hair) + fur * hair, 0, 255).astype(np.uint8)
+
+    return paint
+
+
 def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:
     """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``."""
     rng = np.random.default_rng(seed)
@@ -282,6 +334,7 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     points = _read_points(src / f"{name}.points.csv")
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
+    beard = _beard(points, (h, w), seed) if kind == "beard" else None
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")
@@ -300,6 +353,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             img = img[:, ::-1]
         if hand is not None:
             img = hand[0](img, i)
+        if beard is not None and i < len(points["left_pupil"]):
+            img = beard(img, i)
         writer.write(np.ascontiguousarray(pix(img, i)))
     writer.release()
 
