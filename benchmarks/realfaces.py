@@ -938,7 +938,7 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False) -> int:
             total[k] += passes[k]
         count += len(res)
         print(f"  {v}: {row[1]} clicks, {row[2]} auto", file=sys.stderr, flush=True)
-    t = Table("Real faces, harder: the clips made smaller, shaken, noisy, dimmed, stepped, side-lit and shaded, paler, blurred, mirrored, left and covered",
+    t = Table("Real faces, harder: the clips made smaller, shaken, noisy, dimmed, stepped, side-lit and shaded, paler, blurred, mirrored, left, covered and bearded",
               ["variant", "all targets, clicks", "all targets, auto", "misses (L lost, Pm/P95 pupil, R roll, O open, W width, E eye, B brow, A back after away, H ok while away)"],
               rows,
               note=f"clip-modes meeting each target, of {count}: " + ", ".join(f"{STRESS_SHORT[k]} {total[k]}" for k in STRESS_SHORT)

@@ -137,3 +137,27 @@ def test_the_light_steps_by_quarters_and_falls_across_the_side_lit_frame():
     shade = sc._photometric("shade", n, 0)
     assert np.array_equal(shade(img, 0), img)  # even light at the start, the side light at the end
     assert np.array_equal(shade(img, n - 1), sc._photometric("side", n, 0)(img, 0))
+
+
+def test_the_beard_darkens_round_the_mouth_and_leaves_the_lips_and_eyes_bare():
+    """``beard``: hair (dark) under the lower lip, beside the corners and over the upper lip; the lips
+    between the corners and the outer lip edges, the eyes and the cheeks far out keep their pixels."""
+    h, w = 160, 200
+    img = np.full((h, w, 3), 180, np.uint8)
+    pts = {"left_pupil": (70.0, 50.0), "right_pupil": (130.0, 50.0), "left_mouth_corner": (80.0, 110.0),
+           "right_mouth_corner": (120.0, 110.0), "upper_lip_top": (100.0, 104.0), "lower_lip_bottom": (100.0, 118.0)}
+    points = {k: np.array([v], float) for k, v in pts.items()}
+    out = sc._beard(points, (h, w), 0)(img, 0).astype(float)
+    lum = out.mean(axis=2)
+    assert lum[127, 100] < 90  # under the lower lip: the beard
+    assert lum[111, 75] < 90 and lum[111, 125] < 90  # beside the corners
+    assert lum[98, 100] < 120  # the moustache over the upper lip
+    assert abs(lum[111, 100] - 180) < 10  # the lips stay bare
+    assert np.array_equal(out[50, 70], img[50, 70]) and np.array_equal(out[110, 5], img[110, 5])  # eyes, far cheek
+    # the face turned: the beard turns with it (under the lower lip along the face's down)
+    a = np.radians(20.0)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    turned = {k: (v - [100.0, 80.0]) @ rot.T + [100.0, 80.0] for k, v in points.items()}
+    below = (np.array([100.0, 127.0]) - [100.0, 80.0]) @ rot.T + [100.0, 80.0]
+    out2 = sc._beard(turned, (h, w), 0)(img, 0).mean(axis=2)
+    assert out2[int(round(below[1])), int(round(below[0]))] < 90
