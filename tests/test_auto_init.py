@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import centre_votes, find_pupils
+from tracker.auto_init import _lip_span, _mouth, centre_votes, find_pupils
 from tracker.face_finder import DEFAULT_EYES
 
 
@@ -74,3 +74,47 @@ def test_votes_peak_on_a_dark_disc_not_on_a_dark_line():
     assert abs(i + 40 - 70) <= 1 and abs(j + 40 - 60) <= 1
     flat = centre_votes(np.full((120, 200), 128.0, np.float32), (100.0, 60.0), (60.0, 20.0))
     assert not np.any(flat)
+
+
+def _lower_face(beard: bool, open_mouth: bool = False):
+    """Grey and Lab a* images of a lower face (eyes at rows 40, 100 px apart): skin, red lips round
+    a dark gap (or an open mouth's dark inside) about 1.15 eye distances below the eyes and, with
+    ``beard``, a band of dark, colourless hair under the lower lip, darker than the gap."""
+    h, w = 260, 200
+    grey = np.full((h, w), 170.0, np.float32)
+    red = np.full((h, w), 145.0, np.float32)
+    gap0, gap1 = (148, 162) if open_mouth else (154, 156)
+    for y0, y1 in ((gap0 - 10, gap0), (gap1, gap1 + 12)):  # upper lip, lower lip
+        grey[y0:y1, 60:140] = 120.0
+        red[y0:y1, 60:140] = 165.0
+    grey[gap0:gap1, 60:140] = 40.0 if open_mouth else 70.0
+    if beard:
+        grey[gap1 + 14 : gap1 + 60, 40:160] = 35.0
+        red[gap1 + 14 : gap1 + 60, 40:160] = 133.0
+    return grey, red
+
+
+@pytest.mark.parametrize("open_mouth", [False, True])
+def test_the_mouth_point_is_between_the_lips_not_in_a_beard(open_mouth):
+    """The darkest line below the eyes is the beard; the lips' colour says the mouth is higher. With
+    no beard, or no colour, the darkest line as before."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    gap = 155.0
+    grey, red = _lower_face(beard=True, open_mouth=open_mouth)
+    assert _mouth(grey, left, right)[1] > gap + 14  # the darkest line alone: the beard
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - gap) <= (8 if open_mouth else 2) and abs(x - 100.0) < 1
+    grey, red = _lower_face(beard=False, open_mouth=open_mouth)
+    assert _mouth(grey, left, right, red) == pytest.approx(_mouth(grey, left, right))
+    flat = np.full_like(red, 145.0)  # a colourless camera: the lips' colour cannot help
+    grey, _ = _lower_face(beard=True, open_mouth=open_mouth)
+    assert _mouth(grey, left, right, flat) == pytest.approx(_mouth(grey, left, right))
+
+
+def test_lip_span_joins_an_open_mouths_two_lips_and_needs_a_lead_over_the_skin():
+    red = np.full(80, 140.0)
+    red[10:16] = 160.0  # upper lip
+    red[40:48] = 158.0  # lower lip, 0.3 eye distances (of 100 px) below
+    assert _lip_span(red, 140.0, 100.0) == (10, 47)
+    assert _lip_span(red, 140.0, 40.0) == (10, 15)  # a small face: too far apart to be one mouth
+    assert _lip_span(np.full(80, 141.0), 140.0, 100.0) is None

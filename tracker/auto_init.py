@@ -38,6 +38,14 @@ MOUTH_RANGE = (0.9, 1.6)
 """Where the mouth's dark line is looked for below the eye line, in inter-pupil distances."""
 
 
+LIP_RED = 4.0
+"""Lab a* (0–255 scale) by which the reddest row below the eyes must outdo the cheeks for the lips'
+colour to say where the mouth is."""
+LIP_GAP = 0.5
+"""Farthest apart (× the inter-pupil distance) two runs of lip-red rows are one mouth (an open
+mouth's lips)."""
+
+
 class AutoInitError(RuntimeError):
     """The detectors found no usable face (one-line message)."""
 
@@ -263,8 +271,32 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
     return (float(pupil[0] + d * up[0]), float(pupil[1] + d * up[1]))
 
 
-def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> tuple[float, float]:
-    """The mouth's centre: the darkest line across the face in :data:`MOUTH_RANGE` below the eyes."""
+def _lip_span(red: np.ndarray, skin_red: float, ipd: float) -> tuple[int, int] | None:
+    """The rows of a profile of Lab a* (``red``, rows down the face) that hold the lips: the run of
+    rows redder than the skin (``skin_red``) by half the reddest row's lead, round the reddest row,
+    joined with other such runs within :data:`LIP_GAP` eye distances (an open mouth's two lips);
+    None when no row is :data:`LIP_RED` redder than the skin (pale lips, a colourless camera)."""
+    j = int(np.argmax(red))
+    lead = float(red[j]) - skin_red
+    if lead < LIP_RED:
+        return None
+    is_red = red >= skin_red + 0.5 * lead
+    gap = max(int(round(LIP_GAP * ipd)), 1)
+    a = b = j
+    while True:
+        lo = [k for k in range(max(a - gap, 0), a) if is_red[k]]
+        hi = [k for k in range(b + 1, min(b + gap + 1, len(red))) if is_red[k]]
+        if not lo and not hi:
+            return a, b
+        a, b = (min(lo) if lo else a), (max(hi) if hi else b)
+
+
+def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndarray | None = None) -> tuple[float, float]:
+    """The mouth's centre: the darkest line across the face in :data:`MOUTH_RANGE` below the eyes —
+    inside the lips where their colour shows them (``lab_a``, the frame's Lab a* as float32: rows
+    redder than the cheeks; :func:`_lip_span`): a beard, a moustache or the shadow under the lower
+    lip is darker than the gap between closed lips, but not redder than the skin. There the darkest
+    valley between the lips' first and last rows (a closed mouth's gap, an open mouth's inside)."""
     ipd = math.dist(left, right)
     u = (right - left) / ipd
     down = np.array([-u[1], u[0]])
@@ -276,6 +308,17 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> tuple[float
     prof = _strip(grey, start, down, u, n, max(int(0.2 * ipd), 1))
     prof = cv2.GaussianBlur(prof.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
     k = int(np.argmin(prof))
+    if lab_a is not None:
+        half = max(int(0.2 * ipd), 1)
+        red = _strip(lab_a, start, down, u, n, half)
+        red = cv2.GaussianBlur(red.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
+        cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
+                  for s in (-1.0, 1.0)]
+        span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd)
+        if span is not None:
+            a, b = span
+            inner = [i for i in range(a + 1, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+            k = min(inner, key=prof.__getitem__) if inner else (a + b) // 2
     return (float(start[0] + k * down[0]), float(start[1] + k * down[1]))
 
 
@@ -298,7 +341,8 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
     ipd = math.dist(left, right)
     up = np.array([(right[1] - left[1]) / ipd, -(right[0] - left[0]) / ipd])
     brows = [_brow(grey, tuple(p), ipd, up) for p in (left, right)]
-    mouth = _mouth(grey, left, right)
+    lab_a = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2LAB)[..., 1].astype(np.float32)
+    mouth = _mouth(grey, left, right, lab_a)
     d = {
         "frame": int(frame_index),
         "left_pupil": [float(left[0]), float(left[1])],
