@@ -5,7 +5,8 @@
   as skin between the lips);
 * the mouth crop follows a dropped jaw down by at most :data:`~tracker.face_tracker.CROP_DROP`, and
   the jaw's offset is bounded asymmetrically (far down, little up: the nostrils sit above the mouth);
-* a mouth is "too wide" only against max(calibrated width, :data:`~tracker.mouth_finder.WIDE_REF` wi).
+* a mouth is "too wide" only against max(calibrated width, :data:`~tracker.mouth_finder.WIDE_REF` wi);
+* at calibration a moustache over thin closed lips, darker than the line between them, is not the gap.
 """
 
 import cv2
@@ -14,7 +15,7 @@ import pytest
 
 from tracker import face_tracker as ft
 from tracker.mouth_finder import WIDE_REF, MouthFinder
-from tracker.mouth_model import _colour_edge, _outer_edge, profile_features
+from tracker.mouth_model import _colour_edge, _gap, _outer_edge, profile_features
 
 SKIN = np.array([120.0, 150.0, 200.0])  # BGR: a warm skin
 LIP = np.array([125.0, 125.0, 215.0])  # redder, about as bright (a lit lower lip)
@@ -183,3 +184,39 @@ def test_mouth_place_and_tilt_checks():
     assert here(0.0) and here(0.0, rise=0.4) and not here(0.0, rise=0.5)
     assert here(0.0, pred_dy=0.6)  # the jaw closed in one frame: back at its rigid place
     assert not here(-0.4, pred_dy=0.0) and not here(-0.4, pred_dy=0.6)  # above the rigid place: the nose
+
+
+HAIR = np.array([40.0, 48.0, 60.0])  # BGR: dark brown hair, no redder than the skin
+
+
+def _rows_for_gap(runs: list[tuple[np.ndarray, int]]):
+    """Luminance and r − g chroma (minus the skin's) per row of a profile built from colour runs."""
+    prof = _profile(runs)
+    f = profile_features(prof.astype(np.float32), 150.0)
+    skin_red = float(profile_features(SKIN[None, :].astype(np.float32), 150.0)[0, 1])
+    lum = prof @ np.array([0.114, 0.587, 0.299])
+    return lum, f[:, 1] - skin_red
+
+
+@pytest.mark.parametrize("lips", ["closed", "open"])
+def test_calibration_gap_is_between_the_lips_not_in_a_moustache(lips):
+    """Skin, a moustache (darker than anything else), the upper lip, the line between the lips (a
+    little darker than them) or an open mouth's dark inside, the lower lip, skin; the click in the
+    middle of the lips. The darkest row alone is the moustache; with the lips' colour the gap is the
+    line between them, and an open mouth's inside stays the gap."""
+    line = LIP * 0.8
+    inside = np.array([30.0, 30.0, 35.0])
+    middle = [(line, 1)] if lips == "closed" else [(inside, 10)]
+    runs = [(SKIN, 30), (HAIR, 8), (LIP * 0.9, 7)] + middle + [(LIP, 9), (SKIN, 30)]
+    lum, red = _rows_for_gap(runs)
+    line_row = 45 if lips == "closed" else 49
+    click = 46.0 if lips == "closed" else 50.0
+    teeth = np.zeros(len(lum))
+    if lips == "closed":
+        assert 30 <= _gap(lum, teeth, click, WI)[2] < 38  # colour-blind: the moustache
+        assert _gap(lum, teeth, click, WI, red)[2] == line_row
+    else:
+        assert 45 <= _gap(lum, teeth, click, WI, red)[2] <= 54  # the inside, as without colour
+        assert _gap(lum, teeth, click, WI, red)[2] == _gap(lum, teeth, click, WI)[2]
+    flat = np.zeros(len(lum))  # no colour to go by (a colourless camera): the darkest row, as before
+    assert _gap(lum, teeth, click, WI, flat) == _gap(lum, teeth, click, WI)

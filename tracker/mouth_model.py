@@ -438,11 +438,42 @@ def _skin(crop: np.ndarray, cx: float, cy: float, wi: float, skin_samples) -> np
     return ring[dev.max(axis=1) <= np.percentile(dev.max(axis=1), 90)]
 
 
-def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) -> tuple[int, int, int]:
+GAP_RED = (2.0, 0.35)
+"""How much redder than the skin (chroma units; at least the first, and the second share of the
+reddest row's lead near the click) the rows above and below a dark valley must be for it to lie
+between two lips (:func:`_between_lips`)."""
+
+
+def _between_lips(red_rows: np.ndarray, ys: list[int], cy: float, wi: float, reach: float = 0.04,
+                  any_row: bool = False) -> list[bool]:
+    """Per row ``y`` of ``ys``: whether the rows above it and below it (``reach`` wi each) are both
+    lip-red (``red_rows``: each row's r − g chroma minus the skin's; :data:`GAP_RED`) — on average, or
+    with ``any_row`` anywhere there (an open mouth's dark inside lies between lips further off)."""
+    H = len(red_rows)
+    ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
+    need = max(GAP_RED[0], GAP_RED[1] * float(red_rows[ra:rb].max(initial=0.0)))
+    nr = max(int(round(reach * wi)), 2)
+    out = []
+    for y in ys:
+        above, below = red_rows[max(y - nr, 0) : y], red_rows[y + 1 : min(y + 1 + nr, H)]
+        if len(above) == 0 or len(below) == 0:
+            out.append(False)
+        elif any_row:
+            out.append(float(above.max()) >= need and float(below.max()) >= need)
+        else:
+            out.append(float(above.mean()) >= need and float(below.mean()) >= need)
+    return out
+
+
+def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
+         red_rows: np.ndarray | None = None) -> tuple[int, int, int]:
     """The gap on the profile through the click: ``(top, bottom, darkest)`` rows.
 
     The darkest row within −0.12…+0.15 wi of the click is in the gap between the lips or in the open
-    mouth; the gap spreads up and down over rows nearly as dark (15 % of the way from that row to the
+    mouth — unless the lips' colour (``red_rows``, :func:`_between_lips`) says otherwise: when that row
+    has no lip-red rows above and below it within 0.2 wi and another dark valley there has them right
+    next to it, that valley is (a moustache over thin closed lips is darker than the line between
+    them; the inside of an open mouth has its lips further off). The gap spreads up and down over rows nearly as dark (15 % of the way from that row to the
     profile's median: a dark lip is not that dark) or teeth (``inside_rows``: the share of teeth-like
     pixels), across a row or two of neither (the blurred edge between them), at most 0.35 wi each
     way; below, past a tongue
@@ -450,6 +481,11 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float) ->
     H = len(lum_rows)
     ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
     y_min = ya + int(np.argmin(lum_rows[ya:yb]))
+    if red_rows is not None and yb - ya >= 3 and not _between_lips(red_rows, [y_min], cy, wi, reach=0.2, any_row=True)[0]:
+        valleys = [y for y in range(max(ya, 1), min(yb, H - 1)) if lum_rows[y] < lum_rows[y - 1] and lum_rows[y] <= lum_rows[y + 1]]
+        lips = [y for y, ok in zip(valleys, _between_lips(red_rows, valleys, cy, wi)) if ok]
+        if lips:
+            y_min = min(lips, key=lambda y: lum_rows[y])
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
     level = lum_rows[y_min] + 0.15 * (float(np.median(lum_rows[ra:rb])) - lum_rows[y_min])
     skip = (lum_rows < level) | (inside_rows > 0.5)
@@ -772,6 +808,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     teeth0 = _inside(0.0, skin_level, skin_sat).view(np.uint8).take(idx)
 
     band = max(BAND * wi, 1.5)
+    skin_red = float(np.median(profile_features(skin.astype(np.float32), skin_level)[:, 1]))
 
     def column(x: float, y: float):
         """The gap and the outer lip edges on the profile through column ``x`` near row ``y``, and
@@ -779,8 +816,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         b0, b1 = band_columns(x, band, W)
         rows_bgr = cv2.GaussianBlur(crop[:, b0:b1].astype(np.float32).mean(axis=1).reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
         lum_rows = luminance(rows_bgr)
-        top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi)
         f_rows = profile_features(rows_bgr, skin_level)
+        top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi, f_rows[:, 1] - skin_red)
         e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
         # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
         # lip: on pale lips the skin just above is as red as they are)
