@@ -12,7 +12,9 @@ from. Steps, each using only what every face has:
 3. brows: the darkest band on the column above each pupil;
 4. mouth: the darkest line across the lower face, a little more than one inter-pupil
    distance below the eyes — the gap between closed lips or the inside of an open mouth
-   (the nostrils sit higher, the chin's shadow lower).
+   (the nostrils sit higher, the chin's shadow lower); where the lips are redder than the
+   cheeks, the darkest line between them (a beard or a moustache is darker than the gap, but
+   not red; :func:`_lip_span`).
 
 The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 (``cv2.data.haarcascades``); nothing is downloaded.
