@@ -390,3 +390,28 @@ def test_reset_adaptation_is_the_calibration_again(calibrated):
     c, p, _ = frames[0]
     a, b = finder.find(c, p), fresh.find(c, p)
     assert (a.lip_upper, a.lip_lower, a.left, a.right) == (b.lip_upper, b.lip_lower, b.left, b.right)
+
+
+@pytest.mark.parametrize("hair", ["beard", "moustache"])
+def test_the_mouth_line_starts_between_the_lips_not_in_hair_beside_them(calibrated, hair):
+    """Dark, colourless hair right under the lower lip (a beard) or over the upper lip (a moustache),
+    darker than the line between the lips and inside the seed's reach: the line still starts between
+    the lips (hair has lip colour on one side only), and the mouth is found where it is."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    t = _truth_in_crop(BASE, ff, origin)
+    x0, x1 = int(t["mouth_left"][0]) - 12, int(t["mouth_right"][0]) + 12
+    crop = crop.copy()
+    if hair == "beard":
+        y0 = int(math.ceil(t["lip_lower"][1])) + 1
+        crop[y0 : y0 + 16, x0:x1] = (28, 32, 38)
+    else:
+        y1 = int(math.floor(t["lip_upper"][1])) - 1
+        crop[y1 - 8 : y1, x0:x1] = (28, 32, 38)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK
+    assert abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    w, _, _ = _errors(res, t)
+    assert w < 6.0

@@ -55,7 +55,7 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
+    BAND, CORNER_BIAS, GAP_RED, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
     profile_features, trace_line, unlike_cheek,
 )
 
@@ -91,6 +91,10 @@ SEED_UNIT = 0.05
 SEED_LIP = 2.0
 """Darkness units that the lower lip's colour all along under a dark valley is worth (see
 :meth:`MouthFinder.line_seed`)."""
+SEED_REACH_LIPS = 0.5
+"""Rows (× wi) above and below a dark valley within which lip-red rows (redder than the skin by
+:data:`~tracker.mouth_model.GAP_RED` of the calibrated lips' lead) lie when it is between the lips
+(:meth:`MouthFinder.line_seed`; 0: not asked)."""
 RETRACE = 0.03
 """How far (× wi) below the lips' opening the traced line may run before it is traced again from
 inside the opening."""
@@ -561,6 +565,20 @@ class MouthFinder:
         np.cumsum(_clip(ld, 0.0, 1.0), out=cd[1:])
         nd = max(int(round(self.t_dn)), 1)
         unit = SEED_UNIT * max(self.model.skin_level, 8.0)
+        cls = self.model.classes
+        lead = float(min(cls[1][0][1], cls[2][0][1]) - cls[4][0][1])  # the lips' r − g chroma over the skin's
+        if SEED_REACH_LIPS > 0 and lead >= GAP_RED[0]:
+            # lip-red rows above and below within an open mouth's reach: the gap, an open mouth's inside;
+            # hair under the lower lip or over the upper one is darker than a closed mouth's line but has
+            # the lips on one side only (a valley with them on neither side, say between the teeth and a
+            # pale stretched lip, stays a candidate)
+            red = profile_features(bgr.astype(np.float32), self.model.skin_level)[:, 1]
+            need = cls[4][0][1] + max(GAP_RED[0], GAP_RED[1] * lead)
+            reach = max(int(round(SEED_REACH_LIPS * self.wi)), 3)
+            up = [float(red[max(a + k - reach, 0) : a + k].max(initial=-1e9)) >= need for k in cands]
+            down = [float(red[a + k + 1 : a + k + 1 + reach].max(initial=-1e9)) >= need for k in cands]
+            if any(u and v for u, v in zip(up, down)):
+                cands = [k for k, u, v in zip(cands, up, down) if u == v]
         scores = []
         for k in cands:
             y = a + k
