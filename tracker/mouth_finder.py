@@ -542,7 +542,9 @@ class MouthFinder:
         colour under it (its shading-free lip value, :attr:`MouthModel.axis_down`, over a lower lip's
         thickness) — the gap between the lips, not the shadow under the lower lip, which is often
         darker but has the chin under it. Upwards the reach is short: the gap does not rise far above
-        the head's prediction, and the shadow under the nose is 0.25–0.4 wi above it."""
+        the head's prediction, and the shadow under the nose is 0.25–0.4 wi above it. Where the lips
+        are redder than the skin, a valley with lip-red rows on one side only (:data:`SEED_REACH_LIPS`)
+        is hair beside a lip, not the gap, once some valley has them on both sides."""
         H, W = maps.shape
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
