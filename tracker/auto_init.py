@@ -282,15 +282,10 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float) -> tuple[int, int] |
     lead = float(red[j]) - skin_red
     if lead < LIP_RED:
         return None
-    is_red = red >= skin_red + 0.5 * lead
-    gap = max(int(round(LIP_GAP * ipd)), 1)
-    a = b = j
-    while True:
-        lo = [k for k in range(max(a - gap, 0), a) if is_red[k]]
-        hi = [k for k in range(b + 1, min(b + gap + 1, len(red))) if is_red[k]]
-        if not lo and not hi:
-            return a, b
-        a, b = (min(lo) if lo else a), (max(hi) if hi else b)
+    reds = np.flatnonzero(red >= skin_red + 0.5 * lead)  # holds j
+    runs = np.split(reds, np.flatnonzero(np.diff(reds) > max(int(round(LIP_GAP * ipd)), 1)) + 1)
+    run = next(r for r in runs if r[0] <= j <= r[-1])
+    return int(run[0]), int(run[-1])
 
 
 def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndarray | None = None) -> tuple[float, float]:

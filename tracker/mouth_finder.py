@@ -55,8 +55,8 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, GAP_RED, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry, mouth_body,
-    profile_features, trace_line, unlike_cheek,
+    BAND, CORNER_BIAS, GAP_RED, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_distance, lens_outlines, line_geometry,
+    lip_red_need, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -410,6 +410,11 @@ class MouthFinder:
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
         self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
         self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
+        # a row's r − g chroma at or above which it is lip-red for the mouth line's seed (None: the lips
+        # are not redder than the skin to go by), and how far the seed looks for such rows
+        lead = float(min(cls[1, 0, 1], cls[2, 0, 1]) - cls[4, 0, 1])
+        self.seed_red = float(cls[4, 0, 1]) + lip_red_need(lead) if SEED_REACH_LIPS > 0 and lead >= GAP_RED[0] else None
+        self.seed_reach = max(int(round(SEED_REACH_LIPS * wi)), 3)
 
     def _set_thickness(self, t_up: float, t_dn: float) -> None:
         """The lips' expected thicknesses (rows at the working scale) and everything the vertical
@@ -567,20 +572,15 @@ class MouthFinder:
         np.cumsum(_clip(ld, 0.0, 1.0), out=cd[1:])
         nd = max(int(round(self.t_dn)), 1)
         unit = SEED_UNIT * max(self.model.skin_level, 8.0)
-        cls = self.model.classes
-        lead = float(min(cls[1][0][1], cls[2][0][1]) - cls[4][0][1])  # the lips' r − g chroma over the skin's
-        if SEED_REACH_LIPS > 0 and lead >= GAP_RED[0]:
+        if self.seed_red is not None:
             # lip-red rows above and below within an open mouth's reach: the gap, an open mouth's inside;
             # hair under the lower lip or over the upper one is darker than a closed mouth's line but has
             # the lips on one side only (a valley with them on neither side, say between the teeth and a
             # pale stretched lip, stays a candidate)
             red = profile_features(bgr.astype(np.float32), self.model.skin_level)[:, 1]
-            need = cls[4][0][1] + max(GAP_RED[0], GAP_RED[1] * lead)
-            reach = max(int(round(SEED_REACH_LIPS * self.wi)), 3)
-            up = [float(red[max(a + k - reach, 0) : a + k].max(initial=-1e9)) >= need for k in cands]
-            down = [float(red[a + k + 1 : a + k + 1 + reach].max(initial=-1e9)) >= need for k in cands]
-            if any(u and v for u, v in zip(up, down)):
-                cands = [k for k, u, v in zip(cands, up, down) if u == v]
+            sides = lip_sides(red, [a + k for k in cands], self.seed_reach, self.seed_red, any_row=True)
+            if any(up and down for up, down in sides):
+                cands = [k for k, (up, down) in zip(cands, sides) if up == down]
         scores = []
         for k in cands:
             y = a + k

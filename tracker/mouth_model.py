@@ -444,25 +444,35 @@ reddest row's lead near the click) the rows above and below a dark valley must b
 between two lips (:func:`_between_lips`)."""
 
 
+def lip_red_need(lead: float) -> float:
+    """How much redder than the skin a row must be to be lip (:data:`GAP_RED`), for lips ``lead``
+    (r − g chroma units) redder than it."""
+    return max(GAP_RED[0], GAP_RED[1] * lead)
+
+
+def lip_sides(red: np.ndarray, ys, rows: int, need: float, any_row: bool = False) -> list[tuple[bool, bool]]:
+    """Per row ``y`` of ``ys``: whether the ``rows`` rows above it and the ``rows`` rows below it are
+    lip-red (``red`` at least ``need``; a profile's r − g chroma per row) — on average, or with
+    ``any_row`` anywhere there. No rows on a side (the profile's end): not lip-red."""
+    H = len(red)
+    out = []
+    for y in ys:
+        above, below = red[max(y - rows, 0) : y], red[y + 1 : min(y + 1 + rows, H)]
+        pick = np.max if any_row else np.mean
+        out.append((len(above) > 0 and float(pick(above)) >= need, len(below) > 0 and float(pick(below)) >= need))
+    return out
+
+
 def _between_lips(red_rows: np.ndarray, ys: list[int], cy: float, wi: float, reach: float = 0.04,
                   any_row: bool = False) -> list[bool]:
     """Per row ``y`` of ``ys``: whether the rows above it and below it (``reach`` wi each) are both
-    lip-red (``red_rows``: each row's r − g chroma minus the skin's; :data:`GAP_RED`) — on average, or
-    with ``any_row`` anywhere there (an open mouth's dark inside lies between lips further off)."""
+    lip-red (``red_rows``: each row's r − g chroma minus the skin's; the lips' lead is the reddest
+    row's near the click ``cy``; :func:`lip_sides`) — an open mouth's dark inside lies between lips
+    further off (``any_row``)."""
     H = len(red_rows)
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
-    need = max(GAP_RED[0], GAP_RED[1] * float(red_rows[ra:rb].max(initial=0.0)))
-    nr = max(int(round(reach * wi)), 2)
-    out = []
-    for y in ys:
-        above, below = red_rows[max(y - nr, 0) : y], red_rows[y + 1 : min(y + 1 + nr, H)]
-        if len(above) == 0 or len(below) == 0:
-            out.append(False)
-        elif any_row:
-            out.append(float(above.max()) >= need and float(below.max()) >= need)
-        else:
-            out.append(float(above.mean()) >= need and float(below.mean()) >= need)
-    return out
+    need = lip_red_need(float(red_rows[ra:rb].max(initial=0.0)))
+    return [up and down for up, down in lip_sides(red_rows, ys, max(int(round(reach * wi)), 2), need, any_row)]
 
 
 def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
