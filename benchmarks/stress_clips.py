@@ -25,6 +25,9 @@ leave    the face slides out of the frame sideways, stays away a second, and sli
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
          tracker expects the skin beside the lips)
+glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a moving glare
+         on the lenses (a rim between the eye and the brow and under the lower lid, a bright streak
+         over the eye)
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -59,7 +62,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 SIDE_LIGHT = 0.4
@@ -226,6 +229,57 @@ def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
     return paint
 
 
+GLASSES_BGR = (28.0, 26.0, 30.0)
+"""Colour (BGR) of the ``glasses`` variant's frames: near-black plastic."""
+LENS = (0.38, 0.25, 0.05)
+"""The ``glasses`` lenses' half-width and half-height and the rim's thickness (× the inter-pupil
+distance): 48 × 32 mm lenses in 3 mm rims on a 63 mm IPD, each centred a little outside and below
+its pupil, so the upper rim runs between the eye and the brow and the lower one under the lid."""
+
+
+def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int], n: int):
+    """What ``glasses`` draws: a per-frame function painting spectacle frames placed on each frame
+    from the peer's pupils (the face's scale and tilt), with a glare streak on each lens that slides
+    slowly across it over the clip (the head turning under a lamp)."""
+    h, w = shape
+    a, b, t = LENS
+    th = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+    # a rounded rectangle: the superellipse |x/a|^4 + |y/b|^4 = 1
+    cs, sn = np.cos(th), np.sin(th)
+    ring = np.stack([a * np.sign(cs) * np.abs(cs) ** 0.5, b * np.sign(sn) * np.abs(sn) ** 0.5], axis=1)
+    colour = np.array(GLASSES_BGR, np.float32)
+
+    def paint(img: np.ndarray, i: int) -> np.ndarray:
+        lp, rp = points["left_pupil"][i], points["right_pupil"][i]
+        if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))):
+            return img
+        d = float(np.hypot(*(rp - lp)))
+        u = (rp - lp) / max(d, 1e-6)
+        dn = np.array([-u[1], u[0]])
+        to_img = lambda c, pts: np.array([c + x * u * d + y * dn * d for x, y in pts], np.float32)
+        rim = np.zeros((h, w), np.float32)
+        glare = np.zeros((h, w), np.float32)
+        thick = max(int(round(t * d)), 1)
+        # the glare's place across the lens (lens units, −1..1), sliding back and forth over the clip
+        s = 0.6 * math.sin(2.0 * math.pi * i / max(n, 1) * 1.5)
+        for side, p in ((-1.0, lp), (1.0, rp)):
+            c = p + side * 0.03 * d * u + 0.03 * d * dn
+            cv2.polylines(rim, [np.round(to_img(c, ring) * 8).astype(np.int32)], True, 1.0, thick, cv2.LINE_AA, shift=3)
+            # the arm: from the lens's outer edge near its top, out towards the ear
+            arm = [(side * a, -0.6 * b), (side * (a + 0.3), -0.55 * b)]
+            cv2.polylines(rim, [np.round(to_img(c, arm) * 8).astype(np.int32)], False, 1.0, thick, cv2.LINE_AA, shift=3)
+            streak = [(s * a - 0.1, -0.9 * b), (s * a + 0.02, -0.9 * b), (s * a - 0.12, 0.9 * b), (s * a - 0.24, 0.9 * b)]
+            cv2.fillPoly(glare, [np.round(to_img(c, streak) * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+        bridge = [(-0.5 + a + 0.03 - 0.01, -0.35 * b + 0.03), (0.0, -0.45 * b + 0.03), (0.5 - a - 0.03 + 0.01, -0.35 * b + 0.03)]
+        cv2.polylines(rim, [np.round(to_img(0.5 * (lp + rp), bridge) * 8).astype(np.int32)], False, 1.0, thick, cv2.LINE_AA, shift=3)
+        glare = cv2.GaussianBlur(glare, (0, 0), max(0.02 * d, 0.6))[..., None] * np.float32(0.35)
+        out = img * (1.0 - glare) + np.float32(255.0) * glare
+        rim = rim[..., None]
+        return np.clip(out * (1.0 - rim) + colour * rim, 0, 255).astype(np.uint8)
+
+    return paint
+
+
 def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:
     """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``."""
     rng = np.random.default_rng(seed)
@@ -334,7 +388,7 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     points = _read_points(src / f"{name}.points.csv")
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
-    beard = _beard(points, (h, w), seed) if kind == "beard" else None
+    worn = {"beard": lambda: _beard(points, (h, w), seed), "glasses": lambda: _glasses(points, (h, w), n)}.get(kind, lambda: None)()
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")
@@ -353,8 +407,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             img = img[:, ::-1]
         if hand is not None:
             img = hand[0](img, i)
-        if beard is not None and i < len(points["left_pupil"]):
-            img = beard(img, i)
+        if worn is not None and i < len(points["left_pupil"]):
+            img = worn(img, i)
         writer.write(np.ascontiguousarray(pix(img, i)))
     writer.release()
 

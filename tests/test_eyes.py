@@ -22,6 +22,7 @@ from tracker.eyes import (
     iris_radius,
     learn_eyes,
     limbus_centre,
+    thin_dark,
     refine_pupils,
     walk_length,
 )
@@ -609,3 +610,50 @@ def test_the_light_is_followed_as_it_falls_far_and_turns_warm():
     res, truth, _, _ = _find(f, state)
     assert f._gain is not None and f._gain.max() > 2.2
     _check(res, truth, lid=1.5)
+
+
+def _with_glasses(frame: np.ndarray, state: FaceState, thick: float = 0.05) -> np.ndarray:
+    """``frame`` with near-black spectacle rims (rounded rectangles 0.76 × 0.5 IPD, ``thick`` IPD
+    wide) round both eyes and a bridge between them: the lower rim crosses the skin under the eyes,
+    the upper one the skin between the eyes and the brows."""
+    lm = face_landmarks(state)
+    out = frame.copy()
+    d = state.ipd
+    t = max(int(round(thick * d)), 1)
+    for p in (lm["left_pupil"], lm["right_pupil"]):
+        x, y = float(p[0]), float(p[1]) + 0.03 * d
+        box = np.array([[x - 0.38 * d, y - 0.25 * d], [x + 0.38 * d, y - 0.25 * d], [x + 0.38 * d, y + 0.25 * d],
+                        [x - 0.38 * d, y + 0.25 * d]])
+        cv2.polylines(out, [np.round(box).astype(np.int32)], True, (28, 26, 30), t, cv2.LINE_AA)
+    a, b = lm["left_pupil"] + [0.38 * d, -0.05 * d], lm["right_pupil"] - [0.38 * d, 0.05 * d]
+    cv2.line(out, tuple(np.round(a).astype(int)), tuple(np.round(b).astype(int)), (28, 26, 30), t, cv2.LINE_AA)
+    return out
+
+
+def test_thin_dark_marks_a_rim_and_lashes_but_not_an_iris_or_shading():
+    wi = 80.0
+    grey = np.tile(np.linspace(120.0, 200.0, 200, dtype=np.float32), (120, 1))  # smooth shading
+    grey[30:34, 10:190] = 30.0  # a rim, 4 px (0.05 wi)
+    cv2.circle(grey, (100, 80), 8, 40.0, -1)  # an iris, 16 px across
+    lines = thin_dark(grey, wi)
+    assert lines[31, 20:180].all()
+    assert not lines[80, 100] and lines[70:90, 95:105].mean() < 0.1
+    assert not lines[50:60].any() and not lines[100:].any()
+
+
+@pytest.mark.parametrize("thick", [0.03, 0.05, 0.08])
+def test_spectacle_rims_across_the_skin_bands_do_not_shut_the_eyes(thick):
+    """Calibrated and tracked with glasses on: the rims crossing the skin samples under and over the
+    eyes are left out of the skin's colour, so the eyes' interior still stands out from it and the
+    lids are measured (a skin model that takes the rims for skin calls almost anything skin: the lid
+    gap came out 0–1 px and every frame was ``eyes_closed``)."""
+    frame, _ = render_face(BASE)
+    frame = _with_glasses(frame, BASE, thick)
+    model, wi = _learn(frame=frame)
+    finder = EyeFinder(model, wi)
+    for expr in ("neutral", "wide"):
+        state = BASE.with_expression(expr)
+        img, _ = render_face(state)
+        res, truth, _, _ = _find(finder, state, frame=_with_glasses(img, state, thick))
+        assert all(e.open for e in res.eyes)
+        _check(res, truth, lid=2.0, brow=math.inf)

@@ -161,3 +161,26 @@ def test_the_beard_darkens_round_the_mouth_and_leaves_the_lips_and_eyes_bare():
     below = (np.array([100.0, 127.0]) - [100.0, 80.0]) @ rot.T + [100.0, 80.0]
     out2 = sc._beard(turned, (h, w), 0)(img, 0).mean(axis=2)
     assert out2[int(round(below[1])), int(round(below[0]))] < 90
+
+
+def test_glasses_put_dark_rims_round_the_eyes_and_leave_the_eyes_and_mouth_bare():
+    """``glasses``: a dark rim between each eye and its brow and under each eye, a bridge between the
+    eyes; the pupils and the mouth keep their pixels; the frames turn with the face."""
+    h, w = 160, 200
+    img = np.full((h, w, 3), 180, np.uint8)
+    pts = {"left_pupil": (70.0, 50.0), "right_pupil": (130.0, 50.0)}
+    points = {k: np.array([v], float) for k, v in pts.items()}
+    out = sc._glasses(points, (h, w), 10)(img, 0).astype(float)
+    lum = out.mean(axis=2)
+    a, b, t = sc.LENS
+    top, bottom = int(round(50 + 0.03 * 60 - b * 60)), int(round(50 + 0.03 * 60 + b * 60))
+    assert lum[top, 70] < 80 and lum[bottom, 70] < 80 and lum[bottom, 130] < 80  # the rims
+    assert lum[int(round(50 - 0.45 * b * 60 + 0.03 * 60)), 100] < 120  # the bridge
+    assert np.array_equal(out[50, 70], img[50, 70]) or lum[50, 70] > 180  # the pupil: bare or under glare
+    assert np.array_equal(out[130, 100], img[130, 100])  # the mouth
+    a_ = np.radians(20.0)
+    rot = np.array([[np.cos(a_), -np.sin(a_)], [np.sin(a_), np.cos(a_)]])
+    turned = {k: (v - [100.0, 80.0]) @ rot.T + [100.0, 80.0] for k, v in points.items()}
+    under = (np.array([70.0, bottom]) - [100.0, 80.0]) @ rot.T + [100.0, 80.0]
+    out2 = sc._glasses(turned, (h, w), 10)(img, 0).mean(axis=2)
+    assert out2[int(round(under[1])), int(round(under[0]))] < 80

@@ -13,7 +13,8 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   like that disc on both sides at once, lose. The best pair is refined at full resolution
   (darkness × correlation, parabola through the peak).
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
-  Gaussian in YCrCb learned below, above and between the eyes at calibration; the skin's
+  Gaussian in YCrCb learned below, above and between the eyes at calibration, without the thin
+  dark lines that cross those bands — a spectacle rim, lashes, a crease: :func:`thin_dark`; the skin's
   own colour up to half again as bright — a lit lid, a highlight, more light — still counts
   as skin): sclera, iris, pupil and lashes. The upper and lower lid distances are the soft
   lengths of the interior runs up and down a strip of columns through the iris; the ramp
@@ -112,6 +113,10 @@ LEVEL_MAX = 10.0
 """Highest centre of the interior ramp (Mahalanobis units)."""
 SKIN_FLOOR = (2.0, 1.0, 1.0)
 """Spread (std, grey levels) added to the skin's Y, Cr, Cb: noise, shading."""
+LINE_WIDTH = 0.12
+"""Width (wi) of a disc wider than a spectacle rim or a lash line (see :func:`thin_dark`)."""
+LINE_DARK = 0.25
+"""Share by which a thin line is darker than what lies round it (see :func:`thin_dark`)."""
 DARK_RATIO = 0.6
 """The iris's middle must be at most this fraction as bright as the darkest skin for "much
 darker than any skin" to count as interior."""
@@ -667,22 +672,40 @@ def calibration_crop(work_ipd: float) -> tuple[int, int, int, int]:
     return (int(math.floor(-1.05 * wi)), int(math.floor(-1.2 * wi)), int(math.ceil(2.1 * wi)), int(math.ceil(1.7 * wi)))
 
 
+def thin_dark(grey: np.ndarray, wi: float) -> np.ndarray:
+    """Where ``grey`` (float32) holds a thin dark line (bool, its shape): a spectacle rim, lashes, a
+    strand of hair, a deep crease — pixels at least :data:`LINE_DARK` darker than the grey closed with
+    a disc :data:`LINE_WIDTH` wi across (what lies round them). Such lines are no skin, whatever
+    band they cross."""
+    k = max(int(round(LINE_WIDTH * wi)), 3) | 1
+    closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+    return grey < (1.0 - LINE_DARK) * closed
+
+
 def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float):
     """BGR samples of the calibration crop: skin groups (a band below each eye, a band above
     it up to the brow's lower edge, the bridge between the eyes), the irises' middles (no
     skin may claim them), a ring of each iris around the pupil and the sclera beside it."""
     h, w = crop.shape[:2]
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    lines = thin_dark(grey, wi)
     below, above, middle, ring, sclera = [], [], [], [], []
     hx = max(int(round(BANDS["half"] * wi)), 2)
+
+    def skin_of(y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
+        """The pixels of a band, without its thin dark lines (all of them when those are most of it)."""
+        y0, y1 = max(y0, 0), max(min(y1, h), 0)
+        px, keep = crop[y0:y1, x0:x1].reshape(-1, 3), ~lines[y0:y1, x0:x1].ravel()
+        return px[keep] if keep.sum() >= 0.3 * len(px) else px
+
     for (px, py), r, hb in zip(pupils, radius, brow_heights):
         xi, yi = int(round(px)), int(round(py))
         x0, x1 = max(xi - hx, 0), min(xi + hx + 1, w)
         b0, b1 = int(round(py + BANDS["below"][0] * wi)), int(round(py + BANDS["below"][1] * wi)) + 1
-        below.append(crop[max(b0, 0) : min(b1, h), x0:x1].reshape(-1, 3))
+        below.append(skin_of(b0, b1, x0, x1))
         a1 = int(round(py - BANDS["above"][0] * wi))
         a0 = min(int(round(py - min(BANDS["above"][1] * wi, hb - 0.08 * wi))), a1 - 2)
-        above.append(crop[max(a0, 0) : max(a1, 0), x0:x1].reshape(-1, 3))
+        above.append(skin_of(a0, a1, x0, x1))
         k = max(int(round(0.4 * r)), 1)
         middle.append(crop[yi - k : yi + k + 1, xi - k : xi + k + 1].reshape(-1, 3))
         yy, xx = np.mgrid[yi - k : yi + k + 1, xi - int(r) : xi + int(r) + 1]
@@ -698,7 +721,7 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
             sclera.append(pix[grey[yi - sy : yi + sy + 1, c0:c1].ravel() > level])
     mx, my = 0.5 * (pupils[0] + pupils[1])
     bx, y0, y1 = max(int(round(0.06 * wi)), 1), int(round(my - 0.05 * wi)), int(round(my + 0.1 * wi)) + 1
-    bridge = crop[max(y0, 0) : y1, max(int(round(mx)) - bx, 0) : int(round(mx)) + bx + 1].reshape(-1, 3)
+    bridge = skin_of(y0, y1, max(int(round(mx)) - bx, 0), int(round(mx)) + bx + 1)
     light = eye_light([np.concatenate((b, a)) for b, a in zip(below, above)])
     if light is not None:  # each eye's samples as if both eyes were lit alike
         below, above, middle, ring, sclera = ([(g * f).astype(np.float32) for g, f in zip(group, light)]
