@@ -25,9 +25,9 @@ leave    the face slides out of the frame sideways, stays away a second, and sli
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
          tracker expects the skin beside the lips)
-glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a moving glare
-         on the lenses (a rim between the eye and the brow and under the lower lid, a bright streak
-         over the eye)
+glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a glare on
+         the lenses that moves as the head moves (a rim between the eye and the brow and under the
+         lower lid, a bright streak near or over the eye)
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -237,10 +237,17 @@ distance): 48 × 32 mm lenses in 3 mm rims on a 63 mm IPD, each centred a little
 its pupil, so the upper rim runs between the eye and the brow and the lower one under the lid."""
 
 
-def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int], n: int):
+GLARE_SHIFT = 1.0
+"""How far the ``glasses`` glare moves across a lens (× its half-width) per eye distance the head
+moves sideways, or per 10° it rolls."""
+
+
+def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
     """What ``glasses`` draws: a per-frame function painting spectacle frames placed on each frame
-    from the peer's pupils (the face's scale and tilt), with a glare streak on each lens that slides
-    slowly across it over the clip (the head turning under a lamp)."""
+    from the peer's pupils (the face's scale and tilt), with a glare streak on each lens: the
+    reflection of a light in front of the face, which moves across the lens as the head moves
+    against it (:data:`GLARE_SHIFT` of the lens's half-width per eye distance the eyes' midpoint
+    has moved, and per 10° of roll, from the first frame's)."""
     h, w = shape
     a, b, t = LENS
     th = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
@@ -248,6 +255,10 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int], n: int):
     cs, sn = np.cos(th), np.sin(th)
     ring = np.stack([a * np.sign(cs) * np.abs(cs) ** 0.5, b * np.sign(sn) * np.abs(sn) ** 0.5], axis=1)
     colour = np.array(GLASSES_BGR, np.float32)
+    seen = np.isfinite(points["left_pupil"]).all(axis=1) & np.isfinite(points["right_pupil"]).all(axis=1)
+    first = int(np.argmax(seen))
+    v0 = points["right_pupil"][first] - points["left_pupil"][first]
+    d0, roll0 = max(float(np.hypot(*v0)), 1e-6), math.atan2(v0[1], v0[0])
 
     def paint(img: np.ndarray, i: int) -> np.ndarray:
         lp, rp = points["left_pupil"][i], points["right_pupil"][i]
@@ -260,8 +271,10 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int], n: int):
         rim = np.zeros((h, w), np.float32)
         glare = np.zeros((h, w), np.float32)
         thick = max(int(round(t * d)), 1)
-        # the glare's place across the lens (lens units, −1..1), sliding back and forth over the clip
-        s = 0.6 * math.sin(2.0 * math.pi * i / max(n, 1) * 1.5)
+        # the glare's place across the lens (lens units, −1..1): a reflection moves as the head moves
+        mid, mid0 = 0.5 * (lp + rp), 0.5 * (points["left_pupil"][first] + points["right_pupil"][first])
+        roll = math.atan2(u[1], u[0]) - roll0
+        s = float(np.clip(GLARE_SHIFT * ((mid[0] - mid0[0]) / d0 + math.degrees(roll) / 10.0) - 0.2, -0.8, 0.8))
         for side, p in ((-1.0, lp), (1.0, rp)):
             c = p + side * 0.03 * d * u + 0.03 * d * dn
             cv2.polylines(rim, [np.round(to_img(c, ring) * 8).astype(np.int32)], True, 1.0, thick, cv2.LINE_AA, shift=3)
@@ -388,7 +401,7 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     points = _read_points(src / f"{name}.points.csv")
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
-    worn = {"beard": lambda: _beard(points, (h, w), seed), "glasses": lambda: _glasses(points, (h, w), n)}.get(kind, lambda: None)()
+    worn = {"beard": lambda: _beard(points, (h, w), seed), "glasses": lambda: _glasses(points, (h, w))}.get(kind, lambda: None)()
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")

@@ -170,7 +170,7 @@ def test_glasses_put_dark_rims_round_the_eyes_and_leave_the_eyes_and_mouth_bare(
     img = np.full((h, w, 3), 180, np.uint8)
     pts = {"left_pupil": (70.0, 50.0), "right_pupil": (130.0, 50.0)}
     points = {k: np.array([v], float) for k, v in pts.items()}
-    out = sc._glasses(points, (h, w), 10)(img, 0).astype(float)
+    out = sc._glasses(points, (h, w))(img, 0).astype(float)
     lum = out.mean(axis=2)
     a, b, t = sc.LENS
     top, bottom = int(round(50 + 0.03 * 60 - b * 60)), int(round(50 + 0.03 * 60 + b * 60))
@@ -182,5 +182,5 @@ def test_glasses_put_dark_rims_round_the_eyes_and_leave_the_eyes_and_mouth_bare(
     rot = np.array([[np.cos(a_), -np.sin(a_)], [np.sin(a_), np.cos(a_)]])
     turned = {k: (v - [100.0, 80.0]) @ rot.T + [100.0, 80.0] for k, v in points.items()}
     under = (np.array([70.0, bottom]) - [100.0, 80.0]) @ rot.T + [100.0, 80.0]
-    out2 = sc._glasses(turned, (h, w), 10)(img, 0).mean(axis=2)
+    out2 = sc._glasses(turned, (h, w))(img, 0).mean(axis=2)
     assert out2[int(round(under[1])), int(round(under[0]))] < 80
