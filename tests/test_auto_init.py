@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import _lip_span, _mouth, centre_votes, find_pupils
+from tracker.auto_init import _lip_span, _mouth, centre_votes, find_brows, find_pupils
 from tracker.face_finder import DEFAULT_EYES
 
 
@@ -118,3 +118,23 @@ def test_lip_span_joins_an_open_mouths_two_lips_and_needs_a_lead_over_the_skin()
     assert _lip_span(red, 140.0, 100.0) == (10, 47)
     assert _lip_span(red, 140.0, 40.0) == (10, 15)  # a small face: too far apart to be one mouth
     assert _lip_span(np.full(80, 141.0), 140.0, 100.0) is None
+
+
+@pytest.mark.parametrize("glasses", [False, True])
+@pytest.mark.parametrize("roll", [0.0, 8.0])
+def test_the_brow_point_is_on_the_brow_not_on_a_spectacle_rim(glasses, roll):
+    """Spectacle rims (near-black, under the brows, round each eye) are the darkest band above the
+    eyes; the brow point stays on the brow (0.38 eye distances above the pupil), with or without them
+    (the darkest band alone put it on the rim's upper bar, 0.2 above)."""
+    ipd = 90.0
+    img, pts = narrow_face(ipd=ipd, roll=roll)
+    if glasses:
+        c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
+        u, dn = np.array([c, -s]), np.array([s, c])
+        for p in pts:
+            centre = p + 0.03 * ipd * dn
+            box = [centre + ipd * (a * u + b * dn) for a, b in ((-0.38, -0.22), (0.38, -0.22), (0.38, 0.25), (-0.38, 0.25))]
+            cv2.polylines(img, [np.round(np.array(box) * 8).astype(np.int32)], True, (25, 25, 25), 4, cv2.LINE_AA, shift=3)
+    grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    for b, p in zip(find_brows(grey, pts[0], pts[1]), pts):
+        assert math.dist(b, p) == pytest.approx(0.38 * ipd, abs=0.04 * ipd)

@@ -22,6 +22,7 @@ from tracker.eyes import (
     iris_radius,
     learn_eyes,
     limbus_centre,
+    spectacle_rims,
     thin_dark,
     refine_pupils,
     walk_length,
@@ -657,3 +658,36 @@ def test_spectacle_rims_across_the_skin_bands_do_not_shut_the_eyes(thick):
         res, truth, _, _ = _find(finder, state, frame=_with_glasses(img, state, thick))
         assert all(e.open for e in res.eyes)
         _check(res, truth, lid=2.0, brow=math.inf)
+
+
+@pytest.mark.parametrize("thick", [0.03, 0.05, 0.08])
+def test_a_spectacle_rim_under_the_brows_is_found_and_left_out_of_them(thick):
+    """The rims go round each eye, so their upper bar is found (and nothing on a bare face: the
+    lashes, the brows and the lids go round no eye that far out); filled in, the brows are read and
+    follow the face (a rim darker than the brow and moving with the head held the brow's
+    cross-section on the rim: a raised brow read as unmoved)."""
+    wi = 80.0
+    plain, _ = render_face(BASE)
+    frame = _with_glasses(plain, BASE, thick)
+    for img, has in ((plain, False), (frame, True)):
+        lm = face_landmarks(BASE)
+        ff = FaceFrame.from_pupils(tuple(lm["left_pupil"]), tuple(lm["right_pupil"]), wi)
+        rect = calibration_crop(wi)
+        crop = cv2.cvtColor(ff.crop(img, rect), cv2.COLOR_BGR2GRAY).astype(np.float32)
+        pupils = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - np.array(rect[:2], dtype=np.float64)
+        rims = spectacle_rims(crop, pupils, wi)
+        if not has:
+            assert rims == [None, None]
+            continue
+        bar = -(0.25 - 0.03) * wi  # the upper bar's middle, from the pupil
+        for r in rims:
+            assert r is not None and r[0] < bar < r[1] and r[1] - r[0] <= thick * wi + 5
+    model, wi = _learn(frame=frame)
+    assert all(r is not None for r in model.rims)
+    assert EyeModel.from_dict(model.to_dict(), model.images()).rims == model.rims
+    finder = EyeFinder(model, wi)
+    for expr in ("neutral", "brows_up", "brows_angry"):
+        state = BASE.with_expression(expr)
+        img, _ = render_face(state)
+        res, truth, _, _ = _find(finder, state, frame=_with_glasses(img, state, thick))
+        _check(res, truth, lid=2.0, brow=2.0)

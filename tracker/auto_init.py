@@ -9,7 +9,8 @@ from. Steps, each using only what every face has:
    inter-pupil distance off on real faces); near there, candidates for each eye from three
    cues, and the best *pair* of them: both dark round centres with white beside them, mirror
    images of each other, level and about the box's distance apart (:func:`find_pupils`);
-3. brows: the darkest band on the column above each pupil;
+3. brows: the darkest band on the column above each pupil (a spectacle rim's upper bar, which
+   goes round the eye, filled in first: :func:`tracker.eyes.spectacle_rims`);
 4. mouth: the darkest line across the lower face, a little more than one inter-pupil
    distance below the eyes — the gap between closed lips or the inside of an open mouth
    (the nostrils sit higher, the chin's shadow lower); where the lips are redder than the
@@ -29,7 +30,7 @@ import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import Clicks
-from tracker.eyes import REFINE_WI, limbus_scores
+from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, spectacle_rims
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
 
 IRIS_RADIUS = 0.09
@@ -259,11 +260,15 @@ def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.nd
     return cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).mean(axis=1)
 
 
-def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray) -> tuple[float, float]:
-    """The middle of the darkest band above a pupil, along ``up``."""
+def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray,
+          rim: tuple[float, float] | None = None) -> tuple[float, float]:
+    """The middle of the darkest band above a pupil, along ``up``; ``rim``: the distances (px along
+    ``up``) of a spectacle rim's upper bar, filled in first (it is darker than many brows)."""
     n = int(round(BROW_RANGE[1] * ipd)) + 2
     side = np.array([-up[1], up[0]])
     prof = _strip(grey, np.asarray(pupil, dtype=np.float64), up, side, n, max(int(0.12 * ipd), 1))
+    if rim is not None:
+        fill_rows(prof, rim[0], rim[1])
     lo, hi = int(BROW_RANGE[0] * ipd), int(BROW_RANGE[1] * ipd)
     seg = prof[lo:hi]
     if len(seg) < 3:
@@ -271,6 +276,19 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
     # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
     d = min(max(brow_centre(prof, lo + int(np.argmin(seg)), max(int(0.05 * ipd), 2)), lo), hi)
     return (float(pupil[0] + d * up[0]), float(pupil[1] + d * up[1]))
+
+
+def find_brows(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> list[tuple[float, float]]:
+    """Both brows' middles (frame px) above the pupils ``left`` and ``right`` (:func:`_brow`), with
+    any spectacle rim's upper bar (:func:`tracker.eyes.spectacle_rims`, found on the eye band at the
+    eye finder's scale) filled in first."""
+    ipd = math.dist(left, right)
+    up = np.array([(right[1] - left[1]) / ipd, -(right[0] - left[0]) / ipd])
+    band, m = _upright(grey, left, right)
+    at = np.array([left, right], dtype=np.float64) @ m[:, :2].T + m[:, 2]
+    f = ipd / EYE_WI
+    rims = [None if r is None else (-r[1] * f, -r[0] * f) for r in spectacle_rims(band, at, EYE_WI)]
+    return [_brow(grey, tuple(p), ipd, up, r) for p, r in zip((left, right), rims)]
 
 
 def _lip_span(red: np.ndarray, skin_red: float, ipd: float) -> tuple[int, int] | None:
@@ -335,9 +353,7 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
     grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     face = faces[0]
     left, right = find_pupils(grey, face)
-    ipd = math.dist(left, right)
-    up = np.array([(right[1] - left[1]) / ipd, -(right[0] - left[0]) / ipd])
-    brows = [_brow(grey, tuple(p), ipd, up) for p in (left, right)]
+    brows = find_brows(grey, left, right)
     lab_a = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2LAB)[..., 1].astype(np.float32)
     mouth = _mouth(grey, left, right, lab_a)
     d = {

@@ -30,7 +30,9 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
   brow are then measured from there.
 * **brow** — the calibrated vertical cross-section of the brow slid along a strip of
-  columns above the eye point (normalised correlation, parabola refined).
+  columns above the eye point (normalised correlation, parabola refined). A spectacle rim's
+  upper bar, found at calibration (:func:`spectacle_rims`), lies right under many brows and is
+  darker than most: its rows are filled in, in the calibrated cross-section and in every strip.
 * **score** — "this is this person's eye": the geometric mean of the iris picture's
   correlation at the iris and the best correlation of the calibrated eye picture (iris,
   white, lids, corners) around it.
@@ -117,6 +119,12 @@ LINE_WIDTH = 0.12
 """Width (wi) of a disc wider than a spectacle rim or a lash line (see :func:`thin_dark`)."""
 LINE_DARK = 0.25
 """Share by which a thin line is darker than what lies round it (see :func:`thin_dark`)."""
+RIM_CLEAR = 0.15
+"""How far (wi) above and below a pupil a spectacle rim lies at least (the lash line and the lower
+lid are nearer; see :func:`spectacle_rims`)."""
+RIM_SIDE = 0.3
+"""How far (wi) beside a pupil a spectacle rim lies at least (the eye's corners, with their lashes
+and eyeliner, are nearer)."""
 DARK_RATIO = 0.6
 """The iris's middle must be at most this fraction as bright as the darkest skin for "much
 darker than any skin" to count as interior."""
@@ -524,7 +532,9 @@ class EyeModel:
     sclera's median distance from the skin (Mahalanobis units; None: not measured, the lid
     ramp stays where calibration put it, see :func:`walk_length`); ``light`` per eye, the factors
     (B, G, R) that take its colours to the light both eyes share (a face lit from one side; None:
-    lit alike, see :func:`eye_light`).
+    lit alike, see :func:`eye_light`); ``rims`` per eye, the rows (crop px from the pupil's, up
+    negative) of a spectacle rim's upper bar on the brow's column, filled in before the brow is
+    read (None: no rim, see :func:`spectacle_rims`).
     """
 
     work_ipd: float
@@ -540,6 +550,7 @@ class EyeModel:
     lash: list[float] = field(default_factory=lambda: [0.0, 0.0])
     white: float | None = None
     light: list[np.ndarray] | None = None
+    rims: list[tuple[float, float] | None] = field(default_factory=lambda: [None, None])
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -563,6 +574,7 @@ class EyeModel:
             "lash": [float(v) for v in self.lash],
             **({} if self.white is None else {"white": float(self.white)}),
             **({} if self.light is None else {"light": [np.asarray(f, dtype=float).round(4).tolist() for f in self.light]}),
+            **({} if all(r is None for r in self.rims) else {"rims": [None if r is None else [float(v) for v in r] for r in self.rims]}),
             "skin": self.skin.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
         }
@@ -595,6 +607,7 @@ class EyeModel:
                 lash=[float(v) for v in d["lash"]],
                 white=None if d.get("white") is None else float(d["white"]),
                 light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
+                rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
                 skin=SkinModel.from_dict(d["skin"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
             )
@@ -602,7 +615,7 @@ class EyeModel:
             raise
         except (KeyError, TypeError, ValueError, AttributeError) as e:
             raise EyeModelError(f"eye model: malformed ({type(e).__name__}: {e})") from None
-        lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash) + (() if m.light is None else (m.light,))
+        lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash, m.rims) + (() if m.light is None else (m.light,))
         if any(len(v) != 2 for v in lists) or not m.work_ipd > 0 or not all(r > 0 for r in m.radius):
             raise EyeModelError("eye model: every per-eye entry needs two values and the sizes must be positive")
         if m.light is not None and not all(np.all(np.isfinite(f)) and np.all(f > 0) for f in m.light):
@@ -680,6 +693,64 @@ def thin_dark(grey: np.ndarray, wi: float) -> np.ndarray:
     k = max(int(round(LINE_WIDTH * wi)), 3) | 1
     closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
     return grey < (1.0 - LINE_DARK) * closed
+
+
+def spectacle_rims(grey: np.ndarray, pupils, wi: float) -> list[tuple[float, float] | None]:
+    """Per eye of a face crop (float32 grey, ``wi`` px between the eyes), the rows (relative to the
+    pupil's, negative: above) of a spectacle rim's upper bar over the pupil, or None.
+
+    A rim is a run of :func:`thin_dark` pixels (8-connected) that goes round the pupil — met above
+    it and below it beyond :data:`RIM_CLEAR` wi and on both sides beyond :data:`RIM_SIDE` wi; a
+    brow, lashes, eyeliner or a crease are thin dark lines too, but none goes round an eye that far
+    out. Its upper bar lies between the eye and the brow,
+    where the brow's cross-section is read: the rows, up to half a wi above the pupil, that are
+    the most thin-dark across the lens (the grey closed with a :data:`LINE_WIDTH` disc, less the
+    grey, averaged over ±0.2 wi), taken while at least half as much."""
+    h, w = grey.shape
+    k = max(int(round(LINE_WIDTH * wi)), 3) | 1
+    closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+    _, labels = cv2.connectedComponents((grey < (1.0 - LINE_DARK) * closed).astype(np.uint8), connectivity=8)
+    out: list[tuple[float, float] | None] = []
+    clear, reach, half = int(math.ceil(RIM_CLEAR * wi)), int(math.ceil(0.5 * wi)), int(math.ceil(0.2 * wi))
+    for px, py in np.asarray(pupils, dtype=np.float64):
+        x, y = int(round(px)), int(round(py))
+        if not (0 <= x < w and clear < y < h):
+            out.append(None)
+            continue
+        up = labels[max(y - reach, 0) : y - clear, x]
+        down = labels[min(y + clear, h) : min(y + reach, h), x]
+        side = int(math.ceil(RIM_SIDE * wi))
+        left = labels[y, max(x - reach, 0) : max(x - side, 0)]
+        right = labels[y, min(x + side, w) : min(x + reach, w)]
+        if not (set(up.tolist()) & set(down.tolist()) & set(left.tolist()) & set(right.tolist())) - {0}:
+            out.append(None)
+            continue
+        a0 = max(y - reach, 0)
+        score = (closed - grey)[a0 : y - clear, max(x - half, 0) : x + half + 1].mean(axis=1)
+        top = bottom = int(score.argmax())
+        while top > 0 and score[top - 1] >= 0.5 * score[bottom]:
+            top -= 1
+        peak = score[bottom]
+        while bottom + 1 < len(score) and score[bottom + 1] >= 0.5 * peak:
+            bottom += 1
+        out.append((float(a0 + top - 1 - py), float(a0 + bottom + 1 - py)))
+    return out
+
+
+def fill_rows(prof: np.ndarray, a: float, b: float) -> None:
+    """Replace ``prof``'s rows ``a .. b`` (sub-pixel, rounded outwards; clipped to the profile) in
+    place by the straight line between the rows just outside them: what lies under a rim."""
+    n = len(prof)
+    i, j = max(int(math.floor(a)), 0), min(int(math.ceil(b)), n - 1)
+    if j < i:
+        return
+    lo = float(prof[i - 1]) if i > 0 else None
+    hi = float(prof[j + 1]) if j + 1 < n else None
+    if lo is None and hi is None:
+        return
+    lo = hi if lo is None else lo
+    hi = lo if hi is None else hi
+    prof[i : j + 1] = np.linspace(lo, hi, j - i + 3, dtype=np.float32)[1:-1]
 
 
 def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float):
@@ -778,19 +849,26 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     iris_pics = [subpixel_cut(grey, p[0], p[1], *iris_picture_size(r)) for p, r in zip(pupils, radius)]
     eye_pics = [subpixel_cut(grey, p[0], p[1], _even(SOCKET_HW * wi), _even(SOCKET_HH * wi)) for p in pupils]
 
-    # brows: the cross-section through each iris, centred on the brow's middle line
+    # brows: the cross-section through each iris, centred on the brow's middle line, read with any
+    # spectacle rim filled in (it is darker than many brows and lies right under them)
+    rims = spectacle_rims(grey, pupils, wi)
     brow_profiles, brow_centres, brow_heights = [], [], []
     half = max(int(round(0.13 * wi)), 4)
-    for (px, py), b in zip(pupils, brows):
+    for (px, py), b, rim in zip(pupils, brows, rims):
         top = int(math.floor(py - 1.1 * wi))
         prof = column_profile(grey, px, top, int(py), 2)
+        if rim is not None:
+            fill_rows(prof, py + rim[0] - top, py + rim[1] - top)
         guess = min(max(int(round(b[1] - top)), 0), len(prof) - 1)
         height = py - (top + brow_centre(prof, guess, max(int(round(0.08 * wi)), 3)))
         if not (0.08 * wi < height < 1.0 * wi):
             height = float(np.clip(py - b[1], 0.15 * wi, 0.9 * wi))
         cy_b = py - height
         start = int(math.floor(cy_b)) - half
-        brow_profiles.append(strip_profile(grey, px, start, 2 * half + 1, brow_half_width(wi)))
+        bp = strip_profile(grey, px, start, 2 * half + 1, brow_half_width(wi))
+        if rim is not None:
+            fill_rows(bp, py + rim[0] - start, py + rim[1] - start)
+        brow_profiles.append(bp)
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
@@ -802,7 +880,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     skin.set_dark([g for k, g in groups.items() if k not in doubtful], middle, [groups[k] for k in doubtful])
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
-        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin,
+        brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin, rims=rims,
         skin_bgr=np.ones(3), white=float(np.median(skin.distance(sclera))) if len(sclera) >= 3 else None,
         light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
     )
@@ -1224,20 +1302,32 @@ class EyeFinder:
         top = int(math.floor(at[1] - self.brow_hi[i] - c)) - 1
         return top, int(math.ceil(at[1] - self.brow_lo[i] - c)) + len(self._brow_t[i]) + 1 - top
 
-    def _brows(self, grey: np.ndarray, ats) -> list[tuple[float, float]]:
+    def _brow_strip(self, grey: np.ndarray, at: tuple[float, float], i: int, top: int, rows: int, centre) -> np.ndarray:
+        """The strip profile eye ``i``'s brow is read on (rows ``top ..``), with the calibrated
+        spectacle rim's rows (:attr:`EyeModel.rims`, from the eye's predicted centre ``centre``: the
+        rim moves with the head, not with the gaze) filled in."""
+        prof = strip_profile(grey, at[0], top, rows, self._brow_hw)
+        rim = self.model.rims[i]
+        if rim is not None and centre is not None:
+            fill_rows(prof, centre[1] + rim[0] - top, centre[1] + rim[1] - top)
+        return prof
+
+    def _brows(self, grey: np.ndarray, ats, centres=None) -> list[tuple[float, float]]:
         """Brow heights above ``ats`` (both eyes, crop px) and their correlations: each eye's
         calibrated cross-section slid along a strip of columns above it (normalised correlation,
-        both strips' window sums in one go), refined by a parabola."""
+        both strips' window sums in one go), refined by a parabola. ``centres``: the eyes' predicted
+        centres, where a calibrated spectacle rim is (:meth:`_brow_strip`)."""
+        cs = (None, None) if centres is None else centres
         profs, tops = [], []
         for i, at in enumerate(ats):
             top, rows = self._brow_window(at, i)
             if rows < len(self._brow_t[i]) + 2:
-                return [self._brow(grey, a, k) for k, a in enumerate(ats)]
-            profs.append(strip_profile(grey, at[0], top, rows, self._brow_hw))
+                return [self._brow(grey, a, k, cs[k]) for k, a in enumerate(ats)]
+            profs.append(self._brow_strip(grey, at, i, top, rows, cs[i]))
             tops.append(top)
         n = len(self._brow_t[0])
         if len(self._brow_t[1]) != n:
-            return [self._brow(grey, a, k) for k, a in enumerate(ats)]
+            return [self._brow(grey, a, k, cs[k]) for k, a in enumerate(ats)]
         both = np.concatenate(profs)
         s1 = np.correlate(both, self._brow_ones[0], "valid")
         s2 = np.correlate(both * both, self._brow_ones[0], "valid")
@@ -1279,14 +1369,14 @@ class EyeFinder:
         self._brow_last[i] = h
         return h, min(b, 1.0)
 
-    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int) -> tuple[float, float]:
+    def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int, centre=None) -> tuple[float, float]:
         """:meth:`_brows` of one eye."""
         top, rows = self._brow_window(at, i)
         t = self._brow_t[i]
         n = len(t)
         if rows < n + 2:
             return self.model.brow_heights[i], 0.0
-        prof = strip_profile(grey, at[0], top, rows, self._brow_hw)
+        prof = self._brow_strip(grey, at, i, top, rows, centre)
         # Σ (p − p̄)(t − t̄) / (|p − p̄| |t − t̄|) at every offset; a flat stretch scores 0
         num = np.correlate(prof, t, "valid")
         s1 = np.correlate(prof, self._brow_ones[i], "valid")
@@ -1444,7 +1534,7 @@ class EyeFinder:
                 lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
             pts.append((pt, w))
         if brows:
-            brows = self._brows(crop_grey, (pts[0][0], pts[1][0]))
+            brows = self._brows(crop_grey, (pts[0][0], pts[1][0]), centres)
         else:
             brows = [(math.nan, 0.0), (math.nan, 0.0)]
         eyes = []
