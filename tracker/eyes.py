@@ -13,8 +13,8 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   like that disc on both sides at once, lose. The best pair is refined at full resolution
   (darkness × correlation, parabola through the peak).
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
-  Gaussian in YCrCb learned below, above and between the eyes at calibration, without the thin
-  dark lines that cross those bands — a spectacle rim, lashes, a crease: :func:`thin_dark`; the skin's
+  Gaussian in YCrCb learned below, above and between the eyes at calibration — behind glasses
+  without the thin dark lines that cross those bands, the rims among them: :func:`thin_dark`; the skin's
   own colour up to half again as bright — a lit lid, a highlight, more light — still counts
   as skin): sclera, iris, pupil and lashes. The upper and lower lid distances are the soft
   lengths of the interior runs up and down a strip of columns through the iris; the ramp
@@ -620,6 +620,8 @@ class EyeModel:
             raise EyeModelError("eye model: every per-eye entry needs two values and the sizes must be positive")
         if m.light is not None and not all(np.all(np.isfinite(f)) and np.all(f > 0) for f in m.light):
             raise EyeModelError("eye model: the eyes' light factors must be positive numbers")
+        if not all(r is None or (all(map(math.isfinite, r)) and r[0] < r[1]) for r in m.rims):
+            raise EyeModelError("eye model: a spectacle rim's rows must be finite and rising")
         return m
 
 
@@ -685,13 +687,20 @@ def calibration_crop(work_ipd: float) -> tuple[int, int, int, int]:
     return (int(math.floor(-1.05 * wi)), int(math.floor(-1.2 * wi)), int(math.ceil(2.1 * wi)), int(math.ceil(1.7 * wi)))
 
 
-def thin_dark(grey: np.ndarray, wi: float) -> np.ndarray:
-    """Where ``grey`` (float32) holds a thin dark line (bool, its shape): a spectacle rim, lashes, a
-    strand of hair, a deep crease — pixels at least :data:`LINE_DARK` darker than the grey closed with
-    a disc :data:`LINE_WIDTH` wi across (what lies round them). Such lines are no skin, whatever
-    band they cross."""
+def _lines_closed(grey: np.ndarray, wi: float) -> np.ndarray:
+    """``grey`` (float32) closed with a disc :data:`LINE_WIDTH` wi across: what lies round each thin
+    dark line, filled over it."""
     k = max(int(round(LINE_WIDTH * wi)), 3) | 1
-    closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+    return cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+
+
+def thin_dark(grey: np.ndarray, wi: float, closed: np.ndarray | None = None) -> np.ndarray:
+    """Where ``grey`` (float32) holds a thin dark line (bool, its shape): a spectacle rim, lashes, a
+    strand of hair, a deep crease — pixels at least :data:`LINE_DARK` darker than what lies round
+    them (``closed``: :func:`_lines_closed`, made here when not given). Such lines are no skin,
+    whatever band they cross."""
+    if closed is None:
+        closed = _lines_closed(grey, wi)
     return grey < (1.0 - LINE_DARK) * closed
 
 
@@ -702,16 +711,15 @@ def spectacle_rims(grey: np.ndarray, pupils, wi: float) -> list[tuple[float, flo
     A rim is a run of :func:`thin_dark` pixels (8-connected) that goes round the pupil — met above
     it and below it beyond :data:`RIM_CLEAR` wi and on both sides beyond :data:`RIM_SIDE` wi; a
     brow, lashes, eyeliner or a crease are thin dark lines too, but none goes round an eye that far
-    out. Its upper bar lies between the eye and the brow,
-    where the brow's cross-section is read: the rows, up to half a wi above the pupil, that are
-    the most thin-dark across the lens (the grey closed with a :data:`LINE_WIDTH` disc, less the
-    grey, averaged over ±0.2 wi), taken while at least half as much."""
+    out. Its upper bar lies between the eye and the brow, where the brow's cross-section is read:
+    the rows, up to half a wi above the pupil, that are the most thin-dark across the lens (what
+    lies round them less the grey, averaged over ±0.2 wi), taken while at least half as much."""
     h, w = grey.shape
-    k = max(int(round(LINE_WIDTH * wi)), 3) | 1
-    closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
-    _, labels = cv2.connectedComponents((grey < (1.0 - LINE_DARK) * closed).astype(np.uint8), connectivity=8)
+    closed = _lines_closed(grey, wi)
+    _, labels = cv2.connectedComponents(thin_dark(grey, wi, closed).astype(np.uint8), connectivity=8)
     out: list[tuple[float, float] | None] = []
     clear, reach, half = int(math.ceil(RIM_CLEAR * wi)), int(math.ceil(0.5 * wi)), int(math.ceil(0.2 * wi))
+    side = int(math.ceil(RIM_SIDE * wi))
     for px, py in np.asarray(pupils, dtype=np.float64):
         x, y = int(round(px)), int(round(py))
         if not (0 <= x < w and clear < y < h):
@@ -719,7 +727,6 @@ def spectacle_rims(grey: np.ndarray, pupils, wi: float) -> list[tuple[float, flo
             continue
         up = labels[max(y - reach, 0) : y - clear, x]
         down = labels[min(y + clear, h) : min(y + reach, h), x]
-        side = int(math.ceil(RIM_SIDE * wi))
         left = labels[y, max(x - reach, 0) : max(x - side, 0)]
         right = labels[y, min(x + side, w) : min(x + reach, w)]
         if not (set(up.tolist()) & set(down.tolist()) & set(left.tolist()) & set(right.tolist())) - {0}:
@@ -753,13 +760,16 @@ def fill_rows(prof: np.ndarray, a: float, b: float) -> None:
     prof[i : j + 1] = np.linspace(lo, hi, j - i + 3, dtype=np.float32)[1:-1]
 
 
-def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float):
+def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float, glasses: bool = False):
     """BGR samples of the calibration crop: skin groups (a band below each eye, a band above
     it up to the brow's lower edge, the bridge between the eyes), the irises' middles (no
-    skin may claim them), a ring of each iris around the pupil and the sclera beside it."""
+    skin may claim them), a ring of each iris around the pupil and the sclera beside it. With
+    ``glasses`` (spectacle rims round the eyes, :func:`spectacle_rims`) the skin groups leave out
+    the thin dark lines crossing them (:func:`thin_dark`): the rims cross both bands and the
+    bridge, a quarter to a third of them."""
     h, w = crop.shape[:2]
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
-    lines = thin_dark(grey, wi)
+    lines = thin_dark(grey, wi) if glasses else np.zeros((h, w), bool)
     below, above, middle, ring, sclera = [], [], [], [], []
     hx = max(int(round(BANDS["half"] * wi)), 2)
 
@@ -872,7 +882,8 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
-    groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi)
+    groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi,
+                                                          glasses=any(r is not None for r in rims))
     doubtful = ("above the eyes",)
     skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])
