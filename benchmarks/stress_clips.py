@@ -25,6 +25,9 @@ leave    the face slides out of the frame sideways, stays away a second, and sli
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
          tracker expects the skin beside the lips)
+deep     the skin and lips darkened to a deep brown, the whites of the eyes, the teeth and the hair
+         left as they are (a darker-skinned face: the brows, the lashes and the mouth's inside barely
+         darker than the skin)
 glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a glare on
          the lenses that moves as the head moves (a rim between the eye and the brow and under the
          lower lid, a bright streak near or over the eye)
@@ -62,7 +65,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses")
+VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 SIDE_LIGHT = 0.4
@@ -229,6 +232,9 @@ def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
     return paint
 
 
+DEEP_SKIN = (0.34, 0.41, 0.52)
+"""Factors (B, G, R) the ``deep`` variant takes skin and lips by: a pale or olive face's colours to a
+deep brown one's (a cheek at (150, 170, 210) to (51, 70, 109)), its shading and features kept."""
 GLASSES_BGR = (28.0, 26.0, 30.0)
 """Colour (BGR) of the ``glasses`` variant's frames: near-black plastic."""
 LENS = (0.38, 0.25, 0.05)
@@ -331,6 +337,19 @@ def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np
             grey = cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
             return cv2.addWeighted(img, 0.5, grey, 0.5, 0.0)
         return pale
+    if kind == "deep":
+        tone = np.array(DEEP_SKIN, np.float32)
+
+        def deep(img: np.ndarray, i: int) -> np.ndarray:
+            ycc = cv2.cvtColor(img, cv2.COLOR_BGR2YCrCb).astype(np.float32)
+            y, cr, cb = ycc[..., 0], ycc[..., 1], ycc[..., 2]
+            ramp = lambda v, a, b: np.clip((v - a) / (b - a), 0.0, 1.0)
+            # skin and lips by their chroma (any light skin's: red above the grey, blue below it),
+            # soft at the edges; the whites of the eyes, the teeth, hair and most backgrounds are not
+            skin = ramp(cr, 130.0, 137.0) * ramp(-np.abs(cb - 108.0), -30.0, -22.0) * ramp(y, 40.0, 60.0)
+            skin = cv2.GaussianBlur(skin, (0, 0), 1.0)[..., None]
+            return np.clip(img * (1.0 - skin + skin * tone), 0, 255).astype(np.uint8)
+        return deep
     if kind == "blur":
         return lambda img, i: cv2.GaussianBlur(img, (0, 0), 1.6)
     return lambda img, i: img

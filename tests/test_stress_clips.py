@@ -184,3 +184,19 @@ def test_glasses_put_dark_rims_round_the_eyes_and_leave_the_eyes_and_mouth_bare(
     under = (np.array([70.0, bottom]) - [100.0, 80.0]) @ rot.T + [100.0, 80.0]
     out2 = sc._glasses(turned, (h, w))(img, 0).mean(axis=2)
     assert out2[int(round(under[1])), int(round(under[0]))] < 80
+
+
+def test_deep_darkens_skin_and_lips_and_leaves_whites_and_hair():
+    """``deep``: skin-coloured and lip-coloured pixels are taken by DEEP_SKIN (a cheek 150, 170, 210 →
+    about 51, 70, 109); a grey white of the eye, a dark brow and a green background keep their colours."""
+    img = np.zeros((40, 50, 3), np.uint8)
+    img[:, :10] = (150, 170, 210)  # a light cheek
+    img[:, 10:20] = (90, 80, 170)  # lips
+    img[:, 20:30] = (200, 205, 205)  # the white of an eye
+    img[:, 30:40] = (30, 32, 35)  # a brow
+    img[:, 40:] = (60, 160, 70)  # a green screen
+    out = sc._photometric("deep", 1, 0)(img, 0).astype(float)
+    assert np.allclose(out[20, 5], np.array([150, 170, 210]) * sc.DEEP_SKIN, atol=2)
+    assert out[20, 15].sum() < 0.6 * img[20, 15].astype(float).sum()
+    for x in (25, 35, 45):
+        assert np.allclose(out[20, x], img[20, x], atol=2)
