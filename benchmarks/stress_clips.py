@@ -241,8 +241,6 @@ LENS = (0.38, 0.25, 0.05)
 """The ``glasses`` lenses' half-width and half-height and the rim's thickness (× the inter-pupil
 distance): 48 × 32 mm lenses in 3 mm rims on a 63 mm IPD, each centred a little outside and below
 its pupil, so the upper rim runs between the eye and the brow and the lower one under the lid."""
-
-
 GLARE_SHIFT = 1.0
 """How far the ``glasses`` glare moves across a lens (× its half-width) per eye distance the head
 moves sideways, or per 10° it rolls."""
@@ -265,6 +263,7 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
     first = int(np.argmax(seen))
     v0 = points["right_pupil"][first] - points["left_pupil"][first]
     d0, roll0 = max(float(np.hypot(*v0)), 1e-6), math.atan2(v0[1], v0[0])
+    mid0 = 0.5 * (points["left_pupil"][first] + points["right_pupil"][first])
 
     def paint(img: np.ndarray, i: int) -> np.ndarray:
         lp, rp = points["left_pupil"][i], points["right_pupil"][i]
@@ -278,7 +277,7 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
         glare = np.zeros((h, w), np.float32)
         thick = max(int(round(t * d)), 1)
         # the glare's place across the lens (lens units, −1..1): a reflection moves as the head moves
-        mid, mid0 = 0.5 * (lp + rp), 0.5 * (points["left_pupil"][first] + points["right_pupil"][first])
+        mid = 0.5 * (lp + rp)
         roll = math.atan2(u[1], u[0]) - roll0
         s = float(np.clip(GLARE_SHIFT * ((mid[0] - mid0[0]) / d0 + math.degrees(roll) / 10.0) - 0.2, -0.8, 0.8))
         for side, p in ((-1.0, lp), (1.0, rp)):
@@ -420,7 +419,7 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     points = _read_points(src / f"{name}.points.csv")
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
-    worn = {"beard": lambda: _beard(points, (h, w), seed), "glasses": lambda: _glasses(points, (h, w))}.get(kind, lambda: None)()
+    worn = _beard(points, (h, w), seed) if kind == "beard" else _glasses(points, (h, w)) if kind == "glasses" else None
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")

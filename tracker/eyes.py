@@ -704,7 +704,7 @@ def thin_dark(grey: np.ndarray, wi: float, closed: np.ndarray | None = None) -> 
     return grey < (1.0 - LINE_DARK) * closed
 
 
-def spectacle_rims(grey: np.ndarray, pupils, wi: float) -> list[tuple[float, float] | None]:
+def spectacle_rims(grey: np.ndarray, pupils, wi: float, closed: np.ndarray | None = None) -> list[tuple[float, float] | None]:
     """Per eye of a face crop (float32 grey, ``wi`` px between the eyes), the rows (relative to the
     pupil's, negative: above) of a spectacle rim's upper bar over the pupil, or None.
 
@@ -713,9 +713,11 @@ def spectacle_rims(grey: np.ndarray, pupils, wi: float) -> list[tuple[float, flo
     brow, lashes, eyeliner or a crease are thin dark lines too, but none goes round an eye that far
     out. Its upper bar lies between the eye and the brow, where the brow's cross-section is read:
     the rows, up to half a wi above the pupil, that are the most thin-dark across the lens (what
-    lies round them less the grey, averaged over ±0.2 wi), taken while at least half as much."""
+    lies round them less the grey, averaged over ±0.2 wi), taken while at least half as much.
+    ``closed``: :func:`_lines_closed` of ``grey`` when already made."""
     h, w = grey.shape
-    closed = _lines_closed(grey, wi)
+    if closed is None:
+        closed = _lines_closed(grey, wi)
     _, labels = cv2.connectedComponents(thin_dark(grey, wi, closed).astype(np.uint8), connectivity=8)
     out: list[tuple[float, float] | None] = []
     clear, reach, half = int(math.ceil(RIM_CLEAR * wi)), int(math.ceil(0.5 * wi)), int(math.ceil(0.2 * wi))
@@ -760,16 +762,18 @@ def fill_rows(prof: np.ndarray, a: float, b: float) -> None:
     prof[i : j + 1] = np.linspace(lo, hi, j - i + 3, dtype=np.float32)[1:-1]
 
 
-def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float, glasses: bool = False):
+def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float,
+                    lines: np.ndarray | None = None):
     """BGR samples of the calibration crop: skin groups (a band below each eye, a band above
     it up to the brow's lower edge, the bridge between the eyes), the irises' middles (no
-    skin may claim them), a ring of each iris around the pupil and the sclera beside it. With
-    ``glasses`` (spectacle rims round the eyes, :func:`spectacle_rims`) the skin groups leave out
-    the thin dark lines crossing them (:func:`thin_dark`): the rims cross both bands and the
-    bridge, a quarter to a third of them."""
+    skin may claim them), a ring of each iris around the pupil and the sclera beside it. The skin
+    groups leave out the pixels of ``lines`` (bool, the crop's shape): behind glasses the thin dark
+    lines (:func:`thin_dark`), since the rims cross both bands and the bridge, a quarter to a third
+    of them."""
     h, w = crop.shape[:2]
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
-    lines = thin_dark(grey, wi) if glasses else np.zeros((h, w), bool)
+    if lines is None:
+        lines = np.zeros((h, w), bool)
     below, above, middle, ring, sclera = [], [], [], [], []
     hx = max(int(round(BANDS["half"] * wi)), 2)
 
@@ -861,7 +865,8 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
 
     # brows: the cross-section through each iris, centred on the brow's middle line, read with any
     # spectacle rim filled in (it is darker than many brows and lies right under them)
-    rims = spectacle_rims(grey, pupils, wi)
+    closed = _lines_closed(grey, wi)
+    rims = spectacle_rims(grey, pupils, wi, closed)
     brow_profiles, brow_centres, brow_heights = [], [], []
     half = max(int(round(0.13 * wi)), 4)
     for (px, py), b, rim in zip(pupils, brows, rims):
@@ -882,8 +887,9 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
+    glasses = any(r is not None for r in rims)
     groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi,
-                                                          glasses=any(r is not None for r in rims))
+                                                          thin_dark(grey, wi, closed) if glasses else None)
     doubtful = ("above the eyes",)
     skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])

@@ -455,10 +455,10 @@ def lip_sides(red: np.ndarray, ys, rows: int, need: float, any_row: bool = False
     lip-red (``red`` at least ``need``; a profile's r − g chroma per row) — on average, or with
     ``any_row`` anywhere there. No rows on a side (the profile's end): not lip-red."""
     H = len(red)
+    pick = np.max if any_row else np.mean
     out = []
     for y in ys:
         above, below = red[max(y - rows, 0) : y], red[y + 1 : min(y + 1 + rows, H)]
-        pick = np.max if any_row else np.mean
         out.append((len(above) > 0 and float(pick(above)) >= need, len(below) > 0 and float(pick(below)) >= need))
     return out
 
