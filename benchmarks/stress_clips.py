@@ -25,9 +25,10 @@ leave    the face slides out of the frame sideways, stays away a second, and sli
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
          tracker expects the skin beside the lips)
-deep     the skin and lips darkened to a deep brown, the whites of the eyes, the teeth and the hair
-         left as they are (a darker-skinned face: the brows, the lashes and the mouth's inside barely
-         darker than the skin)
+deep     the face darkened to a deep brown, all of it alike (a washed-out forehead too) but the
+         whites of the eyes between the peer's lids and the teeth between its lips, and outside the
+         face whatever has skin's colour (a darker-skinned face: the brows, the lashes, a brown iris
+         and the mouth's inside barely darker than the skin; a grey or green iris lighter than it)
 glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a glare on
          the lenses that moves as the head moves (a rim between the eye and the brow and under the
          lower lid, a bright streak near or over the eye)
@@ -298,8 +299,10 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
     return paint
 
 
-def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np.ndarray]:
-    """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``."""
+def _photometric(kind: str, n: int, seed: int,
+                 points: dict[str, np.ndarray] | None = None) -> Callable[[np.ndarray, int], np.ndarray]:
+    """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``. ``deep``
+    keeps the eye openings the peer's ``points`` outline (when given) as they are."""
     rng = np.random.default_rng(seed)
     if kind == "noisy":
         def noisy(img: np.ndarray, i: int) -> np.ndarray:
@@ -346,7 +349,17 @@ def _photometric(kind: str, n: int, seed: int) -> Callable[[np.ndarray, int], np
             # skin and lips by their chroma (any light skin's: red above the grey, blue below it),
             # soft at the edges; the whites of the eyes, the teeth, hair and most backgrounds are not
             skin = ramp(cr, 130.0, 137.0) * ramp(-np.abs(cb - 108.0), -30.0, -22.0) * ramp(y, 40.0, 60.0)
-            skin = cv2.GaussianBlur(skin, (0, 0), 1.0)[..., None]
+            skin = cv2.GaussianBlur(skin, (0, 0), 1.0)
+            if points is not None and i < len(points["left_pupil"]):
+                # the whole face alike (a washed-out cheek has lost its chroma, a shadow its light,
+                # and both are skin all the same) but for the whites of the eyes and the teeth:
+                # bright and nearly grey inside the mouth
+                face, mouth = _face_ovals(points, i, skin.shape)
+                np.maximum(skin, face, out=skin)
+                sat = np.abs(cr - 128.0) + np.abs(cb - 128.0)
+                skin *= 1.0 - mouth * ramp(y, 120.0, 160.0) * (1.0 - ramp(sat, 25.0, 40.0))
+                skin *= 1.0 - _eye_openings(points, i, skin.shape)
+            skin = skin[..., None]
             return np.clip(img * (1.0 - skin + skin * tone), 0, 255).astype(np.uint8)
         return deep
     if kind == "blur":
@@ -376,6 +389,70 @@ def peer_params(points: dict[str, np.ndarray]) -> np.ndarray:
         ipd,
     ]
     return np.stack(cols, axis=1)
+
+
+EYE_HALF_WIDTH = 0.23
+"""Half the length of an eye's opening, corner to corner (× the inter-pupil distance): a 29 mm
+opening on a 63 mm IPD."""
+
+
+def _eye_openings(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -> np.ndarray:
+    """Frame ``i``'s two eye openings, 1 inside and 0 outside (float32, ``shape``, softened by a
+    pixel): almond shapes from corner to corner (:data:`EYE_HALF_WIDTH` either side of the pupil
+    along the eye line) through the peer's upper and lower lid points. A real sclera is pinkish
+    in a webcam's chroma (Cr 137–147 on the shared clips), as red as skin, and a darker face's
+    eyes are as white as a light one's: ``deep`` must not darken them."""
+    mask = np.zeros(shape, np.float32)
+    lp, rp = points["left_pupil"][i], points["right_pupil"][i]
+    ipd = float(np.hypot(*(rp - lp)))
+    if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))) or ipd < 4:
+        return mask
+    e = (rp - lp) / ipd
+    t = np.linspace(0.0, 1.0, 12)[:, None]
+    for side in ("left", "right"):
+        p, up, lo = points[f"{side}_pupil"][i], points[f"{side}_upper_lid"][i], points[f"{side}_lower_lid"][i]
+        if not (np.all(np.isfinite(up)) and np.all(np.isfinite(lo))):
+            continue
+        a, b = p - EYE_HALF_WIDTH * ipd * e, p + EYE_HALF_WIDTH * ipd * e
+        # each lid a quadratic curve from corner to corner through its lid point (at t = ½)
+        curves = [(1 - t) ** 2 * a + 2 * t * (1 - t) * (2 * q - (a + b) / 2) + t * t * b for q in (up, lo)]
+        poly = np.vstack([curves[0], curves[1][::-1]])
+        cv2.fillPoly(mask, [np.round(poly * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+    return cv2.GaussianBlur(mask, (0, 0), 1.0)
+
+
+FACE_OVAL = (1.05, 1.3, 0.35)
+"""The ``deep`` variant's face oval, darkened throughout (× the inter-pupil distance): half its width, half its height,
+and how far below the eyes' midpoint its centre is (towards the mouth): forehead to chin, cheek to
+cheek."""
+
+
+def _face_ovals(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Frame ``i``'s face oval (:data:`FACE_OVAL`, on the eye line's tilt) and the oval inside its
+    lips (where teeth can show: between the lips' outer edges less a lip's thickness, and short
+    of the corners; empty when the mouth is closed), each 1 inside and 0 outside, soft-edged
+    (float32, ``shape``)."""
+    face, mouth = np.zeros(shape, np.float32), np.zeros(shape, np.float32)
+    lp, rp = points["left_pupil"][i], points["right_pupil"][i]
+    lips = [points[k][i] for k in ("left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom")]
+    ipd = float(np.hypot(*(rp - lp)))
+    if not all(np.all(np.isfinite(q)) for q in [lp, rp, *lips]) or ipd < 4:
+        return face, mouth
+    e = (rp - lp) / ipd
+    down = np.array([-e[1], e[0]])
+    ang = math.degrees(math.atan2(e[1], e[0]))
+    hw, hh, below = FACE_OVAL
+    at = lambda c: tuple(int(v) for v in np.round(np.asarray(c) * 8))
+    cv2.ellipse(face, at(0.5 * (lp + rp) + below * ipd * down), (int(hw * ipd * 8), int(hh * ipd * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
+    lc, rc, top, bottom = lips
+    # inside the lips: the teeth and the dark, a lip's thickness (about 0.1 ipd) in from their outline
+    mw = 0.4 * float(np.hypot(*(rc - lc)))
+    mh = 0.5 * float(abs(np.dot(bottom - top, down))) - 0.1 * ipd
+    if mh <= 0.5:
+        return cv2.GaussianBlur(face, (0, 0), max(0.05 * ipd, 1.0)), mouth
+    cv2.ellipse(mouth, at(0.5 * (top + bottom)), (int(mw * 8), int(mh * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
+    soft = max(0.05 * ipd, 1.0)
+    return cv2.GaussianBlur(face, (0, 0), soft), cv2.GaussianBlur(mouth, (0, 0), 0.5 * soft)
 
 
 def _read_points(path: Path) -> dict[str, np.ndarray]:
@@ -415,8 +492,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     h, w = frames[0].shape[:2]
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
     maps, (W, H) = _affine_frames(n, kind, (w, h), seed)
-    pix = _photometric(kind, n, seed)
     points = _read_points(src / f"{name}.points.csv")
+    pix = _photometric(kind, n, seed, points)
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
     worn = _beard(points, (h, w), seed) if kind == "beard" else _glasses(points, (h, w)) if kind == "glasses" else None

@@ -19,6 +19,7 @@ from tracker.eyes import (
     _run,
     calibration_crop,
     eye_light,
+    iris_darkness,
     iris_radius,
     learn_eyes,
     limbus_centre,
@@ -175,6 +176,29 @@ def test_other_performers(style):
         _check(res, truth, pupil=1.0, lid=2.0)
 
 
+LIGHT_EYES_DARK_SKIN = STYLES["dark_skin"].replace(name="light_eyes_dark_skin", iris=(150, 165, 140))
+
+
+def test_iris_darkness_counts_a_dark_iris_and_not_a_light_one_in_a_dark_face():
+    """The disc-darkness cue is for irises darker than the eye round them: fully on the default
+    performer and a dark-skinned one with dark eyes, off for grey-green eyes in a dark face."""
+    for style, want in ((None, 1.0), (STYLES["dark_skin"], 1.0), (LIGHT_EYES_DARK_SKIN, 0.0)):
+        model, _ = _learn(style=style)
+        assert iris_darkness(model.eye_pictures, model.radius) == pytest.approx(want, abs=0.05), style
+
+
+def test_light_irises_in_a_dark_face_are_found_not_the_lashes():
+    """Grey-green irises as light as the dark skin round them: the darkest discs near them are
+    the lash lines and brows, so the search leans on the iris picture and the rim instead (with
+    the darkness cue on, both eyes went to the lashes)."""
+    model, wi = _learn(style=LIGHT_EYES_DARK_SKIN)
+    f = EyeFinder(model, wi)
+    for expr in ("neutral", "brows_up", "smile"):
+        for off in ((0.0, 0.0), (0.04, -0.05)):
+            res, truth, _, _ = _find(f, BASE.with_expression(expr), LIGHT_EYES_DARK_SKIN, offset=off)
+            _check(res, truth, pupil=1.0, lid=2.0)
+
+
 def test_a_small_face_and_strong_roll():
     small = BASE.replace(ipd=44.0, roll_deg=25.0)
     model, wi = _learn(small)
@@ -298,12 +322,12 @@ def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
     assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))
 
 
-def _lidded_eye(iris: float, opening: float, lashes: float, dy: float = 0.0) -> np.ndarray:
-    """One eye on lit skin (grey, 160 × 120 px, an eye distance of 160 px): a white almond
-    ``2 × opening`` px tall, an iris of radius 13 and grey ``iris`` centred at (80, 60 + dy)
+def _lidded_eye(iris: float, opening: float, lashes: float, dy: float = 0.0, skin: float = 190.0) -> np.ndarray:
+    """One eye on skin of grey ``skin`` (grey, 160 × 120 px, an eye distance of 160 px): a white
+    almond ``2 × opening`` px tall, an iris of radius 13 and grey ``iris`` centred at (80, 60 + dy)
     whose top the upper lid covers, and a dark lash line of grey ``lashes`` along the upper
     lid's edge (as thick as a third of the iris)."""
-    img = np.full((120, 160), 190.0, np.float32)
+    img = np.full((120, 160), skin, np.float32)
     yy, xx = np.mgrid[0:120, 0:160].astype(np.float32)
     cy = 60.0 + dy
     almond = ((xx - 80.0) / 34.0) ** 2 + ((yy - cy) / opening) ** 2 <= 1.0
@@ -335,6 +359,18 @@ def test_refine_pupils_keeps_a_narrow_eyes_light_iris_off_its_lash_line(dy):
     l, r = refine_pupils(frame, (80.0, 60.0), (240.0, 60.0))
     for p, x in ((l, 80.0), (r, 240.0)):
         assert abs(p[0] - x) < 1.0 and abs(p[1] - (60.0 + dy)) < 1.5
+
+
+@pytest.mark.parametrize("dy", [-2.0, 0.0, 2.0])
+def test_refine_pupils_keeps_a_light_iris_in_a_dark_face_off_its_lid(dy):
+    """A light iris in a narrow eye of a dark face: the dark lid over the light eye is the
+    steepest edge near the click, and a circle centred on it has its lower arcs on that edge —
+    but the grey there changes along the arcs as much as across them, which a limbus never does,
+    so the careful clicks stay (the circle's centre went 3 px up onto the lid)."""
+    frame = _two_eyes(_lidded_eye(iris=150.0, opening=7.0, lashes=25.0, dy=dy, skin=70.0))
+    l, r = refine_pupils(frame, (80.0, 60.0 + dy), (240.0, 60.0 + dy))
+    for p, x in ((l, 80.0), (r, 240.0)):
+        assert abs(p[0] - x) < 1.0 and abs(p[1] - (60.0 + dy)) < 1.0
 
 
 def _iris_eye(iris: float, highlight: bool) -> np.ndarray:

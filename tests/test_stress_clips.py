@@ -200,3 +200,29 @@ def test_deep_darkens_skin_and_lips_and_leaves_whites_and_hair():
     assert out[20, 15].sum() < 0.6 * img[20, 15].astype(float).sum()
     for x in (25, 35, 45):
         assert np.allclose(out[20, x], img[20, x], atol=2)
+
+
+def test_deep_darkens_the_whole_face_but_the_whites_of_the_eyes_and_the_teeth():
+    """``deep`` with the peer's points: a washed-out, nearly grey forehead inside the face is
+    darkened like the skin (it is skin that lost its chroma to the light), while the pinkish
+    whites between each eye's lids (as red as skin on a webcam) and bright teeth between the
+    lips keep their colours; outside the face only skin colours change."""
+    h, w = 200, 200
+    img = np.zeros((h, w, 3), np.uint8)
+    img[:] = (150, 170, 210)  # skin
+    img[30:45, :] = (225, 228, 230)  # a washed-out forehead
+    img[:, 185:] = (200, 205, 205)  # a grey wall beside the face
+    img[68:73, 55:86] = (185, 190, 225)  # the left eye's pinkish white
+    img[138:143, 85:116] = (235, 240, 240)  # teeth
+    pts = {"left_pupil": (70.0, 70.0), "right_pupil": (130.0, 70.0),
+           "left_upper_lid": (70.0, 64.0), "left_lower_lid": (70.0, 76.0),
+           "right_upper_lid": (130.0, 64.0), "right_lower_lid": (130.0, 76.0),
+           "left_mouth_corner": (72.0, 140.0), "right_mouth_corner": (128.0, 140.0),
+           "upper_lip_top": (100.0, 124.0), "lower_lip_bottom": (100.0, 158.0)}
+    points = {k: np.array([v], float) for k, v in pts.items()}
+    out = sc._photometric("deep", 1, 0, points)(img, 0).astype(float)
+    assert np.allclose(out[100, 40], np.array([150, 170, 210]) * sc.DEEP_SKIN, atol=3)  # a cheek
+    assert out[37, 100].sum() < 0.6 * img[37, 100].astype(float).sum()  # the forehead
+    assert np.allclose(out[70, 62], img[70, 62], atol=3)  # the white of the eye
+    assert np.allclose(out[140, 100], img[140, 100], atol=3)  # the teeth
+    assert np.allclose(out[100, 195], img[100, 195], atol=3)  # the wall

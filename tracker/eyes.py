@@ -68,6 +68,13 @@ IRIS_MATCH_WEIGHT = 3.0
 placed at full resolution (score = darkness × (1 + this × correlation)). Blur spreads dark lashes
 and make-up into the disc above the iris, so the darkest disc leans to the lash line (blurred
 clips 1–1.5 px high); the calibrated picture, lashes and all, still matches where it was cut."""
+IRIS_DARK = (0.8, 1.0)
+"""The calibrated iris's darkness against its eye (the mean grey of a disc inside it over the
+eye picture's median grey) at which the iris search counts the disc's darkness fully, and at
+which it does not count it at all (a straight ramp between, see :func:`iris_darkness`). A dark or
+hazel iris in a light or olive face is 0.2–0.8 of its eye's grey; a grey, green or light-brown
+iris in a dark face is as light as the skin round it or lighter (0.9–1.6), and the darkest disc
+there is the lash line or a brow."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 LID_RANGE = 0.3
@@ -169,6 +176,21 @@ _YCC = np.array(
     [[0.114, 0.587, 0.299], [-0.081312, -0.418688, 0.5], [0.5, -0.331264, -0.168736]], dtype=np.float64
 )
 """YCrCb from BGR (OpenCV's conversion without its offsets, which cancel here)."""
+
+
+def iris_darkness(eye_pictures, radius) -> float:
+    """The power of the disc-darkness term in the iris search for this person's eyes (0..1), from
+    the calibrated eye pictures (grey, centred on the irises) and iris radii (px): how much
+    darker than the eye round it the paler iris is (:data:`IRIS_DARK`)."""
+    ratio = 0.0
+    for pic, r in zip(eye_pictures, radius):
+        pic = np.asarray(pic, dtype=np.float32)
+        h, w = pic.shape
+        yy, xx = np.ogrid[:h, :w]
+        inside = (yy - 0.5 * (h - 1)) ** 2 + (xx - 0.5 * (w - 1)) ** 2 <= (0.75 * float(r)) ** 2
+        ratio = max(ratio, float(pic[inside].mean()) / max(float(np.median(pic)), 8.0))
+    lo, hi = IRIS_DARK
+    return min(max((hi - ratio) / (hi - lo), 0.0), 1.0)
 
 
 class EyeModelError(ValueError):
@@ -924,16 +946,17 @@ class EyeFinder:
     0)``) whose crop holds everything :meth:`find` looks at when the eyes are where
     predicted; a larger crop works too. ``search`` (x, y) is the half-size of the iris
     search window and ``prior`` the spread of the preference for irises near the predicted
-    centres, both × ``work_ipd``; ``darkness`` the power of the disc-darkness term (0: off).
+    centres, both × ``work_ipd``; ``darkness`` the power of the disc-darkness term (0: off;
+    ``None``: from how dark the calibrated irises are, :func:`iris_darkness`).
     """
 
     def __init__(
         self, model: EyeModel, work_ipd: float, search: tuple[float, float] = (SEARCH_X, SEARCH_Y),
-        prior: tuple[float, float] = PRIOR, darkness: float = 1.0,
+        prior: tuple[float, float] = PRIOR, darkness: float | None = None,
     ):
         self.model = model
         self.wi = wi = float(work_ipd)
-        self.dark_power = float(darkness)
+        self.dark_power = iris_darkness(model.eye_pictures, model.radius) if darkness is None else float(darkness)
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
@@ -1673,6 +1696,20 @@ class _LimbusGrid:
         u, v = self.offs / (REFINE_PRIOR[0] * wi), self.offs / (REFINE_PRIOR[1] * wi)
         self.prior = (np.exp(-0.5 * u * u)[:, None] * np.exp(-0.5 * v * v)[None, :]).astype(np.float32)
 
+    def across(self, gx: np.ndarray, gy: np.ndarray, x: float, y: float, r: float) -> float:
+        """How much more the grey changes across the arcs of the circle of radius ``r`` centred
+        at ``(x, y)`` (px of ``gx``/``gy``) than along them: the mean of the outward step less the
+        size of the step along the arc (grey levels per px). A limbus changes across only; a
+        lid's edge or a lash line that a circle's lower arcs cut at a slant changes along as
+        much, and scores below 0."""
+        px = (np.float32(x) + np.float32(r) * self.cos).reshape(1, -1)
+        py = (np.float32(y) + np.float32(r) * self.sin).reshape(1, -1)
+        GX = cv2.remap(gx, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
+        GY = cv2.remap(gy, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()
+        out = GX * self.cos + GY * self.sin
+        along = GY * self.cos - GX * self.sin
+        return float(np.mean(out - np.abs(along)))
+
     def scores(self, gx: np.ndarray, gy: np.ndarray, cx: float, cy: float) -> np.ndarray:
         """Mean outward step on every arc centred around ``(cx, cy)`` (px of ``gx``/``gy``), as
         ``(radius, x, y)``."""
@@ -1756,7 +1793,8 @@ def refine_pupils(
     and its iris centre is the centre of the circle that best fits the limbus below the upper
     lid (:func:`limbus_centre`) within :data:`REFINE_REACH` of the click, careful clicks
     preferred (:data:`REFINE_PRIOR`). A click stays where nothing there has a limbus's edge
-    (:data:`LIMBUS_MIN_EDGE`), and both stay when the result is not a plausible pair (a real
+    (:data:`LIMBUS_MIN_EDGE`) or the best circle's edge runs along its arcs as much as across
+    them (:meth:`_LimbusGrid.across`: the lid's edge over a light iris in a narrow eye), and both stay when the result is not a plausible pair (a real
     face is never refused). ``frame_grey`` may also be BGR.
     """
     from tracker.calibration import FaceFrame
@@ -1786,8 +1824,9 @@ def refine_pupils(
     scores = [limbus_scores((gx, gy), at) for at in ats]
     radii = common_radius((scores[0], scores[1]))
     for at, S in zip(ats, scores):
-        x, y, _, edge = limbus_centre((gx, gy), at, S, radii)
-        found.append((x + x0, y + y0) if edge >= LIMBUS_MIN_EDGE else (at[0] + x0, 0.0))
+        x, y, r, edge = limbus_centre((gx, gy), at, S, radii)
+        rim = edge >= LIMBUS_MIN_EDGE and _LIMBUS.across(gx, gy, x, y, r) >= 0.0
+        found.append((x + x0, y + y0) if rim else (at[0] + x0, 0.0))
     img = ff.to_image(np.array(found))
     nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
     if not (0.8 * ipd < math.hypot(nr[0] - nl[0], nr[1] - nl[1]) < 1.25 * ipd):
