@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import _lip_span, _mouth, centre_votes, find_brows, find_pupils
+from tracker.auto_init import EYE_WI, IRIS_RADIUS, _lip_span, _mouth, centre_votes, find_brows, find_pupils, iris_contrast
 from tracker.face_finder import DEFAULT_EYES
 
 
@@ -74,6 +74,21 @@ def test_votes_peak_on_a_dark_disc_not_on_a_dark_line():
     assert abs(i + 40 - 70) <= 1 and abs(j + 40 - 60) <= 1
     flat = centre_votes(np.full((120, 200), 128.0, np.float32), (100.0, 60.0), (60.0, 20.0))
     assert not np.any(flat)
+
+
+def test_disc_contrast_needs_white_on_both_sides():
+    """An iris has the white of the eye left and right of it; an eye's dark corner (or the lashes
+    that end it) has white on one side only and skin on the other, here darker than the white as
+    on a dark face. Averaging the two sides scored the corner above the iris; the darker side
+    decides."""
+    r = IRIS_RADIUS * EYE_WI
+    img = np.full((80, 200), 70.0, np.float32)  # dark skin
+    cv2.ellipse(img, (90, 40), (int(3.2 * r), int(1.3 * r)), 0, 0, 360, 200.0, -1, cv2.LINE_AA)  # the white
+    cv2.circle(img, (90, 40), int(round(r)), 110.0, -1, cv2.LINE_AA)  # a mid-brown iris
+    cv2.circle(img, (int(90 + 3.4 * r), 40), int(round(0.8 * r)), 40.0, -1, cv2.LINE_AA)  # the dark corner
+    c = iris_contrast(cv2.GaussianBlur(img, (0, 0), 1.0))
+    j, i = np.unravel_index(int(c[:, 40:160].argmax()), c[:, 40:160].shape)
+    assert abs(i + 40 - 90) <= 2 and abs(j - 40) <= 2
 
 
 def _lower_face(beard: bool, open_mouth: bool = False):

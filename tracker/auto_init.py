@@ -127,9 +127,10 @@ def centre_votes(band: np.ndarray, centre: tuple[float, float], reach: tuple[flo
 
 
 def iris_contrast(band: np.ndarray) -> np.ndarray:
-    """At every place of ``band``: the mean grey of two small boxes left and right of an
+    """At every place of ``band``: the grey of the darker of two small boxes left and right of an
     iris-sized disc there (the white of the eye) minus the disc's mean — high on an iris, low
-    on brows, lashes and shadows, which are dark but have no white beside them."""
+    on brows, lashes and shadows, which are dark but have no white beside them, and on an eye's
+    dark corner, which has white on one side only (on a dark face their mean put it above the iris)."""
     r = IRIS_RADIUS * EYE_WI
     kd = int(round(1.6 * r)) | 1
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kd, kd)).astype(np.float32)
@@ -137,11 +138,12 @@ def iris_contrast(band: np.ndarray) -> np.ndarray:
     bw = max(int(round(0.5 * r)), 1)
     bh = max(int(round(0.8 * r)), 1) | 1
     off = int(round(1.35 * r))
-    side = np.zeros((bh, 2 * off + bw), np.float32)
-    side[:, :bw] = 1.0
-    side[:, -bw:] = 1.0
-    side /= side.sum()
-    return cv2.filter2D(band, -1, side, borderType=cv2.BORDER_REPLICATE) - cv2.filter2D(band, -1, disc, borderType=cv2.BORDER_REPLICATE)
+    left = np.zeros((bh, 2 * off + bw), np.float32)
+    left[:, :bw] = 1.0 / (bw * bh)
+    right = left[:, ::-1].copy()
+    sides = np.minimum(cv2.filter2D(band, -1, left, borderType=cv2.BORDER_REPLICATE),
+                       cv2.filter2D(band, -1, right, borderType=cv2.BORDER_REPLICATE))
+    return sides - cv2.filter2D(band, -1, disc, borderType=cv2.BORDER_REPLICATE)
 
 
 def _blobs(band: np.ndarray, sigma: float) -> np.ndarray:
