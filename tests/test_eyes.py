@@ -15,6 +15,7 @@ from tracker.eyes import (
     EyeModel,
     LID_SHOW,
     EyeModelError,
+    GAP_BLIND,
     SkinModel,
     _run,
     calibration_crop,
@@ -197,6 +198,20 @@ def test_light_irises_in_a_dark_face_are_found_not_the_lashes():
         for off in ((0.0, 0.0), (0.04, -0.05)):
             res, truth, _, _ = _find(f, BASE.with_expression(expr), LIGHT_EYES_DARK_SKIN, offset=off)
             _check(res, truth, pupil=1.0, lid=2.0)
+
+
+def test_an_iris_the_gap_rule_cannot_see_is_judged_open_or_shut_by_its_picture():
+    """A brown iris of the dark skin's own colour: the lid gap measured at calibration is under an
+    iris radius on a wide-open eye (blind), and the same rule called shut eyes open. The iris
+    picture's match decides instead: open on open eyes, shut on shut ones and on a wink's shut eye."""
+    style = STYLES["dark_skin"].replace(name="brown_as_skin", iris=STYLES["dark_skin"].skin)
+    model, wi = _learn(style=style)
+    f = EyeFinder(model, wi)
+    assert all(g < GAP_BLIND * r for g, r in zip(model.lid_open, model.radius))
+    for expr, want in (("neutral", (True, True)), ("brows_up", (True, True)), ("smile", (True, True)),
+                       ("eyes_closed", (False, False)), ("wink_l", (False, True)), ("wink_r", (True, False))):
+        res, _, _, _ = _find(f, BASE.with_expression(expr), style)
+        assert tuple(e.open for e in res.eyes) == want, expr
 
 
 def test_a_small_face_and_strong_roll():

@@ -28,7 +28,9 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
 * **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
   the eye point moves from the iris to the middle of what is visible of the eye (the slit
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
-  brow are then measured from there.
+  brow are then measured from there. Where calibration found the gap too small for an open eye
+  (:data:`GAP_BLIND`: the rule cannot see this person's iris), the iris picture's match says
+  whether the eye is open.
 * **brow** — the calibrated vertical cross-section of the brow slid along a strip of
   columns above the eye point (normalised correlation, parabola refined). A spectacle rim's
   upper bar, found at calibration (:func:`spectacle_rims`), lies right under many brows and is
@@ -98,6 +100,16 @@ OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
 eye shut below about 40 % of its usual opening."""
+GAP_BLIND = 1.2
+"""A calibrated lid gap under this many iris radii on an eye clicked open says the gap rule cannot
+see this person's iris (a brown iris in a dark face is neither far from the skin's colour nor much
+darker than its shadows: 0.6 radii measured where 2–2.5 is usual); the eye then counts as open while
+its iris picture matches at :data:`IRIS_SHOWS` or better, and shut when it does not (the gap that
+cannot see an open iris cannot see a shut lid either)."""
+IRIS_SHOWS = 0.6
+"""Correlation with the iris picture at and above which an iris shows: a shut lid replaces the
+iris and the white beside it, and the correlation falls with the opening (on the synthetic
+performer 0.9 at 80 % open, 0.6 at 40 % — where :data:`OPEN_SHARE` shuts an eye — and 0.1 shut)."""
 SLIT_HW, SLIT_HH = 0.22, 0.1
 """Half-size of the window a closed eye's slit is looked for in."""
 SOCKET_HW, SOCKET_HH = 0.3, 0.17
@@ -961,6 +973,7 @@ class EyeFinder:
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
         self._lid_most = [(r + LID_SHOW[0] * self.wi, r + LID_SHOW[1] * self.wi) for r in self.radius]
+        self._gap_blind = [g < GAP_BLIND * r for g, r in zip(model.lid_open, self.radius)]
         # iris search: a half-resolution strip for both eyes, then full resolution near the peak
         self.sx, self.sy = _even(search[0] * wi), _even(search[1] * wi)
         self.slack = (max(int(round(PAIR_SLACK_X * wi / 2)), 1), max(int(round(PAIR_SLACK_Y * wi / 2)), 1))
@@ -1583,7 +1596,7 @@ class EyeFinder:
             up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
-                open=w >= OPEN_SHARE, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
+                open=match >= IRIS_SHOWS if self._gap_blind[i] else w >= OPEN_SHARE, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
                 radius=self.radius[i], iris_match=float(match), brow_match=brow_match,
             ))
         return EyeResult((eyes[0], eyes[1]))
