@@ -327,6 +327,14 @@ STRESS_CASES = [
     # brows held the brows' cross-section (talk_b --auto r brow 0.11: the brow point on the rim)
     pytest.param("expr_d0", "glasses", False, None, id="expr_d0-glasses-clicks"),
     pytest.param("talk_b", "glasses", True, None, id="talk_b-glasses-auto"),
+    # a dark face: grey-green eyes lighter than the skin (the darkest discs, which the iris search
+    # preferred, were the lash lines: expr_d18's pupils 14 % of the eye distance high from frame 0,
+    # and calibration's click refinement moved them onto the lids), and brown ones the lid gap rule
+    # cannot tell from the skin (expr_d19's eyes reported shut on 83 % of the frames)
+    pytest.param("expr_d18", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye"),
+                 id="expr_d18-deep-clicks"),
+    pytest.param("expr_d19", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_eye", "r_brow"),
+                 id="expr_d19-deep-clicks"),
 ]
 
 
