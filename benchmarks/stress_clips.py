@@ -301,8 +301,9 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
 
 def _photometric(kind: str, n: int, seed: int,
                  points: dict[str, np.ndarray] | None = None) -> Callable[[np.ndarray, int], np.ndarray]:
-    """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``. ``deep``
-    keeps the eye openings the peer's ``points`` outline (when given) as they are."""
+    """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``. With the
+    peer's ``points``, ``deep`` darkens the whole face oval but the eye openings and the teeth;
+    without them only what has skin's colour."""
     rng = np.random.default_rng(seed)
     if kind == "noisy":
         def noisy(img: np.ndarray, i: int) -> np.ndarray:
@@ -422,9 +423,9 @@ def _eye_openings(points: dict[str, np.ndarray], i: int, shape: tuple[int, int])
 
 
 FACE_OVAL = (1.05, 1.3, 0.35)
-"""The ``deep`` variant's face oval, darkened throughout (× the inter-pupil distance): half its width, half its height,
-and how far below the eyes' midpoint its centre is (towards the mouth): forehead to chin, cheek to
-cheek."""
+"""The ``deep`` variant's face oval, darkened throughout (× the inter-pupil distance): half its
+width, half its height, and how far below the eyes' midpoint its centre lies (towards the mouth):
+cheek to cheek, forehead to chin."""
 
 
 def _face_ovals(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -444,15 +445,15 @@ def _face_ovals(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -
     hw, hh, below = FACE_OVAL
     at = lambda c: tuple(int(v) for v in np.round(np.asarray(c) * 8))
     cv2.ellipse(face, at(0.5 * (lp + rp) + below * ipd * down), (int(hw * ipd * 8), int(hh * ipd * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
+    soft = max(0.05 * ipd, 1.0)
     lc, rc, top, bottom = lips
     # inside the lips: the teeth and the dark, a lip's thickness (about 0.1 ipd) in from their outline
     mw = 0.4 * float(np.hypot(*(rc - lc)))
     mh = 0.5 * float(abs(np.dot(bottom - top, down))) - 0.1 * ipd
-    if mh <= 0.5:
-        return cv2.GaussianBlur(face, (0, 0), max(0.05 * ipd, 1.0)), mouth
-    cv2.ellipse(mouth, at(0.5 * (top + bottom)), (int(mw * 8), int(mh * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
-    soft = max(0.05 * ipd, 1.0)
-    return cv2.GaussianBlur(face, (0, 0), soft), cv2.GaussianBlur(mouth, (0, 0), 0.5 * soft)
+    if mh > 0.5:
+        cv2.ellipse(mouth, at(0.5 * (top + bottom)), (int(mw * 8), int(mh * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
+        mouth = cv2.GaussianBlur(mouth, (0, 0), 0.5 * soft)
+    return cv2.GaussianBlur(face, (0, 0), soft), mouth
 
 
 def _read_points(path: Path) -> dict[str, np.ndarray]:

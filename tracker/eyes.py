@@ -193,7 +193,7 @@ _YCC = np.array(
 def iris_darkness(eye_pictures, radius) -> float:
     """The power of the disc-darkness term in the iris search for this person's eyes (0..1), from
     the calibrated eye pictures (grey, centred on the irises) and iris radii (px): how much
-    darker than the eye round it the paler iris is (:data:`IRIS_DARK`)."""
+    darker than the eye round it the paler of the two irises is (:data:`IRIS_DARK`)."""
     ratio = 0.0
     for pic, r in zip(eye_pictures, radius):
         pic = np.asarray(pic, dtype=np.float32)
@@ -1594,9 +1594,10 @@ class EyeFinder:
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]
             up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
+            shows = match >= IRIS_SHOWS if self._gap_blind[i] else w >= OPEN_SHARE
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
-                open=match >= IRIS_SHOWS if self._gap_blind[i] else w >= OPEN_SHARE, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
+                open=shows, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
                 radius=self.radius[i], iris_match=float(match), brow_match=brow_match,
             ))
         return EyeResult((eyes[0], eyes[1]))
@@ -1807,8 +1808,9 @@ def refine_pupils(
     lid (:func:`limbus_centre`) within :data:`REFINE_REACH` of the click, careful clicks
     preferred (:data:`REFINE_PRIOR`). A click stays where nothing there has a limbus's edge
     (:data:`LIMBUS_MIN_EDGE`) or the best circle's edge runs along its arcs as much as across
-    them (:meth:`_LimbusGrid.across`: the lid's edge over a light iris in a narrow eye), and both stay when the result is not a plausible pair (a real
-    face is never refused). ``frame_grey`` may also be BGR.
+    them (:meth:`_LimbusGrid.across`: the lid's edge over a light iris in a narrow eye), and
+    both stay when the result is not a plausible pair (a real face is never refused).
+    ``frame_grey`` may also be BGR.
     """
     from tracker.calibration import FaceFrame
 
