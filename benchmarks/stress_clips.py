@@ -139,6 +139,20 @@ def _room(first: np.ndarray) -> np.ndarray:
     return cv2.GaussianBlur(cv2.resize(corner, (w, h), interpolation=cv2.INTER_LINEAR), (0, 0), 6.0)
 
 
+def _eye_line(lp: np.ndarray, rp: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """The face's frame from its pupils (image px): their distance, the unit vector along the eye
+    line (towards the image-right eye) and the face's down (across it, y down)."""
+    d = float(np.hypot(*(rp - lp)))
+    u = (rp - lp) / max(d, 1e-6)
+    return d, u, np.array([-u[1], u[0]])
+
+
+def _fixed(pts) -> np.ndarray:
+    """Points (image px, float) in the fixed point with 3 fractional bits that OpenCV's drawing
+    takes with ``shift=3``: outlines placed to an eighth of a pixel."""
+    return np.round(np.asarray(pts) * 8).astype(np.int32)
+
+
 def _hand(frames: list[np.ndarray], points: dict[str, np.ndarray], seed: int):
     """What ``covered`` draws: a per-frame function painting a hand (a shaded, textured ellipse of
     the face's own skin colour, about the face's size) that comes in from the right, covers the face
@@ -207,9 +221,7 @@ def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
         top, bottom = points["upper_lip_top"][i], points["lower_lip_bottom"][i]
         if not all(np.all(np.isfinite(q)) for q in (lp, rp, lc, rc, top, bottom)):
             return img
-        d = float(np.hypot(*(rp - lp)))
-        u = (rp - lp) / max(d, 1e-6)
-        dn = np.array([-u[1], u[0]])
+        d, u, dn = _eye_line(lp, rp)
         c = 0.5 * (lc + rc)
         half = 0.5 * float(np.dot(rc - lc, u))
         t_up, t_dn = float(np.dot(c - top, dn)), float(np.dot(bottom - c, dn))
@@ -221,11 +233,11 @@ def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
         bd = [(-half - 0.2 * d, -0.05 * d), (-half - 0.25 * d, 0.35 * d), (-0.3 * d, t_dn + 0.55 * d), (0.0, t_dn + 0.62 * d),
               (0.3 * d, t_dn + 0.55 * d), (half + 0.25 * d, 0.35 * d), (half + 0.2 * d, -0.05 * d)]
         for poly in (ms, bd):
-            cv2.fillPoly(hair, [np.round(outline(c, u, dn, poly) * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+            cv2.fillPoly(hair, [_fixed(outline(c, u, dn, poly))], 1.0, cv2.LINE_AA, shift=3)
         # the lips stay bare: a lens through the corners and the outer lip edges
         th = np.linspace(0.0, np.pi, 16)
         lens = [(-half * np.cos(a), -t_up * np.sin(a)) for a in th] + [(half * np.cos(a), t_dn * np.sin(a)) for a in th]
-        cv2.fillPoly(hair, [np.round(outline(c, u, dn, lens) * 8).astype(np.int32)], 0.0, cv2.LINE_AA, shift=3)
+        cv2.fillPoly(hair, [_fixed(outline(c, u, dn, lens))], 0.0, cv2.LINE_AA, shift=3)
         hair = cv2.GaussianBlur(hair, (0, 0), max(0.03 * d, 0.7))[..., None] * np.float32(0.88)
         fur = colour[None, None, :] + strands[..., None]
         return np.clip(img * (1.0 - hair) + fur * hair, 0, 255).astype(np.uint8)
@@ -270,9 +282,7 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
         lp, rp = points["left_pupil"][i], points["right_pupil"][i]
         if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))):
             return img
-        d = float(np.hypot(*(rp - lp)))
-        u = (rp - lp) / max(d, 1e-6)
-        dn = np.array([-u[1], u[0]])
+        d, u, dn = _eye_line(lp, rp)
         to_img = lambda c, pts: np.array([c + x * u * d + y * dn * d for x, y in pts], np.float32)
         rim = np.zeros((h, w), np.float32)
         glare = np.zeros((h, w), np.float32)
@@ -283,14 +293,14 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
         s = float(np.clip(GLARE_SHIFT * ((mid[0] - mid0[0]) / d0 + math.degrees(roll) / 10.0) - 0.2, -0.8, 0.8))
         for side, p in ((-1.0, lp), (1.0, rp)):
             c = p + side * 0.03 * d * u + 0.03 * d * dn
-            cv2.polylines(rim, [np.round(to_img(c, ring) * 8).astype(np.int32)], True, 1.0, thick, cv2.LINE_AA, shift=3)
+            cv2.polylines(rim, [_fixed(to_img(c, ring))], True, 1.0, thick, cv2.LINE_AA, shift=3)
             # the arm: from the lens's outer edge near its top, out towards the ear
             arm = [(side * a, -0.6 * b), (side * (a + 0.3), -0.55 * b)]
-            cv2.polylines(rim, [np.round(to_img(c, arm) * 8).astype(np.int32)], False, 1.0, thick, cv2.LINE_AA, shift=3)
+            cv2.polylines(rim, [_fixed(to_img(c, arm))], False, 1.0, thick, cv2.LINE_AA, shift=3)
             streak = [(s * a - 0.1, -0.9 * b), (s * a + 0.02, -0.9 * b), (s * a - 0.12, 0.9 * b), (s * a - 0.24, 0.9 * b)]
-            cv2.fillPoly(glare, [np.round(to_img(c, streak) * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+            cv2.fillPoly(glare, [_fixed(to_img(c, streak))], 1.0, cv2.LINE_AA, shift=3)
         bridge = [(-0.5 + a + 0.03 - 0.01, -0.35 * b + 0.03), (0.0, -0.45 * b + 0.03), (0.5 - a - 0.03 + 0.01, -0.35 * b + 0.03)]
-        cv2.polylines(rim, [np.round(to_img(0.5 * (lp + rp), bridge) * 8).astype(np.int32)], False, 1.0, thick, cv2.LINE_AA, shift=3)
+        cv2.polylines(rim, [_fixed(to_img(0.5 * (lp + rp), bridge))], False, 1.0, thick, cv2.LINE_AA, shift=3)
         glare = cv2.GaussianBlur(glare, (0, 0), max(0.02 * d, 0.6))[..., None] * np.float32(0.35)
         out = img * (1.0 - glare) + np.float32(255.0) * glare
         rim = rim[..., None]
@@ -405,10 +415,9 @@ def _eye_openings(points: dict[str, np.ndarray], i: int, shape: tuple[int, int])
     eyes are as white as a light one's: ``deep`` must not darken them."""
     mask = np.zeros(shape, np.float32)
     lp, rp = points["left_pupil"][i], points["right_pupil"][i]
-    ipd = float(np.hypot(*(rp - lp)))
+    ipd, e, _ = _eye_line(lp, rp)
     if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))) or ipd < 4:
         return mask
-    e = (rp - lp) / ipd
     t = np.linspace(0.0, 1.0, 12)[:, None]
     for side in ("left", "right"):
         p, up, lo = points[f"{side}_pupil"][i], points[f"{side}_upper_lid"][i], points[f"{side}_lower_lid"][i]
@@ -418,7 +427,7 @@ def _eye_openings(points: dict[str, np.ndarray], i: int, shape: tuple[int, int])
         # each lid a quadratic curve from corner to corner through its lid point (at t = ½)
         curves = [(1 - t) ** 2 * a + 2 * t * (1 - t) * (2 * q - (a + b) / 2) + t * t * b for q in (up, lo)]
         poly = np.vstack([curves[0], curves[1][::-1]])
-        cv2.fillPoly(mask, [np.round(poly * 8).astype(np.int32)], 1.0, cv2.LINE_AA, shift=3)
+        cv2.fillPoly(mask, [_fixed(poly)], 1.0, cv2.LINE_AA, shift=3)
     return cv2.GaussianBlur(mask, (0, 0), 1.0)
 
 
@@ -436,14 +445,12 @@ def _face_ovals(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -
     face, mouth = np.zeros(shape, np.float32), np.zeros(shape, np.float32)
     lp, rp = points["left_pupil"][i], points["right_pupil"][i]
     lips = [points[k][i] for k in ("left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom")]
-    ipd = float(np.hypot(*(rp - lp)))
+    ipd, e, down = _eye_line(lp, rp)
     if not all(np.all(np.isfinite(q)) for q in [lp, rp, *lips]) or ipd < 4:
         return face, mouth
-    e = (rp - lp) / ipd
-    down = np.array([-e[1], e[0]])
     ang = math.degrees(math.atan2(e[1], e[0]))
     hw, hh, below = FACE_OVAL
-    at = lambda c: tuple(int(v) for v in np.round(np.asarray(c) * 8))
+    at = lambda c: tuple(_fixed(c).tolist())
     cv2.ellipse(face, at(0.5 * (lp + rp) + below * ipd * down), (int(hw * ipd * 8), int(hh * ipd * 8)), ang, 0, 360, 1.0, -1, cv2.LINE_AA, 3)
     soft = max(0.05 * ipd, 1.0)
     lc, rc, top, bottom = lips
