@@ -348,3 +348,31 @@ def test_a_shadow_under_the_lower_lip_is_not_the_mouth_line(retrace, expr, monke
     truth = _truth_in_crop(st, ff, origin)
     dy = abs(res.centre[1] - truth["mouth"][1]) if res is not None else math.inf
     assert (dy < 0.1 * WI) == retrace
+
+
+def _upper_profile(lip_rows: int, shade: list[float]) -> tuple[np.ndarray, int]:
+    """Profile features (rows, 3) up from a gap row: skin above, an upper lip ``lip_rows`` thick
+    (a little darker and redder), its rows next to the gap darkened by ``shade`` (the line's blur)."""
+    skin, lip = np.array([19.0, 12.0, 10.0]), np.array([18.0, 14.0, 10.5])
+    gap = 40
+    f = np.tile(skin, (60, 1))
+    f[gap - lip_rows : gap] = lip
+    for k, s in enumerate(shade):
+        f[gap - 1 - k, 0] -= s
+    f[gap] = (10.0, 14.0, 10.0)
+    f[gap + 1 :] = lip
+    return f, gap
+
+
+def test_the_lines_shade_is_not_a_thin_upper_lip():
+    """Rows next to the gap darkened by the line's blur make the thinnest lip the search allows split
+    best (the shade against the lip): the peak further out, where the lip meets the skin, is the
+    edge (expr_d19's clicked calibration took 2.5 px for an upper lip of ~11; its clicked mouth
+    opening followed the peer at r 0.80, at 0.91 with this). A lip that really is that thin keeps
+    its edge."""
+    from tracker.mouth_model import _outer_edge
+
+    f, gap = _upper_profile(11, [4.0, 3.0, 2.0, 1.0])
+    assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 11.0) < 1.5
+    f, gap = _upper_profile(3, [1.0])
+    assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 3.0) < 1.0

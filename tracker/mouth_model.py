@@ -566,6 +566,12 @@ def _colour_edge(rows_bgr: np.ndarray, start: int, direction: int, first: float,
     return first
 
 
+EDGE_INTERIOR = 0.5
+"""A lip's outer edge found at the thinnest lip the search allows, with the split still improving
+towards the gap, gives way to a peak further out scoring at least this share of it
+(:func:`_outer_edge`); a weaker one is noise on a lip that really is that thin."""
+
+
 def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
     """The outer edge of a lip on a profile ``f`` (rows, c), from its inner edge ``start`` (the gap's
     last row) in ``direction`` (−1 up, +1 down), ``lo``..``hi`` wi away: the row that best splits the
@@ -596,6 +602,14 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
     if not np.isfinite(score).any():
         return float(start + direction * 0.5 * (lo + hi) * wi)
     j = int(np.argmax(score))
+    if j == 0:
+        # the split is best at the thinnest lip allowed and better still towards the gap: that is
+        # the gap's own blurred edge (rows next to the line are its shade), not the lip's outer edge;
+        # a peak further out is the edge where there is one
+        peaks = [k for k in range(1, len(es) - 1) if score[k] >= score[k - 1] and score[k] >= score[k + 1]
+                 and score[k] >= EDGE_INTERIOR * score[0]]
+        if peaks:
+            j = max(peaks, key=lambda k: score[k])
     y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
     if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
         y += direction * _vertex(score[j - 1], score[j], score[j + 1])
