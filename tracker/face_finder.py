@@ -134,6 +134,40 @@ def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.nda
     return m, size, (c * per, s * per), (-s * per, c * per)
 
 
+LIGHT_SIGMA = 0.35
+"""Width (inter-pupil distances) of the local mean a face picture is divided by in :func:`light_free`."""
+LIGHT_CHECK = 0.6
+"""Correlation of the face pictures as they are under which their light-free versions are
+compared too (at or above it, the pictures as they are decide alone)."""
+LIGHT_SURE = 0.75
+"""Correlation of the light-free pictures at or above which it stands for the face's. Side light
+coming up after calibration dropped a real face's correlation from 0.9 to 0.26 while its
+light-free one stayed at 0.87-0.95; a hand coming over the face took both down together (its
+light-free one 0.4-0.7): a partly covered face must not pass for one under new light."""
+
+
+def light_free(picture: np.ndarray) -> np.ndarray:
+    """A face picture (float32) over its own local mean (a Gaussian :data:`LIGHT_SIGMA` inter-pupil
+    distances wide): light that changes smoothly across the face — a lamp or a window to one side,
+    coming up or going down after calibration — multiplies the picture by a smooth field, which the
+    ratio cancels; the eyes, brows and nose keep their contrast against the skin round them."""
+    mean = cv2.GaussianBlur(picture, (0, 0), LIGHT_SIGMA * PATCH_IPD, borderType=cv2.BORDER_REFLECT)
+    np.maximum(mean, 1.0, out=mean)
+    return cv2.divide(picture, mean)
+
+
+FACE_CONTRAST = 0.5
+"""A picture with less than this share of the face picture's contrast (the spread of its
+:func:`light_free` values) matches it the less the flatter it is: light-free, a flat hand or wall
+keeps only faint shading, which normalised correlation would blow up to a face's contrast."""
+
+
+def _flatness(window: np.ndarray, reference: np.ndarray) -> float:
+    """The factor (0..1] a match of ``window`` with ``reference`` (both light-free) is scaled by."""
+    a, b = float(window.std()), float(reference.std())
+    return min(a / max(FACE_CONTRAST * b, 1e-6), 1.0)
+
+
 def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray:
     """The upright face picture (float32, blurred) for eyes at ``pupils`` (frame px).
 
@@ -147,7 +181,10 @@ def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray
 
 def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: np.ndarray, reach: float = 0.15) -> tuple[np.ndarray, float]:
     """Where the face picture best matches near eyes at ``pupils``: the shift (frame px) that
-    moves the pupils onto the match, and the match's normalised correlation.
+    moves the pupils onto the match, and the match's normalised correlation — of the pictures as
+    they are or, when that is under :data:`LIGHT_CHECK` and their :func:`light_free` versions
+    match at least :data:`LIGHT_SURE` and better, of those (the light has changed across the face
+    since calibration).
 
     ``reach`` is the search half-width in inter-pupil distances.
     """
@@ -159,6 +196,14 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
         return np.zeros(2), 0.0
     r = cv2.matchTemplate(win, reference, cv2.TM_CCOEFF_NORMED)
     _, best, _, (i, j) = cv2.minMaxLoc(r)
+    if best < LIGHT_CHECK:
+        free, ref = light_free(win), light_free(reference)
+        r2 = cv2.matchTemplate(free, ref, cv2.TM_CCOEFF_NORMED)
+        _, best2, _, (i2, j2) = cv2.minMaxLoc(r2)
+        rh, rw = ref.shape
+        best2 *= _flatness(free[j2 : j2 + rh, i2 : i2 + rw], ref)
+        if best2 >= LIGHT_SURE and best2 > best:
+            r, best, i, j = r2, best2, i2, j2
     h, w = r.shape
     dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
     dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
@@ -174,10 +219,17 @@ def _vertex(a: float, b: float, c: float) -> float:
 
 
 def patch_similarity(patch: np.ndarray, reference: np.ndarray) -> float:
-    """Normalised correlation (−1..1) of two face pictures of the same size."""
+    """Normalised correlation (−1..1) of two face pictures of the same size: as they are, or of
+    their :func:`light_free` versions where those match well and the pictures themselves do not
+    (:data:`LIGHT_CHECK`, :data:`LIGHT_SURE`)."""
     if patch.shape != reference.shape:
         return 0.0
-    return float(cv2.matchTemplate(patch, reference, cv2.TM_CCOEFF_NORMED)[0, 0])
+    raw = float(cv2.matchTemplate(patch, reference, cv2.TM_CCOEFF_NORMED)[0, 0])
+    if raw >= LIGHT_CHECK:
+        return raw
+    a, b = light_free(patch), light_free(reference)
+    free = float(cv2.matchTemplate(a, b, cv2.TM_CCOEFF_NORMED)[0, 0]) * _flatness(a, b)
+    return free if free >= LIGHT_SURE and free > raw else raw
 
 
 def reference_vector(reference: np.ndarray) -> np.ndarray:
