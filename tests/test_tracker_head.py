@@ -85,13 +85,18 @@ def test_working_scale_is_a_power_of_two_that_keeps_the_face_mid_sized():
     assert g.shape == (60, 80)  # 640×480 at 1/8
 
 
-def test_face_picture_finds_a_shifted_face_and_tells_it_from_the_background():
+def _face_picture_setup():
+    """The neutral frame, its true pupils, a head-motion working scale for it and its face picture."""
     frame, _ = render_face(BASE)
     c = clicks_for(BASE)
     pupils = np.array([c["left_pupil"], c["right_pupil"]], dtype=np.float64)
     hm = HeadMotion()
     hm.set_scale(80.0)
-    ref = face_patch(hm.grey(frame), hm.scale, pupils)
+    return frame, pupils, hm, face_patch(hm.grey(frame), hm.scale, pupils)
+
+
+def test_face_picture_finds_a_shifted_face_and_tells_it_from_the_background():
+    frame, pupils, hm, ref = _face_picture_setup()
     for shift in ((5.0, 0.0), (-4.0, 6.0)):
         d, score = locate_face(hm.grey(frame), hm.scale, pupils + shift, ref)
         assert score > 0.95
@@ -106,12 +111,7 @@ def test_the_face_picture_still_matches_when_light_falls_across_the_face(fall):
     face by 70-85 %: the picture as it is no longer correlates with the calibrated one (under
     0.6; on a real face it fell to 0.26 and the tracker gave the face up as "not this face"). Over
     its own local mean the light cancels, and the face still matches, at its place."""
-    frame, _ = render_face(BASE)
-    c = clicks_for(BASE)
-    pupils = np.array([c["left_pupil"], c["right_pupil"]], dtype=np.float64)
-    hm = HeadMotion()
-    hm.set_scale(80.0)
-    ref = face_patch(hm.grey(frame), hm.scale, pupils)
+    frame, pupils, hm, ref = _face_picture_setup()
     t = np.clip((np.arange(frame.shape[1], dtype=np.float32) - (BASE.cx - 110.0)) / 220.0, 0.0, 1.0)
     lit = np.clip(frame * (1.0 - fall * t * t * (3.0 - 2.0 * t))[None, :, None], 0, 255).astype(np.uint8)
     picture = face_patch(hm.grey(lit), hm.scale, pupils)
