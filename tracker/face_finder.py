@@ -168,6 +168,24 @@ def _flatness(window: np.ndarray, reference: np.ndarray) -> float:
     return min(a / max(FACE_CONTRAST * b, 1e-6), 1.0)
 
 
+def _match(window: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, float, tuple[int, int]]:
+    """The face picture slid over ``window`` (at least its size): the map of normalised
+    correlations, its best value and where (x, y) — of the pictures as they are, or of their
+    :func:`light_free` versions when the first is under :data:`LIGHT_CHECK` and the second reaches
+    :data:`LIGHT_SURE` and is better (scaled by :func:`_flatness` where it matched)."""
+    r = cv2.matchTemplate(window, reference, cv2.TM_CCOEFF_NORMED)
+    _, best, _, at = cv2.minMaxLoc(r)
+    if best < LIGHT_CHECK:
+        free, ref = light_free(window), light_free(reference)
+        r2 = cv2.matchTemplate(free, ref, cv2.TM_CCOEFF_NORMED)
+        _, best2, _, (i, j) = cv2.minMaxLoc(r2)
+        rh, rw = ref.shape
+        best2 *= _flatness(free[j : j + rh, i : i + rw], ref)
+        if best2 >= LIGHT_SURE and best2 > best:
+            return r2, float(best2), (i, j)
+    return r, float(best), at
+
+
 def face_patch(grey: np.ndarray, scale: float, pupils: np.ndarray) -> np.ndarray:
     """The upright face picture (float32, blurred) for eyes at ``pupils`` (frame px).
 
@@ -194,16 +212,7 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
     win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
     if win.shape[0] < reference.shape[0] or win.shape[1] < reference.shape[1]:
         return np.zeros(2), 0.0
-    r = cv2.matchTemplate(win, reference, cv2.TM_CCOEFF_NORMED)
-    _, best, _, (i, j) = cv2.minMaxLoc(r)
-    if best < LIGHT_CHECK:
-        free, ref = light_free(win), light_free(reference)
-        r2 = cv2.matchTemplate(free, ref, cv2.TM_CCOEFF_NORMED)
-        _, best2, _, (i2, j2) = cv2.minMaxLoc(r2)
-        rh, rw = ref.shape
-        best2 *= _flatness(free[j2 : j2 + rh, i2 : i2 + rw], ref)
-        if best2 >= LIGHT_SURE and best2 > best:
-            r, best, i, j = r2, best2, i2, j2
+    r, best, (i, j) = _match(win, reference)
     h, w = r.shape
     dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
     dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
@@ -224,12 +233,7 @@ def patch_similarity(patch: np.ndarray, reference: np.ndarray) -> float:
     (:data:`LIGHT_CHECK`, :data:`LIGHT_SURE`)."""
     if patch.shape != reference.shape:
         return 0.0
-    raw = float(cv2.matchTemplate(patch, reference, cv2.TM_CCOEFF_NORMED)[0, 0])
-    if raw >= LIGHT_CHECK:
-        return raw
-    a, b = light_free(patch), light_free(reference)
-    free = float(cv2.matchTemplate(a, b, cv2.TM_CCOEFF_NORMED)[0, 0]) * _flatness(a, b)
-    return free if free >= LIGHT_SURE and free > raw else raw
+    return _match(patch, reference)[1]
 
 
 def reference_vector(reference: np.ndarray) -> np.ndarray:
