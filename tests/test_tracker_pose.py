@@ -82,3 +82,36 @@ def test_the_face_picture_sets_the_roll_right_with_one_eye_covered(cal, frame):
     cv2.rectangle(img, (int(x - 25), int(y - 20)), (int(x + 25), int(y + 15)), (140, 172, 218), -1)
     tr, _ = _track_from_a_wrong_pose(cal, img, turn_deg=8.0, frames=30)
     assert abs(_roll(tr.anchors)) < 1.0
+
+
+def _follow_once(tr, img, eyes: np.ndarray, strong: bool) -> float:
+    """The anchors' distance after one pull towards ``eyes`` (frame px) on frame ``img``."""
+    tr._grey = tr.motion.grey(img)
+    anchors = tr.anchors.copy()
+    tr._follow(anchors, eyes, [True, True], tr._pupils_face.copy(), True, True, strong)
+    return math.dist(*tr.anchors)
+
+
+def test_eyes_not_clearly_seen_do_not_grow_the_head_the_face_picture_disagrees_with(cal, frame):
+    """Weak eyes on the outer corners (wider than the face) pull the roll and the place, not the
+    scale: the face picture matches worse at their distance. Clear eyes still turn and grow the pose."""
+    tr = FaceTracker(cal)
+    for i in range(3):
+        tr.track(frame, i)
+    d0 = math.dist(*tr.anchors)
+    wide = _moved(tr.anchors, grow=1.08, turn_deg=2.0)
+    assert _follow_once(tr, frame, wide, strong=False) == pytest.approx(d0, rel=1e-9)
+    assert abs(_roll(tr.anchors) - _roll(TRUTH)) > 0.1  # the roll followed
+    assert _follow_once(tr, frame, _moved(tr.anchors, grow=1.08), strong=True) > 1.03 * d0
+
+
+def test_eyes_not_clearly_seen_grow_the_head_where_the_face_picture_agrees(cal):
+    """The face came nearer: the picture matches better at the eyes' wider distance, so weak eyes
+    may pull the scale after them."""
+    tr = FaceTracker(cal)
+    for i in range(3):
+        tr.track(render_face(BASE)[0], i)
+    d0 = math.dist(*tr.anchors)
+    near = BASE.replace(ipd=86.0)
+    eyes = np.array([clicks_for(near)["left_pupil"], clicks_for(near)["right_pupil"]], dtype=np.float64)
+    assert _follow_once(tr, render_face(near)[0], eyes, strong=False) > 1.005 * d0
