@@ -48,6 +48,7 @@ if __name__ == "__main__":  # before numpy loads: one thread per process
 
 import argparse
 import csv
+import json
 import math
 import re
 import sys
@@ -844,9 +845,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--stress", metavar="DIR", nargs="?", const="out/stress",
                     help="instead: every harder variant of the clips (benchmarks.stress_clips; made in DIR, default "
                          "out/stress, when missing) in both modes, one summary line per variant")
+    ap.add_argument("--save", metavar="JSON", help="with --stress: write each clip-mode's misses and values to JSON")
+    ap.add_argument("--against", metavar="JSON", help="with --stress: also list the clip-modes whose misses changed "
+                                                       "since an earlier --save")
     args = ap.parse_args(argv)
+    if (args.save or args.against) and not args.stress:
+        print("realfaces: --save and --against go with --stress", file=sys.stderr)
+        return 2
     if args.stress:
-        return stress_main(Path(args.stress), args.dir, args.serial)
+        old = None
+        if args.against:
+            try:
+                old = json.loads(Path(args.against).read_text())
+                if not isinstance(old, list):
+                    raise ValueError("not a list of clip-modes")
+            except (OSError, ValueError) as e:
+                print(f"realfaces: cannot read {args.against}: {e}", file=sys.stderr)
+                return 2
+        return stress_main(Path(args.stress), args.dir, args.serial, save=args.save, against=old)
 
     folder = real_dir(args.dir)
     if folder is None:
@@ -909,9 +925,61 @@ def stress_summary(variant: str, results: Sequence[ClipResult]) -> tuple[list[st
     return [variant, f"{every['clicks']}/{n}", f"{every['auto']}/{n}", "  ".join(fails)], passes
 
 
-def stress_main(out: Path, src: str | None = None, serial: bool = False) -> int:
+STRESS_VALUES = ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye", "r_brow")
+"""The values :func:`stress_records` keeps beside each clip-mode's misses."""
+
+
+def stress_records(variant: str, results: Sequence[ClipResult]) -> list[dict]:
+    """One JSON-ready record per clip-mode of a variant: its misses (the targets of
+    :data:`STRESS_SHORT`; ``["start"]`` when it did not start) and its :data:`STRESS_VALUES`."""
+    out = []
+    for r in results:
+        rec = {"variant": variant, "clip": r.name, "mode": r.mode}
+        if r.metrics is None:
+            rec.update(misses=["start"], values={})
+        else:
+            rec["misses"] = sorted(k for k, v in misses(r.metrics, auto=r.mode == "auto").items() if v and k in STRESS_SHORT)
+            vals = metric_values(r.metrics)
+            rec["values"] = {k: (round(float(vals[k]), 4) if math.isfinite(vals[k]) else None) for k in STRESS_VALUES}
+        out.append(rec)
+    return out
+
+
+def stress_changes(old: Sequence[dict], new: Sequence[dict]) -> list[str]:
+    """The clip-modes of ``new`` whose misses differ from ``old``'s (:func:`stress_records`), one line
+    each — the targets it now meets and now misses, with their values then and now — and a last line
+    with how many clip-modes met every target then and now (of those in both)."""
+    key = lambda r: (r.get("variant"), r.get("clip"), r.get("mode"))
+    before = {key(r): r for r in old if isinstance(r, dict)}
+    lines, then, now, both = [], 0, 0, 0
+    for r in new:
+        o = before.get(key(r))
+        if o is None:
+            continue
+        both += 1
+        a, b = set(o.get("misses") or ()), set(r.get("misses") or ())
+        then += not a
+        now += not b
+        if a == b:
+            continue
+        va, vb = o.get("values") or {}, r.get("values") or {}
+        fmt = lambda v: "—" if v is None else f"{v:.2f}"
+        vals = ", ".join(f"{k} {fmt(va.get(k))}→{fmt(vb.get(k))}" for k in sorted(a ^ b) if k in STRESS_VALUES)
+        short = lambda ks: ", ".join(STRESS_SHORT.get(k, k) for k in sorted(ks))
+        gained, lost = a - b, b - a
+        lines.append(f"{r['variant']} {r['clip']} {r['mode']}: " + "; ".join(
+            x for x in (f"now meets {short(gained)}" if gained else "", f"now misses {short(lost)}" if lost else "") if x)
+            + (f"  ({vals})" if vals else ""))
+    lines.append(f"every target: {then} then, {now} now, of {both} clip-modes in both runs")
+    return lines
+
+
+def stress_main(out: Path, src: str | None = None, serial: bool = False, save: str | None = None,
+                against: Sequence[dict] | None = None) -> int:
     """``--stress``: every variant of :mod:`benchmarks.stress_clips` (made in ``out`` when missing),
-    both modes; one line per variant, then how many clip-modes meet each target over all of them."""
+    both modes; one line per variant, then how many clip-modes meet each target over all of them.
+    ``save``: write :func:`stress_records` of every clip-mode there (JSON); ``against``: an earlier
+    such list, whose changed clip-modes are listed after the table (:func:`stress_changes`)."""
     from benchmarks import stress_clips
     from benchmarks.harness import Table
 
@@ -928,10 +996,11 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False) -> int:
                 stress_clips.make_variant(folder, nm, v, d)
         sets.append((v, d))
     cv2.setNumThreads(1)
-    rows, total, count = [], {k: 0 for k in STRESS_SHORT}, 0
+    rows, total, count, records = [], {k: 0 for k in STRESS_SHORT}, 0, []
     t0 = time.perf_counter()
     for v, d in sets:
         res = measure_all(d, names, (False, True), workers=1 if serial else 2)
+        records += stress_records(v, res)
         row, passes = stress_summary(v, res)
         rows.append(row)
         for k in total:
@@ -944,6 +1013,16 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False) -> int:
               note=f"clip-modes meeting each target, of {count}: " + ", ".join(f"{STRESS_SHORT[k]} {total[k]}" for k in STRESS_SHORT)
               + ".\nVariants: benchmarks.stress_clips (its docstring says what each one does); no timing here.")
     print(t.render())
+    if against is not None:
+        print()
+        print("Clip-modes whose misses changed since the earlier run:")
+        for line in stress_changes(against, records):
+            print("  " + line)
+    if save:
+        from tracker.atomic_file import write_text
+
+        write_text(save, json.dumps(records, indent=0))
+        print(f"clip-modes written to {save}")
     print(f"({time.perf_counter() - t0:.1f} s)")
     return 0
 

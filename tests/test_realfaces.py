@@ -245,6 +245,35 @@ def test_results_table_shows_a_failed_start():
     assert "no start" in text and "x auto: no start — no face found" in text and "all targets: 0/1" in text
 
 
+def test_stress_records_and_what_changed_between_two_runs(tmp_path):
+    peer = _peer(n=60)
+    good = rf.compare(_ours(peer.values), peer)
+    bad_values = peer.values.copy()
+    bad_values[:, 0] += 30.0  # pupils 30 % of the eye distance off
+    bad = rf.compare(_ours(bad_values), peer)
+    res = lambda m1, m2: [rf.ClipResult("a", "clicks", m1, np.zeros(0), 1.0), rf.ClipResult("a", "auto", m2, np.zeros(0), 1.0),
+                          rf.ClipResult("b", "clicks", None, np.zeros(0), math.nan, error="no face")]
+    before = rf.stress_records("half", res(good, bad))
+    assert [r["misses"] for r in before] == [[], ["pupil_med", "pupil_p95"], ["start"]]
+    assert before[1]["values"]["pupil_med"] == pytest.approx(30.0)
+    after = rf.stress_records("half", res(bad, good))
+    lines = rf.stress_changes(before, after)
+    assert lines[0].startswith("half a clicks: now misses Pm, P95") and "pupil_med 0.00→30.00" in lines[0]
+    assert lines[1].startswith("half a auto: now meets Pm, P95")
+    assert lines[-1] == "every target: 1 then, 1 now, of 3 clip-modes in both runs"
+    assert rf.stress_changes(before, before) == ["every target: 1 then, 1 now, of 3 clip-modes in both runs"]
+
+
+def test_stress_save_and_against_need_stress_and_a_readable_earlier_run(tmp_path, capsys):
+    assert rf.main(["--save", str(tmp_path / "x.json")]) == 2
+    assert "go with --stress" in capsys.readouterr().err
+    broken = tmp_path / "old.json"
+    broken.write_text("{not json")
+    assert rf.main(["--stress", str(tmp_path / "s"), "--against", str(broken)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot read" in err and "old.json" in err and err.count("\n") == 1
+
+
 # ------------------------------------------------------------------ the tracker on real clips
 
 REAL = rf.real_dir()
