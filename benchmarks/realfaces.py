@@ -907,21 +907,26 @@ STRESS_SHORT = {"lost_pct": "L", "pupil_med": "Pm", "pupil_p95": "P95", "roll_me
 def stress_summary(variant: str, results: Sequence[ClipResult]) -> tuple[list[str], dict[str, int]]:
     """One row of the stress table (variant, clips meeting every target with clicks / auto, each
     failing clip-mode and the targets it misses) and how many clip-modes meet each target."""
+    return _summary_of(variant, stress_records(variant, results))
+
+
+def _summary_of(variant: str, records: Sequence[dict]) -> tuple[list[str], dict[str, int]]:
+    """:func:`stress_summary` from one variant's :func:`stress_records`."""
     passes = {k: 0 for k in STRESS_SHORT}
     every = {"clicks": 0, "auto": 0}
     fails = []
-    for r in results:
-        if r.metrics is None:
-            fails.append(f"{r.name}/{r.mode[0]}: no start")
+    for r in records:
+        if r["misses"] == ["start"]:
+            fails.append(f"{r['clip']}/{r['mode'][0]}: no start")
             continue
-        miss = [k for k, v in misses(r.metrics, auto=r.mode == "auto").items() if v and k in STRESS_SHORT]
+        miss = [k for k in STRESS_SHORT if k in r["misses"]]
         for k in STRESS_SHORT:
             passes[k] += k not in miss
         if miss:
-            fails.append(f"{r.name}/{r.mode[0]}: {'+'.join(STRESS_SHORT[k] for k in miss)}")
+            fails.append(f"{r['clip']}/{r['mode'][0]}: {'+'.join(STRESS_SHORT[k] for k in miss)}")
         else:
-            every[r.mode] += 1
-    n = len({r.name for r in results})
+            every[r["mode"]] += 1
+    n = len({r["clip"] for r in records})
     return [variant, f"{every['clicks']}/{n}", f"{every['auto']}/{n}", "  ".join(fails)], passes
 
 
@@ -1000,8 +1005,9 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False, save: s
     t0 = time.perf_counter()
     for v, d in sets:
         res = measure_all(d, names, (False, True), workers=1 if serial else 2)
-        records += stress_records(v, res)
-        row, passes = stress_summary(v, res)
+        recs = stress_records(v, res)
+        records += recs
+        row, passes = _summary_of(v, recs)
         rows.append(row)
         for k in total:
             total[k] += passes[k]

@@ -162,10 +162,25 @@ FACE_CONTRAST = 0.5
 keeps only faint shading, which normalised correlation would blow up to a face's contrast."""
 
 
-def _flatness(window: np.ndarray, reference: np.ndarray) -> float:
-    """The factor (0..1] a match of ``window`` with ``reference`` (both light-free) is scaled by."""
-    a, b = float(window.std()), float(reference.std())
-    return min(a / max(FACE_CONTRAST * b, 1e-6), 1.0)
+def _flatness(window: np.ndarray, reference_spread: float) -> float:
+    """The factor (0..1] a match of ``window`` (light-free) with a light-free reference whose
+    values spread ``reference_spread`` (their standard deviation) is scaled by."""
+    return min(float(window.std()) / max(FACE_CONTRAST * reference_spread, 1e-6), 1.0)
+
+
+_FREE_REFERENCE: tuple[np.ndarray, np.ndarray, float] | None = None
+"""The last reference given to :func:`_match`, its :func:`light_free` version and that one's spread."""
+
+
+def _free_reference(reference: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`light_free` of a reference picture and its spread, made once for the reference in use
+    (the tracker compares every frame with the same calibrated picture)."""
+    global _FREE_REFERENCE
+    kept = _FREE_REFERENCE
+    if kept is None or kept[0] is not reference:
+        free = light_free(reference)
+        kept = _FREE_REFERENCE = (reference, free, float(free.std()))
+    return kept[1], kept[2]
 
 
 def _match(window: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, float, tuple[int, int]]:
@@ -176,11 +191,12 @@ def _match(window: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, float
     r = cv2.matchTemplate(window, reference, cv2.TM_CCOEFF_NORMED)
     _, best, _, at = cv2.minMaxLoc(r)
     if best < LIGHT_CHECK:
-        free, ref = light_free(window), light_free(reference)
+        free = light_free(window)
+        ref, spread = _free_reference(reference)
         r2 = cv2.matchTemplate(free, ref, cv2.TM_CCOEFF_NORMED)
         _, best2, _, (i, j) = cv2.minMaxLoc(r2)
         rh, rw = ref.shape
-        best2 *= _flatness(free[j : j + rh, i : i + rw], ref)
+        best2 *= _flatness(free[j : j + rh, i : i + rw], spread)
         if best2 >= LIGHT_SURE and best2 > best:
             return r2, float(best2), (i, j)
     return r, float(best), at

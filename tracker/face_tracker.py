@@ -611,10 +611,11 @@ class FaceTracker:
             mx, my = amx + shift * (pmx - amx), amy + shift * (pmy - amy)
             avx, avy = ax1 - ax0, ay1 - ay0
             vx, vy = avx + turn * ((px1 - px0) - avx), avy + turn * ((py1 - py0) - avy)
-            la, lp = math.hypot(avx, avy), math.hypot(px1 - px0, py1 - py0)
-            if not strong and not self._picture_allows_scale(anchors, lp / max(la, 1e-9)):
-                k = la / max(math.hypot(vx, vy), 1e-9)  # the roll follows, the scale stays
-                vx, vy = vx * k, vy * k
+            if not strong:
+                la = math.hypot(avx, avy)
+                if not self._picture_allows_scale(anchors, math.hypot(px1 - px0, py1 - py0) / max(la, 1e-9)):
+                    k = la / max(math.hypot(vx, vy), 1e-9)  # the roll follows, the scale stays
+                    vx, vy = vx * k, vy * k
             new = np.array([[mx - 0.5 * vx, my - 0.5 * vy], [mx + 0.5 * vx, my + 0.5 * vy]])
         self.velocity = new - self.anchors
         self.anchors = new
@@ -624,10 +625,10 @@ class FaceTracker:
         """Whether eyes that are not clearly seen may pull the head's scale by ``ratio`` (their
         distance over the anchors'). A weak eye may sit on its corner or lash line, and the scale
         pulled after it moves where both are looked for next, further onto the corners: on a
-        dark-skinned face turning quickly the pose grew 7 % in two thirds of a second while the face
-        narrowed 10 %, and the pupils reported ok stayed 10 % of the eye distance off to the end. The face picture (brows, eyes, nose)
-        does not follow the eye points: the scale may follow them where the picture matches better
-        at their distance than at the pose's."""
+        dark-skinned face turning quickly the pose grew 7 % in two thirds of a second while the
+        face narrowed 10 %, and the pupils reported ok stayed 10 % of the eye distance off to the
+        end. The face picture (brows, eyes, nose) does not follow the eye points: the scale may
+        follow them where the picture matches better at their distance than at the pose's."""
         if self._face_ref is None or abs(ratio - 1.0) <= SCALE_QUIET:
             return True
         mid = 0.5 * (anchors[0] + anchors[1])
