@@ -985,7 +985,7 @@ class EyeFinder:
         self._gain: np.ndarray | None = None  # the light against calibration (see adapt)
         self._gain_slow = np.ones(3)
         self._grid_ref: np.ndarray | None = None  # the light's grid in the calibration's light (measure_gain)
-        self._grid_cut: tuple[tuple, np.ndarray] | None = None  # this frame's grid at the irises (find → adapt)
+        self._grid_cut: tuple[tuple, np.ndarray, np.ndarray] | None = None  # this frame's grid at the irises and its median (find → adapt)
         self._light = None if model.light is None else [np.asarray(f, dtype=np.float32).reshape(1, 1, 3) for f in model.light]
         self._adapt_count = 0
         self._half: tuple[np.ndarray | None, int, int] = (None, 0, 0)
@@ -1475,17 +1475,26 @@ class EyeFinder:
         y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
         block = crop[y0:y1:self._skin_step, x0:x1:self._skin_step]
         if self._light is not None:  # each side in the light both eyes share
-            side = np.arange(x0, x1, self._skin_step)[: block.shape[1]] >= 0.5 * (c[0, 0] + c[1, 0])
-            block = block * np.where(side[:, None], self._light[1].reshape(1, 3), self._light[0].reshape(1, 3))[None]
+            # the columns x0, x0 + step, … from the first at or right of the eyes' middle on are the right side's
+            mid, step, n = 0.5 * (c[0, 0] + c[1, 0]), self._skin_step, block.shape[1]
+            j = min(max(math.ceil((mid - x0) / step), 0), n)
+            while j > 0 and x0 + step * (j - 1) >= mid:
+                j -= 1
+            while j < n and x0 + step * j < mid:
+                j += 1
+            lit = np.empty(block.shape, np.float32)
+            np.multiply(block[:, :j], self._light[0], out=lit[:, :j])
+            np.multiply(block[:, j:], self._light[1], out=lit[:, j:])
+            block = lit
         px = np.ascontiguousarray(block).reshape(-1, 3)
         return px if len(px) >= 16 else None
 
     def _skin_median(self, px: np.ndarray, gain: np.ndarray | None) -> np.ndarray | None:
         """Median BGR of the grid pixels ``px`` that look like skin under ``gain`` (within
         :data:`SKIN_SELECT` of the start of the skin model's interior ramp), or None when too few do."""
-        g = np.ones(3, np.float32) if gain is None else np.asarray(gain, dtype=np.float32)
-        near = self.skin.distance(px * g) < self.skin.lo + SKIN_SELECT
-        if near.sum() < max(16, 0.1 * len(px)):
+        lit = px if gain is None else px * np.asarray(gain, dtype=np.float32)
+        near = self.skin.distance(lit) < self.skin.lo + SKIN_SELECT
+        if np.count_nonzero(near) < max(16, 0.1 * len(px)):
             return None
         return _median_bgr(px[near])
 
@@ -1520,7 +1529,8 @@ class EyeFinder:
         eyes, brows and skin all move with the light, so the grid's median follows the light
         whatever the face does."""
         lo, hi = GAIN_LIMITS
-        grid = _median_bgr(px)
+        cut = self._grid_cut
+        grid = cut[2] if cut is not None and cut[1] is px else _median_bgr(px)
         now = None if jump else self._skin_median(px, self._gain)
         if now is None and self._grid_ref is not None:
             trial = np.clip(self._grid_ref / np.maximum(grid, 1.0), lo, hi)
@@ -1542,8 +1552,8 @@ class EyeFinder:
         px = self._skin_grid(crop, centres)
         if px is None:
             return
-        self._grid_cut = (tuple(np.asarray(centres, dtype=np.float64).ravel().tolist()), px)
         grid = _median_bgr(px)
+        self._grid_cut = (tuple(np.asarray(centres, dtype=np.float64).ravel().tolist()), px, grid)
         seen = grid * (1.0 if self._gain is None else self._gain)
         if np.all(np.abs(np.log(np.maximum(seen, 1.0) / np.maximum(self._grid_ref, 1.0))) < math.log(LIGHT_JUMP)):
             return

@@ -187,6 +187,14 @@ class HeadMotion:
             return found
         return np.concatenate([keep, found])
 
+    def _limits(self, w: int, h: int) -> np.ndarray:
+        """``(w, h)`` as float32 (1, 2), made once per image size: a corner's x and y stay under them."""
+        key = ("limits", w, h)
+        lim = self._buf.get(key)
+        if lim is None:
+            lim = self._buf[key] = np.array([[w, h]], np.float32)
+        return lim
+
     def step(self, frame_bgr: np.ndarray, face_polygon: np.ndarray | Callable[[], np.ndarray] | None = None,
              grey: np.ndarray | None = None) -> Motion | None:
         """The rigid motion from the previous frame to this one (frame px), or None.
@@ -207,7 +215,9 @@ class HeadMotion:
         h, w = g.shape
         if nxt is not None:
             q = nxt.reshape(-1, 2)
-            ok = (st.reshape(-1) != 0) & ((q >= 0) & (q < (w, h))).all(axis=1)
+            inside = (q >= 0.0) & (q < self._limits(w, h))
+            ok = inside[:, 0] & inside[:, 1]
+            ok &= st.reshape(-1) != 0
         else:
             ok = st.reshape(-1) != 0
         n_ok = int(np.count_nonzero(ok))
