@@ -392,6 +392,28 @@ def test_reset_adaptation_is_the_calibration_again(calibrated):
     assert (a.lip_upper, a.lip_lower, a.left, a.right) == (b.lip_upper, b.lip_lower, b.left, b.right)
 
 
+@pytest.mark.parametrize("gap", [1, 6])
+def test_a_corner_with_no_cheek_past_it_is_not_a_confident_mouth(calibrated, gap):
+    """Dark hair on the cheek ``gap`` px past the right corner, out to the crop's edge and as high
+    as the lips: right beside the corner the line runs on into it, no column past the corner looks
+    like the cheek, and the mouth found (as wide as the crop allows) is not taken for this person's
+    mouth. With skin between the corner and the hair the cheek is seen and the mouth is found."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    t = _truth_in_crop(BASE, ff, origin)
+    y = int(round(t["mouth"][1]))
+    crop = crop.copy()
+    crop[y - 10 : y + 11, int(t["mouth_right"][0]) + gap :] = (38, 48, 62)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    if gap == 1:
+        assert res is None or res.score < SCORE_OK
+    else:
+        assert res is not None and res.score >= SCORE_OK
+        assert _errors(res, t)[0] < 2.5
+
+
 @pytest.mark.parametrize("hair", ["beard", "moustache"])
 def test_the_mouth_line_starts_between_the_lips_not_in_hair_beside_them(calibrated, hair):
     """Dark, colourless hair right under the lower lip (a beard) or over the upper lip (a moustache),

@@ -9,7 +9,7 @@ import pytest
 
 from tracker.colour_model import lut_index
 from tracker.mouth_finder import WORK_IPD, MouthFinder, _edge_shift, body_middle
-from tracker.mouth_model import MouthModel, _inside, band_columns, corner_distance, line_columns, profile_features
+from tracker.mouth_model import MouthModel, _inside, band_columns, corner_distance, corner_search, line_columns, profile_features
 
 from test_mouth_finder import BASE, WI, _calibrate, _crop, _frame_of, render_face
 
@@ -78,6 +78,22 @@ def test_corner_distance_matches_the_plain_reference():
         want = _corner_reference(d, 4, n - 3, 3, (2, 9))
         assert got == pytest.approx(want, abs=1e-9)
 
+
+
+def test_corner_search_says_whether_the_cheek_was_seen_past_the_corner():
+    """With a run of cheek-like columns in reach the corner is where it starts (seen); with none —
+    the line ran on into hair or a collar as unlike the cheek as the lips — the corner is only where
+    the sum of unlikeness stopped growing (not seen). ``corner_distance`` is the same without the flag."""
+    rng = np.random.default_rng(3)
+    lips = rng.uniform(20, 60, 14)
+    seen = corner_search(np.concatenate([lips, rng.uniform(0, 3, 20)]), 4, 30, 3, (2, 9))
+    assert seen[2] and 13.0 <= seen[0] <= 15.0
+    hair = corner_search(np.concatenate([lips, rng.uniform(15, 40, 20)]), 4, 30, 3, (2, 9))
+    assert not hair[2]
+    short = corner_search(np.full(6, 30.0), 4, 30, 3, (2, 9))
+    assert not short[2]
+    for d in (np.concatenate([lips, rng.uniform(0, 3, 20)]), np.concatenate([lips, rng.uniform(15, 40, 20)])):
+        assert corner_distance(d, 4, 30, 3, (2, 9)) == corner_search(d, 4, 30, 3, (2, 9))[:2]
 
 def _profile(rows, finder):
     """A profile (features, inside) from a list of (kind, count): kinds are the model's classes."""

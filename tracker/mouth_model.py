@@ -748,13 +748,22 @@ def _crossing(v: list[float], k: int, level: float) -> float:
 
 def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int, int],
                     previous: float | None = None) -> tuple[float, float]:
+    """:func:`corner_search` without whether the cheek was seen: ``(distance, gain)``."""
+    x, g, _ = corner_search(d, lo, hi, run, body, previous)
+    return x, g
+
+
+def corner_search(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int, int],
+                  previous: float | None = None) -> tuple[float, float, bool]:
     """Where the mouth ends along one side of the line, from the columns' unlikeness to the cheek
     ``d`` (column 0 at the centre): the first column in ``[lo, hi]`` after which ``run`` columns in a
     row are less unlike the cheek than :data:`BODY_SHARE` of the mouth's body (the median over columns
     ``body``; at least :data:`CHEEK_LEVEL`) — a short crease or blotch beyond the corner does not
     move it, nor hair, a collar or the background further out — placed sub-pixel where ``d``
     crosses that level; and how clearly the mouth's columns up to it differed from the cheek
-    (``Σ min(d, 5·level) − level``). Without such a run, where that sum is largest.
+    (``Σ min(d, 5·level) − level``); and whether the cheek was seen past it. Without such a run,
+    where that sum is largest (the cheek not seen: the line ran off the mouth into hair, a beard or
+    a collar as unlike the cheek as lips, and the corner is only where the sum stopped).
 
     ``previous`` (the last frame's distance on this side, columns): where the columns past the lips
     are about as unlike the cheek as that level (a crease running on from the corner), the corner
@@ -771,7 +780,7 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
         # match out here may stay above a level set by the calibration alone
         level = max(level, CHEEK_FAR * min(v[a : b + 1]))
     if b <= a:
-        return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0
+        return float(min(max(0.5 * (lo + hi), 0.0), n - 1)), 0.0, False
     cap = 5.0 * level
     need = min(run, n - 1 - b + run)
     k = _cheek_from(v, level, a, b, need)
@@ -781,7 +790,7 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
             g += (q if q < cap else cap) - level
             gain.append(g)
         k = max(range(a, b + 1), key=gain.__getitem__)
-        return _crossing(v, k, level), float(gain[k])
+        return _crossing(v, k, level), float(gain[k]), False
     x = _crossing(v, k, level)
     if previous is not None and CORNER_HOLD > 0:
         k_in = _cheek_from(v, (1.0 + CORNER_HOLD) * level, a, b, need)
@@ -795,7 +804,7 @@ def corner_distance(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[i
     g = 0.0
     for q in v[: k + 1]:
         g += (q if q < cap else cap) - level
-    return x, float(g)
+    return x, float(g), True
 
 
 def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
