@@ -1475,13 +1475,9 @@ class EyeFinder:
         y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
         block = crop[y0:y1:self._skin_step, x0:x1:self._skin_step]
         if self._light is not None:  # each side in the light both eyes share
-            # the columns x0, x0 + step, … from the first at or right of the eyes' middle on are the right side's
-            mid, step, n = 0.5 * (c[0, 0] + c[1, 0]), self._skin_step, block.shape[1]
-            j = min(max(math.ceil((mid - x0) / step), 0), n)
-            while j > 0 and x0 + step * (j - 1) >= mid:
-                j -= 1
-            while j < n and x0 + step * j < mid:
-                j += 1
+            # columns x0, x0 + step, …: those left of the eyes' middle are the left side's
+            mid, step = 0.5 * (c[0, 0] + c[1, 0]), self._skin_step
+            j = sum(1 for k in range(block.shape[1]) if x0 + step * k < mid)
             lit = np.empty(block.shape, np.float32)
             np.multiply(block[:, :j], self._light[0], out=lit[:, :j])
             np.multiply(block[:, j:], self._light[1], out=lit[:, j:])
