@@ -477,7 +477,8 @@ def sheet_frames(n: int, tiles: int = 20) -> list[int]:
 def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None = None, cols: int = 5) -> np.ndarray:
     """A grid of our overlay frames (kept in ``run.overlays``) with the peer's points as white dots,
     the frame index, our status and the pupil error on each tile; a title band names the clip, the
-    mode, the colours and (given ``metrics``) the clip's headline figures."""
+    mode, the colours and (given ``metrics``) the clip's headline figures; under the tiles, with the
+    peer, :func:`series_strips` of the whole clip (yellow ticks: the tiles' frames)."""
     idx = sorted(run.overlays)
     if not idx:
         return np.zeros((TILE, TILE, 3), np.uint8)
@@ -522,7 +523,64 @@ def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None 
         colour = {OK: (120, 255, 120), EYES_CLOSED: (0, 200, 255), MOUTH_LOST: (0, 140, 255)}.get(st, (90, 90, 255))
         cv2.putText(sheet, label, (x + 4, y + th + 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv2.LINE_AA)
         cv2.rectangle(sheet, (x, y), (x + tw - 1, y + th + band - 1), (70, 70, 70), 1)
+    if peer is not None:
+        sheet = np.vstack([sheet, series_strips(run.params, peer, sheet.shape[1], idx)])
     return sheet
+
+
+SERIES_H = 64
+"""Height (px) of one strip of :func:`series_strips`."""
+SERIES = (("r_open", "mouth opening"), ("r_width", "mouth width"), ("r_eye", "eye opening"), ("r_brow", "brows"))
+
+
+def series_strips(ours: Sequence[FaceParams], peer: PeerTrack, width: int, marks: Sequence[int] = ()) -> np.ndarray:
+    """One strip per shape value (:data:`SERIES`) across the whole clip, ``width`` px wide: the peer's
+    series in white and ours in red, ours mapped onto the peer's scale by the least-squares line
+    between them over the frames the peer sees — what the correlation compares, so a stretch where
+    red leaves white is where r is lost (a jump between two levels: the finder switching between two
+    readings). Frames we did not report ``ok`` have a dark red background, frames the peer does
+    not see a black one; ``marks`` (frame indices, e.g. the contact sheet's tiles) are ticks on the
+    lower edge."""
+    n = min(len(ours), len(peer))
+    out = np.full((SERIES_H * len(SERIES), width, 3), 24, np.uint8)
+    if n < 2:
+        return out
+    a_all = _shapes(_hold(np.array([p.values() for p in ours[:n]], dtype=np.float64)))
+    b_all = _shapes(peer.values[:n])
+    seen = peer.visible[:n]
+    x = np.round(np.arange(n) * (width - 1) / (n - 1)).astype(np.int32)
+    bad = np.array([p.status != OK for p in ours[:n]])
+    for k, (key, label) in enumerate(SERIES):
+        y0 = k * SERIES_H
+        strip = out[y0 : y0 + SERIES_H]
+        for i in range(n):
+            if not seen[i] or bad[i]:
+                x1 = x[i + 1] if i + 1 < n else width
+                strip[:, x[i] : max(x1, x[i] + 1)] = (0, 0, 0) if not seen[i] else (0, 0, 70)
+        a, b = a_all[key], b_all[key]
+        ok = seen & np.isfinite(a) & np.isfinite(b)
+        r = pearson(a[ok], b[ok]) if ok.sum() >= 3 else math.nan
+        if ok.sum() >= 3 and np.ptp(b[ok]) > 0:
+            lo, hi = float(np.min(b[ok])), float(np.max(b[ok]))
+            lo, hi = lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo)
+            slope, icpt = np.polyfit(b[ok], a[ok], 1)
+            mapped = (a - icpt) / slope if abs(slope) > 1e-9 else np.full(n, math.nan)
+
+            def line(v: np.ndarray, colour: tuple[int, int, int]) -> None:
+                y = y0 + (SERIES_H - 3) - (np.clip(v, lo, hi) - lo) / (hi - lo) * (SERIES_H - 16)
+                for s0, s1 in _runs(ok & np.isfinite(v)):
+                    pts = np.stack([x[s0:s1], np.round(y[s0:s1]).astype(np.int32) - y0], axis=1)
+                    cv2.polylines(strip, [pts.reshape(-1, 1, 2)], False, colour, 1, cv2.LINE_AA)
+
+            line(b, (255, 255, 255))
+            line(mapped, (60, 60, 255))
+        cv2.putText(strip, f"{label}  r {r:.2f}   white: the peer   red: ours on the peer's scale", (4, 11),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.38, (200, 200, 200), 1, cv2.LINE_AA)
+        for i in marks:
+            if 0 <= i < n:
+                strip[SERIES_H - 3 :, x[i]] = (0, 255, 255)
+        strip[0, :] = (70, 70, 70)
+    return out
 
 
 def write_png(path: Path, img: np.ndarray) -> None:

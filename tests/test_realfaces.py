@@ -230,13 +230,46 @@ def test_contact_sheet_tiles_and_peer_points():
     peer.points = {"left_pupil": np.tile([100.0, 100.0], (n, 1)), "right_pupil": np.tile([200.0, 100.0], (n, 1))}
     run = rf.ClipRun("c", "clicks", params=_ours(peer.values), overlays={i: np.zeros((480, 640, 3), np.uint8) for i in keep})
     sheet = rf.contact_sheet(run, peer, rf.compare(run.params, peer), cols=4)
-    head = sheet.shape[0] - 2 * (240 + 22)
+    head = sheet.shape[0] - 2 * (240 + 22) - rf.SERIES_H * len(rf.SERIES)
     assert sheet.shape[1] == 4 * rf.TILE and head > 0
     assert (sheet[:head] > 150).any()  # the title band
     tile = sheet[head : head + 240, : rf.TILE]
     s = rf.TILE / 640
     assert tile[int(100 * s), int(100 * s)].tolist() == [255, 255, 255]  # the peer's left pupil
     assert (sheet[head + 240 : head + 262, : rf.TILE] > 100).any()  # a label under the tile
+
+
+def _ink(strip: np.ndarray, colour) -> np.ndarray:
+    """(row, column) of the pixels of ``strip`` close to ``colour`` (BGR), below the label."""
+    d = np.abs(strip[12:].astype(int) - np.array(colour)).max(axis=2)
+    return np.argwhere(d < 60) + [12, 0]
+
+
+def test_series_strips_draw_ours_on_the_peers_scale_and_shade_frames_not_ok():
+    n = 120
+    peer = _peer(n=n, seed=3)
+    values = peer.values.copy()
+    values[:, IX["lip_upper"]] = 2.0 * peer.values[:, IX["lip_upper"]] + 3.0  # a linear change of scale
+    values[:, IX["lip_lower"]] = 2.0 * peer.values[:, IX["lip_lower"]] + 3.0
+    values[60:80, IX["mouth_width"]] = peer.values[60:80, IX["mouth_width"]] + 40.0  # a stretch off the peer
+    statuses = [OK] * n
+    statuses[90:100] = [LOST] * 10
+    img = rf.series_strips(_ours(values, statuses), peer, 600, marks=[0, 50])
+    H = rf.SERIES_H
+    assert img.shape == (H * len(rf.SERIES), 600, 3)
+    opening, width = img[:H], img[H : 2 * H]
+    # the opening, rescaled, is drawn exactly where the peer's own series would be: red over the white
+    same = rf.series_strips(_ours(peer.values, statuses), peer, 600, marks=[0, 50])[:H]
+    assert np.abs(opening.astype(int) - same.astype(int)).max() <= 40
+    assert len(_ink(opening, (60, 60, 255))) > 200 and len(_ink(opening, (255, 255, 255))) < 20
+    # the width's red leaves the white at the stretch, to the strip's top (clipped there), not elsewhere
+    x_off = 70 * 599 // 119
+    assert _ink(width[:, x_off : x_off + 2], (60, 60, 255))[:, 0].min() <= 14
+    assert _ink(width[:, 100:200], (60, 60, 255))[:, 0].min() > 20
+    # frames not ok have a dark red background; the tiles' frames are ticked on the lower edge
+    at = lambda i: int(round(i * 599 / 119))
+    assert (opening[20:, at(95)] == (0, 0, 70)).all(axis=1).sum() > 20 and not (opening[:, at(30)] == (0, 0, 70)).all(axis=1).any()
+    assert (opening[H - 1, at(0)] == (0, 255, 255)).all() and (opening[H - 1, at(50)] == (0, 255, 255)).all()
 
 
 def test_results_table_shows_a_failed_start():
