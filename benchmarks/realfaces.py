@@ -549,14 +549,12 @@ def series_strips(ours: Sequence[FaceParams], peer: PeerTrack, width: int, marks
     b_all = _shapes(peer.values[:n])
     seen = peer.visible[:n]
     x = np.round(np.arange(n) * (width - 1) / (n - 1)).astype(np.int32)
-    bad = np.array([p.status != OK for p in ours[:n]])
+    for i, p in enumerate(ours[:n]):
+        if not seen[i] or p.status != OK:
+            x1 = x[i + 1] if i + 1 < n else width
+            out[:, x[i] : max(x1, x[i] + 1)] = (0, 0, 0) if not seen[i] else (0, 0, 70)
     for k, (key, label) in enumerate(SERIES):
-        y0 = k * SERIES_H
-        strip = out[y0 : y0 + SERIES_H]
-        for i in range(n):
-            if not seen[i] or bad[i]:
-                x1 = x[i + 1] if i + 1 < n else width
-                strip[:, x[i] : max(x1, x[i] + 1)] = (0, 0, 0) if not seen[i] else (0, 0, 70)
+        strip = out[k * SERIES_H : (k + 1) * SERIES_H]
         a, b = a_all[key], b_all[key]
         ok = seen & np.isfinite(a) & np.isfinite(b)
         r = pearson(a[ok], b[ok]) if ok.sum() >= 3 else math.nan
@@ -567,9 +565,9 @@ def series_strips(ours: Sequence[FaceParams], peer: PeerTrack, width: int, marks
             mapped = (a - icpt) / slope if abs(slope) > 1e-9 else np.full(n, math.nan)
 
             def line(v: np.ndarray, colour: tuple[int, int, int]) -> None:
-                y = y0 + (SERIES_H - 3) - (np.clip(v, lo, hi) - lo) / (hi - lo) * (SERIES_H - 16)
+                y = np.round((SERIES_H - 3) - (np.clip(v, lo, hi) - lo) / (hi - lo) * (SERIES_H - 16)).astype(np.int32)
                 for s0, s1 in _runs(ok & np.isfinite(v)):
-                    pts = np.stack([x[s0:s1], np.round(y[s0:s1]).astype(np.int32) - y0], axis=1)
+                    pts = np.stack([x[s0:s1], y[s0:s1]], axis=1)
                     cv2.polylines(strip, [pts.reshape(-1, 1, 2)], False, colour, 1, cv2.LINE_AA)
 
             line(b, (255, 255, 255))
