@@ -13,6 +13,7 @@ from tracker.calibration import FaceFrame
 from tracker.eyes import (
     EyeFinder,
     EyeModel,
+    IRIS_FLOOR,
     LID_SHOW,
     EyeModelError,
     GAP_BLIND,
@@ -742,3 +743,32 @@ def test_a_spectacle_rim_under_the_brows_is_found_and_left_out_of_them(thick):
         img, _ = render_face(state)
         res, truth, _, _ = _find(finder, state, frame=_with_glasses(img, state, thick))
         _check(res, truth, lid=2.0, brow=2.0)
+
+
+def test_a_dark_iris_near_the_skins_colour_is_inside_the_walk():
+    # an iris 3 from the skin by colour (under the ramp's middle 3.5) but dark: by colour alone the
+    # walk ends at once; with the dark rule as its floor it crosses the iris and goes on by colour
+    # through the white (6) to the lid's skin (0.5)
+    walk = [3.0] * 4 + [6.0] * 2 + [0.5] * 6
+    assert walk_length(walk, 2.0, 5.0, 3, 4.5) < 1.0
+    assert walk_length(walk, 2.0, 5.0, 3, 4.5, floor=[1.0] * 4) == pytest.approx(5.5, abs=0.3)
+    # the floor only lifts: a walk already interior by colour is unchanged, and a floor past the
+    # skin does not carry the run on
+    plain = [9.0] * 4 + [0.5] * 6
+    assert walk_length(plain, 2.0, 5.0, 3, 4.5, floor=[0.0] * 4) == walk_length(plain, 2.0, 5.0, 3, 4.5)
+    assert walk_length(walk, 2.0, 5.0, 3, 4.5, floor=[1.0, 1.0]) < 2.0
+
+
+def test_the_lid_walks_take_the_dark_rule_only_within_the_iris_floor(finder):
+    # a strip whose eye point is on a dark iris that the colour walk calls skin: the dark rule lifts
+    # the samples within IRIS_FLOOR radii of it and no further (a lash line on the rim stays out)
+    i, c = 0, 40
+    r = finder.radius[i]
+    nr = int(math.floor(IRIS_FLOOR * r)) + 1
+    dist = [3.0] * 81
+    dark = [1.0] * 81  # everything dark: only the floor's reach may count
+    up0, down0 = finder._lid_walks(dist, c, i, (10.0, float(c)))
+    up1, down1 = finder._lid_walks(dist, c, i, (10.0, float(c)), dark)
+    assert up0 < 1.0 and down0 < 1.0
+    assert down1 == pytest.approx(nr - 0.5, abs=0.01)
+    assert up1 == pytest.approx(max(nr - 0.5 - finder.model.lash[i], 0.0), abs=0.01)

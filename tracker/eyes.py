@@ -96,6 +96,13 @@ eye point is at most the iris radius plus this. Real eyes open no wider (a landm
 widest surprise on the shared clips: 0.093 and 0.05 wi past the iris), and a run past it went on
 into make-up, an eye bag's shadow or the brow's (at 35 px between the eyes, runs three times the
 lid's real distance)."""
+IRIS_FLOOR = 0.6
+"""How far from the eye point (× the iris radius) the lid walks take the dark rule's interior as
+interior whatever its colour. A dark brown iris can lie nearer a broad skin model's colour than the
+walk's ramp middle (a shared clip's skin runs from a lit bridge to a shadowed lid: the iris 3.8 from
+it, 3.3 behind glasses whose glare broadens it, against a middle of 3.5 or more); by colour alone
+both walks then end at the pupil and the eye reads shut while it is open. Nearer than the whole
+radius: a narrowed eye's lash line lies on the iris's rim, and blur spreads it inwards."""
 OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
@@ -341,7 +348,7 @@ def _run(e) -> float:
     return total
 
 
-def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None) -> float:
+def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None, floor: list[float] | None = None) -> float:
     """Soft length (samples) of the interior run of one lid walk whose samples lie ``dist``
     (Mahalanobis units) from the skin, ``dist[0]`` at the eye point.
 
@@ -355,7 +362,8 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
     white above or below the iris is interior too), but never below the calibrated middle nor
     more than ``b`` above it (a walk that reaches skin like the calibrated one keeps the
     calibrated ramp). A blurred edge crosses half-way exactly at the edge. ``white`` None: the
-    calibrated ramp only."""
+    calibrated ramp only. ``floor`` (optional, 0..1 per sample from ``dist[0]``) is the least
+    membership of its samples: what is known to be interior whatever its colour."""
     if not dist:
         return 0.0
     mid, width = 0.5 * (lo + hi), hi - lo
@@ -366,7 +374,12 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
         mid = max(mid, min(mid + b, 0.5 * (a + b)))
     start = mid - 0.5 * width
     ramp = [(d - start) / width for d in dist]
-    return _run([0.0 if r < 0.0 else 1.0 if r > 1.0 else r for r in ramp])  # clamped, without min/max calls
+    ramp = [0.0 if r < 0.0 else 1.0 if r > 1.0 else r for r in ramp]  # clamped, without min/max calls
+    if floor:
+        for j, f in enumerate(floor[: len(ramp)]):
+            if f > ramp[j]:
+                ramp[j] = f
+    return _run(ramp)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1260,13 +1273,19 @@ class EyeFinder:
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
-    def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
+    def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float],
+                   dark: list[float] | None = None) -> tuple[float, float]:
         """``(upper, lower)`` by colour from the strip's distances from the skin ``dist`` (row ``c``
-        is ``at``'s), each walk's ramp set by :func:`walk_length`."""
+        is ``at``'s), each walk's ramp set by :func:`walk_length`; ``dark`` (the strip's interior
+        with the dark rule, ``at`` on the iris) is its floor within :data:`IRIS_FLOOR` radii."""
         dy = round(at[1]) - at[1]
         lo, hi, k, white = self.skin.lo, self.skin.hi, self._walk_k[i], self.model.white
-        up = walk_length(dist[c::-1], lo, hi, k, white)
-        down = walk_length(dist[c:], lo, hi, k, white)
+        fu = fd = None
+        if dark is not None:
+            nr = int(math.floor(IRIS_FLOOR * self.radius[i])) + 1
+            fu, fd = dark[c::-1][:nr], dark[c:][:nr]
+        up = walk_length(dist[c::-1], lo, hi, k, white, fu)
+        down = walk_length(dist[c:], lo, hi, k, white, fd)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
 
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
@@ -1292,7 +1311,7 @@ class EyeFinder:
         n = len(c0)
         out = []
         for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
-            up, down = self._lid_walks(dist[a:b], k, i, ats[i])
+            up, down = self._lid_walks(dist[a:b], k, i, ats[i], ed[a:b])
             gu, gd = self._lid_runs(ed[a:b], k, i, ats[i])
             out.append((up, down, gu + gd))
         return out
