@@ -557,7 +557,7 @@ def series_strips(ours: Sequence[FaceParams], peer: PeerTrack, width: int, marks
         strip = out[k * SERIES_H : (k + 1) * SERIES_H]
         a, b = a_all[key], b_all[key]
         ok = seen & np.isfinite(a) & np.isfinite(b)
-        r = pearson(a[ok], b[ok]) if ok.sum() >= 3 else math.nan
+        r = pearson(a[ok], b[ok])  # nan with fewer than 3 frames
         if ok.sum() >= 3 and np.ptp(b[ok]) > 0:
             lo, hi = float(np.min(b[ok])), float(np.max(b[ok]))
             lo, hi = lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo)

@@ -1283,7 +1283,7 @@ class EyeFinder:
         fu = fd = None
         if dark is not None:
             nr = int(math.floor(IRIS_FLOOR * self.radius[i])) + 1
-            fu, fd = dark[c::-1][:nr], dark[c:][:nr]
+            fu, fd = dark[c::-1][:nr], dark[c : c + nr]
         up = walk_length(dist[c::-1], lo, hi, k, white, fu)
         down = walk_length(dist[c:], lo, hi, k, white, fd)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
