@@ -397,8 +397,10 @@ class MouthFinder:
         self._off = np.arange(self.reach[0], self.reach[1] + 1)
         m = len(self._off)
         self._upper_only = np.where(np.tri(m, m, -1, dtype=bool), np.inf, 0.0)  # the gap's bottom is not above its top
-        self._gap_a, self._gap_b = self._off[:, None] - 0.5, self._off[None, :] - 0.5  # the gap's rows, from its top to its bottom
-        self._span = (self._off[None, :] - self._off[:, None]).astype(np.float64)
+        self._gap_edge = self._off - 0.5  # the gap's rows, from its top to its bottom
+        # the gap's candidate heights (rows from its top to its bottom candidate), and each pair's one
+        self._spans = np.arange(1 - m, m, dtype=np.float64)
+        self._span_at = np.arange(m)[None, :] - np.arange(m)[:, None] + (m - 1)
         # (the offsets that depend on the lips' thicknesses: _set_thickness)
         # what the lips look like and how thick they are, adapted from well-fitted frames (adapt)
         self._mu0 = cls[:, 0].copy()
@@ -453,6 +455,7 @@ class MouthFinder:
         P = self._pad
         self._at_b, self._at_u, self._at_sa = self._off + P, self._off_u + P, self._off_sa + P
         self._at_l, self._at_sb, self._at_ob = self._off_l + P, self._off_sb + P, self._off_ob + P
+        self._tables: dict[int, tuple] = {}  # per profile length: see _sums
 
     # ------------------------------------------------------------------ adaptation
     def adapt(self, res: MouthResult) -> bool:
@@ -602,6 +605,31 @@ class MouthFinder:
             scores.append(col[k] / unit - SEED_LIP * below + 0.05 * d[k])
         return float(a + cands[min(range(len(scores)), key=scores.__getitem__)])  # the first lowest (finite scores)
 
+    def _sums(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int]]:
+        """For profiles of ``n`` rows, what :meth:`vertical` fills every frame: the running sums
+        (8, n + 2P + 1) — the four parts' row costs, the three between the lips' and the one past the
+        lower lip's, each after a 0 — their value before the profile's rows are written in, and the
+        flat indices (from the line's row) of the sums each candidate pair of lip edges reads: the
+        upper lip and the skin above it, the lower lip, the skin below it and past that, and the gap's
+        edges. Made again when the thicknesses change (:meth:`_set_thickness`)."""
+        got = self._tables.get(n)
+        if got is None:
+            P = self._pad
+            w = n + 2 * P + 1
+            table = np.zeros((8, w))
+            table[:4, 1:] = ROW_CAP
+            table[4:6, 1:] = GAP_PRICE
+            m = len(self._off)
+            b = np.broadcast_to(self._at_b[:, None], self._at_u.shape)
+            upper = [w + b, w + self._at_u, self._at_u, self._at_sa]
+            b = np.broadcast_to(self._at_b[:, None], self._at_l.shape)
+            lower = [2 * w + self._at_l, 2 * w + b, 3 * w + self._at_sb, 3 * w + self._at_l,
+                     7 * w + self._at_ob, 7 * w + self._at_sb]
+            edges = [(4 + i) * w + self._at_b for i in range(3)]
+            picks = np.concatenate([np.ravel(v) for v in upper + lower + edges])
+            got = self._tables[n] = (np.empty((8, w)), table, picks, (self._at_u.size, self._at_l.size, m))
+        return got
+
     def row_costs(self, f: np.ndarray) -> np.ndarray:
         """What each row of a profile costs (4, rows) as the skin above, the upper lip, the lower lip
         and the skin below: its mean squared feature distance from the part's median in the part's
@@ -636,53 +664,60 @@ class MouthFinder:
         inside of a mouth."""
         n = len(f)
         P = self._pad
-        e = np.full((4, n + 2 * P), ROW_CAP)  # rows past the crop's edges: as bad as can be
-        e[:, P : P + n] = self.row_costs(f)
-        cum = np.zeros((4, n + 2 * P + 1))
-        np.cumsum(e, axis=1, out=cum[:, 1:])
+        sums, table, picks, (nu, nl, m) = self._sums(n)
+        # rows 0-3: what each row costs in the four parts (rows past the crop's edges: as bad as can
+        # be); 4-6: between the lips (see below); 7: lip colour past the skin below the lower lip
+        np.copyto(sums, table)
+        rows = sums[:, 1 + P : 1 + P + n]
+        e = rows[:4]
+        e[...] = self.row_costs(f)
         # a row between the lips is free when it looks like the inside (dark, teeth); skin there costs
         # the full price; anything else (a tongue, the red back of a wide-open mouth) is free in an
         # open mouth — a gap with rows of the dark inside or teeth in it — but lip-like rows are
         # not a gap between closed lips (lips pressed together, one lip tucked under the other)
-        m0, m1 = P, P + n
         out = 1.0 - inside
-        skin_like = np.minimum(e[0, m0:m1], e[3, m0:m1])
-        lip_like = np.minimum(e[1, m0:m1], e[2, m0:m1])
+        skin_like = np.minimum(e[0], e[3])
+        lip_like = np.minimum(e[1], e[2])
         k = GAP_PRICE / SKIN_UNLIKE
-        cg = np.zeros((3, n + 2 * P + 1))
-        cg[0, 1:] = cg[1, 1:] = GAP_PRICE
-        cg[0, 1 + m0 : 1 + m1] = (OPEN_SKIN / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
+        rows[4] = (OPEN_SKIN / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
         if OPEN_LIP > 0:
-            cg[0, 1 + m0 : 1 + m1] += (OPEN_LIP / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - lip_like, 0.0, SKIN_UNLIKE)
-        cg[1, 1 + m0 : 1 + m1] = k * out * _clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
-        cg[2, 1 + m0 : 1 + m1] = inside > 0.5
-        np.cumsum(cg, axis=1, out=cg)
-        # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
-        # the lower lip (b3 = b2: lips closed, no gap row); offsets precomputed in the constructor
-        yi = min(max(int(y_line), 0), n - 1)
-        at_b, at_u, at_l, at_sb = self._at_b, self._at_u, self._at_l, self._at_sb
-        c0, c1, c2, c3 = cum[:, yi:]  # from the row P above the line's row (the offsets are from there)
-        cu = c1[at_b][:, None] - c1[at_u] + c0[at_u] - c0[self._at_sa] + self._pu
-        cl = c2[at_l] - c2[at_b][:, None] + c3[at_sb] - c3[at_l] + self._pd
+            rows[4] += (OPEN_LIP / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - lip_like, 0.0, SKIN_UNLIKE)
+        rows[5] = k * out * _clip(SKIN_UNLIKE - np.minimum(skin_like, lip_like), 0.0, SKIN_UNLIKE)
+        rows[6] = inside > 0.5
         # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
-        co = np.zeros(n + 2 * P + 1)
-        co[1 + m0 : 1 + m1] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
-        np.cumsum(co, out=co)
-        co = co[yi:]
-        cl += co[self._at_ob] - co[at_sb]
+        rows[7] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
+        np.cumsum(sums, axis=1, out=sums)
+        # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
+        # the lower lip (b3 = b2: lips closed, no gap row); the sums at their offsets (precomputed in
+        # _sums) from the row P above the line's row, all in one gather
+        yi = min(max(int(y_line), 0), n - 1)
+        got = sums.ravel()[yi:].take(picks)
+        gu = got[: 4 * nu].reshape(4, m, -1)
+        gl = got[4 * nu : 4 * nu + 6 * nl].reshape(6, m, -1)
+        cgb = got[4 * nu + 6 * nl :].reshape(3, m)
+        cu = gu[0] - gu[1] + gu[2] - gu[3] + self._pu
+        cl = gl[0] - gl[1] + gl[2] - gl[3] + self._pd
+        cl += gl[4] - gl[5]
         U, L = cu.min(axis=1), cl.min(axis=1)
-        cgb = cg[:, yi + at_b]
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
         tot = np.where(gap[2] >= OPEN_ROWS * self.r, gap[0], gap[1])
         tot += U[:, None] + L[None, :] + self._upper_only
-        # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it)
+        # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it):
+        # the cost of a pair is the larger of its top's and its bottom's (the cost grows with the miss)
         dl = y_line - yi
-        off = np.maximum(np.maximum(self._gap_a - dl, dl - self._gap_b), 0.0)
-        tot += (3.0 * self.r / (spread * self.wi) ** 2) * off * off
+        c = 3.0 * self.r / (spread * self.wi) ** 2
+        above = np.maximum(self._gap_edge - dl, 0.0)
+        below = np.maximum(dl - self._gap_edge, 0.0)
+        above = c * above * above
+        below = c * below * below
+        tot += np.maximum(above[:, None], below[None, :])
         if previous is not None:
             g0 = previous.gap_bottom - previous.gap_top
-            # capped: it settles what the rows leave open, and cannot hold on to a wrong gap
-            tot += np.minimum((2.0 * self.r / (0.15 * self.wi) ** 2) * (self._span - g0) ** 2, PREVIOUS_CAP * self.r)
+            # capped: it settles what the rows leave open, and cannot hold on to a wrong gap (by the
+            # pair's height, which is the same along each diagonal)
+            cost = np.minimum((2.0 * self.r / (0.15 * self.wi) ** 2) * (self._spans - g0) ** 2, PREVIOUS_CAP * self.r)
+            tot += cost.take(self._span_at)
+        at_b = self._at_b
         m = len(at_b)
         bs = yi + self._off
         (lu, pu, _), (ld, pd, _) = self._len

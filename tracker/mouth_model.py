@@ -63,8 +63,11 @@ LINE_BANDS = (0.03, 0.09)
 """Rows (× wi) above and below the mouth line that a column's "above" and "below" bands cover."""
 L_UNIT, C_UNIT = 0.05, 0.012
 """One unit of the profile features: 5 % of the skin's luminance; 0.012 of a chroma ratio."""
-_FEATURE_MIX = np.array([[0.114, 0.0, -1.0], [0.587, -1.0, 0.5], [0.299, 1.0, 0.5]], np.float32)
-"""BGR → (luminance, r − g, (r + g − 2b) / 2), the numerators of :func:`profile_features`."""
+_FEATURE_MIX = np.array([[0.114, 0.0, -1.0, 1.0], [0.587, -1.0, 0.5, 1.0], [0.299, 1.0, 0.5, 1.0]], np.float32)
+"""BGR → (luminance, r − g, (r + g − 2b) / 2, b + g + r), the numerators of :func:`profile_features`
+and the sum its chroma ratios are taken over."""
+_FEATURE_UNITS: dict[float, np.ndarray] = {}
+"""The factors (3,) float32 that put :func:`profile_features`' values in their units, by skin level."""
 
 
 # --------------------------------------------------------------------------------------------- features
@@ -80,14 +83,18 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     """Colour features (float32 ``(..., 3)``) of mean BGR values ``(..., 3)``: luminance in units of
     :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
     units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference."""
-    c = np.asarray(bgr, dtype=np.float32)
-    out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2
-    out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
-    den = np.add.reduce(c, axis=-1, keepdims=True)  # c.sum without the method's wrapper
+    units = _FEATURE_UNITS.get(skin_level)
+    if units is None:
+        if len(_FEATURE_UNITS) > 16:
+            _FEATURE_UNITS.clear()
+        units = _FEATURE_UNITS[skin_level] = np.array(
+            [np.float32(1.0 / (L_UNIT * max(skin_level, 8.0))), np.float32(1.0 / C_UNIT), np.float32(1.0 / C_UNIT)], np.float32)
+    out = np.asarray(bgr, dtype=np.float32) @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
+    den = out[..., 3:]
     den += np.float32(24.0)
-    np.divide(out[..., 1:], den, out=out[..., 1:])
-    out[..., 1:] *= np.float32(1.0 / C_UNIT)
-    return out
+    np.divide(out[..., 1:3], den, out=out[..., 1:3])
+    out[..., :3] *= units
+    return out[..., :3]
 
 
 def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
