@@ -416,7 +416,7 @@ class MouthFinder:
         self.sigma_line = max(0.015 * wi, 1.0)
         self.n_side = int(math.ceil(0.95 * wi))
         self._cols = np.arange(self.n_side + 1)
-        self._insets = np.asarray(CORNER_INSETS) * r
+        self._insets = (np.asarray(CORNER_INSETS) * r).tolist()
         self._inv_skins = self._inv[_SKINS]
         self.reset_adaptation()
         self.cheeks = (model.cheek_left, model.cheek_right)
@@ -430,6 +430,7 @@ class MouthFinder:
         lead = float(min(cls[1, 0, 1], cls[2, 0, 1]) - cls[4, 0, 1])
         self.seed_red = float(cls[4, 0, 1]) + lip_red_need(lead) if SEED_REACH_LIPS > 0 and lead >= GAP_RED[0] else None
         self.seed_reach = max(int(round(SEED_REACH_LIPS * wi)), 3)
+        self._axis_seed = (model.axis_down[:3], model.axis_down[3])  # the lower lip's value: w·bgr + c
 
     def _set_thickness(self, t_up: float, t_dn: float) -> None:
         """The lips' expected thicknesses (rows at the working scale) and everything the vertical
@@ -570,20 +571,21 @@ class MouthFinder:
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
         b = min(max(int(y_line + SEED_REACH[1] * self.wi) + 1, a + 1), H)
-        col = _row_means(maps.lum[a:b, x0:x1])
-        d = np.abs(np.arange(a, b) - y_line)
-        best = int((col + 0.05 * d).argmin())
+        # a few dozen rows: plain lists are quicker than numpy here
+        col = _row_means(maps.lum[a:b, x0:x1]).tolist()
+        d = [abs(y - y_line) for y in range(a, b)]
+        near = [v + 0.05 * e for v, e in zip(col, d)]
+        best = near.index(min(near))
         if SEED_LIP <= 0 or b - a < 3:
             return float(a + best)
-        v = ((col[1:-1] < col[:-2]) & (col[1:-1] <= col[2:])).nonzero()[0] + 1
-        cands = sorted(set(v.tolist()) | {best})
+        cands = sorted({k for k in range(1, b - a - 1) if col[k] < col[k - 1] and col[k] <= col[k + 1]} | {best})
         if len(cands) == 1:
             return float(a + best)
         # the lower lip's value on the rows of the band (mean BGR), from the running sums: the gap has
         # the lower lip under it, the shadow under the lower lip has the chin
         c = maps.colour[:, x1] - maps.colour[:, x0]
         bgr = (c[1:] - c[:-1]).astype(np.float64) * (1.0 / (x1 - x0))
-        ld = bgr @ self.model.axis_down[:3] + self.model.axis_down[3]
+        ld = bgr @ self._axis_seed[0] + self._axis_seed[1]
         cd = np.zeros(len(ld) + 1)
         np.cumsum(_clip(ld, 0.0, 1.0), out=cd[1:])
         nd = max(int(round(self.t_dn)), 1)
@@ -828,20 +830,27 @@ class MouthFinder:
         reach = int(math.ceil(0.2 * self.wi))
         ys = [min(max(int(round(c[1])), 0), H - 1) for c in (left, right)]
         a, b = max(min(ys) - reach, 0), min(max(ys) + reach + 1, H)
-        ins = self._insets
-        xs = np.concatenate([left[0] + ins, right[0] - ins])
-        x0 = _clip(np.rint(xs - 1.0).astype(np.int64), 0, W - 1)
-        x1 = _clip(np.rint(xs + 1.0).astype(np.int64) + 1, x0 + 1, W)
-        inv = (1.0 / (x1 - x0)).astype(np.float32)[:, None]
-        c = maps.colour[a : b + 1][:, x1] - maps.colour[a : b + 1][:, x0]  # (n+1, k, 3)
+        # each column's span [x0, x1) (6 columns: plain Python), its x1s first, then its x0s
+        ends, inv = [], []
+        for x in [left[0] + d for d in self._insets] + [right[0] - d for d in self._insets]:
+            x0 = min(max(round(x - 1.0), 0), W - 1)
+            x1 = min(max(round(x + 1.0) + 1, x0 + 1), W)
+            ends.append((x1, x0))
+            inv.append(1.0 / (x1 - x0))
+        k = len(ends)
+        at = [e[0] for e in ends] + [e[1] for e in ends]
+        inv = np.array(inv, np.float32)[:, None]
+        c = maps.colour[a : b + 1, at]
+        c = c[:, :k] - c[:, k:]  # (n+1, k, 3)
         f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
         d = f[:, None, :, :] - self._mu_skins
         unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins).min(axis=1)  # (k, n)
         np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
-        i = maps.inside[a : b + 1][:, x1] - maps.inside[a : b + 1][:, x0]
+        i = maps.inside[a : b + 1, at]
+        i = i[:, :k] - i[:, k:]
         inside = ((i[1:] - i[:-1]).astype(np.float32) * inv[:, 0]).T > 0.5
         out = []
-        n_in = len(ins)
+        n_in = len(self._insets)
         unlike_l, inside_l = unlike.tolist(), inside.tolist()
         for side, (corner, yi) in enumerate(zip((left, right), ys)):
             hs, ms = [], []
