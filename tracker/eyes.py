@@ -862,6 +862,11 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
     return skin, np.concatenate(middle), np.concatenate(ring), np.concatenate(sclera), light
 
 
+def _ratios(num: np.ndarray, den: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``clip(num / max(den, 1), lo, hi)`` of two colours (3,) as float64 (plain floats: three values)."""
+    return np.array([min(max(a / max(b, 1.0), lo), hi) for a, b in zip(num.tolist(), den.tolist())])
+
+
 def _median_bgr(px: np.ndarray) -> np.ndarray:
     """Per-channel median (3,) float64 of pixels ``px`` (n, 3) (the upper one of an even count)."""
     return np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
@@ -1478,24 +1483,24 @@ class EyeFinder:
             _, best, _, _ = cv2.minMaxLoc(cv2.matchTemplate(np.ascontiguousarray(win), self._eye_half[i], cv2.TM_CCOEFF_NORMED))
             return min(max(best, 0.0), 1.0)
         z = win.ravel()  # a copy when the window is a part of the strip
-        s1, s2 = float(z.sum()), float(z @ z)
+        s1, s2 = float(np.add.reduce(z)), float(z @ z)
         norm = math.sqrt(max(s2 - s1 * s1 / z.size, 0.0))
         if norm < 1e-3:
             return 0.0
-        best = float((q @ z).max()) / norm
+        best = float(np.maximum.reduce(q @ z)) / norm
         return min(max(best, 0.0), 1.0)
 
     def _skin_grid(self, crop: np.ndarray, centres) -> np.ndarray | None:
         """The sparse grid of BGR pixels (n, 3) over the brows, lids, bridge and cheeks around both
         eyes that the light is measured on, or None when the crop holds too little of it."""
-        c = np.asarray(centres, dtype=np.float64).reshape(2, 2)
+        (ax, ay), (bx, by) = np.asarray(centres, dtype=np.float64).reshape(2, 2).tolist()
         h, w = crop.shape[:2]
-        x0, x1 = int(max(c[:, 0].min() - 0.45 * self.wi, 0)), int(min(c[:, 0].max() + 0.45 * self.wi, w))
-        y0, y1 = int(max(c[:, 1].min() - 0.45 * self.wi, 0)), int(min(c[:, 1].max() + 0.35 * self.wi, h))
+        x0, x1 = int(max(min(ax, bx) - 0.45 * self.wi, 0)), int(min(max(ax, bx) + 0.45 * self.wi, w))
+        y0, y1 = int(max(min(ay, by) - 0.45 * self.wi, 0)), int(min(max(ay, by) + 0.35 * self.wi, h))
         block = crop[y0:y1:self._skin_step, x0:x1:self._skin_step]
         if self._light is not None:  # each side in the light both eyes share
             # columns x0, x0 + step, …: those left of the eyes' middle are the left side's
-            mid, step = 0.5 * (c[0, 0] + c[1, 0]), self._skin_step
+            mid, step = 0.5 * (ax + bx), self._skin_step
             j = sum(1 for k in range(block.shape[1]) if x0 + step * k < mid)
             lit = np.empty(block.shape, np.float32)
             np.multiply(block[:, :j], self._light[0], out=lit[:, :j])
@@ -1548,11 +1553,11 @@ class EyeFinder:
         grid = cut[2] if cut is not None and cut[1] is px else _median_bgr(px)
         now = None if jump else self._skin_median(px, self._gain)
         if now is None and self._grid_ref is not None:
-            trial = np.clip(self._grid_ref / np.maximum(grid, 1.0), lo, hi)
+            trial = _ratios(self._grid_ref, grid, lo, hi)
             now, jump = self._skin_median(px, trial), True
         if now is None:
             return None
-        gain = np.clip(self.model.skin_bgr / np.maximum(now, 1.0), lo, hi)
+        gain = _ratios(self.model.skin_bgr, now, lo, hi)
         self._grid_ref = grid * gain
         return gain, jump
 
@@ -1570,7 +1575,8 @@ class EyeFinder:
         grid = _median_bgr(px)
         self._grid_cut = (tuple(np.asarray(centres, dtype=np.float64).ravel().tolist()), px, grid)
         seen = grid * (1.0 if self._gain is None else self._gain)
-        if np.all(np.abs(np.log(np.maximum(seen, 1.0) / np.maximum(self._grid_ref, 1.0))) < math.log(LIGHT_JUMP)):
+        steps = np.log([max(a, 1.0) / max(b, 1.0) for a, b in zip(seen.tolist(), self._grid_ref.tolist())]).tolist()
+        if all(abs(v) < math.log(LIGHT_JUMP) for v in steps):
             return
         m = self._gain_from(px, jump=True)
         if m is not None:
@@ -1580,7 +1586,7 @@ class EyeFinder:
         """The light's slow gain, and the gain used: none within :data:`GAIN_DEAD_ZONE` of 1 (shading
         and expressions move it by several per cent; only a change of the light itself is applied)."""
         self._gain_slow = slow
-        self._gain = None if np.all(np.abs(slow - 1.0) < GAIN_DEAD_ZONE) else slow.copy()
+        self._gain = None if all(abs(v - 1.0) < GAIN_DEAD_ZONE for v in slow.tolist()) else slow.copy()
 
     # ------------------------------------------------------------------ main entry
     def find(self, crop_bgr: np.ndarray, crop_grey: np.ndarray, eye_centres_crop, brows: bool = True) -> EyeResult:

@@ -263,7 +263,7 @@ def face_similarity(grey: np.ndarray, scale: float, pupils: np.ndarray, ref: np.
     """Normalised correlation (−1..1) of the face picture at eyes ``pupils`` (frame px) with ``ref``
     (:func:`reference_vector`); ``grey`` is the frame in grey scaled by ``scale``."""
     p = face_patch(grey, scale, pupils).ravel()
-    s1, s2 = float(p.sum()), float(p @ p)
+    s1, s2 = float(np.add.reduce(p)), float(p @ p)
     return float(ref @ p) / max(math.sqrt(max(s2 - s1 * s1 / p.size, 0.0)), 1e-6)
 
 

@@ -202,6 +202,7 @@ class FaceTracker:
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
         self._pupils_eye_crop = self._pupils_face - self.eye_rect[:2]  # ... in the eye crop's px
         self._jaw_min, self._jaw_max = np.array(JAW_MIN) * wi, np.array(JAW_MAX) * wi
+        self._jaw_lo, self._jaw_hi = tuple(self._jaw_min.tolist()), tuple(self._jaw_max.tolist())
         self._buffers: dict[tuple, np.ndarray] = {}
         c = cal.clicks
         self._cal_pupils = np.array([c.left_pupil, c.right_pupil], dtype=np.float64)
@@ -540,26 +541,24 @@ class FaceTracker:
         mid = 0.5 * (left + right)
         roll = math.degrees(math.atan2(-(right[1] - left[1]), right[0] - left[0]))
         vals = [mid[0], mid[1], roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
-        ov = Overlay(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
+        parts = dict(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
         status = OK
         if mouth_res is not None:
             n = len(mouth_res.polygon)
             corners = img_pts[16:18]
             width = math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1])
             vals += [width, mouth_res.lip_upper / k, mouth_res.lip_lower / k]
-            ov.mouth_corners = corners
-            ov.mouth_centre = img_pts[18]
-            ov.lip_points = img_pts[19:21]
-            ov.lip_polygon = img_pts[21 : 21 + n]
-            ov.lip_raw_polygon = img_pts[21 + n : 21 + 2 * n]
-            ov._blob_of = mouth_res
-            ov.blob_origin = (ff, (float(mo[0]), float(mo[1])))
-            ov.mouth_cue = mouth_res.cue
+            ov = Overlay(mouth_corners=corners, mouth_centre=img_pts[18], lip_points=img_pts[19:21],
+                         lip_polygon=img_pts[21 : 21 + n], lip_raw_polygon=img_pts[21 + n : 21 + 2 * n],
+                         blob_origin=(ff, (float(mo[0]), float(mo[1]))), mouth_cue=mouth_res.cue, _blob_of=mouth_res,
+                         **parts)
             # the jaw from the centre on the mouth line, where calibration measured the rigid place
             lc = mouth_res.line_centre
-            at = np.array([lc[0] + mouth_origin[0], lc[1] + mouth_origin[1]])
-            self.jaw = np.minimum(np.maximum(at - rigid_mouth, self._jaw_min), self._jaw_max)
+            (rx, ry), (x_lo, y_lo), (x_hi, y_hi) = rigid_mouth.tolist(), self._jaw_lo, self._jaw_hi
+            self.jaw = np.array([min(max((lc[0] + mouth_origin[0]) - rx, x_lo), x_hi),
+                                 min(max((lc[1] + mouth_origin[1]) - ry, y_lo), y_hi)])
         else:
+            ov = Overlay(**parts)
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
             self.jaw *= JAW_HOLD

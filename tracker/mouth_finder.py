@@ -521,9 +521,9 @@ class MouthFinder:
         if ref is None:
             return None
         sub = crop[::4, ::4].reshape(-1, 3)
-        med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].astype(np.float64)
-        g = _clip(np.asarray(ref, dtype=np.float64) / np.maximum(med, 1.0), 0.33, 3.0)
-        return None if (np.abs(g - 1.0) < 0.04).all() else g
+        med = np.partition(sub, len(sub) // 2, axis=0)[len(sub) // 2].tolist()
+        g = [min(max(a / max(b, 1.0), 0.33), 3.0) for a, b in zip(ref, med)]  # three values: plain floats
+        return None if all(abs(v - 1.0) < 0.04 for v in g) else np.array(g)
 
     # ------------------------------------------------------------------ the vertical profile
     def prepare(self, crop: np.ndarray) -> "_Maps":
