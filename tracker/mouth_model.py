@@ -738,14 +738,20 @@ def unlike_cheek(cols: np.ndarray, cheek: tuple[np.ndarray, np.ndarray]) -> np.n
 def _cheek_from(v: list[float], level: float, a: int, b: int, need: int) -> int | None:
     """The first column ``k`` in ``[a, b]`` at or above ``level`` with ``need`` columns under it
     after it (None when there is none)."""
-    n = len(v)
-    for i in range(a, b + 1):
+    # a column whose ``need`` columns after it are not all inside the list never qualifies; a column
+    # that does not qualify hands on to the first one at or above the level after it
+    last = min(b, len(v) - 1 - max(need, 0))
+    i = a
+    while i <= last:
         if v[i] >= level:
-            j, end = i + 1, min(i + need, n - 1)
-            while j <= end and v[j] < level:
+            j, stop = i + 1, i + need
+            while j <= stop and v[j] < level:
                 j += 1
-            if j - i - 1 >= need:
+            if j > stop:
                 return i
+            i = j
+        else:
+            i += 1
     return None
 
 
