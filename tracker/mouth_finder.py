@@ -358,6 +358,7 @@ class _Maps:
         self.shape = shape
         self.colour = np.zeros((H + 1, W + 1, 3), np.int32)
         self.crow = np.zeros((H + 1, W, 3), np.int32)
+        self.crow_px = self.crow.reshape(-1, 3)  # the same memory, one pixel a row (flat indices y·W + x)
         self.inside = np.zeros((H + 1, W + 1), np.int32)
         self.lum = np.zeros((H, W), np.uint8)
 
@@ -420,6 +421,7 @@ class MouthFinder:
         self._inv_skins = self._inv[_SKINS]
         self.reset_adaptation()
         self.cheeks = (model.cheek_left, model.cheek_right)
+        self._cheek_cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         self.run = cheek_run(wi)
         self.body = mouth_body(wi)
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
@@ -776,18 +778,19 @@ class MouthFinder:
             bias = CORNER_BIAS * self.r
             last = (x0 - previous.left[0] - bias, previous.right[0] - x0 - bias)
         live = [(step, ys) for step, ys in zip((-1, +1), traced) if ys is not None]
-        if live:  # the columns along both sides in one go
-            xs = np.concatenate([x0 + step * self._cols[: len(ys)] for step, ys in live])
+        if live:  # the columns along both sides in one go, each against its side's cheek
+            xs = np.concatenate([np.arange(x0, x0 + step * len(ys), step) for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
+            unlike = unlike_cheek(cols, self._cheek_rows(tuple(0 if ys is None else len(ys) for ys in traced)))
         out, strength, halves, seen, at = [], [], [], [], 0
-        for step, ys, cheek, prev in zip((-1, +1), traced, self.cheeks, last):
+        for step, ys, prev in zip((-1, +1), traced, last):
             if ys is None:
                 out.append((float(x0), float(y_line)))
                 strength.append(0.0)
                 halves.append(None)
                 seen.append(False)
                 continue
-            d = unlike_cheek(cols[at : at + len(ys)], cheek)
+            d = unlike[at : at + len(ys)]
             at += len(ys)
             half, g, cheek_seen = corner_search(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
             k = min(int(half), len(ys) - 2)
@@ -797,6 +800,15 @@ class MouthFinder:
             halves.append(half)
             seen.append(cheek_seen)
         return out[0], out[1], strength, halves, seen
+
+    def _cheek_rows(self, counts: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """The cheeks' medians and spreads (n, 9) for ``counts`` columns of the left side's then the right
+        side's (:meth:`_search`'s columns of both sides in one array), made once per pair of counts."""
+        got = self._cheek_cache.get(counts)
+        if got is None:
+            got = self._cheek_cache[counts] = tuple(
+                np.concatenate([np.repeat(cheek[i][None], k, axis=0) for cheek, k in zip(self.cheeks, counts)]) for i in range(2))
+        return got
 
     def bent(self, x0: int, traced: list[np.ndarray | None], halves: list[float | None],
              heights: tuple[float, float]) -> list[np.ndarray | None]:
@@ -840,13 +852,13 @@ class MouthFinder:
         k = len(ends)
         at = [e[0] for e in ends] + [e[1] for e in ends]
         inv = np.array(inv, np.float32)[:, None]
-        c = maps.colour[a : b + 1, at]
+        c = maps.colour[a : b + 1].take(at, axis=1)
         c = c[:, :k] - c[:, k:]  # (n+1, k, 3)
         f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
         d = f[:, None, :, :] - self._mu_skins
         unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins).min(axis=1)  # (k, n)
         np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
-        i = maps.inside[a : b + 1, at]
+        i = maps.inside[a : b + 1].take(at, axis=1)
         i = i[:, :k] - i[:, k:]
         inside = ((i[1:] - i[:-1]).astype(np.float32) * inv[:, 0]).T > 0.5
         out = []
@@ -883,11 +895,11 @@ class MouthFinder:
         """:func:`~tracker.mouth_model.line_columns` from the running sums at columns ``xs`` (inside the
         crop) and line rows ``ys``: features (n, 9) of the mean colour of the band ``a1..a2`` rows above
         the line, of its own three rows and of the band below."""
-        H = maps.shape[0]
+        H, W = maps.shape
         bounds = ys.astype(np.int32)[None, :] + self._band_rows  # [start, end) of the three bands
         np.maximum(bounds, 0, out=bounds)
         np.minimum(bounds, H, out=bounds)
-        sums = maps.crow[bounds, xs[None, :]]  # (6, n, 3)
+        sums = maps.crow_px.take(bounds * W + xs, axis=0)  # (6, n, 3)
         cnt = np.maximum(bounds[1::2] - bounds[0::2], 1).astype(np.float32)  # (3, n)
         means = (sums[1::2] - sums[0::2]).astype(np.float32) / cnt[:, :, None]  # (3, n, 3)
         return profile_features(means.transpose(1, 0, 2), self.model.skin_level).reshape(len(ys), 9)
