@@ -373,8 +373,7 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
         b = min(dist)
         mid = max(mid, min(mid + b, 0.5 * (a + b)))
     start = mid - 0.5 * width
-    ramp = [(d - start) / width for d in dist]
-    ramp = [0.0 if r < 0.0 else 1.0 if r > 1.0 else r for r in ramp]  # clamped, without min/max calls
+    ramp = [0.0 if (r := (d - start) / width) < 0.0 else 1.0 if r > 1.0 else r for d in dist]  # clamped, without min/max calls
     if floor:
         for j, f in enumerate(floor[: len(ramp)]):
             if f > ramp[j]:

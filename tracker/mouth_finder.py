@@ -281,15 +281,23 @@ def body_middle(unlike: list[float], inside: list[bool], y: int, reach: int, nea
     if peak < CORNER_UNLIKE:
         return None
     level = 0.5 * peak
-    mouth = [u > level or i for u, i in zip(unlike, inside)]
-    near = [j for j in range(max(a, y - near_rows), min(b, y + near_rows + 1)) if mouth[j]]
-    if not near:
+    mouth = [u > level or i for u, i in zip(unlike[a:b], inside[a:b])]  # rows a .. b-1
+    # the mouth row nearest y within near_rows (the upper one of two as near)
+    j0, j1 = max(a, y - near_rows), min(b, y + near_rows + 1)
+    k = None
+    for dist in range(near_rows + 1):
+        if j0 <= y - dist < j1 and mouth[y - dist - a]:
+            k = y - dist
+            break
+        if j0 <= y + dist < j1 and mouth[y + dist - a]:
+            k = y + dist
+            break
+    if k is None:
         return None
-    k = min(near, key=lambda j: abs(j - y))
     lo, hi = k, k
-    while lo - 1 >= a and mouth[lo - 1]:
+    while lo - 1 >= a and mouth[lo - 1 - a]:
         lo -= 1
-    while hi + 1 < b and mouth[hi + 1]:
+    while hi + 1 < b and mouth[hi + 1 - a]:
         hi += 1
 
     def edge(i_in: int, i_out: int) -> float:

@@ -402,17 +402,19 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
         block = lum[:, x0 + ka : x0 + kb + 1] if step > 0 else lum[:, x0 - kb : x0 - ka + 1][:, ::-1]
         cols = np.ascontiguousarray(block.T)  # one column after the other, in the walk's order
         vals = cols.tobytes() if cols.dtype == np.uint8 else cols.ravel().tolist()
+        step_to = out.append
         for base in range(0, len(vals), h):
-            # rows y-2 .. y+2 exist (y stays in [2, h-3]); a valley at y excludes one at y±1
+            # rows y-2 .. y+2 exist (y stays in [2, h-3]); a valley at y excludes one at y±1; down wins
+            # over up when it is darker or up is no valley
             m2, m1, c0, p1, p2 = vals[base + y - 2 : base + y + 3]
             if not (c0 < m1 and c0 < p1):
-                up, down = m1 < m2 and m1 < c0, p1 < c0 and p1 < p2
-                if down and (not up or p1 < m1):
-                    y += 1
-                elif up:
-                    y -= 1
-            y = lo if y < lo else hi if y > hi else y
-            out.append(y)
+                if p1 < c0 and p1 < p2 and (p1 < m1 or not (m1 < m2 and m1 < c0)):
+                    if y < hi:
+                        y += 1
+                elif m1 < m2 and m1 < c0:
+                    if y > lo:
+                        y -= 1
+            step_to(y)
     out += [y] * (n + 1 - len(out))
     return np.array(out, dtype=np.float64)
 
