@@ -868,7 +868,9 @@ def _ratios(num: np.ndarray, den: np.ndarray, lo: float, hi: float) -> np.ndarra
 
 def _median_bgr(px: np.ndarray) -> np.ndarray:
     """Per-channel median (3,) float64 of pixels ``px`` (n, 3) (the upper one of an even count)."""
-    return np.partition(px, len(px) // 2, axis=0)[len(px) // 2].astype(np.float64)
+    q = px.copy()
+    q.partition(len(q) // 2, axis=0)  # np.partition without its wrapper
+    return q[len(q) // 2].astype(np.float64)
 
 
 def eye_light(skins: list[np.ndarray]) -> np.ndarray | None:
@@ -1207,7 +1209,7 @@ class EyeFinder:
         for i, (x, y) in enumerate(peaks):
             win = cut(grey, x - FINE - hw, y - FINE - hh, n + 2 * hw, n + 2 * hh)
             V[i].reshape(n, n, 2 * hh + 1, 2 * hw + 1)[...] = windows(win, n, n, 2 * hh + 1, 2 * hw + 1)
-            level[i, 0] = max(float(win[hh : hh + n, hw : hw + n].max()), 8.0)
+            level[i, 0] = max(float(np.maximum.reduce(win[hh : hh + n, hw : hw + n], axis=None)), 8.0)
         R = np.matmul(V, self._fine_K)  # (2, n², 3): numerator, disc mean, sum
         s2 = np.einsum("eij,eij->ei", V, V) if self._fine_all else np.matmul(V * V, self._fine_mask)[..., 0]
         s1 = R[..., 2]

@@ -253,7 +253,8 @@ def _clip(v: np.ndarray, lo: float | np.ndarray, hi: float | np.ndarray) -> np.n
 
 def _median_rows(block: np.ndarray) -> np.ndarray:
     """``np.median(block, axis=0)`` of a few rows, without its Python overhead."""
-    s = np.sort(block, axis=0)
+    s = block.copy()
+    s.sort(axis=0)  # np.sort without its wrapper
     k = len(s) // 2
     return s[k] if len(s) % 2 else (s[k - 1] + s[k]) * s.dtype.type(0.5)
 
@@ -710,7 +711,7 @@ class MouthFinder:
         cu = gu[0] - gu[1] + gu[2] - gu[3] + self._pu
         cl = gl[0] - gl[1] + gl[2] - gl[3] + self._pd
         cl += gl[4] - gl[5]
-        U, L = cu.min(axis=1), cl.min(axis=1)
+        U, L = np.minimum.reduce(cu, axis=1), np.minimum.reduce(cl, axis=1)
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
         tot = np.where(gap[2] >= OPEN_ROWS * self.r, gap[0], gap[1])
         tot += U[:, None] + L[None, :] + self._upper_only
@@ -864,7 +865,7 @@ class MouthFinder:
         c = c[:, :k] - c[:, k:]  # (n+1, k, 3)
         f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
         d = f[:, None, :, :] - self._mu_skins
-        unlike = np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins).min(axis=1)  # (k, n)
+        unlike = np.minimum.reduce(np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins), axis=1)  # (k, n)
         np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
         i = maps.inside[a : b + 1].take(at, axis=1)
         i = i[:, :k] - i[:, k:]
