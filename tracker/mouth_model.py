@@ -90,7 +90,11 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
             _FEATURE_UNITS.clear()
         units = _FEATURE_UNITS[skin_level] = np.array(
             [np.float32(1.0 / (L_UNIT * max(skin_level, 8.0))), np.float32(1.0 / C_UNIT), np.float32(1.0 / C_UNIT)], np.float32)
-    out = np.asarray(bgr, dtype=np.float32) @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
+    c = np.asarray(bgr, dtype=np.float32)
+    if c.ndim == 2:
+        out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
+    else:  # one product for all rows (a stack of matrices is one BLAS call per matrix)
+        out = (c.reshape(-1, 3) @ _FEATURE_MIX).reshape(c.shape[:-1] + (4,))
     den = out[..., 3:]
     den += np.float32(24.0)
     np.divide(out[..., 1:3], den, out=out[..., 1:3])
