@@ -117,10 +117,19 @@ PATCH_RECT = (-1.0, -0.6, 2.0, 1.35)
 _PATCH_PX = tuple(v * PATCH_IPD for v in PATCH_RECT)
 
 
+def _pupil_floats(pupils) -> list[float]:
+    """Both pupils (frame px) as plain floats ``[lx, ly, rx, ry]``; ``pupils`` is a (2, 2) array or
+    two (x, y) pairs."""
+    if type(pupils) is tuple and len(pupils) == 2 and type(pupils[0]) is tuple and type(pupils[1]) is tuple:
+        (lx, ly), (rx, ry) = pupils
+        return [float(lx), float(ly), float(rx), float(ry)]
+    return np.asarray(pupils, dtype=np.float64).ravel().tolist()
+
+
 def _patch_warp(scale: float, pupils: np.ndarray, margin: float) -> tuple[np.ndarray, tuple[int, int], tuple[float, float], tuple[float, float]]:
     """The affine from the scaled grey image to the face picture (grown by ``margin`` px on
     every side), the picture's size, and the picture's x and down axes in frame px per picture px."""
-    lx, ly, rx, ry = (v * scale for v in np.asarray(pupils, dtype=np.float64).ravel().tolist())
+    lx, ly, rx, ry = (v * scale for v in _pupil_floats(pupils))
     ipd = max(math.hypot(rx - lx, ry - ly), 1e-6)
     k = PATCH_IPD / ipd
     c, s = (rx - lx) / ipd, (ry - ly) / ipd  # unit eye line (x right, y down)
@@ -276,14 +285,14 @@ def face_turn(grey: np.ndarray, scale: float, pupils: np.ndarray, ref: np.ndarra
     not drift, and a face's expressions (brows up, eyes wide, a yawn) are mostly symmetric, so
     they leave its roll alone — not its size: raised brows look like a larger face. ``grey`` is
     the frame in grey scaled by ``scale``; ``ref`` is :func:`reference_vector`."""
-    p = np.asarray(pupils, dtype=np.float64).reshape(2, 2)
-    mx, my = 0.5 * (p[0] + p[1])
-    z = complex(0.5 * (p[1, 0] - p[0, 0]), 0.5 * (p[1, 1] - p[0, 1]))
-    c0 = face_similarity(grey, scale, p, ref)
+    lx, ly, rx, ry = _pupil_floats(pupils)
+    mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
+    z = complex(0.5 * (rx - lx), 0.5 * (ry - ly))
+    c0 = face_similarity(grey, scale, ((lx, ly), (rx, ry)), ref)
     cs = []
     for a in (-turn, turn):
         v = z * complex(math.cos(a), math.sin(a))
-        cs.append(face_similarity(grey, scale, np.array([[mx - v.real, my - v.imag], [mx + v.real, my + v.imag]]), ref))
+        cs.append(face_similarity(grey, scale, ((mx - v.real, my - v.imag), (mx + v.real, my + v.imag)), ref))
     lo, hi = cs
     den = lo - 2.0 * c0 + hi
     if den < -1e-9:

@@ -396,18 +396,23 @@ class FaceTracker:
         shift, presence = locate_face(self._grey, self.motion.scale, anchors, self.cal.face_patch,
                                       FACE_REACH if flow_ok else 2 * FACE_REACH)
         if presence >= FACE_PRESENT:
+            (lx, ly), (rx, ry) = anchors.tolist()  # two points: plain floats
+            sx, sy = shift.tolist()
             if flow_ok:
                 # a turned head changes the picture: the weaker the match, the less it pulls
                 trust = min(max((presence - FACE_PRESENT) / (0.9 - FACE_PRESENT), 0.0), 1.0)
-                anchors = anchors + FACE_FOLLOW * trust * shift
-            elif math.hypot(*shift) > 0.03 * math.hypot(*(anchors[1] - anchors[0])):
-                anchors = anchors + shift  # no flow to trust: the picture says where the head went
+                k = FACE_FOLLOW * trust
+                sx, sy = k * sx, k * sy
+                lx, ly, rx, ry = lx + sx, ly + sy, rx + sx, ry + sy
+            elif math.hypot(sx, sy) > 0.03 * math.hypot(rx - lx, ry - ly):
+                # no flow to trust: the picture says where the head went
+                lx, ly, rx, ry = lx + sx, ly + sy, rx + sx, ry + sy
             # roll: the flow's drift, and a face pulled or turned that fooled it, would
             # stay for good (one eye then disagrees with the pose and is doubted, so the eyes
             # cannot set it right); the calibrated picture does not drift
-            turn = ROLL_PULL * face_turn(self._grey, self.motion.scale, anchors, self._face_ref, ROLL_STEP)
-            z = complex(*(0.5 * (anchors[1] - anchors[0]))) * complex(math.cos(turn), math.sin(turn))
-            mx, my = 0.5 * (anchors[0] + anchors[1])
+            turn = ROLL_PULL * face_turn(self._grey, self.motion.scale, ((lx, ly), (rx, ry)), self._face_ref, ROLL_STEP)
+            z = complex(0.5 * (rx - lx), 0.5 * (ry - ly)) * complex(math.cos(turn), math.sin(turn))
+            mx, my = 0.5 * (lx + rx), 0.5 * (ly + ry)
             anchors = np.array([[mx - z.real, my - z.imag], [mx + z.real, my + z.imag]])
             self.pose = similarity_from_pairs(self._cal_pupils, anchors)
         return anchors, presence
@@ -529,18 +534,18 @@ class FaceTracker:
         if mouth_res is not None:
             mo = np.array(mouth_origin, dtype=np.float64)
             mcx, mcy = mouth_res.centre[0] + mouth_origin[0], mouth_res.centre[1] + mouth_origin[1]
+            ox, oy = mouth_origin
             pts += [
-                np.array([mouth_res.left, mouth_res.right, mouth_res.centre]) + mo,
+                [[x + ox, y + oy] for x, y in (mouth_res.left, mouth_res.right, mouth_res.centre)],
                 [[mcx, mcy - mouth_res.lip_upper], [mcx, mcy + mouth_res.lip_lower]],
                 mouth_res.polygon + mo,
                 mouth_res.raw_polygon + mo,
             ]
         img_pts = ff.to_image(np.concatenate(pts, dtype=np.float64))  # every part is (k, 2)
         pupils_img = img_pts[0:2]
-        left, right = pupils_img
-        mid = 0.5 * (left + right)
-        roll = math.degrees(math.atan2(-(right[1] - left[1]), right[0] - left[0]))
-        vals = [mid[0], mid[1], roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
+        (lx, ly), (rx, ry) = pupils_img.tolist()
+        roll = math.degrees(math.atan2(-(ry - ly), rx - lx))
+        vals = [0.5 * (lx + rx), 0.5 * (ly + ry), roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
         parts = dict(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
         status = OK
         if mouth_res is not None:
@@ -592,11 +597,13 @@ class FaceTracker:
         so they turn the pose faster — otherwise they change its scale only where the face picture
         agrees (:meth:`_picture_allows_scale`).
         """
+        gaze, found, pupils = self.gaze.tolist(), found_face.tolist(), self._pupils_face.tolist()
         for i in range(2):
             if usable[i]:
-                self.gaze[i] = found_face[i] - self._pupils_face[i]
+                gaze[i] = [found[i][0] - pupils[i][0], found[i][1] - pupils[i][1]]
             else:
-                self.gaze[i] *= 0.9
+                gaze[i] = [gaze[i][0] * 0.9, gaze[i][1] * 0.9]
+        self.gaze[:] = gaze
         if not (usable[0] and usable[1]):
             new = anchors
         elif not flow_ok and not pinned:

@@ -387,6 +387,7 @@ class MouthFinder:
         self.s = min(WORK_IPD / self.wi_crop, 1.0)
         self.wi = wi = self.wi_crop * self.s
         self._small = None
+        self._up: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         self._maps: _Maps | None = None
         self.k = k = wi / model.work_ipd  # the model's lengths → this crop's
         # rows and columns at the working scale per row at the scale the priors were set at (40 px
@@ -416,9 +417,12 @@ class MouthFinder:
         self._mu0 = cls[:, 0].copy()
         reach = ADAPT_REACH * cls[:4, 1].astype(np.float64)
         self._mu_bounds = (self._mu0[:4] - reach, self._mu0[:4] + reach)
+        self._mu_bounds_rows = tuple(b.tolist() for b in self._mu_bounds)
+        self._mu_floor = (ADAPT_FLOOR * self._mu0[:4]).tolist()  # the calibration's share of the colours used
         self._thick0 = (model.thick_up * k, model.thick_down * k)
         self._log_t0 = np.log(self._thick0)
         self._log_t_bounds = (self._log_t0 - LOG_THICK_REACH, self._log_t0 + LOG_THICK_REACH)
+        self._log_t_rows = tuple(b.tolist() for b in self._log_t_bounds)
         self.a1, self.a2 = line_geometry(wi)
         a1, a2 = self.a1, self.a2
         self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
@@ -496,11 +500,18 @@ class MouthFinder:
             if i1 <= i0:
                 return False
             meds.append(_median_rows(f[i0:i1]))
-        self._mu_seen = _clip(self._mu_seen + ADAPT_RATE * (np.asarray(meds) - self._mu_seen), *self._mu_bounds)
-        self._mu[:4] = ADAPT_FLOOR * self._mu0[:4] + (1.0 - ADAPT_FLOOR) * self._mu_seen
+        # twelve colour values and two thicknesses: plain floats (the same float64 steps)
+        lo, hi = self._mu_bounds_rows
+        seen_mu = [[min(max(s + ADAPT_RATE * (m - s), a), b) for s, m, a, b in zip(*rows)]
+                   for rows in zip(self._mu_seen.tolist(), np.asarray(meds).tolist(), lo, hi)]
+        self._mu_seen = np.array(seen_mu)
+        self._mu[:4] = [[f + (1.0 - ADAPT_FLOOR) * s for f, s in zip(*rows)] for rows in zip(self._mu_floor, seen_mu)]
         self._colours_changed()
-        seen = np.log(np.maximum([gap_top - top, bottom - gap_bottom], 0.5))
-        self._log_t = _clip(self._log_t + ADAPT_RATE * (seen - self._log_t), *self._log_t_bounds)
+        seen = np.log([max(gap_top - top, 0.5), max(bottom - gap_bottom, 0.5)]).tolist()
+        (lo_u, lo_d), (hi_u, hi_d) = self._log_t_rows
+        (t_u, t_d), (s_u, s_d) = self._log_t.tolist(), seen
+        self._log_t = np.array([min(max(t_u + ADAPT_RATE * (s_u - t_u), lo_u), hi_u),
+                                min(max(t_d + ADAPT_RATE * (s_d - t_d), lo_d), hi_d)])
         self._adapted += 1
         if self._adapted % THICK_EVERY == 0:
             t = np.exp(self._log_t)
@@ -831,11 +842,16 @@ class MouthFinder:
             if ys is None or half is None:
                 out.append(ys)
                 continue
-            k = min(int(half), len(ys) - 2)
+            rows = ys.tolist()  # a few dozen columns: plain floats
+            k = min(int(half), len(rows) - 2)
             t = half - k
-            dy = yc - float(ys[k] * (1 - t) + ys[k + 1] * t)
-            ramp = _clip((self._cols[: len(ys)] - (half - self.bend)) * (1.0 / self.bend), 0.0, 1.0)
-            out.append(np.rint(ys + dy * ramp))
+            dy = yc - (rows[k] * (1 - t) + rows[k + 1] * t)
+            start, per = half - self.bend, 1.0 / self.bend
+            bent = []
+            for j, y in enumerate(rows):
+                r = (j - start) * per
+                bent.append(y + dy * (0.0 if r < 0.0 else 1.0 if r > 1.0 else r))
+            out.append(np.rint(bent))
         return out
 
     def corner_heights(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float]) -> tuple[float, float]:
@@ -951,8 +967,10 @@ class MouthFinder:
         if r is None:
             return None
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
-        scale = np.array([1.0 / sx, 1.0 / sy])
-        off = 0.5 * scale - 0.5
+        scale, off = self._up.get((H, W), (None, None))
+        if scale is None:  # the outlines' factor and offset back to the crop's px, once per crop size
+            scale = np.array([1.0 / sx, 1.0 / sy])
+            scale, off = self._up[(H, W)] = (scale, 0.5 * scale - 0.5)
         return _moved(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
             line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),
