@@ -36,7 +36,6 @@ a typical one at the click, and the finder's score says how sure each frame is.
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass, field
 
@@ -342,32 +341,19 @@ def lens_outline(left, right, top: float, bottom: float, x_mid: float, n: int = 
     return lens_outlines(left, right, (top,), (bottom,), x_mid, n)[0]
 
 
-_ARC_T: dict[int, tuple[np.ndarray, list[float]]] = {}
-"""The arc parameters ``linspace(0, 1, half + 1)`` by ``half``, as an array and as a list."""
+_ARC_T: dict[int, np.ndarray] = {}
 
 
 def lens_outlines(left, right, tops, bottoms, x_mid: float, n: int = N_RAYS) -> np.ndarray:
     """:func:`lens_outline` for several pairs of edges through the same corners at once: (k, n, 2)."""
     (xl, yl), (xr, yr) = left, right
     half = n // 2
-    got = _ARC_T.get(half)
-    if got is None:
-        t = np.linspace(0.0, 1.0, half + 1)
-        got = _ARC_T[half] = (t, t.tolist())
-    t = got[0]
+    t = _ARC_T.get(half)
+    if t is None:
+        t = _ARC_T[half] = np.linspace(0.0, 1.0, half + 1)
     s = min(max((x_mid - xl) / max(xr - xl, 1e-6), 0.05), 0.95)
-    k = bisect.bisect_right(got[1], s)  # t[:k] <= s: the left half of the arc
-    u = np.empty(len(t))
-    np.multiply(t[:k], 1.0 / s, out=u[:k])
-    u[:k] -= 1.0
-    np.subtract(t[k:], s, out=u[k:])
-    u[k:] *= 1.0 / (1.0 - s)
-    # (1 − u²) clipped to 0..1, to the power 0.7: 1 at x_mid, 0 at the corners
-    shape = np.multiply(u, u, out=u)
-    np.subtract(1.0, shape, out=shape)
-    np.maximum(shape, 0.0, out=shape)
-    np.minimum(shape, 1.0, out=shape)
-    np.power(shape, 0.7, out=shape)
+    u = np.where(t <= s, t * (1.0 / s) - 1.0, (t - s) * (1.0 / (1.0 - s)))
+    shape = np.clip(1.0 - u * u, 0.0, 1.0) ** 0.7  # 1 at x_mid, 0 at the corners
     base = yl + t * (yr - yl)
     base_mid = yl + s * (yr - yl)
     tops, bottoms = np.asarray(tops, dtype=np.float64), np.asarray(bottoms, dtype=np.float64)
