@@ -93,8 +93,7 @@ class FaceFrame:
         self._u, self._d = self._R
         self._m = np.array([float(self.mid[0]), float(self.mid[1])])
         # frame px = mid + (face x, face y) @ _back
-        k = self.scale
-        self._back = np.array([[c / k, (-s) / k], [s / k, c / k]])
+        self._back = self._R / self.scale
 
     def axes(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit vectors (frame px) of the face's x and down axes."""

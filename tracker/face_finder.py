@@ -120,9 +120,6 @@ _PATCH_PX = tuple(v * PATCH_IPD for v in PATCH_RECT)
 def _pupil_floats(pupils) -> list[float]:
     """Both pupils (frame px) as plain floats ``[lx, ly, rx, ry]``; ``pupils`` is a (2, 2) array or
     two (x, y) pairs."""
-    if type(pupils) is tuple and len(pupils) == 2 and type(pupils[0]) is tuple and type(pupils[1]) is tuple:
-        (lx, ly), (rx, ry) = pupils
-        return [float(lx), float(ly), float(rx), float(ry)]
     return np.asarray(pupils, dtype=np.float64).ravel().tolist()
 
 

@@ -387,7 +387,6 @@ class MouthFinder:
         self.s = min(WORK_IPD / self.wi_crop, 1.0)
         self.wi = wi = self.wi_crop * self.s
         self._small = None
-        self._up: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         self._maps: _Maps | None = None
         self.k = k = wi / model.work_ipd  # the model's lengths → this crop's
         # rows and columns at the working scale per row at the scale the priors were set at (40 px
@@ -967,10 +966,8 @@ class MouthFinder:
         if r is None:
             return None
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
-        scale, off = self._up.get((H, W), (None, None))
-        if scale is None:  # the outlines' factor and offset back to the crop's px, once per crop size
-            scale = np.array([1.0 / sx, 1.0 / sy])
-            scale, off = self._up[(H, W)] = (scale, 0.5 * scale - 0.5)
+        scale = np.array([1.0 / sx, 1.0 / sy])
+        off = 0.5 * scale - 0.5
         return _moved(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
             line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),

@@ -66,8 +66,6 @@ L_UNIT, C_UNIT = 0.05, 0.012
 _FEATURE_MIX = np.array([[0.114, 0.0, -1.0, 1.0], [0.587, -1.0, 0.5, 1.0], [0.299, 1.0, 0.5, 1.0]], np.float32)
 """BGR → (luminance, r − g, (r + g − 2b) / 2, b + g + r), the numerators of :func:`profile_features`
 and the sum its chroma ratios are taken over."""
-_FEATURE_UNITS: dict[float, np.ndarray] = {}
-"""The factors (3,) float32 that put :func:`profile_features`' values in their units, by skin level."""
 
 
 # --------------------------------------------------------------------------------------------- features
@@ -83,12 +81,6 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     """Colour features (float32 ``(..., 3)``) of mean BGR values ``(..., 3)``: luminance in units of
     :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
     units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference."""
-    units = _FEATURE_UNITS.get(skin_level)
-    if units is None:
-        if len(_FEATURE_UNITS) > 16:
-            _FEATURE_UNITS.clear()
-        units = _FEATURE_UNITS[skin_level] = np.array(
-            [np.float32(1.0 / (L_UNIT * max(skin_level, 8.0))), np.float32(1.0 / C_UNIT), np.float32(1.0 / C_UNIT)], np.float32)
     c = np.asarray(bgr, dtype=np.float32)
     if c.ndim == 2:
         out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
@@ -97,7 +89,8 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     den = out[..., 3:]
     den += np.float32(24.0)
     np.divide(out[..., 1:3], den, out=out[..., 1:3])
-    out[..., :3] *= units
+    out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
+    out[..., 1:3] *= np.float32(1.0 / C_UNIT)
     return out[..., :3]
 
 
