@@ -15,7 +15,7 @@ import time
 import traceback
 from pathlib import Path
 
-from benchmarks.harness import Context, machine, pin_one_core, registered
+from benchmarks.harness import Context, host_speed, libraries, machine, pin_one_core, registered
 
 
 def _load_all() -> None:
@@ -32,7 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     _load_all()
     pinned = pin_one_core()
-    print(f"# Inkface benchmarks\nmachine: {machine()}; {pinned}; {'quick' if args.quick else 'full'} run\n")
+    print(f"# Inkface benchmarks\nmachine: {machine()}; {pinned}; {'quick' if args.quick else 'full'} run\n"
+          f"libraries: {libraries()}\nhost speed: 10⁶ Python additions in {host_speed():.0f} ms (a yardstick for "
+          "comparing hosts: the per-frame times scale with it)\n")
     ctx = Context(quick=args.quick)
     failed = 0
     for name, fn in registered():

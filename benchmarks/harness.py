@@ -7,12 +7,15 @@ Times are wall-clock on one core (the process pins itself to one CPU where it ca
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import statistics
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
+
+import numpy as np
 
 _REGISTRY: list[tuple[str, Callable[["Context"], Iterable["Table"]]]] = []
 
@@ -140,6 +143,32 @@ def machine() -> str:
     except OSError:
         pass
     return f"{cpu}; {os.cpu_count()} cores; Python {platform.python_version()}; {platform.system()} {platform.release()}"
+
+
+def libraries() -> str:
+    """One line naming the versions of the libraries the numbers depend on: a new OpenCV build
+    decodes the same video a little differently, and the real-face figures move with it."""
+    out = [f"numpy {np.__version__}"]
+    for name, label in (("cv2", "OpenCV"), ("scipy", "SciPy"), ("PySide6", "PySide6")):
+        try:
+            out.append(f"{label} {__import__(name).__version__}")
+        except Exception:  # pragma: no cover - not installed
+            out.append(f"{label} absent")
+    return ", ".join(out)
+
+
+def host_speed(n: int = 1_000_000, repeats: int = 5) -> float:
+    """Milliseconds a fixed pure-Python loop (``n`` additions) takes here, best of ``repeats``: a
+    yardstick for comparing one host's times with another's (the per-frame cost is mostly Python
+    and small numpy calls, which scale with it)."""
+    best = math.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        s = 0
+        for i in range(n):
+            s += i
+        best = min(best, time.perf_counter() - t)
+    return best * 1000.0
 
 
 def pin_one_core() -> str:
