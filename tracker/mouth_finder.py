@@ -415,20 +415,17 @@ class MouthFinder:
         # what the lips look like and how thick they are, adapted from well-fitted frames (adapt)
         self._mu0 = cls[:, 0].copy()
         reach = ADAPT_REACH * cls[:4, 1].astype(np.float64)
-        self._mu_bounds = (self._mu0[:4] - reach, self._mu0[:4] + reach)
-        self._mu_bounds_rows = tuple(b.tolist() for b in self._mu_bounds)
+        self._mu_bounds_rows = ((self._mu0[:4] - reach).tolist(), (self._mu0[:4] + reach).tolist())
         self._mu_floor = (ADAPT_FLOOR * self._mu0[:4]).tolist()  # the calibration's share of the colours used
         self._thick0 = (model.thick_up * k, model.thick_down * k)
         self._log_t0 = np.log(self._thick0)
-        self._log_t_bounds = (self._log_t0 - LOG_THICK_REACH, self._log_t0 + LOG_THICK_REACH)
-        self._log_t_rows = tuple(b.tolist() for b in self._log_t_bounds)
+        self._log_t_rows = ((self._log_t0 - LOG_THICK_REACH).tolist(), (self._log_t0 + LOG_THICK_REACH).tolist())
         self.a1, self.a2 = line_geometry(wi)
         a1, a2 = self.a1, self.a2
         self._band_rows = np.array([-a2, -a1 + 1, -1, 2, a1, a2 + 1], np.int32)[:, None]
         self.strip_half = int(math.ceil(0.32 * wi)) + self.a2 + 2
         self.sigma_line = max(0.015 * wi, 1.0)
         self.n_side = int(math.ceil(0.95 * wi))
-        self._cols = np.arange(self.n_side + 1)
         self._insets = (np.asarray(CORNER_INSETS) * r).tolist()
         self._inv_skins = self._inv[_SKINS]
         self.reset_adaptation()

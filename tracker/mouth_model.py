@@ -335,6 +335,7 @@ def lens_outline(left, right, top: float, bottom: float, x_mid: float, n: int = 
 
 
 _ARC_T: dict[int, np.ndarray] = {}
+"""The arc parameters ``linspace(0, 1, half + 1)`` of :func:`lens_outlines`, by ``half``."""
 
 
 def lens_outlines(left, right, tops, bottoms, x_mid: float, n: int = N_RAYS) -> np.ndarray:
