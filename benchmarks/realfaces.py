@@ -904,11 +904,32 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--save", metavar="JSON", help="with --stress: write each clip-mode's misses and values to JSON")
     ap.add_argument("--against", metavar="JSON", help="with --stress: also list the clip-modes whose misses changed "
                                                        "since an earlier --save")
+    ap.add_argument("--variants", help="with --stress: comma-separated variants (default: all; 'original' is the "
+                                       "shared clips as they are)")
     args = ap.parse_args(argv)
-    if (args.save or args.against) and not args.stress:
-        print("realfaces: --save and --against go with --stress", file=sys.stderr)
+    if (args.save or args.against or args.variants) and not args.stress:
+        print("realfaces: --save, --against and --variants go with --stress", file=sys.stderr)
         return 2
+    folder = real_dir(args.dir)
+    want = None
+    if args.clips and folder is not None:
+        names = clip_names(folder)
+        want = [c.strip() for c in args.clips.split(",") if c.strip()]
+        unknown = [c for c in want if c not in names]
+        if unknown:
+            print(f"realfaces: no clip {', '.join(unknown)} in {folder} (have {', '.join(names)})", file=sys.stderr)
+            return 2
     if args.stress:
+        variants = None
+        if args.variants:
+            from benchmarks.stress_clips import VARIANTS
+
+            variants = [v.strip() for v in args.variants.split(",") if v.strip()]
+            unknown = [v for v in variants if v not in ("original", *VARIANTS)]
+            if unknown or not variants:
+                print(f"realfaces: no stress variant {', '.join(unknown) or repr(args.variants)} "
+                      f"(have original, {', '.join(VARIANTS)})", file=sys.stderr)
+                return 2
         old = None
         if args.against:
             try:
@@ -918,20 +939,12 @@ def main(argv: list[str] | None = None) -> int:
             except (OSError, ValueError) as e:
                 print(f"realfaces: cannot read {args.against}: {e}", file=sys.stderr)
                 return 2
-        return stress_main(Path(args.stress), args.dir, args.serial, save=args.save, against=old)
+        return stress_main(Path(args.stress), args.dir, args.serial, save=args.save, against=old, variants=variants, clips=want)
 
-    folder = real_dir(args.dir)
     if folder is None:
         print(f"realfaces: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
         return 0
-    names = clip_names(folder)
-    if args.clips:
-        want = [c.strip() for c in args.clips.split(",") if c.strip()]
-        unknown = [c for c in want if c not in names]
-        if unknown:
-            print(f"realfaces: no clip {', '.join(unknown)} in {folder} (have {', '.join(names)})", file=sys.stderr)
-            return 2
-        names = want
+    names = want or clip_names(folder)
     modes = (True,) if args.auto else (False, True) if args.both else (False,)
     workers = 1 if args.serial else 2
     note = ""
@@ -1036,11 +1049,14 @@ def stress_changes(old: Sequence[dict], new: Sequence[dict]) -> list[str]:
 
 
 def stress_main(out: Path, src: str | None = None, serial: bool = False, save: str | None = None,
-                against: Sequence[dict] | None = None) -> int:
+                against: Sequence[dict] | None = None, variants: Sequence[str] | None = None,
+                clips: Sequence[str] | None = None) -> int:
     """``--stress``: every variant of :mod:`benchmarks.stress_clips` (made in ``out`` when missing),
     both modes; one line per variant, then how many clip-modes meet each target over all of them.
     ``save``: write :func:`stress_records` of every clip-mode there (JSON); ``against``: an earlier
-    such list, whose changed clip-modes are listed after the table (:func:`stress_changes`)."""
+    such list, whose changed clip-modes are listed after the table (:func:`stress_changes`, over the
+    clip-modes both runs have). ``variants`` / ``clips``: only these (names checked by :func:`main`;
+    ``"original"`` is the shared clips themselves)."""
     from benchmarks import stress_clips
     from benchmarks.harness import Table
 
@@ -1048,9 +1064,10 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False, save: s
     if folder is None:
         print(f"realfaces --stress: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
         return 0
-    names = clip_names(folder)
-    sets = [("original", folder)]
-    for v in stress_clips.VARIANTS:
+    names = list(clips) if clips else clip_names(folder)
+    wanted = list(variants) if variants else ["original", *stress_clips.VARIANTS]
+    sets = [("original", folder)] if "original" in wanted else []
+    for v in (v for v in stress_clips.VARIANTS if v in wanted):
         d = out / v
         if not all((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists() for nm in names):
             for nm in names:

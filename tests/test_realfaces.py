@@ -307,6 +307,35 @@ def test_stress_save_and_against_need_stress_and_a_readable_earlier_run(tmp_path
     assert "cannot read" in err and "old.json" in err and err.count("\n") == 1
 
 
+def test_stress_variants_are_checked_and_go_with_stress(tmp_path, capsys):
+    assert rf.main(["--variants", "deep"]) == 2
+    assert "go with --stress" in capsys.readouterr().err
+    assert rf.main(["--stress", str(tmp_path / "s"), "--variants", "deep,dep"]) == 2
+    err = capsys.readouterr().err
+    assert "no stress variant dep" in err and "glasses" in err and err.count("\n") == 1
+
+
+def test_stress_runs_only_the_variants_and_clips_asked_for(tmp_path, monkeypatch, capsys):
+    from benchmarks import stress_clips
+
+    src = tmp_path / "real"
+    src.mkdir()
+    for n in ("a", "b"):
+        (src / f"{n}.clicks.json").write_text("{}")
+        (src / f"{n}.mp.csv").write_text("frame\n")
+        (src / f"{n}.mp4").write_bytes(b"")
+    made, measured = [], []
+    monkeypatch.setattr(stress_clips, "make_variant", lambda folder, name, v, d: made.append((name, v)))
+    monkeypatch.setattr(rf, "measure_all", lambda d, names, modes, workers=2: measured.append((d.name, list(names))) or [
+        rf.ClipResult(n, m, None, np.zeros(0), math.nan, error="x") for n in names for m in ("clicks", "auto")])
+    out = tmp_path / "stress"
+    assert rf.main(["--stress", str(out), "--dir", str(src), "--variants", "original,pale", "--clips", "b"]) == 0
+    assert made == [("b", "pale")]
+    assert measured == [("real", ["b"]), ("pale", ["b"])]
+    rows = [line.split()[0] for line in capsys.readouterr().out.splitlines() if line.split()[:1] and line.split()[0] in ("original", *stress_clips.VARIANTS)]
+    assert rows == ["original", "pale"]
+
+
 # ------------------------------------------------------------------ the tracker on real clips
 
 REAL = rf.real_dir()
