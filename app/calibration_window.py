@@ -451,14 +451,17 @@ class CalibrationWindow(QDialog):
             self._on_changed()
             return False
         self._auto_note, self._auto_found = "", True
-        self.set_points(c.points())
+        from tracker.clicks import PIXEL_CENTRE
+
+        self.set_points(c.moved(-PIXEL_CENTRE, -PIXEL_CENTRE).points())  # the view's points: pixel centres at whole numbers
         return True
 
     def clicks(self):
-        from tracker.clicks import Clicks
+        """The placed points as CLICKS.json has them (measured from the frame's top-left corner)."""
+        from tracker.clicks import PIXEL_CENTRE, Clicks
 
         d = {"frame": self.frame_index, **{k: list(v) for k, v in self.view.points.items()}}
-        return Clicks.from_dict(d, where="calibration clicks")
+        return Clicks.from_dict(d, where="calibration clicks").moved(PIXEL_CENTRE, PIXEL_CENTRE)
 
     # ------------------------------------------------------------------------ calibrating
     def _on_changed(self) -> None:

@@ -1139,7 +1139,7 @@ def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
     """A new calibration on ``image``: at the points the tracker found in it, else where the
     face detector finds the face, else at the old calibration's clicks. Returns (Calibration, how)."""
     from tracker.calibration import calibrate
-    from tracker.clicks import Clicks
+    from tracker.clicks import PIXEL_CENTRE, Clicks
 
     tries = []
     if overlay is not None and str(getattr(overlay, "status", "")) != "lost":
@@ -1150,7 +1150,8 @@ def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
             if np.all(np.isfinite(pupils)) and np.all(np.isfinite(brows)) and np.all(np.isfinite(mouth)):
                 tries.append(("at the tracked points", lambda: Clicks.from_dict({
                     "frame": int(index), "left_pupil": list(pupils[0]), "right_pupil": list(pupils[1]),
-                    "left_brow": list(brows[0]), "right_brow": list(brows[1]), "mouth": list(mouth)})))
+                    "left_brow": list(brows[0]), "right_brow": list(brows[1]), "mouth": list(mouth)}
+                ).moved(PIXEL_CENTRE, PIXEL_CENTRE)))  # the overlay's convention to the clicks
         except (AttributeError, TypeError, ValueError):
             pass
 
@@ -1161,7 +1162,7 @@ def recalibrate(image: np.ndarray, overlay, old, index: int = 0):
 
     tries.append(("where the face was found", found))
     if old is not None and getattr(old, "clicks", None) is not None:
-        tries.append(("at the previous clicks", lambda: old.clicks))
+        tries.append(("at the previous clicks", lambda: old.clicks.moved(PIXEL_CENTRE, PIXEL_CENTRE)))
     last: Exception | None = None
     for how, clicks in tries:
         try:

@@ -37,7 +37,7 @@ import numpy as np
 
 from benchmarks.harness import Table, benchmark
 from tracker.calibration import FaceFrame
-from tracker.clicks import Clicks
+from tracker.clicks import PIXEL_CENTRE, Clicks
 
 REAL = Path(os.environ.get("INKFACE_REAL", Path(__file__).resolve().parents[2] / "shared" / "real"))
 OUT = Path(__file__).resolve().parents[1] / "out" / "real_eyes"
@@ -46,10 +46,6 @@ QUICK_CLIPS = ("expr_d0", "expr_d19")
 TARGETS = {"iris_med": 3.0, "iris_p95": 8.0, "roll": 1.5, "r_eye": 0.7, "r_brow": 0.6}
 ADAPT = True
 """Whether the "after" finder adapts slowly from confident frames (as the tracker would)."""
-PEER_PIXEL_CENTRE = 0.5
-"""The peer's coordinates put a pixel's centre at +0.5 (its coordinates are fractions of the
-image size, 0 at the image's left edge); ours put it at 0. Its points are shifted by this
-much before comparing (the iris x offsets of both eyes on all nine clips average +0.5 px)."""
 WRONG_PLACES = ((0.0, 0.65), (0.0, -0.45), (-0.55, 0.45), (0.55, 0.45), (1.0, 0.0), (0.0, 1.1))
 """Crop offsets (× work ipd, face frame) that put the eye windows on the nose, the brows,
 the cheeks, beside the face and on the mouth."""
@@ -87,7 +83,7 @@ def load_clip(name: str) -> RealClip:
     with open(REAL / f"{name}.points.csv") as f:
         rows = list(csv.DictReader(f))
     keys = sorted({k[:-2] for k in rows[0] if k.endswith("_x")})
-    points = {k: np.array([[float(r[k + "_x"]), float(r[k + "_y"])] for r in rows]) - PEER_PIXEL_CENTRE for k in keys}
+    points = {k: np.array([[float(r[k + "_x"]), float(r[k + "_y"])] for r in rows]) - PIXEL_CENTRE for k in keys}
     with open(REAL / f"{name}.mp.csv") as f:
         rows = list(csv.DictReader(f))
     peer = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
@@ -156,6 +152,7 @@ class After:
         from tracker.eyes import EyeFinder, calibration_crop, learn_eyes, refine_pupils
 
         grey0 = cv2.cvtColor(frame0, cv2.COLOR_BGR2GRAY)
+        clicks = clicks.moved(-PIXEL_CENTRE, -PIXEL_CENTRE)  # the finders count as OpenCV does
         lp, rp = refine_pupils(grey0, clicks.left_pupil, clicks.right_pupil)
         self.pupils_cal = (lp, rp)
         ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])

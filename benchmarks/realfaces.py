@@ -63,7 +63,7 @@ import numpy as np
 
 from tracker.auto_init import AutoInitError
 from tracker.calibration import CalibrationError, calibrate
-from tracker.clicks import Clicks, ClicksError
+from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams
 from tracker.track_cli import TrackCliError, _auto, _frame_at, _Video
@@ -232,9 +232,11 @@ class ClipRun:
         return [p.status for p in self.params]
 
 
-def start_tracker(video: Path, clicks: str | os.PathLike | None = None, auto: bool = False) -> FaceTracker:
+def start_tracker(video: Path, clicks: str | os.PathLike | None = None, auto: bool = False,
+                  shift: tuple[float, float] = (0.0, 0.0)) -> FaceTracker:
     """Calibrate as ``python -m tracker track VIDEO (--init CLICKS | --auto)`` does and return the
-    tracker. Raises the tracker's own one-line errors."""
+    tracker. ``shift`` (px) moves the five points first (another person's clicks; see
+    :data:`JITTER`). Raises the tracker's own one-line errors."""
     if auto:
         found, cal_frame = _auto(video)
     else:
@@ -242,6 +244,8 @@ def start_tracker(video: Path, clicks: str | os.PathLike | None = None, auto: bo
         cal_frame = _frame_at(video, found.frame)
         h, w = cal_frame.shape[:2]
         found.check_inside((w, h), where=str(clicks))
+    if shift != (0.0, 0.0):
+        found = found.moved(*shift)
     return FaceTracker(calibrate(cal_frame, found))
 
 
@@ -253,17 +257,18 @@ def run_clip(
     keep: Sequence[int] = (),
     name: str | None = None,
     max_frames: int | None = None,
+    shift: tuple[float, float] = (0.0, 0.0),
 ) -> ClipRun:
     """Track every frame of ``video`` from frame 0, timing each ``track`` call.
 
     ``keep``: frame indices whose overlay image to keep (for contact sheets; drawn outside the
-    timed region). ``max_frames`` stops early (for quick runs).
+    timed region). ``max_frames`` stops early (for quick runs). ``shift``: see :func:`start_tracker`.
     """
     video = Path(video)
     run = ClipRun(name=name or video.stem, mode="auto" if auto else "clicks")
     t0 = time.perf_counter()
     try:
-        tracker = start_tracker(video, clicks, auto=auto)
+        tracker = start_tracker(video, clicks, auto=auto, shift=shift)
     except (TrackCliError, ClicksError, CalibrationError, AutoInitError) as e:
         run.error = str(e)
         return run
@@ -287,7 +292,8 @@ def run_clip(
     finally:
         v.close()
     run.times_ms, run.cpu_ms = np.array(times), np.array(cpu)
-    run.mouth_centres = np.array(mouths, dtype=np.float64).reshape(-1, 2)
+    # the overlay's points are in the tracker's own pixel convention; the peer's, like the params', in the files'
+    run.mouth_centres = np.array(mouths, dtype=np.float64).reshape(-1, 2) + PIXEL_CENTRE
     return run
 
 
@@ -504,7 +510,7 @@ def contact_sheet(run: ClipRun, peer: PeerTrack | None, metrics: Metrics | None 
             for name, pts in peer.points.items():
                 p = pts[i]
                 if np.all(np.isfinite(p)):
-                    c = (int(round(p[0] * s)), int(round(p[1] * s)))
+                    c = (int(round(p[0] * s - PIXEL_CENTRE)), int(round(p[1] * s - PIXEL_CENTRE)))  # drawn as OpenCV counts
                     cv2.circle(tile, c, 3, (0, 0, 0), -1, cv2.LINE_AA)
                     cv2.circle(tile, c, 2, PEER_COLOUR, -1, cv2.LINE_AA)
             lp, rp = peer.points.get("left_pupil"), peer.points.get("right_pupil")
@@ -609,14 +615,15 @@ class ClipResult:
 
 
 def measure_clip(folder: Path, name: str, auto: bool = False, sheets: bool = False,
-                 max_frames: int | None = None, out_dir: Path = OUT_DIR) -> ClipResult:
+                 max_frames: int | None = None, out_dir: Path = OUT_DIR,
+                 shift: tuple[float, float] = (0.0, 0.0)) -> ClipResult:
     """Track clip ``name`` of ``folder`` (clicks or ``--auto``), compare with the peer, and write its
-    contact sheet when ``sheets``."""
+    contact sheet when ``sheets``. ``shift``: the five points moved first (:func:`start_tracker`)."""
     peer = load_peer(folder, name)
     n = len(peer) if max_frames is None else min(len(peer), max_frames)
     keep = sheet_frames(n) if sheets else ()
     run = run_clip(folder / f"{name}.mp4", folder / f"{name}.clicks.json", auto=auto, keep=keep,
-                   name=name, max_frames=max_frames)
+                   name=name, max_frames=max_frames, shift=shift)
     if run.error is not None:
         return ClipResult(name, run.mode, None, np.zeros(0), math.nan, error=run.error)
     m = compare(run.params, peer, run.mouth_centres)
@@ -738,6 +745,48 @@ def results_table(results: Sequence[ClipResult], notes: Sequence[str] = ()) -> "
              "CPU time (the frame's own cost when the machine is shared)."]
     lines += [f"{r.name} {r.mode}: no start — {r.error}" for r in results if r.error is not None]
     t.note = "\n".join(n for n in [*lines, *notes] if n)
+    return t
+
+
+JITTER = ((0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 1.0), (-1.0, -1.0), (0.5, 0.5))
+"""Moves (px) of the five points for ``--jitter``: as given, and as another careful person might
+click them — a pixel apart is what two clicks on the same pupil differ by. One run per move says
+how much of a clip's figure is the clicks' luck: a model learned from one frame can read a lid
+or a lip in one of two ways, and the whole track follows that reading."""
+JITTER_VALUES = ("lost_pct", "pupil_med", "pupil_p95", "r_open", "r_width", "r_eye", "r_brow")
+
+
+def measure_jitter(folder: Path, names: Sequence[str], modes: Sequence[bool] = (False, True), workers: int = 2,
+                   max_frames: int | None = None) -> dict[tuple[str, str], list[ClipResult]]:
+    """Every clip and mode once per move of :data:`JITTER`: ``{(clip, mode): [result per move]}``."""
+    jobs = [(folder, n, a, False, max_frames, OUT_DIR, sh) for n in names for a in modes for sh in JITTER]
+    out: dict[tuple[str, str], list[ClipResult]] = {}
+    for r in _map(measure_clip, jobs, workers):
+        out.setdefault((r.name, r.mode), []).append(r)
+    return out
+
+
+def jitter_table(groups: dict[tuple[str, str], list[ClipResult]]) -> "Table":
+    """Per clip and mode: how many of the moved-click runs meet every target and each value's mean
+    (lowest–highest) over them; under it the runs meeting every target, per mode."""
+    from benchmarks.harness import Table
+
+    t = Table(f"Real faces, the clicks moved by up to a pixel ({len(JITTER)} runs a clip: --jitter)",
+              ["clip", "mode", "runs meeting every target", *[f"{k} mean (lo–hi)" for k in JITTER_VALUES]])
+    totals: dict[str, list[int]] = {}
+    for (name, mode), rs in groups.items():
+        ok = [r for r in rs if r.metrics is not None]
+        met = sum(not any(misses(r.metrics, auto=mode == "auto").values()) for r in ok)
+        tot = totals.setdefault(mode, [0, 0])
+        tot[0] += met
+        tot[1] += len(rs)
+        cells = []
+        for k in JITTER_VALUES:
+            v = np.array([metric_values(r.metrics)[k] for r in ok], dtype=np.float64)
+            v = v[np.isfinite(v)]
+            cells.append(f"{v.mean():.2f} ({v.min():.2f}–{v.max():.2f})" if len(v) else "—")
+        t.add(name, mode, f"{met}/{len(rs)}" + ("" if len(ok) == len(rs) else f" ({len(rs) - len(ok)} no start)"), *cells)
+    t.note = "runs meeting every target (no speed here): " + ", ".join(f"{m} {a}/{b}" for m, (a, b) in totals.items())
     return t
 
 
@@ -898,6 +947,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--serial", action="store_true",
                     help="one clip at a time on one pinned core (use this for speed figures)")
     ap.add_argument("--frames", type=int, help="track only the first N frames of each clip")
+    ap.add_argument("--jitter", action="store_true",
+                    help=f"instead: each clip {len(JITTER)} times, the clicks (or --auto's points) moved by up to a pixel, "
+                         "and how often and how far each figure holds")
     ap.add_argument("--stress", metavar="DIR", nargs="?", const="out/stress",
                     help="instead: every harder variant of the clips (benchmarks.stress_clips; made in DIR, default "
                          "out/stress, when missing) in both modes, one summary line per variant")
@@ -909,6 +961,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if (args.save or args.against or args.variants) and not args.stress:
         print("realfaces: --save, --against and --variants go with --stress", file=sys.stderr)
+        return 2
+    if args.jitter and args.stress:
+        print("realfaces: --jitter and --stress are two different runs: give one", file=sys.stderr)
         return 2
     folder = real_dir(args.dir)
     want = None
@@ -947,6 +1002,12 @@ def main(argv: list[str] | None = None) -> int:
     names = want or clip_names(folder)
     modes = (True,) if args.auto else (False, True) if args.both else (False,)
     workers = 1 if args.serial else 2
+    if args.jitter:
+        cv2.setNumThreads(1)
+        t0 = time.perf_counter()
+        print(jitter_table(measure_jitter(folder, names, modes, workers, args.frames)).render())
+        print(f"({time.perf_counter() - t0:.1f} s)")
+        return 0
     note = ""
     if args.serial:
         from benchmarks.harness import pin_one_core

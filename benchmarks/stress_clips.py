@@ -60,6 +60,7 @@ import cv2
 import numpy as np
 
 from benchmarks.realfaces import clip_names, real_dir
+from tracker.clicks import PIXEL_CENTRE
 from tracker.params import PARAM_NAMES
 
 POINTS = (
@@ -475,7 +476,9 @@ def _num(v: float, fmt: str) -> str:
 
 
 def _move(p: np.ndarray, m: np.ndarray) -> np.ndarray:
-    return p @ m[:, :2].T + m[:, 2]
+    """Points of the files (the peer's, the clicks: :data:`~tracker.clicks.PIXEL_CENTRE`) through a map
+    made for the pictures (OpenCV's convention, pixel centres at whole numbers)."""
+    return (p - PIXEL_CENTRE) @ m[:, :2].T + m[:, 2] + PIXEL_CENTRE
 
 
 def read_frames(path: Path) -> tuple[list[np.ndarray], float]:

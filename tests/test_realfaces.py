@@ -336,6 +336,30 @@ def test_stress_runs_only_the_variants_and_clips_asked_for(tmp_path, monkeypatch
     assert rows == ["original", "pale"]
 
 
+def test_jitter_runs_every_clip_once_per_move_and_counts_the_runs_that_meet_every_target(tmp_path, monkeypatch):
+    peer = _peer(n=60)
+    good = rf.compare(_ours(peer.values), peer)
+    off = peer.values.copy()
+    off[:, 0] += 30.0
+    bad = rf.compare(_ours(off), peer)
+    seen = []
+
+    def fake(folder, name, auto=False, sheets=False, max_frames=None, out_dir=None, shift=(0.0, 0.0)):
+        seen.append((name, auto, shift))
+        m = bad if (name == "b" and shift == rf.JITTER[1]) else good
+        return rf.ClipResult(name, "auto" if auto else "clicks", m, np.zeros(0), 1.0)
+
+    monkeypatch.setattr(rf, "measure_clip", fake)
+    groups = rf.measure_jitter(tmp_path, ["a", "b"], (False,), workers=1)
+    assert sorted(set(s for _, _, s in seen)) == sorted(rf.JITTER) and len(seen) == 2 * len(rf.JITTER)
+    text = rf.jitter_table(groups).render()
+    n = len(rf.JITTER)
+    row = lambda clip: next(line for line in text.splitlines() if line.startswith(clip + " "))
+    assert f"{n}/{n}" in row("a") and f"{n - 1}/{n}" in row("b")
+    assert "30.00" in row("b") and f"clicks {2 * n - 1}/{2 * n}" in text
+    assert rf.main(["--jitter", "--stress", str(tmp_path)]) == 2
+
+
 # ------------------------------------------------------------------ the tracker on real clips
 
 REAL = rf.real_dir()
@@ -410,9 +434,11 @@ STRESS_CASES = [
                  id="expr_d19-side-clicks"),
     # bearded: --auto took the darkest line below the eyes, the beard's, for the mouth and learned it
     # there (r open -0.90 on expr_d0; on expr_d19 -0.35 with the width at 0.00 and 99 % of the 'ok'
-    # frames' mouths off). expr_d19's lost frames (3.2 %: the corners in the beard) are not asserted
+    # frames' mouths off). expr_d19's lost frames (3.2 %: the corners in the beard) are not asserted,
+    # nor its opening: with --auto's points moved by a pixel (realfaces --jitter) it comes out
+    # anywhere from 0.22 to 0.95 — the mouth is found, how far it opens is the beard's coin toss
     pytest.param("expr_d0", "beard", True, None, id="expr_d0-beard-auto"),
-    pytest.param("expr_d19", "beard", True, ("pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye", "r_brow"),
+    pytest.param("expr_d19", "beard", True, ("pupil_med", "pupil_p95", "roll_med", "r_width", "r_eye", "r_brow"),
                  id="expr_d19-beard-auto"),
     # glasses: the rims crossing the skin bands round the eyes made the skin model take in the eyes
     # (93.6 % of expr_d0's frames 'eyes_closed', i.e. lost, in both modes), and the rim under the
@@ -425,12 +451,17 @@ STRESS_CASES = [
     # cannot tell from the skin (expr_d19's eyes reported shut on 83 % of the frames)
     pytest.param("expr_d18", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye"),
                  id="expr_d18-deep-clicks"),
-    pytest.param("expr_d19", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_eye", "r_brow"),
+    # (the eyes only: expr_d19's mouth opening on this copy is 0.74-0.89 with the clicks moved by a pixel)
+    pytest.param("expr_d19", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_eye", "r_brow"),
                  id="expr_d19-deep-clicks"),
     # her eyes scored only 0.4-0.55 after a quick turn, one on its dark outer corner, and pulled the
     # head's scale 7 % wider while her face narrowed 10 %: every pupil after it 10 % of the eye
-    # distance off, reported ok (the scale now follows weak eyes only where the face picture agrees)
-    pytest.param("talk_a", "deep", False, None, id="talk_a-deep-clicks"),
+    # distance off, reported ok (the scale now follows weak eyes only where the face picture agrees,
+    # with the flow or without it: a frame without the flow grew it 4 % at a time, two of eight
+    # one-pixel moves of the clicks ended 10 % off). Her eye opening (r 0.66-0.75 over those moves)
+    # and mouth width are not what this case is about
+    pytest.param("talk_a", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_brow"),
+                 id="talk_a-deep-clicks"),
 ]
 
 

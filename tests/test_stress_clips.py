@@ -66,9 +66,10 @@ def test_variant_moves_points_with_pixels(tmp_path, kind):
     lp, rp = peer.points["left_pupil"][0], peer.points["right_pupil"][0]
     if kind == "half":
         assert img.shape[:2] == (24, 32)
-        assert lp == pytest.approx([(20 + 0.5) * 0.5 - 0.5, (15 + 0.5) * 0.5 - 0.5], abs=0.01)
+        # the files measure from the frame's corner (PIXEL_CENTRE): a point halves with the picture
+        assert lp == pytest.approx([20 * 0.5, 15 * 0.5], abs=0.01)
     elif kind == "mirror":
-        assert lp == pytest.approx([63 - 44, 13], abs=0.01) and rp == pytest.approx([63 - 20, 15], abs=0.01)
+        assert lp == pytest.approx([64 - 44, 13], abs=0.01) and rp == pytest.approx([64 - 20, 15], abs=0.01)
         assert lp[0] < rp[0] and clicks["left_pupil"][0] < clicks["right_pupil"][0]
     assert peer.ipd[0] == pytest.approx(float(np.hypot(*(rp - lp))), abs=0.01)
     assert clicks["left_pupil"] == pytest.approx(list(lp), abs=0.06)

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
+from tracker.clicks import PIXEL_CENTRE
 from tracker.params import PARAM_NAMES, read_csv
 from tracker.synthetic import (
     EXPRESSIONS,
@@ -215,7 +216,7 @@ def test_pupil_centres_and_roll(pose):
     right = pupil_centroid(img, lm["right_pupil"], 0.042 * st.ipd)
     assert np.allclose(left, lm["left_pupil"], atol=0.15)
     assert np.allclose(right, lm["right_pupil"], atol=0.15)
-    mid = (left + right) / 2
+    mid = (left + right) / 2 + PIXEL_CENTRE  # the params count from the frame's corner
     assert mid == pytest.approx([truth.mid_x, truth.mid_y], abs=0.15)
     roll = math.degrees(math.atan2(-(right[1] - left[1]), right[0] - left[0]))
     assert roll == pytest.approx(truth.roll_deg, abs=0.3)
@@ -501,7 +502,7 @@ def test_any_pose_and_frame_size_renders(cx, cy, roll, ipd, w, h, expr):
     st = FaceState(cx=cx, cy=cy, roll_deg=roll, ipd=ipd).with_expression(expr)
     img, truth = render_face(st, STYLES["webcam"], frame_size=(w, h))
     assert img.shape == (h, w, 3) and img.dtype == np.uint8
-    assert truth.mid_x == cx and np.isfinite(truth.values()).all()
+    assert truth.mid_x == cx + PIXEL_CENTRE and np.isfinite(truth.values()).all()
 
 
 def test_textured_blushing_skin_keeps_the_features_exact():

@@ -228,6 +228,68 @@ def test_two_clear_eyes_outvote_a_face_picture_a_side_light_has_spoiled(cal, mon
     assert shut.params.status == LOST and shut.debug.get("lost") == "not this face"
 
 
+def test_without_the_flow_weak_eyes_move_the_head_but_do_not_grow_it_unless_the_face_picture_agrees(cal):
+    """With the flow lost for a frame (a quick turn), two weak eyes found on their outer corners
+    12 % too far apart move the head's midpoint and roll but not its scale: on a darkened copy of a
+    real clip such a frame grew the head 4 % at a time and every pupil after it stayed on the eye
+    corners, 10 % of the eye distance off and reported ok. Two clear eyes still grow it, as far as
+    a frame allows."""
+    import math
+
+    from tracker.face_tracker import MAX_GROW
+
+    img, _ = render_face(BASE)
+    tr = FaceTracker(cal)
+    tr.track(img, 0)
+    a = tr.anchors.copy()
+    mid = 0.5 * (a[0] + a[1]) + (3.0, -2.0)
+    wide = mid + 1.12 * (a - 0.5 * (a[0] + a[1]))
+    found = tr._pupils_face.copy()
+    length = lambda p: math.hypot(*(p[1] - p[0]))
+    tr._follow(a, wide, [True, True], found, flow_ok=False, pinned=False, strong=False)
+    assert length(tr.anchors) == pytest.approx(length(a), rel=1e-6)  # the picture is at the old scale
+    assert np.allclose(0.5 * (tr.anchors[0] + tr.anchors[1]), mid)
+    tr.anchors = a.copy()
+    tr._follow(a, wide, [True, True], found, flow_ok=False, pinned=False, strong=True)
+    assert length(tr.anchors) == pytest.approx((1 + MAX_GROW) * length(a), rel=1e-6)
+
+
+def test_consensus_keeps_the_middle_reading_never_an_outlier_or_a_blend():
+    """Calibration learns each model on a few crops a fraction of a pixel apart and keeps the one
+    whose readings sit in the middle: one crop's odd reading (a lower lip read at a third of its
+    thickness) is never the one kept, and what is kept is a reading one crop really gave."""
+    from tracker.calibration import CONSENSUS_SHIFTS, consensus
+
+    readings = [[0.35, 2.0], [1.10, 2.1], [1.00, 2.0], [0.90, 1.95], [1.05, 2.05]]
+    assert consensus(readings) == 2
+    assert consensus([[0.0]]) == 0 and consensus([[1.0], [3.0], [2.0]]) == 2
+    assert CONSENSUS_SHIFTS[0] == (0.0, 0.0) and len(CONSENSUS_SHIFTS) % 2 == 1
+    assert all(abs(dx) < 1.0 and abs(dy) < 1.0 for dx, dy in CONSENSUS_SHIFTS)
+
+
+def test_the_kept_models_are_ones_a_shifted_crop_gave(cal):
+    """The eye and mouth models kept are learned on one of the shifted crops (their readings are
+    one crop's, not an average)."""
+    from tracker.calibration import CONSENSUS_SHIFTS, FaceFrame, eye_calibration_crop
+    from tracker.eyes import learn_eyes
+    from tracker.mouth_model import learn_mouth
+
+    frame, _ = render_face(BASE)
+    c = cal.clicks
+    ff = FaceFrame.from_pupils(c.left_pupil, c.right_pupil, cal.work_ipd)
+    wi = cal.work_ipd
+    got = []
+    for dx, dy in CONSENSUS_SHIFTS:
+        r0 = eye_calibration_crop(wi)
+        r = (r0[0] + dx, r0[1] + dy, r0[2], r0[3])
+        crop = ff.crop(frame, r)
+        brows = ff.to_face(np.array([c.left_brow, c.right_brow])) - r[:2]
+        m = learn_eyes(crop, cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32),
+                       np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - r[:2], brows, wi)
+        got.append(tuple(m.lid_open))
+    assert any(np.allclose(cal.eye_model.lid_open, g, rtol=1e-6) for g in got)
+
+
 def test_lost_holds_the_last_values(cal):
     tr = FaceTracker(cal)
     r0 = tr.track(render_face(BASE)[0])

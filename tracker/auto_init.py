@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 from tracker.brows import brow_centre
-from tracker.clicks import Clicks
+from tracker.clicks import PIXEL_CENTRE, Clicks
 from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, spectacle_rims
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
 
@@ -366,4 +366,4 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
         "right_brow": list(brows[1]),
         "mouth": list(mouth),
     }
-    return Clicks.from_dict(d, where="auto init")
+    return Clicks.from_dict(d, where="auto init").moved(PIXEL_CENTRE, PIXEL_CENTRE)

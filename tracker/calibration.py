@@ -30,7 +30,7 @@ import numpy as np
 
 from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
-from tracker.clicks import Clicks, ClicksError
+from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
 from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils
 from tracker.eyes import calibration_crop as eye_calibration_crop
@@ -52,6 +52,14 @@ third of their size: eye-opening target met on 22 of 27 clip runs instead of 18,
 and mouths off the mouth). Small faces then cost what a large one does."""
 SNAP_REACH = 0.12
 """Farthest (× the clicked inter-pupil distance) a clicked pupil is snapped to a dark disc."""
+CONSENSUS_SHIFTS = ((0.0, 0.0), (0.7, 0.7), (-0.7, 0.7), (0.7, -0.7), (-0.7, -0.7))
+"""Shifts (face px) of the crops the eye and mouth models are each learned from; the model kept
+is the one whose measurements sit in the middle of all (:func:`consensus`). One frame's lid gap
+and lip thicknesses can come out in one of two readings (a walk that stops at the lash line or at
+the lid's margin, a lower lip read with or without its shaded half), and which one depended on
+where the crop's pixels fell: on the shared clips, clicks moved by one pixel read expr_d6's lower
+lip as 16 or as 5 px and expr_d19's lid gap as 1.15 or 1.34 iris radii — and the tracker's results
+with them (expr_d6's mouth-opening r 0.37–0.65 over eight such moves)."""
 
 
 class CalibrationError(ValueError):
@@ -141,7 +149,8 @@ class Calibration:
     """What the tracker knows about one performer (lengths in face-frame px unless noted).
 
     ``ipd`` and ``frame_size`` are in frame px; ``work_ipd`` is the inter-pupil distance in
-    the face frame. Geometry (``brow_height``, ``mouth_offset`` …) is measured on the
+    the face frame. ``clicks`` (the refined pupils and mouth centre) are in OpenCV's pixel convention,
+    as everything the tracker keeps: half a pixel from the clicks file's (:data:`~tracker.clicks.PIXEL_CENTRE`). Geometry (``brow_height``, ``mouth_offset`` …) is measured on the
     calibration frame relative to the pupils.
     """
 
@@ -413,6 +422,13 @@ def _ellipse_pixels(img: np.ndarray, cx: float, cy: float, ax: float, ay: float,
     return img[(e <= 1.0) & (e >= inner**2)]
 
 
+def consensus(measures: list[list[float]]) -> int:
+    """Index of the measurement vector nearest all the others (the least sum of absolute
+    differences; the first such): the middle reading of a few, never a blend of two."""
+    m = np.asarray(measures, dtype=np.float64)
+    return int(np.abs(m[:, None, :] - m[None, :, :]).sum(axis=(1, 2)).argmin())
+
+
 def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     """Learn a :class:`Calibration` from one frame and the five clicks on it.
 
@@ -427,6 +443,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         clicks.check_inside((W, H))
     except ClicksError as e:
         raise CalibrationError(str(e)) from None
+    given, clicks = clicks, clicks.moved(-PIXEL_CENTRE, -PIXEL_CENTRE)  # to OpenCV's pixel convention
     grey_full = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     ipd0 = clicks.ipd()
     # the iris centres near the clicks (the clicks stay when nothing iris-like is there)
@@ -451,7 +468,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     # brows 0.2–0.55 above): clicks outside them are not on one face
     if not (0.55 * wi < mouth_f[1] < 2.2 * wi and abs(mouth_f[0]) < 0.5 * wi):
         raise CalibrationError(
-            f"clicks: the mouth ({clicks.mouth[0]:g}, {clicks.mouth[1]:g}) must be below the middle of the eyes, "
+            f"clicks: the mouth ({given.mouth[0]:g}, {given.mouth[1]:g}) must be below the middle of the eyes, "
             "about one eye distance down"
         )
     if not all(-1.0 * wi < b[1] < -0.05 * wi for b in brows_f):
@@ -481,7 +498,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         M = np.float32([[1, 0, px - tw // 2], [0, 1, py - th // 2]])
         t = cv2.warpAffine(grey, M, (tw, th), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
         temps.append(np.rint(t).astype(np.float32))
-    for t, side, c in zip(temps, ("left", "right"), (clicks.left_pupil, clicks.right_pupil)):
+    for t, side, c in zip(temps, ("left", "right"), (given.left_pupil, given.right_pupil)):
         if float(t.std()) < MIN_EYE_CONTRAST:
             raise CalibrationError(
                 f"clicks: nothing eye-like at the {side} pupil click ({c[0]:g}, {c[1]:g}): the picture there is flat"
@@ -527,21 +544,32 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
             white_threshold = 0.5 * (lo_m + hi_m)
 
     # --- the eyes: irises, lids, brows, the whole eye's picture (:mod:`tracker.eyes`)
-    erect = eye_calibration_crop(wi)
-    ecrop = ff.crop(frame_bgr, erect)
-    egrey = cv2.cvtColor(ecrop, cv2.COLOR_BGR2GRAY).astype(np.float32)
-    eo = np.array(erect[:2], dtype=np.float64)
-    try:
-        learned = learn_eyes(ecrop, egrey, np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - eo, brows_f - eo, wi)
-        # the pictures are kept as 8-bit PNGs: round now, so a loaded calibration tracks like this one
-        eye_model = EyeModel.from_dict(learned.to_dict(), learned.images())
-    except EyeModelError as e:
-        raise CalibrationError(f"calibration: {e}") from None
+    # (each learned on a few crops shifted by less than a pixel, the middle one kept: CONSENSUS_SHIFTS)
+    erect0 = eye_calibration_crop(wi)
+    eyes = []
+    for dx, dy in CONSENSUS_SHIFTS:
+        erect = (erect0[0] + dx, erect0[1] + dy, erect0[2], erect0[3])
+        ecrop = ff.crop(frame_bgr, erect)
+        egrey = cv2.cvtColor(ecrop, cv2.COLOR_BGR2GRAY).astype(np.float32)
+        eo = np.array(erect[:2], dtype=np.float64)
+        try:
+            eyes.append(learn_eyes(ecrop, egrey, np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]]) - eo, brows_f - eo, wi))
+        except EyeModelError as e:
+            raise CalibrationError(f"calibration: {e}") from None
+    learned = eyes[consensus([[math.log(g / r) for g, r in zip(m.lid_open, m.radius)] + [math.log(r) for r in m.radius]
+                              for m in eyes])]
+    # the pictures are kept as 8-bit PNGs: round now, so a loaded calibration tracks like this one
+    eye_model = EyeModel.from_dict(learned.to_dict(), learned.images())
 
     # --- the mouth: this performer's lips, gap and inside (never refuses a face; says which cue it uses)
-    mrect = mouth_rect(mouth_f, wi)
-    mcrop = ff.crop(frame_bgr, mrect)
-    mouth_model = learn_mouth(mcrop, (mouth_f[0] - mrect[0], mouth_f[1] - mrect[1]), wi)
+    mrect0 = mouth_rect(mouth_f, wi)
+    mouths = []
+    for dx, dy in CONSENSUS_SHIFTS:
+        mrect = (mrect0[0] + dx, mrect0[1] + dy, mrect0[2], mrect0[3])
+        mcrop = ff.crop(frame_bgr, mrect)
+        mouths.append((learn_mouth(mcrop, (mouth_f[0] - mrect[0], mouth_f[1] - mrect[1]), wi), mrect, mcrop))
+    mouth_model, mrect, mcrop = mouths[consensus([[math.log(max(v, 0.5)) for v in (m.thick_up, m.thick_down, m.width)]
+                                                  for m, _, _ in mouths])]
     mcx = mrect[0] + mouth_model.centre[0]
     mcy = mrect[1] + mouth_model.centre[1]
 

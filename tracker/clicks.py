@@ -21,6 +21,13 @@ MAX_COORD = 1e6
 MAX_FILE_BYTES = 1024 * 1024
 
 
+PIXEL_CENTRE = 0.5
+"""Where a pixel's centre lies in the coordinates of files and the command line (CLICKS.json, the
+track CSV): pixel ``(i, j)`` covers ``[i, i + 1) × [j, j + 1)`` measured from the image's top-left
+corner, as in MediaPipe, Qt and most drawing tools. The tracker works inside in OpenCV's convention
+(pixel centres at whole numbers) and moves points by this on the way in and out."""
+
+
 class ClicksError(ValueError):
     """A clicks file or dictionary is unusable; the message is one line naming the problem."""
 
@@ -78,6 +85,10 @@ class Clicks:
     def save(self, path: str | os.PathLike) -> None:
         """Write CLICKS.json atomically."""
         atomic_file.write_text(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
+
+    def moved(self, dx: float, dy: float) -> "Clicks":
+        """These clicks with every point moved by ``(dx, dy)`` px."""
+        return Clicks(frame=self.frame, **{k: (x + dx, y + dy) for k, (x, y) in self.points().items()})
 
     def points(self) -> dict[str, Point]:
         return {k: getattr(self, k) for k in POINT_KEYS}

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from tracker.clicks import PIXEL_CENTRE
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.eyes import EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
@@ -545,7 +546,7 @@ class FaceTracker:
         pupils_img = img_pts[0:2]
         (lx, ly), (rx, ry) = pupils_img.tolist()
         roll = math.degrees(math.atan2(-(ry - ly), rx - lx))
-        vals = [0.5 * (lx + rx), 0.5 * (ly + ry), roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
+        vals = [0.5 * (lx + rx) + PIXEL_CENTRE, 0.5 * (ly + ry) + PIXEL_CENTRE, roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
         parts = dict(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
         status = OK
         if mouth_res is not None:
@@ -608,6 +609,11 @@ class FaceTracker:
             new = anchors
         elif not flow_ok and not pinned:
             new = self._limited(anchors, pupils_img)
+            if not strong:  # as below: weak eyes change the scale only where the face picture agrees
+                la, ln = math.hypot(*(anchors[1] - anchors[0])), math.hypot(*(new[1] - new[0]))
+                if not self._picture_allows_scale(anchors, ln / max(la, 1e-9)):
+                    mid = 0.5 * (new[0] + new[1])
+                    new = mid + (la / max(ln, 1e-9)) * (new - mid)
         else:
             (ax0, ay0), (ax1, ay1) = anchors.tolist()
             (px0, py0), (px1, py1) = pupils_img.tolist()

@@ -3,7 +3,8 @@
 Units are pixels of the input frame and degrees (see ``shared/DESIGN.md``):
 
 ========== ==================================================================
-mid_x/y    midpoint between the two pupil centres (x right, y down)
+mid_x/y    midpoint between the two pupil centres (x right, y down; measured from the
+           frame's top-left corner, pixel centres at +0.5: see tracker.clicks.PIXEL_CENTRE)
 roll_deg   angle of the pupil segment from horizontal, + when the image-right
            pupil is higher (i.e. counter-clockwise on screen)
 eye_open_* lid-to-lid distance through the pupil, along the face's up axis

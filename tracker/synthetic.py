@@ -45,6 +45,7 @@ import cv2
 import numpy as np
 
 from tracker import atomic_file
+from tracker.clicks import PIXEL_CENTRE
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams, write_csv
 
 BGR = tuple[int, int, int]
@@ -349,6 +350,8 @@ def face_truth(state: FaceState, frame: int = 0, time: float = 0.0,
     Status: ``lost`` when the face is not visible or (given ``frame_size``) a pupil is outside the
     frame; ``mouth_lost`` when the mouth centre is outside the frame; ``eyes_closed`` when both
     lid gaps are under 10 % of normal; else ``ok``. Values always say where the face is (or would be).
+    ``mid_x`` / ``mid_y`` are in the files' pixel convention (:data:`~tracker.clicks.PIXEL_CENTRE`),
+    like the tracker's; :attr:`FaceState.cx` / ``cy`` and :func:`face_landmarks` in OpenCV's.
     """
     u = state.ipd
     if not (u > 0 and math.isfinite(u)):
@@ -379,7 +382,7 @@ def face_truth(state: FaceState, frame: int = 0, time: float = 0.0,
     else:
         status, conf = OK, 1.0
     return FaceParams(
-        frame=int(frame), mid_x=float(state.cx), mid_y=float(state.cy), roll_deg=float(state.roll_deg),
+        frame=int(frame), mid_x=float(state.cx) + PIXEL_CENTRE, mid_y=float(state.cy) + PIXEL_CENTRE, roll_deg=float(state.roll_deg),
         eye_open_l=vals[0], eye_open_r=vals[1], brow_l=brows[0], brow_r=brows[1],
         mouth_width=2.0 * m.half_w, lip_upper=lip_u, lip_lower=lip_l,
         time=float(time), status=status, confidence=conf,
@@ -387,7 +390,8 @@ def face_truth(state: FaceState, frame: int = 0, time: float = 0.0,
 
 
 def face_landmarks(state: FaceState) -> dict[str, np.ndarray]:
-    """Image positions (x, y) of the performer's key points, for tests and overlays.
+    """Image positions (x, y) of the performer's key points, for tests and overlays, in OpenCV's pixel
+    convention (pixel centres at whole numbers, as the tracker's overlays).
 
     Keys: ``left_pupil``, ``right_pupil``, ``left_brow``, ``right_brow`` (eyebrow middle line on
     the line through the pupil along up), ``mouth`` (centre), ``mouth_left``, ``mouth_right``
@@ -420,9 +424,10 @@ def face_landmarks(state: FaceState) -> dict[str, np.ndarray]:
 
 
 def clicks_for(state: FaceState, frame: int = 0) -> dict:
-    """The five calibration clicks of DESIGN.md's CLICKS.json for ``state``."""
+    """The five calibration clicks of DESIGN.md's CLICKS.json for ``state`` (the files' pixel
+    convention, :data:`~tracker.clicks.PIXEL_CENTRE`)."""
     lm = face_landmarks(state)
-    r = lambda p: [round(float(p[0]), 3), round(float(p[1]), 3)]
+    r = lambda p: [round(float(p[0]) + PIXEL_CENTRE, 3), round(float(p[1]) + PIXEL_CENTRE, 3)]
     return {"frame": int(frame), "left_pupil": r(lm["left_pupil"]), "right_pupil": r(lm["right_pupil"]),
             "left_brow": r(lm["left_brow"]), "right_brow": r(lm["right_brow"]), "mouth": r(lm["mouth"])}
 
