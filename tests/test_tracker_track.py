@@ -177,8 +177,15 @@ def test_a_second_look_finds_the_face_where_the_tracker_is_not(cal):
     right = tr.pupils.copy()
     assert tr._second_look(img) is None
     tr.pupils = right - (BASE.ipd, 0.0)
+    tr.anchors = tr.anchors - (BASE.ipd, 0.0)  # the pose followed them there
     found = tr._second_look(img)
     assert found is not None and np.abs(found - right).max() < 2.0
+    # "eyes" a fifth too far apart in the box (a turned head's outer eye corners) while the pose is
+    # on the face and only the reported eyes are off: the face picture says stay
+    tr.anchors = tr.anchors + (BASE.ipd, 0.0)
+    mid = right.mean(axis=0)
+    tr._face_in_box = lambda frame, box: mid + 1.2 * (right - mid)
+    assert tr._second_look(img) is None
     tr = FaceTracker(cal)
     looks = []
     tr._second_look = lambda frame: looks.append(len(looks)) or None

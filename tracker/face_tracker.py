@@ -168,6 +168,7 @@ FACE_REACH = 0.12  # how far (× ipd) the face picture is looked for around the 
 FACE_FOLLOW = 0.5  # per frame pull of the head's position onto the face picture's match
 ROLL_STEP = math.radians(3.0)  # the face picture is also compared this much turned each way: its best roll
 ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's best roll
+LOOK_GROW = 0.1  # a second look that changes the head's scale by more than this needs the face picture's say
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
@@ -729,13 +730,26 @@ class FaceTracker:
         and the calibrated eye pictures decide, as when the face is lost; where they find it far
         from where the tracker is, the tracker moves there."""
         ipd = float(math.hypot(*(self.pupils[1] - self.pupils[0])))
+        here = None
         for box in detect_faces(frame, ipd, 1.6, grey=(self._grey, self.motion.scale))[:3]:  # every size: rare
             found = self._face_in_box(frame, box)
             if found is None:
                 continue
             move = float(np.hypot(*(found.mean(axis=0) - self.pupils.mean(axis=0))))
-            if move > RECHECK_MOVE * max(ipd, 1.0):
-                return found
+            if move <= RECHECK_MOVE * max(ipd, 1.0):
+                continue
+            grow = math.hypot(*(found[1] - found[0])) / max(math.hypot(*(self.anchors[1] - self.anchors[0])), 1e-9)
+            if self._face_ref is not None and abs(grow - 1.0) > LOOK_GROW:
+                # a head that grows or shrinks that much: only where the face picture matches better than
+                # at the tracker's pose. A turned head's box can hold "eyes" a fifth too far apart (an
+                # eye's outer corner) while the tracker, unsure only of one eye, was nearer the face (a
+                # mirrored clip: 20 % of the eye distance off for two seconds after)
+                g, s = self._grey, self.motion.scale
+                if here is None:  # the pose's pupils: a reported eye may be the doubtful one
+                    here = face_similarity(g, s, self.anchors, self._face_ref)
+                if face_similarity(g, s, found, self._face_ref) <= here:
+                    continue
+            return found
         return None
 
     def _reacquire(self, frame: np.ndarray) -> np.ndarray | None:
