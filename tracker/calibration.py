@@ -154,9 +154,10 @@ class Calibration:
     """What the tracker knows about one performer (lengths in face-frame px unless noted).
 
     ``ipd`` and ``frame_size`` are in frame px; ``work_ipd`` is the inter-pupil distance in
-    the face frame. ``clicks`` (the refined pupils and mouth centre) are in OpenCV's pixel convention,
-    as everything the tracker keeps: half a pixel from the clicks file's (:data:`~tracker.clicks.PIXEL_CENTRE`). Geometry (``brow_height``, ``mouth_offset`` …) is measured on the
-    calibration frame relative to the pupils.
+    the face frame. ``clicks`` (the refined pupils and mouth centre) are in OpenCV's pixel
+    convention, as everything the tracker keeps: half a pixel from the clicks file's
+    (:data:`~tracker.clicks.PIXEL_CENTRE`). Geometry (``brow_height``, ``mouth_offset`` …) is
+    measured on the calibration frame relative to the pupils.
     """
 
     frame_size: tuple[int, int]

@@ -36,8 +36,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.clicks import PIXEL_CENTRE
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
+from tracker.clicks import PIXEL_CENTRE
 from tracker.eyes import EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
                                  locate_face, patch_similarity, reference_vector)
