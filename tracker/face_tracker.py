@@ -51,7 +51,9 @@ from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
 
 @dataclass
 class Overlay:
-    """What the tracker found in one frame, in frame pixels, for drawing.
+    """What the tracker found in one frame, in frame pixels, for drawing: counted as OpenCV counts
+    them (pixel centres at whole numbers), half a pixel from the params' ``mid_x`` / ``mid_y``, which
+    count as the files do (:data:`~tracker.clicks.PIXEL_CENTRE`).
 
     ``pupils`` (2,2) left/right; ``brows`` (2,2) points on the brow middle lines;
     ``lids`` (4,2) left upper, left lower, right upper, right lower; ``lip_polygon`` (k,2)
