@@ -392,3 +392,24 @@ def test_the_lines_shade_is_not_a_thin_upper_lip():
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 11.0) < 1.5
     f, gap = _upper_profile(3, [1.0])
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 3.0) < 1.0
+
+
+def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
+    """When only the line's blurred shade tells the rows apart (a soft or low-resolution picture, a
+    lip as pale as the skin) the split improves all the way to the gap and no edge stands out
+    further up: the lip is taken as a thin one (UPPER_UNSEEN), not as the thinnest the search
+    allows (expr_d19 at half resolution: 0.03 wi, where the tracker then looked for a one-to-three
+    px lip for the whole clip and its opening followed the peer at r 0.70; 0.78 with this)."""
+    from tracker.mouth_model import UPPER_UNSEEN, _outer_edge
+
+    skin = np.array([19.0, 12.0, 10.0])
+    f = np.tile(skin, (60, 1))
+    gap = 40
+    for k, s in enumerate([5.0, 3.5, 2.4, 1.6, 1.0, 0.6, 0.3]):  # the shade fading into the skin above
+        f[gap - 1 - k, 0] -= s
+    f[gap] = (10.0, 14.0, 10.0)
+    thick = gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)
+    assert abs(thick - UPPER_UNSEEN * WI) < 1e-9
+    # a lip with an edge of its own is still measured, thin or thick
+    f, gap = _upper_profile(11, [4.0, 3.0, 2.0, 1.0])
+    assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 11.0) < 1.5

@@ -584,9 +584,20 @@ def _colour_edge(rows_bgr: np.ndarray, start: int, direction: int, first: float,
 EDGE_INTERIOR = 0.5
 """An upper lip's outer edge found at the thinnest lip the search allows, with the split still
 improving towards the gap, gives way to a peak further out scoring at least this share of it
-(:func:`_outer_edge`); a weaker one is noise on a lip that really is that thin. Upper lips only:
+(:func:`_outer_edge`); without one, the edge is not seen (:data:`UPPER_UNSEEN`). Upper lips only:
 the lower lip's edge goes on to be placed by its colour (:func:`_colour_edge`), and the rule there
 too cost a dark-skinned copy of expr_d19 its opening's correlation (.90 → .74) for no clip gained."""
+UPPER_UNSEEN = 0.075
+"""Thickness (× wi) taken for an upper lip whose outer edge the calibration frame does not show: the
+split improves all the way to the gap and no peak further out stands up (:data:`EDGE_INTERIOR`) —
+the gap's own blurred shade decides, as it does on a soft or low-resolution picture and on pale
+lips. The search's thinnest lip (0.03 wi) then stood for a measurement, and the tracker looked for
+an upper lip of one to three px at its working scale for the whole clip: expr_d19 at half its
+resolution read 0.03 where the full picture gave 0.14 (the peer: 0.05), and its opening's
+correlation fell from .92 to .70. A thin lip's thickness here (the peer's upper lips on the shared
+clips' first frames: 0.03–0.23 IPD, median 0.13) lets the lip lengths the tracker tries reach a
+real lip's; where the lip really is that thin (expr_d18's first frame, 0.03 by the peer) the
+tracker still finds it so."""
 
 
 def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
@@ -627,6 +638,8 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
                  and score[k] >= EDGE_INTERIOR * score[0]]
         if peaks:
             j = max(peaks, key=lambda k: score[k])
+        else:
+            return float(start) - max(UPPER_UNSEEN * wi, es[0] - 0.5)
     y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
     if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
         y += direction * _vertex(score[j - 1], score[j], score[j + 1])
