@@ -410,6 +410,6 @@ def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
     f[gap] = (10.0, 14.0, 10.0)
     thick = gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)
     assert abs(thick - UPPER_UNSEEN * WI) < 1e-9
-    # a lip with an edge of its own is still measured, thin or thick
+    # a lip with an edge of its own is still measured (the thin one: the test above)
     f, gap = _upper_profile(11, [4.0, 3.0, 2.0, 1.0])
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 11.0) < 1.5

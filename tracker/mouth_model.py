@@ -606,7 +606,8 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
     rows past the gap into a lip (all rows from the gap to it) and skin (:data:`SKIN_ROWS` beyond it)
     — where the whole lip's mean differs most from the skin's just past it. A lip's window grows
     with the candidate, so a soft edge, a highlight on the lip or a crease in the skin do not pull
-    the edge the way the steepest local change would. Sub-pixel."""
+    the edge the way the steepest local change would. Sub-pixel. An upper lip whose edge the
+    profile does not show comes back :data:`UPPER_UNSEEN` thick (see :data:`EDGE_INTERIOR`)."""
     n = len(f)
     s_rows = max(int(round(SKIN_ROWS * wi)), 3)
     cs = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(f, axis=0, dtype=np.float64)])
