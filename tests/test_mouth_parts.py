@@ -106,6 +106,10 @@ def _profile(rows, finder):
             f, i = cls[2, 0] + np.array([6.0, 0.0, 0.0]), 0.0  # lower-lip coloured, brighter
         elif kind == "skin_tongue":
             f, i = cls[4, 0] + np.array([-1.0, 0.5, 0.0]), 0.0  # as pale as the skin round the mouth
+        elif kind == "teeth":
+            f, i = cls[0, 0], 1.0  # as pale and grey as the skin above the lips, but the inside's
+        elif kind == "lipstick_dark":
+            f, i = cls[1, 0] * np.array([0.6, 1.0, 1.0]), 1.0  # the dark inside: as red as the lips, darker
         elif kind == "shaded_chin":
             f, i = cls[3, 0] + np.array([-2.5, 1.0, 0.0]), 0.0  # the chin under a dropped jaw, in shadow
         else:
@@ -184,6 +188,26 @@ def test_a_skin_coloured_tongue_is_inside_an_open_mouth(finder_and_crop):
     bottom_true = 20 + tu + 12 + td
     _, _, _, bottom, _, _ = finder.vertical(f, inside, 20 + tu + 1)
     assert abs(bottom - (bottom_true - 0.5)) <= 1.5
+
+
+def test_the_dark_inside_of_a_grin_is_not_a_lipstick_upper_lip(finder_and_crop, monkeypatch):
+    """A broad grin: the upper lip stretched to one row, upper teeth as pale as the skin, then the dark
+    between the rows of teeth, as red as the lips but darker, then the lower teeth. Read by colour
+    alone, the teeth are the skin above an upper lip made of the dark inside (it is nearer the
+    calibrated thickness than the stretched lip); rows darker than both lips are not lip
+    (:data:`~tracker.mouth_finder.DARK_IN_LIP`), so the upper lip stays the one above the teeth."""
+    import tracker.mouth_finder as mf
+
+    finder = finder_and_crop[0]
+    tu, td = int(round(finder.t_up)), int(round(finder.t_dn))
+    rows = [("skin_up", 20), ("lip_up", 1), ("teeth", 6), ("lipstick_dark", tu), ("teeth", 2),
+            ("lip_down", td), ("skin_down", 20)]
+    f, inside = _profile(rows, finder)
+    line = 20 + 1 + 6
+    top = finder.vertical(f, inside, line)[2]
+    assert abs(top - 19.5) <= 1.5
+    monkeypatch.setattr(mf, "DARK_IN_LIP", 0.0)  # the colours alone: the teeth above are skin
+    assert finder.vertical(f, inside, line)[2] > 19.5 + 4
 
 
 def test_edge_shift_reads_the_lip_share_of_the_rows_at_the_edge():

@@ -89,6 +89,12 @@ OTHER_SKIN = 1.0
 """Extra row cost of skin beyond a lip that looks like the skin beyond the other lip instead."""
 SKIN_IN_LIP = 3.0
 """Extra cost of a row taken for lip that looks plainly like skin (row cost as skin 0)."""
+DARK_IN_LIP = 1.5
+"""Extra cost of a row taken for lip that is darker than both lips (the inside's darkness rule of
+:meth:`MouthFinder.profile`, 0..1 of it): in a grin the dark between the rows of teeth is as red as
+dark lips, and with the upper teeth taken for skin it made an upper lip under a stretched real one
+(talk_a's opening 0.89 -> 0.93). Only the darkness: a glossy lip's highlight passes for teeth in the
+inside's colours. It only chooses between splits; the split's fit (its refusal) leaves it out."""
 SKIN_CLEAR = 2.0
 """Row cost as skin under which a row is plainly skin (see :data:`SKIN_IN_LIP`)."""
 SEED_UNIT = 0.05
@@ -561,6 +567,12 @@ class MouthFinder:
         cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
         return m
 
+    def _darker_than_lips(self, f: np.ndarray) -> np.ndarray:
+        """How much each row of a profile's features ``f`` is darker than both lips (0..1): from 0.85 of
+        the calibrated lips' luminance to 0.65 of it (the inside's darkness rule of :meth:`profile`)."""
+        d = (np.float32(0.85 * self.lip_l) - f[:, 0]) * np.float32(1.0 / max(0.2 * self.lip_l, 1e-3))
+        return _clip(d, 0.0, 1.0)
+
     def profile(self, maps: "_Maps", x: float) -> tuple[np.ndarray, np.ndarray]:
         """The vertical profile through column ``x``: features (H, 3) of each row's mean over the
         band, and how much each row looks like the inside of a mouth (H,) 0..1 (the table's share of
@@ -571,10 +583,7 @@ class MouthFinder:
         f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level)
         i = maps.inside[:, x1] - maps.inside[:, x0]
         inside = (i[1:] - i[:-1]).astype(np.float32) * inv
-        dark = (np.float32(0.85 * self.lip_l) - f[:, 0]) * np.float32(1.0 / max(0.2 * self.lip_l, 1e-3))
-        np.maximum(dark, 0.0, out=dark)
-        np.minimum(dark, 1.0, out=dark)
-        return f, np.maximum(inside, dark, out=inside)
+        return f, np.maximum(inside, self._darker_than_lips(f), out=inside)
 
     def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
         """The row the mouth line is traced from: of the dark valleys (smoothed luminance, band through
@@ -678,7 +687,8 @@ class MouthFinder:
         the mean cost per row of the lips and the skin next to them.
 
         Each lip is a run of rows like it, as thick as calibrated give or take (:data:`LENGTH_PRICE`,
-        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it; a row
+        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it (a row
+        darker than both lips costs more as lip, :data:`DARK_IN_LIP`); a row
         between the lips costs up to :data:`GAP_PRICE` the more it looks like skin (or, unless the gap
         holds :data:`OPEN_ROWS` rows of the inside, like a lip) and nothing where it looks like the
         inside of a mouth."""
@@ -706,6 +716,10 @@ class MouthFinder:
         rows[6] = inside > 0.5
         # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
         rows[7] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
+        dark = None
+        if DARK_IN_LIP > 0:
+            dark = self._darker_than_lips(f)
+            e[1:3] += np.float32(DARK_IN_LIP) * dark
         np.cumsum(sums, axis=1, out=sums)
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
         # the lower lip (b3 = b2: lips closed, no gap row); the sums at their offsets (precomputed in
@@ -756,7 +770,13 @@ class MouthFinder:
         gap_top, gap_bottom = bs[a] - 0.5 + fa, bs[b] - 0.5 + fb
         len_u, len_d = lu[p] + fu, ld[q] + fd
         rows = len_u + len_d + 2 * w
-        fit = float(joint[p, q] - pu[p] - pd[q] - self._couple[p, q]) / rows
+        charged = 0.0
+        if DARK_IN_LIP > 0:
+            # the price only chooses between splits; how well the chosen one fits is the colours' say
+            lo_u, hi_u = min(max(int(bs[a] - lu[p]), 0), n), min(max(int(bs[a]), 0), n)
+            lo_d, hi_d = min(max(int(bs[b]), 0), n), min(max(int(bs[b] + ld[q]), 0), n)
+            charged = DARK_IN_LIP * float(dark[lo_u:hi_u].sum() + dark[lo_d:hi_d].sum())
+        fit = float(joint[p, q] - pu[p] - pd[q] - self._couple[p, q] - charged) / rows
         return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
                 (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
 
