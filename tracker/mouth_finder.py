@@ -148,8 +148,14 @@ REACH = (-0.55, 0.6)
 ADAPT_RATE = 0.1
 """Weight of one well-fitted frame in the lips' adapted colours and thicknesses (about ten such
 frames, a third of a second, to move most of the way)."""
-ADAPT_FLOOR = 0.5
-"""Share of the calibration's colours that always stays in the colours used."""
+ADAPT_FLOOR = 0.25
+"""Share of the calibration's colours that always stays in the colours used. Light that changes
+after calibration moves the lips' colours further than the gain correction brings back (a dimmed
+copy of expr_d19: the lips 1.4 chroma units redder, the skin 0.5 less red); keeping half of the
+calibration's, the lower lip's rows looked like nothing calibrated and the lower lip slid into the
+chin (that copy's opening 0.73, 0.78 with a quarter; the dimmed copies of all nine shared clips
+13 target misses, 10). Half was needed while the dark between a grin's rows of teeth could pass for
+a dark upper lip (:data:`DARK_IN_LIP`)."""
 ADAPT_REACH = 2.0
 """Farthest (in the calibration's spreads) the adapted colours may move from the calibration's."""
 ADAPT_FIT = 2.0
