@@ -434,6 +434,34 @@ def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
     f[gap] = (10.0, 14.0, 10.0)
     thick = gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)
     assert abs(thick - UPPER_UNSEEN * WI) < 1e-9
+    # a caller with other columns to go by (calibration) hears that there was nothing to measure
+    assert math.isnan(_outer_edge(f, gap, -1, 0.04, 0.22, WI, math.nan))
     # a lip with an edge of its own is still measured (the thin one: the test above)
     f, gap = _upper_profile(11, [4.0, 3.0, 2.0, 1.0])
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 11.0) < 1.5
+    assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI, math.nan)) - 11.0) < 1.5
+
+
+def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(monkeypatch):
+    """Calibration measures the lips on three columns and takes the median; a column whose upper
+    edge it cannot see is no vote for a thin lip (the glasses, pale and half-size copies of
+    expr_d19: two of three columns unseen took the lip for UPPER_UNSEEN where the other read twice
+    that, and the opening followed the peer at r 0.76 instead of 0.92)."""
+    import tracker.mouth_model as mm
+    from test_mouth_finder import _calibrate
+
+    before = _calibrate()[0].thick_up
+    monkeypatch.setattr(mm, "UPPER_UNSEEN", 0.2)  # far from the performer's lip, so a vote for it shows
+    orig, calls = mm._outer_edge, []
+
+    def two_columns_unseen(f, start, direction, lo, hi, wi, unseen=None):
+        if direction < 0:
+            calls.append(start)
+            if len(calls) in (3, 4):  # the click's column, then the centre's, left and right
+                return unseen if unseen is not None else float(start) - mm.UPPER_UNSEEN * wi
+        return orig(f, start, direction, lo, hi, wi) if unseen is None else orig(f, start, direction, lo, hi, wi, unseen)
+
+    monkeypatch.setattr(mm, "_outer_edge", two_columns_unseen)
+    after = _calibrate()[0].thick_up
+    assert len(calls) == 4
+    assert abs(after - before) < 1.0 and abs(after - 0.2 * WI) > 5.0

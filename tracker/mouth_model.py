@@ -597,17 +597,21 @@ resolution read 0.03 where the full picture gave 0.14 (the peer: 0.05), and its 
 correlation fell from .92 to .70. A thin lip's thickness here (the peer's upper lips on the shared
 clips' first frames: 0.03–0.23 IPD, median 0.13) lets the lip lengths the tracker tries reach a
 real lip's; where the lip really is that thin (expr_d18's first frame, 0.03 by the peer) the
-tracker still finds it so."""
+tracker still finds it so. Only when none of the three columns calibration measures shows the edge:
+an unseen column is no vote (with two of three unseen, the glasses, pale and half-size copies of
+expr_d19 took 0.075 where the third column read 0.14, and their openings fell to r 0.76)."""
 
 
-def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float) -> float:
+def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float,
+                unseen: float | None = None) -> float:
     """The outer edge of a lip on a profile ``f`` (rows, c), from its inner edge ``start`` (the gap's
     last row) in ``direction`` (−1 up, +1 down), ``lo``..``hi`` wi away: the row that best splits the
     rows past the gap into a lip (all rows from the gap to it) and skin (:data:`SKIN_ROWS` beyond it)
     — where the whole lip's mean differs most from the skin's just past it. A lip's window grows
     with the candidate, so a soft edge, a highlight on the lip or a crease in the skin do not pull
     the edge the way the steepest local change would. Sub-pixel. An upper lip whose edge the
-    profile does not show comes back :data:`UPPER_UNSEEN` thick (see :data:`EDGE_INTERIOR`)."""
+    profile does not show comes back :data:`UPPER_UNSEEN` thick (see :data:`EDGE_INTERIOR`), or as
+    ``unseen`` when that is given (NaN: no measurement, for a caller that has other columns)."""
     n = len(f)
     s_rows = max(int(round(SKIN_ROWS * wi)), 3)
     cs = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(f, axis=0, dtype=np.float64)])
@@ -640,7 +644,7 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
         if peaks:
             j = max(peaks, key=lambda k: score[k])
         else:
-            return float(start) - max(UPPER_UNSEEN * wi, es[0] - 0.5)
+            return float(start) - max(UPPER_UNSEEN * wi, es[0] - 0.5) if unseen is None else unseen
     y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
     if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
         y += direction * _vertex(score[j - 1], score[j], score[j + 1])
@@ -888,7 +892,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         lum_rows = luminance(rows_bgr)
         f_rows = profile_features(rows_bgr, skin_level)
         top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi, f_rows[:, 1] - skin_red)
-        e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
+        e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi, math.nan), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
         # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
         # lip: on pale lips the skin just above is as red as they are)
         e_dn = _colour_edge(rows_bgr, bottom, +1, e_dn, skin, (0.05, 0.3), wi)
@@ -947,10 +951,13 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     if seen:
         cols3 = [column(x, line_row(x)) for x in (centre[0], centre[0] - 0.12 * wi, centre[0] + 0.12 * wi)]
         top, bottom, y_min = cols3[0][:3]
-        thick_up = float(np.median([c[0] - c[3] for c in cols3]))
+        # an upper edge one column does not show is no vote for a thin lip: the others decide
+        ups = [c[0] - c[3] for c in cols3 if math.isfinite(c[3])]
+        thick_up = float(np.median(ups)) if ups else UPPER_UNSEEN * wi
         thick_down = float(np.median([c[4] - c[1] for c in cols3]))
     else:
-        thick_up, thick_down = top - y_top, y_bottom - bottom
+        thick_up = top - y_top if math.isfinite(y_top) else UPPER_UNSEEN * wi
+        thick_down = y_bottom - bottom
     thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
     y_top, y_bottom = top - thick_up, bottom + thick_down
     # a lip thicker than any lip is: the gap reached less far than the mouth is open (a tongue or the
