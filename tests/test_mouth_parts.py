@@ -390,6 +390,36 @@ def test_a_shadow_under_the_lower_lip_is_not_the_mouth_line(retrace, expr, monke
     assert (dy < 0.1 * WI) == retrace
 
 
+def test_a_closed_mouths_one_row_gap_is_an_opening_to_trace_again_from(monkeypatch):
+    """The traced line on the shadow under closed lips whose gap the split reads exactly one row
+    high: the line is still traced again from that row (the rule once asked for more than one row,
+    and a sub-pixel change in the split decided whether the mouth stayed on the shadow)."""
+    import cv2
+    import tracker.mouth_finder as mf
+    from test_mouth_finder import _truth_in_crop
+    from tracker.synthetic import face_landmarks
+
+    model, centre = _calibrate()
+    st = BASE.with_expression("neutral")
+    img, _ = render_face(st)
+    lx, ly = face_landmarks(st)["lip_lower"]
+    cv2.rectangle(img, (int(lx - 0.3 * WI), int(ly + 0.02 * WI)), (int(lx + 0.3 * WI), int(ly + 0.08 * WI)), (25, 25, 40), -1)
+    ff = _frame_of(st)
+    crop, origin = _crop(img, ff, centre)
+    shadow = ff.to_face(np.array([[lx, ly + 0.08 * WI]]))[0] - origin
+    vertical = mf.MouthFinder.vertical
+
+    def one_row_gap(self, *a, **k):
+        gap_top, gap_bottom, *rest = vertical(self, *a, **k)
+        mid = 0.5 * (gap_top + gap_bottom)
+        return (mid - 0.5, mid + 0.5, *rest)
+
+    monkeypatch.setattr(mf.MouthFinder, "vertical", one_row_gap)
+    res = MouthFinder(model, WI).find(crop, (float(centre[0] - origin[0]), float(shadow[1])))
+    truth = _truth_in_crop(st, ff, origin)
+    assert res is not None and abs(res.centre[1] - truth["mouth"][1]) < 0.1 * WI
+
+
 def _upper_profile(lip_rows: int, shade: list[float]) -> tuple[np.ndarray, int]:
     """Profile features (rows, 3) up from a gap row: skin above, an upper lip ``lip_rows`` thick
     (a little darker and redder), its rows next to the gap darkened by ``shade`` (the line's blur)."""

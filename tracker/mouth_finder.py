@@ -1010,7 +1010,7 @@ class MouthFinder:
         # to the corners; the lips on the column through the corners' midpoint
         seed = self.line_seed(maps, px, y_line)
         x0, traced, left, right, strength, halves, seen, (cx, cy), v = self._line_and_lips(maps, px, seed, previous)
-        if cy + self.line0 > v[1] + RETRACE * self.wi and v[1] - v[0] > 1.0:
+        if cy + self.line0 > v[1] + RETRACE * self.wi and v[1] > v[0]:
             # the lips put the mouth's opening above the traced line (which ran along the shadow under
             # the lower lip): trace again from the darkest row of that opening
             a, b = max(int(math.ceil(v[0])), 0), min(int(math.floor(v[1])) + 1, maps.shape[0])
