@@ -475,8 +475,9 @@ def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
 def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(monkeypatch):
     """Calibration measures the lips on three columns and takes the median; a column whose upper
     edge it cannot see is no vote for a thin lip (the glasses, pale and half-size copies of
-    expr_d19: two of three columns unseen took the lip for UPPER_UNSEEN where the other read twice
-    that, and the opening followed the peer at r 0.76 instead of 0.92)."""
+    expr_d19: with one or two of three columns unseen the median fell on UPPER_UNSEEN, about half
+    what the full picture reads, and the glasses copy's opening followed the peer at r 0.76
+    instead of 0.92)."""
     import tracker.mouth_model as mm
     from test_mouth_finder import _calibrate
 

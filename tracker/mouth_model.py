@@ -598,8 +598,9 @@ correlation fell from .92 to .70. A thin lip's thickness here (the peer's upper 
 clips' first frames: 0.03–0.23 IPD, median 0.13) lets the lip lengths the tracker tries reach a
 real lip's; where the lip really is that thin (expr_d18's first frame, 0.03 by the peer) the
 tracker still finds it so. Only when none of the three columns calibration measures shows the edge:
-an unseen column is no vote (with two of three unseen, the glasses, pale and half-size copies of
-expr_d19 took 0.075 where the third column read 0.14, and their openings fell to r 0.76)."""
+an unseen column is no vote (the glasses, pale and half-size copies of expr_d19 had one or two of
+the three unseen, the median fell on 0.075 where the full picture reads 0.13-0.16, and the glasses
+copy's opening followed the peer at r 0.76; 0.92 with this)."""
 
 
 def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float,
