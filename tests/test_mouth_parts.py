@@ -368,45 +368,41 @@ def test_a_shadow_under_the_lower_lip_is_not_the_mouth_line(retrace, expr, monke
     """An open mouth over a dark shadow under the lower lip, the prediction down on the shadow (the
     jaw's last offset): the mouth is found on the mouth — the lips' opening is above the traced line,
     so the line is traced again from inside it. Without that, the line stays on the shadow."""
-    import cv2
     import tracker.mouth_finder as mf
-    from test_mouth_finder import _errors, _truth_in_crop
-    from tracker.synthetic import face_landmarks
 
     if not retrace:
         monkeypatch.setattr(mf, "RETRACE", 1e9)
-    model, centre = _calibrate()
-    st = BASE.with_expression(expr)
-    img, _ = render_face(st)
-    lm = face_landmarks(st)
-    lx, ly = lm["lip_lower"]
-    cv2.rectangle(img, (int(lx - 0.3 * WI), int(ly + 0.02 * WI)), (int(lx + 0.3 * WI), int(ly + 0.08 * WI)), (25, 25, 40), -1)
-    ff = _frame_of(st)
-    crop, origin = _crop(img, ff, centre)
-    shadow = ff.to_face(np.array([[lx, ly + 0.08 * WI]]))[0] - origin
-    res = MouthFinder(model, WI).find(crop, (float(centre[0] - origin[0]), float(shadow[1])))
-    truth = _truth_in_crop(st, ff, origin)
-    dy = abs(res.centre[1] - truth["mouth"][1]) if res is not None else math.inf
+    dy = _found_on_a_shadowed_mouth(expr)
     assert (dy < 0.1 * WI) == retrace
 
 
-def test_a_closed_mouths_one_row_gap_is_an_opening_to_trace_again_from(monkeypatch):
-    """The traced line on the shadow under closed lips whose gap the split reads exactly one row
-    high: the line is still traced again from that row (the rule once asked for more than one row,
-    and a sub-pixel change in the split decided whether the mouth stayed on the shadow)."""
+def _found_on_a_shadowed_mouth(expr: str) -> float:
+    """The synthetic face with ``expr`` and a dark shadow drawn under its lower lip, the mouth finder
+    predicted down on the shadow: how far (crop px) the found mouth's centre is from the true one
+    (inf: none found)."""
     import cv2
-    import tracker.mouth_finder as mf
     from test_mouth_finder import _truth_in_crop
     from tracker.synthetic import face_landmarks
 
     model, centre = _calibrate()
-    st = BASE.with_expression("neutral")
+    st = BASE.with_expression(expr)
     img, _ = render_face(st)
     lx, ly = face_landmarks(st)["lip_lower"]
     cv2.rectangle(img, (int(lx - 0.3 * WI), int(ly + 0.02 * WI)), (int(lx + 0.3 * WI), int(ly + 0.08 * WI)), (25, 25, 40), -1)
     ff = _frame_of(st)
     crop, origin = _crop(img, ff, centre)
     shadow = ff.to_face(np.array([[lx, ly + 0.08 * WI]]))[0] - origin
+    res = MouthFinder(model, WI).find(crop, (float(centre[0] - origin[0]), float(shadow[1])))
+    truth = _truth_in_crop(st, ff, origin)
+    return abs(res.centre[1] - truth["mouth"][1]) if res is not None else math.inf
+
+
+def test_a_closed_mouths_one_row_gap_is_an_opening_to_trace_again_from(monkeypatch):
+    """The traced line on the shadow under closed lips whose gap the split reads exactly one row
+    high: the line is still traced again from that row (the rule once asked for more than one row,
+    and a sub-pixel change in the split decided whether the mouth stayed on the shadow)."""
+    import tracker.mouth_finder as mf
+
     vertical = mf.MouthFinder.vertical
 
     def one_row_gap(self, *a, **k):
@@ -415,9 +411,7 @@ def test_a_closed_mouths_one_row_gap_is_an_opening_to_trace_again_from(monkeypat
         return (mid - 0.5, mid + 0.5, *rest)
 
     monkeypatch.setattr(mf.MouthFinder, "vertical", one_row_gap)
-    res = MouthFinder(model, WI).find(crop, (float(centre[0] - origin[0]), float(shadow[1])))
-    truth = _truth_in_crop(st, ff, origin)
-    assert res is not None and abs(res.centre[1] - truth["mouth"][1]) < 0.1 * WI
+    assert _found_on_a_shadowed_mouth("neutral") < 0.1 * WI
 
 
 def _upper_profile(lip_rows: int, shade: list[float]) -> tuple[np.ndarray, int]:

@@ -722,10 +722,8 @@ class MouthFinder:
         rows[6] = inside > 0.5
         # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
         rows[7] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
-        dark = None
-        if DARK_IN_LIP > 0:
-            dark = self._darker_than_lips(f)
-            e[1:3] += np.float32(DARK_IN_LIP) * dark
+        dark = self._darker_than_lips(f)
+        e[1:3] += np.float32(DARK_IN_LIP) * dark
         np.cumsum(sums, axis=1, out=sums)
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
         # the lower lip (b3 = b2: lips closed, no gap row); the sums at their offsets (precomputed in
@@ -776,12 +774,10 @@ class MouthFinder:
         gap_top, gap_bottom = bs[a] - 0.5 + fa, bs[b] - 0.5 + fb
         len_u, len_d = lu[p] + fu, ld[q] + fd
         rows = len_u + len_d + 2 * w
-        charged = 0.0
-        if DARK_IN_LIP > 0:
-            # the price only chooses between splits; how well the chosen one fits is the colours' say
-            lo_u, hi_u = min(max(int(bs[a] - lu[p]), 0), n), min(max(int(bs[a]), 0), n)
-            lo_d, hi_d = min(max(int(bs[b]), 0), n), min(max(int(bs[b] + ld[q]), 0), n)
-            charged = DARK_IN_LIP * float(dark[lo_u:hi_u].sum() + dark[lo_d:hi_d].sum())
+        # the dark rows' price only chooses between splits; how well the chosen one fits is the colours' say
+        lo_u, hi_u = min(max(int(bs[a] - lu[p]), 0), n), min(max(int(bs[a]), 0), n)
+        lo_d, hi_d = min(max(int(bs[b]), 0), n), min(max(int(bs[b] + ld[q]), 0), n)
+        charged = DARK_IN_LIP * float(dark[lo_u:hi_u].sum() + dark[lo_d:hi_d].sum())
         fit = float(joint[p, q] - pu[p] - pd[q] - self._couple[p, q] - charged) / rows
         return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
                 (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
