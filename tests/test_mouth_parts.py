@@ -484,7 +484,7 @@ def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(mon
             calls.append(start)
             if len(calls) in (3, 4):  # the click's column, then the centre's, left and right
                 return unseen if unseen is not None else float(start) - mm.UPPER_UNSEEN * wi
-        return orig(f, start, direction, lo, hi, wi) if unseen is None else orig(f, start, direction, lo, hi, wi, unseen)
+        return orig(f, start, direction, lo, hi, wi, unseen)
 
     monkeypatch.setattr(mm, "_outer_edge", two_columns_unseen)
     after = _calibrate()[0].thick_up

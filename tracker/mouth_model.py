@@ -950,15 +950,14 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         return float(ys[min(k, len(ys) - 1)])
 
     if seen:
-        cols3 = [column(x, line_row(x)) for x in (centre[0], centre[0] - 0.12 * wi, centre[0] + 0.12 * wi)]
-        top, bottom, y_min = cols3[0][:3]
-        # an upper edge one column does not show is no vote for a thin lip: the others decide
-        ups = [c[0] - c[3] for c in cols3 if math.isfinite(c[3])]
-        thick_up = float(np.median(ups)) if ups else UPPER_UNSEEN * wi
-        thick_down = float(np.median([c[4] - c[1] for c in cols3]))
+        measured = [column(x, line_row(x)) for x in (centre[0], centre[0] - 0.12 * wi, centre[0] + 0.12 * wi)]
+        top, bottom, y_min = measured[0][:3]
     else:
-        thick_up = top - y_top if math.isfinite(y_top) else UPPER_UNSEEN * wi
-        thick_down = y_bottom - bottom
+        measured = [(top, bottom, y_min, y_top, y_bottom)]
+    # an upper edge one column does not show is no vote for a thin lip: the others decide
+    ups = [c[0] - c[3] for c in measured if math.isfinite(c[3])]
+    thick_up = float(np.median(ups)) if ups else UPPER_UNSEEN * wi
+    thick_down = float(np.median([c[4] - c[1] for c in measured]))
     thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
     y_top, y_bottom = top - thick_up, bottom + thick_down
     # a lip thicker than any lip is: the gap reached less far than the mouth is open (a tongue or the
