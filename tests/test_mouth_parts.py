@@ -490,3 +490,35 @@ def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(mon
     after = _calibrate()[0].thick_up
     assert len(calls) == 4
     assert abs(after - before) < 1.0 and abs(after - 0.2 * WI) > 5.0
+
+
+@pytest.mark.parametrize("shade", [0.0, 0.85])
+def test_closed_lips_over_a_lip_coloured_shadow_keep_their_line(shade):
+    """Closed lips with the skin under the lower lip as brown as the lip (a full lower lip on a
+    dark face, expr_d3's calibration): the lower lip measures thicker than any lip. Between closed
+    lips the line is sure, so the lip's outer edge comes in to the thickest a lip is and the gap
+    stays the line — before, the gap's edge moved down into the lip instead, the lower lip's colour
+    came from the shadow, and the tracked lower lip sat 14 % of the eye distance below the peer's
+    on 99 % of expr_d3's frames (its opening followed the peer at r 0.86; 0.98 with this)."""
+    import cv2
+
+    from tracker.mouth_model import LIP_MAX, SHUT_GAP, learn_mouth
+    from tracker.synthetic import face_landmarks
+
+    lm = face_landmarks(BASE)
+    img, _ = render_face(BASE)
+    (xl, _), (xr, _) = lm["mouth_left"], lm["mouth_right"]
+    y_line, y_low = float(lm["mouth"][1]), float(lm["lip_lower"][1])
+    if shade:
+        lip = img[int(round(0.5 * (y_line + y_low))), int(round(lm["mouth"][0]))].astype(float)
+        band = (int(xl + 0.12 * WI), int(round(y_low)) - 1, int(xr - 0.12 * WI), int(round(y_low + 0.16 * WI)))
+        cv2.rectangle(img, band[:2], band[2:], tuple(float(v) for v in shade * lip), -1)
+    ff = _frame_of(BASE)
+    click = ff.to_face(lm["mouth"][None])[0]
+    crop, origin = _crop(img, ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    assert model.gap <= SHUT_GAP * WI
+    assert abs(model.centre[1] + origin[1] + model.line - ff.to_face(lm["mouth"][None])[0][1]) < 1.5
+    assert model.thick_down <= LIP_MAX[1] * WI + 1e-6
+    if not shade:
+        assert abs(model.thick_down - (y_low - y_line)) < 2.0  # an ordinary lip keeps its own edge

@@ -660,6 +660,9 @@ def _vertex(a: float, b: float, c: float) -> float:
 
 LIP_MAX = (0.15, 0.2)
 """Thickest upper and lower lip (× wi): a lip's red is about 0.1–0.15 of the inter-eye distance high."""
+SHUT_GAP = 0.05
+"""Gap (× wi) at or under which the calibration's lips are closed: a lip thicker than
+:data:`LIP_MAX` then has its outer edge wrong, not the gap (see :func:`learn_mouth`)."""
 CHEEK = (0.62, 0.8)
 """Distances (× wi) from the click along the line whose columns are cheek at calibration."""
 CHEEK_FAR = 1.5
@@ -960,14 +963,23 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     thick_down = float(np.median([c[4] - c[1] for c in measured]))
     thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
     y_top, y_bottom = top - thick_up, bottom + thick_down
-    # a lip thicker than any lip is: the gap reached less far than the mouth is open (a tongue or the
-    # lower teeth next to the lip were taken for lip) — the outer edge stands, the inner one moves
+    # a lip thicker than any lip is: in an open mouth the gap reached less far than the mouth is open
+    # (a tongue or the lower teeth next to the lip were taken for lip) — the outer edge stands, the
+    # inner one moves; between closed lips the line is sure and the outer edge ran on into skin (the
+    # shadow under a full lower lip is as brown as the lip on a dark face) — the outer edge moves
+    shut = bottom - top <= SHUT_GAP * wi
     if thick_up > LIP_MAX[0] * wi:
         thick_up = LIP_MAX[0] * wi
-        top = min(int(round(y_top + thick_up)), int(y_min))
+        if shut:
+            y_top = top - thick_up
+        else:
+            top = min(int(round(y_top + thick_up)), int(y_min))
     if thick_down > LIP_MAX[1] * wi:
         thick_down = LIP_MAX[1] * wi
-        bottom = max(int(round(y_bottom - thick_down)), int(y_min))
+        if shut:
+            y_bottom = bottom + thick_down
+        else:
+            bottom = max(int(round(y_bottom - thick_down)), int(y_min))
     thick_up, thick_down = top - y_top, y_bottom - bottom
 
     # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
