@@ -494,8 +494,8 @@ def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(mon
 
 @pytest.mark.parametrize("shade", [0.0, 0.85])
 def test_closed_lips_over_a_lip_coloured_shadow_keep_their_line(shade):
-    """Closed lips with the skin under the lower lip as brown as the lip (a full lower lip on a
-    dark face, expr_d3's calibration): the lower lip measures thicker than any lip. Between closed
+    """Closed lips with the shadowed skin under a full lower lip as brown as the lip (expr_d3's
+    calibration): the lower lip measures thicker than any lip. Between closed
     lips the line is sure, so the lip's outer edge comes in to the thickest a lip is and the gap
     stays the line — before, the gap's edge moved down into the lip instead, the lower lip's colour
     came from the shadow, and the tracked lower lip sat 14 % of the eye distance below the peer's

@@ -966,7 +966,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     # a lip thicker than any lip is: in an open mouth the gap reached less far than the mouth is open
     # (a tongue or the lower teeth next to the lip were taken for lip) — the outer edge stands, the
     # inner one moves; between closed lips the line is sure and the outer edge ran on into skin (the
-    # shadow under a full lower lip is as brown as the lip on a dark face) — the outer edge moves
+    # shadow under a full lower lip can be as brown as the lip) — the outer edge moves
     shut = bottom - top <= SHUT_GAP * wi
     if thick_up > LIP_MAX[0] * wi:
         thick_up = LIP_MAX[0] * wi
