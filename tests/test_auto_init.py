@@ -126,6 +126,20 @@ def test_the_mouth_point_is_between_the_lips_not_in_a_beard(open_mouth):
     assert _mouth(grey, left, right, flat) == pytest.approx(_mouth(grey, left, right))
 
 
+@pytest.mark.parametrize("beard", [False, True])
+def test_the_mouth_point_is_on_the_line_when_only_the_lower_lip_is_red(beard):
+    """An upper lip in shade, darker than it is red (expr_d10's copy darkened to a deep brown): the
+    lip-red rows are the lower lip's alone, the line between the lips is just over them, and the
+    mouth point is on it — before, with no dark row inside the lower lip's rows, it fell on the
+    lower lip's middle, a fifth of the eye distance low, and that clip's tracked opening followed
+    the peer at r 0.50 instead of 0.96."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey, red = _lower_face(beard=beard)
+    red[144:154, 60:140] = 145.0  # the upper lip: as red as the skin
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
+
+
 def test_lip_span_joins_an_open_mouths_two_lips_and_needs_a_lead_over_the_skin():
     red = np.full(80, 140.0)
     red[10:16] = 160.0  # upper lip

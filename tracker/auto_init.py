@@ -47,6 +47,9 @@ colour to say where the mouth is."""
 LIP_GAP = 0.5
 """Farthest apart (× the inter-pupil distance) two runs of lip-red rows are one mouth (an open
 mouth's lips)."""
+LINE_OVER = 0.06
+"""How far (× the inter-pupil distance) above the lip-red rows the mouth's line may lie: an upper
+lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
 
 
 class AutoInitError(RuntimeError):
@@ -334,7 +337,10 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
         span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd)
         if span is not None:
             a, b = span
-            inner = [i for i in range(a + 1, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+            # the line may also lie just over the span: an upper lip darker than it is red (in
+            # shade, on a darker face) falls short of the span while the lower lip holds it
+            top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
+            inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
             k = min(inner, key=prof.__getitem__) if inner else (a + b) // 2
     return (float(start[0] + k * down[0]), float(start[1] + k * down[1]))
 
