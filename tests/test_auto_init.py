@@ -140,6 +140,21 @@ def test_the_mouth_point_is_on_the_line_when_only_the_lower_lip_is_red(beard):
     assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
 
 
+def test_the_mouth_point_is_on_the_lips_not_on_a_pinker_chin():
+    """A chin pinker than brownish lips (expr_d3, shaken copy): the reddest row below the eyes is the
+    chin's, and the lips' own red is under half its lead. The lips' reddest row is looked for above
+    where a chin begins — before, the run round the chin had no dark row inside it, and the point
+    fell on the chin's middle; the `--auto` point there sat 17 % of the eye distance low, and the
+    clip's opening followed the peer at r 0.75 (0.97 with this)."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey, red = _lower_face(beard=False)
+    red[144:168, 60:140] = np.where(red[144:168, 60:140] > 150.0, 153.0, red[144:168, 60:140])  # brownish lips
+    grey[190:205, 50:150] = 175.0
+    red[190:205, 50:150] = 178.0  # the chin: pink and bright
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
+
+
 def test_lip_span_joins_an_open_mouths_two_lips_and_needs_a_lead_over_the_skin():
     red = np.full(80, 140.0)
     red[10:16] = 160.0  # upper lip

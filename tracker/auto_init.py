@@ -47,6 +47,9 @@ colour to say where the mouth is."""
 LIP_GAP = 0.5
 """Farthest apart (× the inter-pupil distance) two runs of lip-red rows are one mouth (an open
 mouth's lips)."""
+LIPS_ABOVE = 1.45
+"""Lowest (× the inter-pupil distance below the eyes) the lips' reddest row may be: below it a closed
+mouth's lower lip has ended and the chin begins."""
 LINE_OVER = 0.06
 """How far (× the inter-pupil distance) above the lip-red rows the mouth's line may lie: an upper
 lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
@@ -296,12 +299,14 @@ def find_brows(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> list[tu
     return [_brow(grey, tuple(p), ipd, up, r) for p, r in zip((left, right), rims)]
 
 
-def _lip_span(red: np.ndarray, skin_red: float, ipd: float) -> tuple[int, int] | None:
+def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | None = None) -> tuple[int, int] | None:
     """The rows of a profile of Lab a* (``red``, rows down the face) that hold the lips: the run of
     rows redder than the skin (``skin_red``) by half the reddest row's lead, round the reddest row,
     joined with other such runs within :data:`LIP_GAP` eye distances (an open mouth's two lips);
-    None when no row is :data:`LIP_RED` redder than the skin (pale lips, a colourless camera)."""
-    j = int(np.argmax(red))
+    None when no row is :data:`LIP_RED` redder than the skin (pale lips, a colourless camera).
+    ``reddest_in``: the reddest row is looked for in the first rows only (a chin pinker than
+    brownish lips is not where they are)."""
+    j = int(np.argmax(red[:reddest_in]))
     lead = float(red[j]) - skin_red
     if lead < LIP_RED:
         return None
@@ -334,7 +339,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
         red = cv2.GaussianBlur(red.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
         cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
                   for s in (-1.0, 1.0)]
-        span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd)
+        span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd,
+                         max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
         if span is not None:
             a, b = span
             # the line may also lie just over the span: an upper lip darker than it is red (in
