@@ -321,7 +321,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
     inside the lips where their colour shows them (``lab_a``, the frame's Lab a* as float32: rows
     redder than the cheeks; :func:`_lip_span`): a beard, a moustache or the shadow under the lower
     lip is darker than the gap between closed lips, but not redder than the skin. There the darkest
-    valley between the lips' first and last rows (a closed mouth's gap, an open mouth's inside)."""
+    valley between the lips' first and last rows or just above them (a closed mouth's gap, an open
+    mouth's inside; :data:`LINE_OVER`)."""
     ipd = math.dist(left, right)
     u = (right - left) / ipd
     down = np.array([-u[1], u[0]])
