@@ -6,7 +6,8 @@
 * the mouth crop follows a dropped jaw down by at most :data:`~tracker.face_tracker.CROP_DROP`, and
   the jaw's offset is bounded asymmetrically (far down, little up: the nostrils sit above the mouth);
 * a mouth is "too wide" only against max(calibrated width, :data:`~tracker.mouth_finder.WIDE_REF` wi);
-* at calibration a moustache over thin closed lips, darker than the line between them, is not the gap.
+* at calibration a moustache over thin closed lips, darker than the line between them, is not the gap;
+* a lower lip redder than at calibration is still lip (a tongue paler than it is not).
 """
 
 import cv2
@@ -220,3 +221,43 @@ def test_calibration_gap_is_between_the_lips_not_in_a_moustache(lips):
         assert _gap(lum, teeth, click, WI, red)[2] == _gap(lum, teeth, click, WI)[2]
     flat = np.zeros(len(lum))  # no colour to go by (a colourless camera): the darkest row, as before
     assert _gap(lum, teeth, click, WI, flat) == _gap(lum, teeth, click, WI)
+
+
+def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
+    """Pale lips as a real face shows them (their lead over the skin a few spreads, not ten), then a
+    frame of an open mouth: the dark inside, a pinkish tongue a little paler than the lower lip, and
+    the lower lip itself redder than at calibration (a pout turns its moist inside out). The gap must
+    take the tongue and the lower lip keep its own rows; costing a redder lip like skin made the
+    tongue the lower lip (expr_d6's pouts)."""
+    import dataclasses
+
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    classes = np.array([[[21.2, 9.9, 6.9], [1.0, 1.0, 1.0]], [[14.1, 16.8, 10.8], [1.7, 3.5, 1.0]],
+                        [[15.4, 16.3, 9.8], [2.2, 2.0, 1.0]], [[19.6, 11.7, 8.0], [1.2, 1.3, 1.0]],
+                        [[20.0, 9.6, 7.5], [1.5, 1.0, 1.0]]], np.float32)
+    pale = dataclasses.replace(model, classes=classes)
+
+    def split() -> tuple[float, float, float]:
+        mf = MouthFinder(pale, pale.work_ipd)
+        mu = mf._mu.astype(np.float64)
+        t_up, t_dn = int(round(mf.t_up)), int(round(mf.t_dn))
+        redder = mu[2] + np.r_[0.0, mu[2, 1:] - mu[4, 1:]]  # twice the lower lip's chroma lead, as bright
+        tongue = mu[4] + 0.8 * (mu[2] - mu[4])
+        dark = np.array([0.25, 0.3, 0.3]) * mu[4]
+        runs = [(mu[0], 14), (mu[1], t_up), (dark, 3), (tongue, 4), (redder, t_dn), (mu[3], 14)]
+        f = np.concatenate([np.repeat(c[None, :], k, axis=0) for c, k in runs]).astype(np.float32)
+        gap_top = 14 + t_up
+        inside = np.zeros(len(f), np.float32)
+        inside[gap_top : gap_top + 3] = 1.0
+        v = mf.vertical(f, inside, gap_top + 1.0, spread=0.12)
+        lip_top = gap_top + 7.0  # the lower lip's first row
+        return v[1] - lip_top, v[3] - (lip_top + t_dn)  # the gap's and the lip's outer edge's errors
+
+    gap_err, bottom_err = split()
+    assert abs(gap_err) <= 1.0 and abs(bottom_err) <= 1.5
+    monkeypatch.setattr(mfm, "LIP_BEYOND", 0.0)
+    gap_err, _ = split()
+    assert gap_err < -2.0, "without the allowance the tongue is the lower lip (else this case shows nothing)"

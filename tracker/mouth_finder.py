@@ -27,7 +27,8 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    dark inside and teeth are counted inside the mouth. Each lip keeps close to its calibrated
    thickness (the gap is the strong evidence, the outer edges the weak one); lip colour right under
    the skin below the lower lip, and lip-like rows swallowed by an open gap, cost extra (the lower
-   lip goes on past teeth as light as skin; an open gap must not take a pouted lower lip). With the
+   lip goes on past teeth as light as skin; an open gap must not take a pouted lower lip), and a
+   lower lip redder than calibrated costs no more than the calibrated one (:data:`LIP_BEYOND`). With the
    last frame's mouth (``previous``) the gap's height is weighed against it; when the lips put the
    opening above the traced line, the line is traced again from inside it;
 4. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
@@ -163,6 +164,16 @@ ADAPT_FIT = 2.0
 for a frame to adapt from."""
 ADAPT_SCORE = 0.7
 """Least score for a frame to adapt from."""
+LIP_BEYOND = 1.5
+"""How much further than calibrated the lower lip's colour may lie from the skin's, in its calibrated
+lead, and still cost nothing more as the lower lip: only the chroma along that lead over the skin
+round the mouth counts (:meth:`MouthFinder.row_costs`). A lower lip gets redder than its calibration
+frame showed when it is stretched, pouted or wet — a pout turns its moist inside out — and such
+rows were costed as unlike the lip as skin is, so the split took a pale tongue or the teeth above
+them for the lower lip (expr_d6's pouts and tongue). Luminance keeps its full price: the shadow
+under a lower lip is darker than the lip but not redder. The upper lip keeps its calibration: where
+the lower lip is the redder one (a lit lower lip, a shaded upper one), an allowance for the upper
+lip made the lower lip fit it, and the upper lip's outline slid down onto it (expr_d0's grin)."""
 THICK_REACH = 1.3
 """Factor within which the adapted thicknesses stay of the calibration's. The split measures a lip
 against the expected thickness, so a small bias in its measurement feeds back: on a washed-out
@@ -540,6 +551,11 @@ class MouthFinder:
         """What the split precomputes from the parts' colours."""
         self._mu_skins = self._mu[_SKINS][None, :, None, :]
         self._axis_up, self._axis_down = _share_axis(self._mu[1], self._mu[0]), _share_axis(self._mu[2], self._mu[3])
+        # the lower lip's chroma lead over the skin round the mouth (2,) and its squared length's inverse
+        # (None: the lower lip not redder than the skin by a just visible difference)
+        lead = (self._mu[2, 1:] - self._mu[4, 1:]).astype(np.float64)
+        n2 = float(lead @ lead)
+        self._beyond = (lead.astype(np.float32), np.float32(1.0 / n2)) if LIP_BEYOND > 0 and lead[0] > 0 and n2 > 1.0 else None
 
     # ------------------------------------------------------------------ light
     def gains(self, crop: np.ndarray) -> np.ndarray | None:
@@ -671,6 +687,13 @@ class MouthFinder:
         spread (for skin, the nearer of the skin next to the lip and the skin round the mouth), at
         most :data:`ROW_CAP`."""
         d = f[None, :, :] - self._mu[:, None, :]
+        if self._beyond is not None:
+            # a row redder than the calibrated lower lip, along its lead over the skin, is no less the
+            # lower lip: the excess is taken off its chroma
+            lead, inv = self._beyond
+            c = d[2, :, 1:]
+            t = _clip((c @ lead) * inv, 0.0, LIP_BEYOND)
+            c -= t[:, None] * lead
         e = np.einsum("prc,prc,pc->pr", d, d, self._inv)
         # skin next to either lip, or like the skin round the mouth: the shading above and below the
         # lips swaps with the pose and an open jaw (a dropped chin is lit like the philtrum was)
