@@ -240,7 +240,7 @@ def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
                         [[20.0, 9.6, 7.5], [1.5, 1.0, 1.0]]], np.float32)
     pale = dataclasses.replace(model, classes=classes)
 
-    def split() -> tuple[float, float, float]:
+    def split() -> tuple[float, float]:
         mf = MouthFinder(pale, pale.work_ipd)
         mu = mf._mu.astype(np.float64)
         t_up, t_dn = int(round(mf.t_up)), int(round(mf.t_dn))
@@ -248,7 +248,7 @@ def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
         tongue = mu[4] + 0.8 * (mu[2] - mu[4])
         dark = np.array([0.25, 0.3, 0.3]) * mu[4]
         runs = [(mu[0], 14), (mu[1], t_up), (dark, 3), (tongue, 4), (redder, t_dn), (mu[3], 14)]
-        f = np.concatenate([np.repeat(c[None, :], k, axis=0) for c, k in runs]).astype(np.float32)
+        f = _profile(runs).astype(np.float32)
         gap_top = 14 + t_up
         inside = np.zeros(len(f), np.float32)
         inside[gap_top : gap_top + 3] = 1.0

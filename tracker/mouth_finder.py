@@ -551,11 +551,13 @@ class MouthFinder:
         """What the split precomputes from the parts' colours."""
         self._mu_skins = self._mu[_SKINS][None, :, None, :]
         self._axis_up, self._axis_down = _share_axis(self._mu[1], self._mu[0]), _share_axis(self._mu[2], self._mu[3])
-        # the lower lip's chroma lead over the skin round the mouth (2,) and its squared length's inverse
-        # (None: the lower lip not redder than the skin by a just visible difference)
+        # the lower lip's chroma lead over the skin round the mouth (2,), and the vector whose dot
+        # product with a chroma difference is its share of that lead (None: the lower lip not redder
+        # than the skin by a just visible difference)
         lead = (self._mu[2, 1:] - self._mu[4, 1:]).astype(np.float64)
         n2 = float(lead @ lead)
-        self._beyond = (lead.astype(np.float32), np.float32(1.0 / n2)) if LIP_BEYOND > 0 and lead[0] > 0 and n2 > 1.0 else None
+        self._beyond = ((lead.astype(np.float32), (lead / n2).astype(np.float32))
+                        if LIP_BEYOND > 0 and lead[0] > 0 and n2 > 1.0 else None)
 
     # ------------------------------------------------------------------ light
     def gains(self, crop: np.ndarray) -> np.ndarray | None:
@@ -690,10 +692,9 @@ class MouthFinder:
         if self._beyond is not None:
             # a row redder than the calibrated lower lip, along its lead over the skin, is no less the
             # lower lip: the excess is taken off its chroma
-            lead, inv = self._beyond
+            lead, share = self._beyond
             c = d[2, :, 1:]
-            t = _clip((c @ lead) * inv, 0.0, LIP_BEYOND)
-            c -= t[:, None] * lead
+            c -= _clip(c @ share, 0.0, LIP_BEYOND)[:, None] * lead
         e = np.einsum("prc,prc,pc->pr", d, d, self._inv)
         # skin next to either lip, or like the skin round the mouth: the shading above and below the
         # lips swaps with the pose and an open jaw (a dropped chin is lit like the philtrum was)
