@@ -85,6 +85,22 @@ def test_working_scale_is_a_power_of_two_that_keeps_the_face_mid_sized():
     assert g.shape == (60, 80)  # 640×480 at 1/8
 
 
+
+@settings(max_examples=25, deadline=None)
+@given(w=st.integers(40, 300), h=st.integers(40, 300), k=st.integers(0, 3), seed=st.integers(0, 2**16))
+def test_working_grey_is_the_mean_of_each_block_of_frame_pixels(w, h, k, seed):
+    """At scale 1/2^k each grey pixel is the mean of its 2^k × 2^k block of the frame's grey (to
+    within the rounding of each halving), whatever the frame's size, odd or even."""
+    frame = np.random.default_rng(seed).integers(0, 256, (h, w, 3), dtype=np.uint8)
+    hm = HeadMotion()
+    hm.scale = 0.5**k
+    g = hm.grey(frame)
+    b = 2**k
+    assert g.shape == (h // b, w // b)
+    full = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float64)
+    want = full[: g.shape[0] * b, : g.shape[1] * b].reshape(g.shape[0], b, g.shape[1], b).mean(axis=(1, 3))
+    assert np.abs(g - want).max() <= 0.5 * k + 0.5
+
 def _face_picture_setup():
     """The neutral frame, its true pupils, a head-motion working scale for it and its face picture."""
     frame, _ = render_face(BASE)

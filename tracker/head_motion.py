@@ -118,9 +118,15 @@ class HeadMotion:
         """The frame in grey at the working scale :attr:`scale` (a power of two: area
         averaging by a whole factor is several times cheaper than by a fraction)."""
         g = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
-        if self.scale >= 0.999:
-            return g
-        return cv2.resize(g, None, fx=self.scale, fy=self.scale, interpolation=cv2.INTER_AREA)
+        s = self.scale
+        while s < 0.999:
+            # one halving at a time: OpenCV's area averaging by exactly 2 is ten times quicker than
+            # by 4 in one go (a 1080p frame: 0.05 against 0.5 ms), and two of them average the same
+            # 4 × 4 pixels (to within a grey level of rounding)
+            h, w = g.shape
+            g = cv2.resize(g[: h & ~1, : w & ~1], (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+            s *= 2.0
+        return g
 
     def set_scale(self, ipd_px: float) -> None:
         """Choose the working scale for a face with this inter-pupil distance (frame px):
