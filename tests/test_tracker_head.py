@@ -190,6 +190,28 @@ def test_a_hand_over_the_face_is_lost_not_ok(cal):
     assert r.params.status == LOST
 
 
+def test_eyes_and_mouth_together_outvote_a_failing_face_picture_but_eyes_alone_do_not(cal, monkeypatch):
+    """A head turned as a side light comes up can leave the face picture matching at 0.3 while both
+    eyes match their pictures well (not clearly) and the mouth is where the head puts it: three
+    finders agree, so the frame stays ``ok``. With the mouth hidden the failing picture wins."""
+    import tracker.face_tracker as ft
+
+    frame, _ = render_face(BASE)
+    monkeypatch.setattr(ft, "EYE_CLEAR", 1.01)  # the eyes alone never outvote the picture here
+    real_locate = ft.locate_face
+    monkeypatch.setattr(ft, "locate_face", lambda *a, **k: (real_locate(*a, **k)[0], 0.2))
+    tr = FaceTracker(cal)
+    r = tr.track(frame, 0)
+    assert r.params.status == OK, r.debug
+    assert r.debug["presence"] == pytest.approx(0.2) and min(r.debug["scores"]) >= ft.EYE_STRONG
+    hidden = frame.copy()
+    c = clicks_for(BASE)["mouth"]
+    x, y = int(c[0]), int(c[1])
+    hidden[y - 40 : y + 45, x - 75 : x + 75] = frame[y - 120, x]  # the cheek's colour over the mouth
+    tr = FaceTracker(cal)
+    assert tr.track(hidden, 0).params.status == LOST
+
+
 def test_fast_slide_is_followed_without_a_lost_frame(cal):
     """The head moves 0.25 ipd a frame: too far for the pupil search windows alone."""
     tr = FaceTracker(cal)

@@ -496,11 +496,15 @@ class FaceTracker:
         blind = n_seen == 0 and max(o.score for o in obs) < EYE_BLIND and (presence is None or presence < FACE_UNSURE)
         self._blind = self._blind + 1 if blind else 0
         why = ""
-        if presence is not None and presence < FACE_ABSENT and not (strong and min(o.score for o in obs) >= EYE_CLEAR):
+        if presence is not None and presence < FACE_ABSENT and not (
+                strong and (min(o.score for o in obs) >= EYE_CLEAR or mouth_res is not None)):
             # something else is where the face was (a hand, the background) — unless both eyes match
             # their pictures clearly where the pose puts them: light from one side lays a ramp across
             # the face picture that the correlation does not forgive (0.9 in even light, 0.3 in a
-            # strong side light), while the small eye pictures hardly see it
+            # strong side light), while the small eye pictures hardly see it; or both match well and
+            # the mouth is found where the head puts it: three finders agree on this face (a head
+            # turned as the side light comes up leaves the picture at 0.3 and the eyes at 0.7),
+            # which a hand over the face does not allow
             why = "not this face"
         elif n_seen == 2:
             pass
