@@ -212,6 +212,21 @@ def test_eyes_and_mouth_together_outvote_a_failing_face_picture_but_eyes_alone_d
     assert tr.track(hidden, 0).params.status == LOST
 
 
+def test_eyes_are_reported_shut_only_when_no_iris_picture_still_matches(cal, monkeypatch):
+    """The lid gaps can read an open eye as shut (a narrowed eye measured from its dark corner): the
+    status says ``eyes_closed`` only when neither iris picture matches as a showing iris does."""
+    import tracker.eyes as eyes
+    from tracker.params import EYES_CLOSED
+
+    monkeypatch.setattr(eyes, "OPEN_SHARE", 1.01)  # every lid gap now says "shut"
+    frame, _ = render_face(BASE)
+    r = FaceTracker(cal).track(frame, 0)
+    assert r.debug["closed"] == [True, True]
+    assert r.params.status == OK
+    shut, _ = render_face(BASE.replace(eye_open=0.0))
+    assert FaceTracker(cal).track(shut, 0).params.status == EYES_CLOSED
+
+
 def test_fast_slide_is_followed_without_a_lost_frame(cal):
     """The head moves 0.25 ipd a frame: too far for the pupil search windows alone."""
     tr = FaceTracker(cal)

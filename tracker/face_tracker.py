@@ -38,7 +38,7 @@ import numpy as np
 
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.clicks import PIXEL_CENTRE
-from tracker.eyes import EyeFinder, EyeResult
+from tracker.eyes import IRIS_SHOWS, EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
                                  locate_face, patch_similarity, reference_vector)
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
@@ -575,7 +575,10 @@ class FaceTracker:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
             self.jaw *= JAW_HOLD
-        if closed[0] and closed[1] and not (doubt[0] and doubt[1]):
+        # both eyes shut by their lid gaps — unless an iris picture still matches as an iris that shows:
+        # a narrowed, side-glancing eye's gap can be read from a point on its dark corner
+        if (closed[0] and closed[1] and not (doubt[0] and doubt[1])
+                and max(o.iris_match for o, d in zip(obs, doubt) if not d) < IRIS_SHOWS):
             status = EYES_CLOSED
         scores = [o.score for o in obs]
         conf = min(max(0.5 * (scores[0] + scores[1]), 0.0), 1.0) * (0.5 if mouth_res is None else 1.0)
