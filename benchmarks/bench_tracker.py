@@ -115,7 +115,7 @@ def run(ctx):
             best[i] = min(best[i], (time.perf_counter() - t0) * 1000.0)
     speed.add("track one frame, wall clock, fastest of 3 passes (clean clip)", *Timing(list(best[2:])).cells(), "")
     # the same clip as a 1080p webcam sends it (the face 2.25× larger, in a 1920×1080 frame): the
-    # finders work on crops at a fixed size, so only the whole-frame grey and the flow grow
+    # finders and the flow work at a fixed face size, so only the whole frame's grey copy grows
     s, ox = 2.25, (1920 - 2.25 * 640) / 2
     big = np.array([[s, 0.0, ox], [0.0, s, 0.0]])
     hd = lambda img: cv2.warpAffine(img, big, (1920, 1080), flags=cv2.INTER_LINEAR)
