@@ -85,7 +85,6 @@ def test_working_scale_is_a_power_of_two_that_keeps_the_face_mid_sized():
     assert g.shape == (60, 80)  # 640×480 at 1/8
 
 
-
 @settings(max_examples=25, deadline=None)
 @given(w=st.integers(40, 300), h=st.integers(40, 300), k=st.integers(0, 3), seed=st.integers(0, 2**16))
 def test_working_grey_is_the_mean_of_each_block_of_frame_pixels(w, h, k, seed):
@@ -100,6 +99,7 @@ def test_working_grey_is_the_mean_of_each_block_of_frame_pixels(w, h, k, seed):
     full = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float64)
     want = full[: g.shape[0] * b, : g.shape[1] * b].reshape(g.shape[0], b, g.shape[1], b).mean(axis=(1, 3))
     assert np.abs(g - want).max() <= 0.5 * k + 0.5
+
 
 def _face_picture_setup():
     """The neutral frame, its true pupils, a head-motion working scale for it and its face picture."""
