@@ -60,6 +60,8 @@ def _corner_reference(d, lo, hi, run, body):
         runs[i] = runs[i + 1] + 1 if cheek[i] else 0
     need = min(run, n - 1 - b + run)
     ends = [i for i in range(a, b + 1) if not cheek[i] and runs[i + 1] >= need]
+    if not ends and cheek[a : a + need + 1].all():  # the lips ended before lo
+        ends = [i for i in range(a - 1, 0, -1) if not cheek[i]][:1]
     k = ends[0] if ends else a + int(np.argmax(gain[a : b + 1]))
     x = float(k)
     if d[k] >= level > d[k + 1]:
@@ -94,6 +96,26 @@ def test_corner_search_says_whether_the_cheek_was_seen_past_the_corner():
     assert not short[2]
     for d in (np.concatenate([lips, rng.uniform(0, 3, 20)]), np.concatenate([lips, rng.uniform(15, 40, 20)])):
         assert corner_distance(d, 4, 30, 3, (2, 9)) == corner_search(d, 4, 30, 3, (2, 9))[:2]
+
+
+def test_lips_that_end_before_the_nearest_corner_allowed_still_see_the_cheek():
+    """The line can start well off the mouth's middle (the mouth moved sideways against the head's
+    prediction, or pursed): on the short side the lips end before ``lo`` and every column from there on
+    is cheek. That corner is where the lips end, with the cheek seen — not the far end of the search
+    with the cheek "never seen", which made a mouth twice as wide and refused it (expr_d6, 7 frames of
+    the shared clips, 29 of their bearded copies)."""
+    lips = [117.0, 165.0, 160.0, 70.0, 22.0, 8.0]
+    d = np.array(lips + [0.5] * 30)
+    x, gain, seen = corner_search(d, 6, 36, 3, (2, 9))
+    assert seen
+    assert 5.0 < x < 6.0  # between the last lip column (8) and the first cheek one, where d crosses the level
+    assert gain > 0.0
+    # one cheek-like column at lo with lips again after it is not the cheek: the search runs on as before
+    blotch = np.array(lips + [0.5] + [30.0] * 6 + [0.5] * 23)
+    assert corner_search(blotch, 6, 36, 3, (2, 9))[0] > 10.0
+    # nothing unlike the cheek before lo either: no mouth on this side to end, the old answer stands
+    flat = np.full(36, 0.5)
+    assert not corner_search(flat, 6, 30, 3, (2, 9))[2]
 
 def _profile(rows, finder):
     """A profile (features, inside) from a list of (kind, count): kinds are the model's classes."""

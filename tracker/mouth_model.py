@@ -783,10 +783,12 @@ def corner_search(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int
     row are less unlike the cheek than :data:`BODY_SHARE` of the mouth's body (the median over columns
     ``body``; at least :data:`CHEEK_LEVEL`) — a short crease or blotch beyond the corner does not
     move it, nor hair, a collar or the background further out — placed sub-pixel where ``d``
-    crosses that level; and how clearly the mouth's columns up to it differed from the cheek
-    (``Σ min(d, 5·level) − level``); and whether the cheek was seen past it. Without such a run,
-    where that sum is largest (the cheek not seen: the line ran off the mouth into hair, a beard or
-    a collar as unlike the cheek as lips, and the corner is only where the sum stopped).
+    crosses that level (when the columns from ``lo`` on are cheek already, the lips ended before
+    it: after the last column before it that is not); and how clearly the mouth's columns up to it
+    differed from the cheek (``Σ min(d, 5·level) − level``); and whether the cheek was seen past
+    it. Without such a run, where that sum is largest (the cheek not seen: the line ran off the
+    mouth into hair, a beard or a collar as unlike the cheek as lips, and the corner is only where
+    the sum stopped).
 
     ``previous`` (the last frame's distance on this side, columns): where the columns past the lips
     are about as unlike the cheek as that level (a crease running on from the corner), the corner
@@ -807,6 +809,9 @@ def corner_search(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int
     cap = 5.0 * level
     need = min(run, n - 1 - b + run)
     k = _cheek_from(v, level, a, b, need)
+    if k is None and all(q < level for q in v[a : a + need + 1]):
+        # the line started off the mouth's middle (it moved sideways, or pursed): the cheek was seen
+        k = next((j for j in range(a - 1, 0, -1) if v[j] >= level), None)
     if k is None:
         gain, g = [], 0.0
         for q in v[: b + 1]:
