@@ -14,7 +14,7 @@ import pytest
 
 from tracker.calibration import FaceFrame
 from tracker.colour_model import TILE_SHAPE
-from tracker.mouth_finder import CHEEKLESS, SCORE_OK, MouthFinder, polygon_measures
+from tracker.mouth_finder import CHEEKLESS, OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
 from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -333,6 +333,24 @@ def test_adaptation_mends_a_lip_thickness_calibration_got_wrong(calibrated):
         assert res.score >= SCORE_OK
         ew, eu, el = _errors(res, t)
         assert ew < 2.5 and eu < 1.5 and el < 1.5, (round(ew, 2), round(eu, 2), round(el, 2))
+
+
+def test_only_an_open_mouths_lower_lip_may_roll_out(calibrated):
+    """A jaw dropped wide rolls the lower lip out and its wet inner side shows above its outer edge:
+    in an open mouth the lower lip may reach OPEN_THICK of its expected thickness, and growing costs
+    less there; in a closed mouth it stays within THICKNESS (a longer one cannot be chosen). A thinner
+    lower lip costs the same either way, and the upper lip's range is as before."""
+    model, _ = calibrated
+    f = MouthFinder(model, WI)
+    lengths, closed, k = f._len[1]
+    opened = f._pd_open[0]
+    beyond = lengths > math.ceil(THICKNESS[1] * f.t_dn)
+    assert beyond.any() and lengths.max() >= math.floor(OPEN_THICK * f.t_dn)
+    assert np.isinf(closed[beyond]).all() and np.isfinite(opened).all()
+    grows = (k > 0) & ~beyond
+    assert grows.any() and (opened[grows] < closed[grows]).all()
+    assert np.array_equal(opened[k <= 0], closed[k <= 0])
+    assert f._len[0][0].max() <= math.ceil(THICKNESS[1] * f.t_up)
 
 
 def test_adaptation_stays_near_the_calibration(calibrated):

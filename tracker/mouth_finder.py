@@ -25,7 +25,8 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    (the gap) and the outer ones: the outer edge cannot drift into the philtrum, a chin's shadow or
    stubble, since the whole lip — its colour, its shading, the skin past it — must fit, and the
    dark inside and teeth are counted inside the mouth. Each lip keeps close to its calibrated
-   thickness (the gap is the strong evidence, the outer edges the weak one); lip colour right under
+   thickness (the gap is the strong evidence, the outer edges the weak one), but an open mouth's
+   lower lip may roll out to :data:`OPEN_THICK` of it; lip colour right under
    the skin below the lower lip, and lip-like rows swallowed by an open gap, cost extra (the lower
    lip goes on past teeth as light as skin; an open gap must not take a pouted lower lip), and a
    lower lip redder than calibrated costs no more than the calibrated one (:data:`LIP_BEYOND`). With the
@@ -80,7 +81,16 @@ COUPLE = 30.0
 together in a smile or pressed together and swell together in a pout, so a lip hard to see follows
 the other."""
 THICKNESS = (0.35, 2.0)
-"""Thicknesses (× the calibration's) a lip may have."""
+"""Thicknesses (× the calibration's) a lip may have (an open mouth's lower lip: up to
+:data:`OPEN_THICK`)."""
+OPEN_THICK = 2.6
+"""Thickest (× the calibration's) the lower lip of an open mouth may be: a jaw dropped wide rolls
+the lower lip out, and its wet inner side shows between the lower teeth and its outer edge (expr_d6's
+"O" mouths: 2.4×, where the split had taken the lower teeth for the skin under the lip)."""
+OPEN_GROW = 12.0
+"""Cost of an open mouth's lower lip ``k`` > 1 times as thick as calibrated: ``OPEN_GROW · ln(k)²``
+in place of :data:`LENGTH_PRICE`'s (k = 2: six rows' worth instead of forty-six). A thinner one costs
+as in a closed mouth."""
 SKIN_UNLIKE = 4.0
 """Row cost as skin (see :meth:`MouthFinder.row_costs`) at and above which a row between the lips
 costs nothing: it is no skin, so it is inside the mouth whatever it is."""
@@ -473,9 +483,14 @@ class MouthFinder:
         r, wi = self.r, self.wi
         self.t_up, self.t_dn = float(t_up), float(t_dn)
         self._len = []
-        for t in (self.t_up, self.t_dn):
-            ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(THICKNESS[1] * t)) + 1)
-            self._len.append((ln, (r * LENGTH_PRICE * np.log(ln / t) ** 2).astype(np.float64), np.log(ln / t)))
+        for t, top in ((self.t_up, THICKNESS[1]), (self.t_dn, OPEN_THICK)):
+            ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(top * t)) + 1)
+            k = np.log(ln / t)
+            self._len.append((ln, (r * LENGTH_PRICE * k ** 2).astype(np.float64), k))
+        # the lower lip: past THICKNESS only in an open mouth, and growing there at OPEN_GROW's price
+        ln, price, k = self._len[1]
+        self._pd_open = np.where(k > 0.0, r * OPEN_GROW * k ** 2, price)[None, :]
+        price[ln > math.ceil(THICKNESS[1] * self.t_dn)] = np.inf
         lu, ld = self._len[0][2], self._len[1][2]
         self._couple = r * COUPLE * (lu[:, None] - ld[None, :]) ** 2
         lens_u, lens_d = self._len[0][0], self._len[1][0]
@@ -717,8 +732,9 @@ class MouthFinder:
         the mean cost per row of the lips and the skin next to them.
 
         Each lip is a run of rows like it, as thick as calibrated give or take (:data:`LENGTH_PRICE`,
-        :data:`COUPLE`), with :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it (a row
-        darker than both lips costs more as lip, :data:`DARK_IN_LIP`); a row
+        :data:`COUPLE`; an open mouth's lower lip may grow further, :data:`OPEN_GROW`), with
+        :data:`~tracker.mouth_model.SKIN_ROWS` of its skin beyond it (a row darker than both lips costs
+        more as lip, :data:`DARK_IN_LIP`); a row
         between the lips costs up to :data:`GAP_PRICE` the more it looks like skin (or, unless the gap
         holds :data:`OPEN_ROWS` rows of the inside, like a lip) and nothing where it looks like the
         inside of a mouth."""
@@ -758,12 +774,14 @@ class MouthFinder:
         gl = got[4 * nu : 4 * nu + 6 * nl].reshape(6, m, -1)
         cgb = got[4 * nu + 6 * nl :].reshape(3, m)
         cu = gu[0] - gu[1] + gu[2] - gu[3] + self._pu
-        cl = gl[0] - gl[1] + gl[2] - gl[3] + self._pd
-        cl += gl[4] - gl[5]
-        U, L = np.minimum.reduce(cu, axis=1), np.minimum.reduce(cl, axis=1)
+        rows_l = gl[0] - gl[1] + gl[2] - gl[3]
+        rows_l += gl[4] - gl[5]
+        cl, cl_open = rows_l + self._pd, rows_l + self._pd_open  # the lower lip's lengths closed / open
+        U, L, L_open = (np.minimum.reduce(c, axis=1) for c in (cu, cl, cl_open))
         gap = cgb[:, None, :] - cgb[:, :, None]  # (3, m, m): rows b2 .. b3-1
-        tot = np.where(gap[2] >= OPEN_ROWS * self.r, gap[0], gap[1])
-        tot += U[:, None] + L[None, :] + self._upper_only
+        is_open = gap[2] >= OPEN_ROWS * self.r
+        tot = np.where(is_open, gap[0] + L_open[None, :], gap[1] + L[None, :])
+        tot += U[:, None] + self._upper_only
         # the line between the corners runs through the gap (closed lips: on it; open: anywhere in it):
         # the cost of a pair is the larger of its top's and its bottom's (the cost grows with the miss)
         dl = y_line - yi
@@ -786,7 +804,8 @@ class MouthFinder:
         w = self.skin_w
         a, b = divmod(int(tot.argmin()), m)
         # the two lips' thicknesses together at the best pair of inner edges
-        joint = cu[a][:, None] + cl[b][None, :] + self._couple
+        opened = bool(is_open[a, b])
+        joint = cu[a][:, None] + (cl_open if opened else cl)[b][None, :] + self._couple
         p, q = divmod(int(joint.argmin()), joint.shape[1])
         # each outer edge inside its rows: the lip's share of the row on either side of it
         r_up, r_dn = int(bs[a] - lu[p]), int(bs[b] + ld[q] - 1)  # the lips' outermost rows
@@ -802,7 +821,8 @@ class MouthFinder:
         lo_u, hi_u = min(max(int(bs[a] - lu[p]), 0), n), min(max(int(bs[a]), 0), n)
         lo_d, hi_d = min(max(int(bs[b]), 0), n), min(max(int(bs[b] + ld[q]), 0), n)
         charged = DARK_IN_LIP * float(dark[lo_u:hi_u].sum() + dark[lo_d:hi_d].sum())
-        fit = float(joint[p, q] - pu[p] - pd[q] - self._couple[p, q] - charged) / rows
+        pd_q = float(self._pd_open[0, q]) if opened else pd[q]
+        fit = float(joint[p, q] - pu[p] - pd_q - self._couple[p, q] - charged) / rows
         return (gap_top, gap_bottom, gap_top - len_u, gap_bottom + len_d,
                 (len_u / self.t_up, len_d / self.t_dn), (fit, fit))
 
