@@ -117,6 +117,7 @@ def test_lips_that_end_before_the_nearest_corner_allowed_still_see_the_cheek():
     flat = np.full(36, 0.5)
     assert not corner_search(flat, 6, 30, 3, (2, 9))[2]
 
+
 def _profile(rows, finder):
     """A profile (features, inside) from a list of (kind, count): kinds are the model's classes."""
     cls = np.asarray(finder.model.classes)
