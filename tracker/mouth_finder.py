@@ -486,11 +486,12 @@ class MouthFinder:
         for t, top in ((self.t_up, THICKNESS[1]), (self.t_dn, OPEN_THICK)):
             ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(top * t)) + 1)
             log_k = np.log(ln / t)
-            self._len.append((ln, (r * LENGTH_PRICE * log_k ** 2).astype(np.float64), log_k))
-        # the lower lip: past THICKNESS only in an open mouth, and growing there at OPEN_GROW's price
-        ln, price, log_k = self._len[1]
-        self._pd_open = np.where(log_k > 0.0, r * OPEN_GROW * log_k ** 2, price)[None, :]
-        price[ln > math.ceil(THICKNESS[1] * self.t_dn)] = np.inf
+            price = r * LENGTH_PRICE * log_k ** 2
+            if top == OPEN_THICK:
+                # the lower lip: growing in an open mouth at OPEN_GROW's price; past THICKNESS only there
+                self._pd_open = np.where(log_k > 0.0, r * OPEN_GROW * log_k ** 2, price)[None, :]
+                price = np.where(ln > math.ceil(THICKNESS[1] * t), np.inf, price)
+            self._len.append((ln, price, log_k))
         lu, ld = self._len[0][2], self._len[1][2]
         self._couple = r * COUPLE * (lu[:, None] - ld[None, :]) ** 2
         lens_u, lens_d = self._len[0][0], self._len[1][0]
