@@ -21,6 +21,10 @@ shade    the side light of ``side`` comes up over the clip, from none to all of 
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
+tilt     the picture turns slowly about its middle, up to 25° each way and back (a head tilted
+         far to one shoulder, a laptop on the knees)
+lean     the picture grows and shrinks slowly about its middle, from 0.6× to 1.2× (leaning back
+         from the camera and in towards it)
 leave    the face slides out of the frame sideways, stays away a second, and slides back
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
@@ -67,7 +71,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
+VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 SIDE_LIGHT = 0.4
@@ -124,6 +128,17 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
         for i in range(n):
             m = cv2.getRotationMatrix2D((0.5 * w, 0.5 * h), float(da[i]), 1.0)
             m[:, 2] += (dx[i], dy[i])
+            out.append(m)
+        return out, (w, h)
+    if kind in ("tilt", "lean"):
+        # slow and smooth, as on the calibration frame at its start: a 7 s turn, a 9 s lean
+        t = np.arange(n) / 25.0
+        out = []
+        for i in range(n):
+            if kind == "tilt":
+                m = cv2.getRotationMatrix2D((0.5 * w, 0.5 * h), 25.0 * math.sin(2 * math.pi * t[i] / 7.0), 1.0)
+            else:
+                m = cv2.getRotationMatrix2D((0.5 * w, 0.5 * h), 0.0, 0.9 + 0.3 * math.sin(2 * math.pi * t[i] / 9.0 + math.asin(1.0 / 3.0)))
             out.append(m)
         return out, (w, h)
     if kind == "leave":  # slides out to the left, past the frame's edge, and back

@@ -85,6 +85,29 @@ def test_stress_summary_counts_targets():
     assert passes["r_open"] == 1 and passes["r_eye"] == 2
 
 
+@pytest.mark.parametrize("kind", ["tilt", "lean"])
+def test_tilt_turns_and_lean_scales_the_face_from_none_at_the_start(tmp_path, kind):
+    """``tilt`` turns the picture up to 25° and ``lean`` scales it up to 1.2× (both slowly, 7 s and 9 s
+    waves); on frame 0, where calibration looks, the face is as it was; the peer's roll and eye
+    distance follow the picture."""
+    n = 60
+    src, out = tmp_path / "src", tmp_path / kind
+    src.mkdir()
+    pts = _write_clip(src, n=n, w=160, h=120)
+    sc.make_variant(src, "c", kind, out)
+    peer = rf.load_peer(out, "c")
+    roll, ipd = peer.values[:, PARAM_NAMES.index("roll_deg")], peer.ipd
+    assert json.loads((out / "c.clicks.json").read_text())["left_pupil"] == pytest.approx(list(pts["left_pupil"]), abs=0.06)
+    assert ipd[0] == pytest.approx(float(np.hypot(24, 2)), abs=0.01)
+    peak = 44  # 1.76 s at 25 frames a second: a quarter of the tilt's wave, the lean's largest
+    if kind == "tilt":
+        assert abs(roll[peak] - roll[0]) == pytest.approx(25.0, abs=0.2)
+        assert ipd[peak] == pytest.approx(ipd[0], abs=0.01)
+    else:
+        assert roll[peak] == pytest.approx(roll[0], abs=0.01)
+        assert ipd[peak] / ipd[0] == pytest.approx(1.2, abs=0.002)
+
+
 @pytest.mark.parametrize("kind", ["leave", "covered"])
 def test_away_variants_hide_the_face_and_blank_the_peer_there(tmp_path, kind):
     """While the face is out of the frame or under the hand the peer's points are blank (and the row
