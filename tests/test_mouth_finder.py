@@ -14,7 +14,7 @@ import pytest
 
 from tracker.calibration import FaceFrame
 from tracker.colour_model import TILE_SHAPE
-from tracker.mouth_finder import CHEEKLESS, OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
+from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
 from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -411,27 +411,33 @@ def test_reset_adaptation_is_the_calibration_again(calibrated):
 
 
 @pytest.mark.parametrize("gap", [1, 6])
-def test_a_corner_with_no_cheek_past_it_is_not_a_confident_mouth(calibrated, gap):
+def test_a_corner_with_no_cheek_past_it_is_placed_from_the_other_one(calibrated, gap):
     """Dark hair on the cheek ``gap`` px past the right corner, out to the crop's edge and as high
-    as the lips: right beside the corner the line runs on into it, no column past the corner looks
-    like the cheek, and the mouth found (as wide as the crop allows) is not taken for this person's
-    mouth (at most :data:`CHEEKLESS` sure). With skin between the corner and the hair the cheek is
-    seen and the mouth is found."""
+    as the lips (a beard, a collar). With skin between the corner and the hair the cheek is seen
+    and the corner found there. Right beside the corner the line runs on into the hair and no
+    column past it looks like the cheek: that corner is placed from the left one — at the last
+    frame's width when there is a sure last frame, else mirrored about the line's start (the
+    prediction) — and the mouth stays sure, where it used to run on to the crop's edge and be
+    refused."""
     model, centre = calibrated
     img, _ = render_face(BASE)
     ff = _frame_of(BASE)
     crop, origin = _crop(img, ff, centre)
     t = _truth_in_crop(BASE, ff, origin)
+    clean = MouthFinder(model, WI).find(crop, tuple(centre - origin))
     y = int(round(t["mouth"][1]))
     crop = crop.copy()
     crop[y - 10 : y + 11, int(t["mouth_right"][0]) + gap :] = (38, 48, 62)
     res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK
+    assert _errors(res, t)[0] < (2.5 if gap > 1 else 1.5)
+    assert abs(res.right[1] - t["mouth_right"][1]) < 2.0
     if gap == 1:
-        assert res is None or res.score <= CHEEKLESS * 1.0001
-        assert res is None or _errors(res, t)[0] > 20.0  # it ran on into the hair
-    else:
-        assert res is not None and res.score >= SCORE_OK
-        assert _errors(res, t)[0] < 2.5
+        off = tuple(centre - origin + np.array([6.0, 0.0]))  # the prediction 6 px to the right
+        mirrored = MouthFinder(model, WI).find(crop, off)
+        held = MouthFinder(model, WI).find(crop, off, previous=clean)
+        assert _errors(mirrored, t)[0] > 10.0  # twice the prediction's error
+        assert _errors(held, t)[0] < 0.5 and held.score >= SCORE_OK
 
 
 @pytest.mark.parametrize("hair", ["beard", "moustache"])

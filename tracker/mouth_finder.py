@@ -63,11 +63,11 @@ from tracker.mouth_model import (
 SCORE_OK = 0.5
 """A result whose score is at least this is taken to be on this person's mouth."""
 CHEEKLESS = 0.5
-"""Factor on the score of a mouth one of whose corners had no cheek past it within reach (the
-line ran on into hair, a beard's edge or a collar, as unlike the cheek as the lips): only a mouth
-flawless in every other way stays at :data:`SCORE_OK`. On the shared clips 3 frames in 9 clips; on a
-bearded copy of talk_a 57 frames, the mouth there reported 60-100 % of the eye distance below the
-lips. At 0.45 (every such mouth refused) the copies lost frames whose mouth was only too narrow."""
+"""Factor on the score of a mouth with a corner that had no cheek past it within reach (the line ran
+on into hair, a beard or a collar, as unlike the cheek as the lips) and that the other corner could
+not place (:meth:`MouthFinder._fill_unseen`: neither saw the cheek, or the width would put it
+further out): only a mouth flawless in every other way stays at :data:`SCORE_OK`. On a bearded copy
+of talk_a the mouth such frames reported lay 60-100 % of the eye distance below the lips."""
 WORK_IPD = 40.0
 """Inter-eye distance (px) of the crop the finder works on (a larger crop is shrunk to it)."""
 ROW_CAP = 6.0
@@ -1073,6 +1073,14 @@ class MouthFinder:
                 left, seen[0] = bl, bent_seen[0]
             if br[0] > right[0]:
                 right, seen[1] = br, bent_seen[1]
+        if seen[0] != seen[1]:
+            # one corner ran on past the lips with no cheek after it: the other one and the mouth's
+            # width place it (a beard or a collar on one side no longer costs the frame)
+            filled = self._fill_unseen(x0, traced, left, right, seen, previous)
+            if filled is not None:
+                left, right = filled
+                seen = [True, True]
+                yl, yr = self.corner_heights(maps, left, right)
         left, right = (left[0], yl), (right[0], yr)
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
@@ -1085,6 +1093,30 @@ class MouthFinder:
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
             stretch=stretch, shape=(H, W), line_ends=line_ends, _split=self._split,
         )
+
+    def _fill_unseen(self, x0: int, traced: list[np.ndarray | None], left: tuple[float, float], right: tuple[float, float],
+                     seen: list[bool], previous: MouthResult | None):
+        """The corners ``(left, right)`` with the one that saw no cheek past it (the line ran on into
+        hair or a collar, as unlike the cheek as lips: its place is only where the search stopped)
+        put where the other one and the mouth's width say — the last frame's width when that frame
+        was sure, else the other side's distance from the line's start ``x0`` mirrored — on the
+        traced row there; None when that would not bring it in."""
+        side = 0 if not seen[0] else 1
+        ys = traced[side]
+        if ys is None:
+            return None
+        if previous is not None and previous.score >= SCORE_OK:
+            width = previous.right[0] - previous.left[0]
+        else:
+            width = 2.0 * (right[0] - x0 if side == 0 else x0 - left[0])
+        x = right[0] - width if side == 0 else left[0] + width
+        if not (left[0] < x < right[0]):
+            return None
+        half = min(max(abs(x - x0) - CORNER_BIAS * self.r, 0.0), len(ys) - 1.0)
+        k = min(int(half), len(ys) - 2)
+        t = half - k
+        corner = (x, float(ys[k] * (1 - t) + ys[k + 1] * t))
+        return (corner, right) if side == 0 else (left, corner)
 
     def _line_and_lips(self, maps: "_Maps", x: float, seed: float, previous: MouthResult | None):
         """The mouth line traced from ``(x, seed)`` and the corners along it (:meth:`trace`,
