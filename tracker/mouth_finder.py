@@ -1087,12 +1087,48 @@ class MouthFinder:
         score = self._score(width, bottom - top, line_c, (mx, cy), (px, py), fit, strength, previous)
         if not (seen[0] and seen[1]):
             score *= CHEEKLESS
+        elif score < SCORE_OK and previous is not None and previous.score >= SCORE_OK:
+            held = self._one_corner_held(maps, x0, traced, left, right, line_c, (px, py), strength, previous)
+            if held is not None:
+                score, left, right, v, self._split = held
+                gap_top, gap_bottom, top, bottom, stretch, fit = v
+                mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
+                cx = mx
         poly, raw = lens_outlines(left, right, (top, gap_top), (bottom, gap_bottom), cx, N_RAYS)
         return MouthResult(
             left=left, right=right, centre=(mx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
             stretch=stretch, shape=(H, W), line_ends=line_ends, _split=self._split,
         )
+
+    def _one_corner_held(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], left: tuple[float, float],
+                         right: tuple[float, float], line_c: tuple[float, float], pred: tuple[float, float],
+                         strength: list[float], previous: MouthResult):
+        """A refused mouth whose one corner alone ran on past the lips — along a crease, into a
+        shaded cheek the calibration never saw, so the mouth came out too wide or its middle jumped:
+        each corner in turn moved in to the last (sure) frame's width from the other, the lips split
+        again through the new middle, scored as usual. ``(score, left, right, v, (features, v))``
+        of the better one (the nearer to the last middle on a tie; ``v``: :meth:`vertical`'s split)
+        when it is sure, else None."""
+        best, pc = None, previous.centre
+        for side in (0, 1):
+            alt = self._corner_from_other(side, previous.right[0] - previous.left[0], x0, traced, left, right)
+            if alt is None:
+                continue
+            yl, yr = self.corner_heights(maps, alt[0], alt[1])
+            a_l, a_r = (alt[0][0], yl), (alt[1][0], yr)
+            f, inside = self.profile(maps, 0.5 * (a_l[0] + a_r[0]))
+            v = self.vertical(f, inside, 0.5 * (alt[0][1] + alt[1][1]) + self.line0, previous=previous, spread=0.12)
+            mx, my = 0.5 * (a_l[0] + a_r[0]), 0.5 * (yl + yr)
+            width = math.hypot(a_r[0] - a_l[0], a_r[1] - a_l[1])
+            score = self._score(width, v[3] - v[2], line_c, (mx, my), pred, v[5], strength, previous)
+            key = (score, -math.hypot(mx - pc[0], my - pc[1]))
+            if best is None or key > best[0]:
+                best = (key, a_l, a_r, v, (f, v))
+        if best is None or best[0][0] < SCORE_OK:
+            return None
+        (score, _), a_l, a_r, v, split = best
+        return score, a_l, a_r, v, split
 
     def _fill_unseen(self, x0: int, traced: list[np.ndarray | None], left: tuple[float, float], right: tuple[float, float],
                      seen: list[bool], previous: MouthResult | None):
@@ -1102,13 +1138,19 @@ class MouthFinder:
         was sure, else the other side's distance from the line's start ``x0`` mirrored — on the
         traced row there; None when that would not bring it in."""
         side = 0 if not seen[0] else 1
-        ys = traced[side]
-        if ys is None:
-            return None
         if previous is not None and previous.score >= SCORE_OK:
             width = previous.right[0] - previous.left[0]
         else:
             width = 2.0 * (right[0] - x0 if side == 0 else x0 - left[0])
+        return self._corner_from_other(side, width, x0, traced, left, right)
+
+    def _corner_from_other(self, side: int, width: float, x0: int, traced: list[np.ndarray | None],
+                           left: tuple[float, float], right: tuple[float, float]):
+        """``(left, right)`` with corner ``side`` (0: left) moved in to ``width`` columns from the
+        other, on the traced row there; None when that would not bring it in."""
+        ys = traced[side]
+        if ys is None:
+            return None
         x = right[0] - width if side == 0 else left[0] + width
         if not (left[0] < x < right[0]):
             return None
