@@ -131,7 +131,7 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
             out.append(m)
         return out, (w, h)
     if kind in ("tilt", "lean"):
-        # slow and smooth, as on the calibration frame at its start: a 7 s turn, a 9 s lean
+        # slow and smooth waves (a 7 s turn, a 9 s lean), none on the first frame, where calibration looks
         t = np.arange(n) / 25.0
         out = []
         for i in range(n):

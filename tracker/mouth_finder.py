@@ -14,7 +14,8 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    not the shadow under the lower lip, :meth:`MouthFinder.line_seed`) outwards along the darkest
    valley, and on each side the corner is where the columns along it (the bands above, on and below
    the line) start to look like the cheek; once the corners' heights are known (step 3) the search
-   is repeated along the line bent to them (a grin's corners rise above the line);
+   is repeated along the line bent to them (a grin's corners rise above the line). A corner with no
+   cheek past it (hair, a collar) is placed from the other one at the mouth's last width;
 3. **the lips on the vertical profile through the corners' midpoint** (:meth:`MouthFinder.vertical`):
    the calibrated templates of the upper and the lower lip — from each lip's inner edge out over
    the skin beyond it — are matched to the profile, each lip stretched within :data:`THICKNESS`,
@@ -35,7 +36,9 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
 4. **score** in 0..1 — "this is this person's mouth": how well the lip templates fit, how
    clearly the columns between the corners differ from the cheek against the calibration, the
    plausibility of the size, the place against the prediction and, with the previous frame's
-   result, how far the mouth moved. :data:`SCORE_OK` is the threshold;
+   result, how far the mouth moved. :data:`SCORE_OK` is the threshold; a mouth under it is tried
+   again with each corner in turn held at the last width from the other (one corner that ran on
+   along a crease or into a shaded cheek);
 5. **adaptation** (:meth:`MouthFinder.adapt`, on the frames the tracker reports ``ok``): when the
    split fitted well, the four parts' colours and the two lips' thicknesses move a little towards
    this frame's — one calibration frame can measure a lip at half or twice its thickness — within
