@@ -21,10 +21,10 @@ shade    the side light of ``side`` comes up over the clip, from none to all of 
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
-tilt     the picture turns slowly about its middle, up to 25° each way and back (a head tilted
-         far to one shoulder, a laptop on the knees)
-lean     the picture grows and shrinks slowly about its middle, from 0.6× to 1.2× (leaning back
-         from the camera and in towards it)
+tilt     the picture turns slowly about its middle, up to 25° each way and back, a wave of 175
+         frames (a head tilted far to one shoulder, a laptop on the knees)
+lean     the picture grows and shrinks slowly about its middle, from 0.6× to 1.2×, a wave of 225
+         frames (leaning back from the camera and in towards it)
 leave    the face slides out of the frame sideways, stays away a second, and slides back
 covered  a skin-coloured hand passes over the face and covers it for a second
 beard    a dark, full beard and moustache round the mouth, following the face (hair where the
@@ -131,7 +131,7 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
             out.append(m)
         return out, (w, h)
     if kind in ("tilt", "lean"):
-        # slow and smooth waves (a 7 s turn, a 9 s lean), none on the first frame, where calibration looks
+        # slow and smooth waves (7 s and 9 s at 25 frames a second), none on the first frame, where calibration looks
         t = np.arange(n) / 25.0
         out = []
         for i in range(n):
