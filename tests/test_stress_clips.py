@@ -38,6 +38,16 @@ def _write_clip(folder, n=4, w=64, h=48):
     return pts
 
 
+def _made(tmp_path, kind, n):
+    """Variant ``kind`` of an ``n``-frame 160×120 clip from :func:`_write_clip`: (its points, the
+    variant's folder, the source's folder)."""
+    src, out = tmp_path / "src", tmp_path / kind
+    src.mkdir()
+    pts = _write_clip(src, n=n, w=160, h=120)
+    sc.make_variant(src, "c", kind, out)
+    return pts, out, src
+
+
 def test_peer_params_follow_the_readme_definitions():
     p = {k: np.array([[0.0, 0.0]]) for k in sc.POINTS}
     p["left_pupil"], p["right_pupil"] = np.array([[10.0, 20.0]]), np.array([[50.0, 20.0]])
@@ -90,11 +100,7 @@ def test_tilt_turns_and_lean_scales_the_face_from_none_at_the_start(tmp_path, ki
     """``tilt`` turns the picture up to 25° and ``lean`` scales it up to 1.2× (both slowly, 7 s and 9 s
     waves); on frame 0, where calibration looks, the face is as it was; the peer's roll and eye
     distance follow the picture."""
-    n = 60
-    src, out = tmp_path / "src", tmp_path / kind
-    src.mkdir()
-    pts = _write_clip(src, n=n, w=160, h=120)
-    sc.make_variant(src, "c", kind, out)
+    pts, out, _ = _made(tmp_path, kind, 60)
     peer = rf.load_peer(out, "c")
     roll, ipd = peer.values[:, PARAM_NAMES.index("roll_deg")], peer.ipd
     assert json.loads((out / "c.clicks.json").read_text())["left_pupil"] == pytest.approx(list(pts["left_pupil"]), abs=0.06)
@@ -113,10 +119,7 @@ def test_away_variants_hide_the_face_and_blank_the_peer_there(tmp_path, kind):
     """While the face is out of the frame or under the hand the peer's points are blank (and the row
     of parameters with them); before and after the event the clip and its peer are the original's."""
     n = 120
-    src, out = tmp_path / "src", tmp_path / kind
-    src.mkdir()
-    pts = _write_clip(src, n=n, w=160, h=120)
-    sc.make_variant(src, "c", kind, out)
+    pts, out, src = _made(tmp_path, kind, n)
     peer = rf.load_peer(out, "c")
     start, ramp, hold = int(sc.AWAY[0] * n), sc.AWAY[1], sc.AWAY[2]
     gone = start + ramp + hold // 2  # the middle of the stay away
@@ -135,10 +138,7 @@ def test_away_variants_hide_the_face_and_blank_the_peer_there(tmp_path, kind):
 
 def test_the_hand_is_skin_coloured_and_covers_the_face(tmp_path):
     n = 120
-    src, out = tmp_path / "src", tmp_path / "covered"
-    src.mkdir()
-    pts = _write_clip(src, n=n, w=160, h=120)
-    sc.make_variant(src, "c", "covered", out)
+    pts, out, _ = _made(tmp_path, "covered", n)
     frames = sc.read_frames(out / "c.mp4")[0]
     gone = int(sc.AWAY[0] * n) + sc.AWAY[1] + sc.AWAY[2] // 2
     x, y = (int(v) for v in pts["left_pupil"])

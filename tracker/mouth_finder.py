@@ -1093,8 +1093,8 @@ class MouthFinder:
         elif score < SCORE_OK and previous is not None and previous.score >= SCORE_OK:
             held = self._one_corner_held(maps, x0, traced, left, right, line_c, (px, py), strength, previous)
             if held is not None:
-                score, left, right, v, self._split = held
-                gap_top, gap_bottom, top, bottom, stretch, fit = v
+                score, left, right, self._split = held
+                gap_top, gap_bottom, top, bottom, stretch, fit = self._split[1]
                 mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1])
                 cx = mx
         poly, raw = lens_outlines(left, right, (top, gap_top), (bottom, gap_bottom), cx, N_RAYS)
@@ -1110,8 +1110,8 @@ class MouthFinder:
         """A refused mouth whose one corner alone ran on past the lips — along a crease, into a
         shaded cheek the calibration never saw, so the mouth came out too wide or its middle jumped:
         each corner in turn moved in to the last (sure) frame's width from the other, the lips split
-        again through the new middle, scored as usual. ``(score, left, right, v, (features, v))``
-        of the better one (the nearer to the last middle on a tie; ``v``: :meth:`vertical`'s split)
+        again through the new middle, scored as usual. ``(score, left, right, (features, split))``
+        of the better one (the nearer to the last middle on a tie; ``split``: :meth:`vertical`'s)
         when it is sure, else None."""
         best, pc = None, previous.centre
         for side in (0, 1):
@@ -1127,11 +1127,11 @@ class MouthFinder:
             score = self._score(width, v[3] - v[2], line_c, (mx, my), pred, v[5], strength, previous)
             key = (score, -math.hypot(mx - pc[0], my - pc[1]))
             if best is None or key > best[0]:
-                best = (key, a_l, a_r, v, (f, v))
+                best = (key, a_l, a_r, (f, v))
         if best is None or best[0][0] < SCORE_OK:
             return None
-        (score, _), a_l, a_r, v, split = best
-        return score, a_l, a_r, v, split
+        (score, _), a_l, a_r, split = best
+        return score, a_l, a_r, split
 
     def _fill_unseen(self, x0: int, traced: list[np.ndarray | None], left: tuple[float, float], right: tuple[float, float],
                      seen: list[bool], previous: MouthResult | None):
