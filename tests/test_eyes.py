@@ -21,6 +21,7 @@ from tracker.eyes import (
     _run,
     calibration_crop,
     eye_light,
+    dark_power,
     iris_darkness,
     iris_radius,
     learn_eyes,
@@ -189,6 +190,36 @@ def test_iris_darkness_counts_a_dark_iris_and_not_a_light_one_in_a_dark_face():
         assert iris_darkness(model.eye_pictures, model.radius) == pytest.approx(want, abs=0.05), style
 
 
+def test_the_darkness_term_is_off_for_an_iris_hardly_darker_than_the_skin_round_it():
+    """The search measures a disc's darkness against its window, which is mostly skin. A brown iris
+    in a brown face is darker than its own eye picture (the white raises that picture's median), so
+    :func:`iris_darkness` keeps the term, yet hardly darker than the window: the search's own
+    measure (:meth:`EyeFinder.search_darkness`, stored with the model) turns it off there, and
+    leaves it on for dark irises in light and dark faces. The irises are still found."""
+    near = STYLES["dark_skin"].replace(name="brown_near_skin", iris=STYLES["dark_skin"].skin, pupil=(36, 48, 76),
+                                       catchlight=False)
+    seen = {}
+    for name, style in (("default", None), ("dark_skin", STYLES["dark_skin"]), ("near", near)):
+        model, wi = _learn(style=style)
+        seen[name] = (model.search_dark, iris_darkness(model.eye_pictures, model.radius), dark_power(model))
+        f = EyeFinder(model, wi)
+        assert f.dark_power == pytest.approx(seen[name][2])
+        for gaze in (-0.06, 0.0, 0.06):
+            res, truth, _, _ = _find(f, BASE.with_expression("smile").replace(gaze_x=gaze), style, offset=(0.04, -0.03))
+            for e, side in zip(res.eyes, ("left", "right")):
+                assert math.dist(e.iris, truth[side]["pupil"]) < 1.0, (name, gaze, side)
+    assert seen["default"][0] > seen["dark_skin"][0] > seen["near"][0]
+    assert seen["default"][2] == seen["dark_skin"][2] == 1.0
+    assert seen["near"][1] > 0.3 and seen["near"][2] == 0.0  # the eye picture's rule alone kept it
+    # a model saved before the measure existed keeps the eye picture's rule
+    model, _ = _learn(style=near)
+    d = model.to_dict()
+    assert d["search_dark"] == pytest.approx(model.search_dark, abs=1e-4)
+    d.pop("search_dark")
+    old = EyeModel.from_dict(d, model.images())
+    assert old.search_dark is None and dark_power(old) == pytest.approx(seen["near"][1], abs=0.02)
+
+
 def test_light_irises_in_a_dark_face_are_found_not_the_lashes():
     """Grey-green irises as light as the dark skin round them: the darkest discs near them are
     the lash lines and brows, so the search leans on the iris picture and the rim instead (with
@@ -282,6 +313,7 @@ def test_model_round_trips_through_json(finder):
     m2 = EyeModel.from_dict(d, imgs)
     f2 = EyeFinder(m2, m2.work_ipd)
     assert f2.rect == finder.rect
+    assert m2.search_dark == pytest.approx(m.search_dark, abs=1e-4) and f2.dark_power == pytest.approx(finder.dark_power, abs=1e-3)
     res1, _, _, _ = _find(finder, BASE.with_expression("smile"))
     res2, _, _, _ = _find(f2, BASE.with_expression("smile"))
     for a, b in zip(res1.eyes, res2.eyes):
@@ -301,6 +333,8 @@ def test_model_round_trips_through_json(finder):
         lambda d, i: d.update(light=[[1.0, 1.0, 1.0]]),
         lambda d, i: d.update(light=[[1.0, 1.0, 1.0], [1.0, -1.0, 1.0]]),
         lambda d, i: d.update(light=[[1.0, 1.0], [1.0, 1.0]]),
+        lambda d, i: d.update(search_dark="dark"),
+        lambda d, i: d.update(search_dark=float("nan")),
     ],
 )
 def test_malformed_models_give_one_line_errors(finder, change):

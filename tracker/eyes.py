@@ -11,7 +11,10 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   shift both irises alike, so the pair maximises the sum of both maps with a little slack
   between the eyes, and eye corners, lash lines, brows or nostrils, which do not look
   like that disc on both sides at once, lose. The best pair is refined at full resolution
-  (darkness × correlation, parabola through the peak).
+  (darkness × correlation, parabola through the peak). The darkness term counts only as much as
+  the calibrated irises were darker than both their eye picture and the search's window, which is
+  mostly skin (:func:`dark_power`): in a dark face a brown iris can be barely darker than the skin,
+  and the darkest disc is then a lash line or a dark eye corner.
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
   Gaussian in YCrCb learned below, above and between the eyes at calibration — behind glasses
   without the thin dark lines that cross those bands, the rims among them: :func:`thin_dark`; the skin's
@@ -77,6 +80,16 @@ which it does not count it at all (a straight ramp between, see :func:`iris_dark
 hazel iris in a light or olive face is 0.2–0.8 of its eye's grey; a grey, green or light-brown
 iris in a dark face is as light as the skin round it or lighter (0.9–1.6), and the darkest disc
 there is the lash line or a brow."""
+SEARCH_DARK = (0.15, 0.35)
+"""The calibrated irises' darkness as the search itself sees it (1 − the disc's mean grey over the
+search window's median, :meth:`EyeFinder.search_darkness`; the paler iris) at and under which the
+disc-darkness term is off, and at and over which it counts as :data:`IRIS_DARK` says (a straight ramp
+between). :data:`IRIS_DARK` weighs the iris against its own eye picture, white and all; the search
+weighs it against the window round both eyes, which is mostly skin. A dark brown iris in a dark
+brown face is darker than its eye picture (0.8 of it) but hardly darker than that window (0.1-0.2
+where a light face gives 0.4-0.8): the term then finds the darkest disc in a window of equally dark
+skin, the lash line or the eye's dark corner, whenever the gaze takes the white from one side of
+the iris."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 LID_RANGE = 0.3
@@ -212,12 +225,31 @@ def iris_darkness(eye_pictures, radius) -> float:
     return min(max((hi - ratio) / (hi - lo), 0.0), 1.0)
 
 
+def dark_power(model: "EyeModel") -> float:
+    """The power of the disc-darkness term for this model: :func:`iris_darkness`, and none where
+    the irises were hardly darker than the search's window at calibration (:data:`SEARCH_DARK`)."""
+    power = iris_darkness(model.eye_pictures, model.radius)
+    if model.search_dark is not None:
+        lo, hi = SEARCH_DARK
+        power *= min(max((model.search_dark - lo) / (hi - lo), 0.0), 1.0)
+    return power
+
+
 class EyeModelError(ValueError):
     """The calibration crop cannot give an eye model, or a stored one is malformed (one line)."""
 
 
 # ---------------------------------------------------------------------------------------------
 # small helpers
+
+
+def _window_level(half: np.ndarray) -> float:
+    """The iris search window's median grey (every other half px each way), at least 8: what a
+    disc's darkness is measured against."""
+    sub = half[::2, ::2].ravel()
+    k = sub.size // 2
+    sub.partition(k)
+    return max(float(sub[k]), 8.0)
 
 
 def _even(v: float, lo: int = 2) -> int:
@@ -580,7 +612,9 @@ class EyeModel:
     (B, G, R) that take its colours to the light both eyes share (a face lit from one side; None:
     lit alike, see :func:`eye_light`); ``rims`` per eye, the rows (crop px from the pupil's, up
     negative) of a spectacle rim's upper bar on the brow's column, filled in before the brow is
-    read (None: no rim, see :func:`spectacle_rims`).
+    read (None: no rim, see :func:`spectacle_rims`); ``search_dark`` how much darker than the iris
+    search's window the paler iris was (:meth:`EyeFinder.search_darkness`; None: not measured, a
+    model saved before it was).
     """
 
     work_ipd: float
@@ -597,6 +631,7 @@ class EyeModel:
     white: float | None = None
     light: list[np.ndarray] | None = None
     rims: list[tuple[float, float] | None] = field(default_factory=lambda: [None, None])
+    search_dark: float | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -621,6 +656,7 @@ class EyeModel:
             **({} if self.white is None else {"white": float(self.white)}),
             **({} if self.light is None else {"light": [np.asarray(f, dtype=float).round(4).tolist() for f in self.light]}),
             **({} if all(r is None for r in self.rims) else {"rims": [None if r is None else [float(v) for v in r] for r in self.rims]}),
+            **({} if self.search_dark is None else {"search_dark": round(float(self.search_dark), 4)}),
             "skin": self.skin.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
         }
@@ -654,6 +690,7 @@ class EyeModel:
                 white=None if d.get("white") is None else float(d["white"]),
                 light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
                 rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
+                search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
                 skin=SkinModel.from_dict(d["skin"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
             )
@@ -668,6 +705,8 @@ class EyeModel:
             raise EyeModelError("eye model: the eyes' light factors must be positive numbers")
         if not all(r is None or (all(map(math.isfinite, r)) and r[0] < r[1]) for r in m.rims):
             raise EyeModelError("eye model: a spectacle rim's rows must be finite and rising")
+        if m.search_dark is not None and not math.isfinite(m.search_dark):
+            raise EyeModelError("eye model: the irises' search darkness must be a finite number")
         return m
 
 
@@ -955,6 +994,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
     )
     f = EyeFinder(model, wi)
+    model.search_dark = f.search_darkness(grey, pupils)
     ref = f.skin_colour(crop, pupils)
     model.skin_bgr = ref if ref is not None else np.median(groups["below the eyes"], axis=0).astype(np.float64)
     # the lash line and the lid gap, measured the way the finder measures them
@@ -978,7 +1018,7 @@ class EyeFinder:
     predicted; a larger crop works too. ``search`` (x, y) is the half-size of the iris
     search window and ``prior`` the spread of the preference for irises near the predicted
     centres, both × ``work_ipd``; ``darkness`` the power of the disc-darkness term (0: off;
-    ``None``: from how dark the calibrated irises are, :func:`iris_darkness`).
+    ``None``: from how dark the calibrated irises are, :func:`dark_power`).
     """
 
     def __init__(
@@ -987,7 +1027,7 @@ class EyeFinder:
     ):
         self.model = model
         self.wi = wi = float(work_ipd)
-        self.dark_power = iris_darkness(model.eye_pictures, model.radius) if darkness is None else float(darkness)
+        self.dark_power = dark_power(model) if darkness is None else float(darkness)
         if abs(wi - model.work_ipd) > 1e-6 * max(wi, 1.0):
             raise ValueError(f"eye model was learned at work ipd {model.work_ipd:g}, not {wi:g}")
         self.radius = [float(r) for r in model.radius]
@@ -1146,10 +1186,7 @@ class EyeFinder:
         half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
         self._half = (half, x0, y0)  # the eye picture's score looks here too
         ph = p // 2
-        sub = half[::2, ::2].ravel()
-        k = sub.size // 2
-        sub.partition(k)
-        level = max(float(sub[k]), 8.0)
+        level = _window_level(half)
         # 1 − disc mean / level, at least 0
         dark = cv2.filter2D(half, -1, self._disc_half * (-1.0 / level), delta=1.0)
         np.maximum(dark, 0.0, out=dark)
@@ -1188,6 +1225,23 @@ class EyeFinder:
         for i, ((u0, v0), _) in enumerate(origins):
             maps[i] *= sc[v0 : v0 + hs, u0 : u0 + ws]
         return maps, [o for _, o in origins]
+
+    def search_darkness(self, grey: np.ndarray, irises) -> float:
+        """How much darker than the search's window the paler iris at ``irises`` ((2, 2) crop px,
+        the calibrated centres) is: 1 − its disc's mean grey over the window's median grey, both
+        at half resolution as the coarse search measures them (:meth:`_coarse_maps`)."""
+        centres = np.asarray(irises, dtype=np.float64).reshape(2, 2)
+        self._coarse_maps(np.asarray(grey, dtype=np.float32), centres)
+        half, x0, y0 = self._half
+        level = _window_level(half)
+        disc = cv2.filter2D(half, -1, self._disc_half)
+        h, w = disc.shape
+        out = []
+        for x, y in centres.tolist():  # half px k is the mean of full px 2k and 2k+1
+            u = min(max(int(round((x - x0 - 0.5) / 2)), 0), w - 1)
+            v = min(max(int(round((y - y0 - 0.5) / 2)), 0), h - 1)
+            out.append(1.0 - float(disc[v, u]) / level)
+        return min(out)
 
     def _ring_votes(self, gx: np.ndarray, gy: np.ndarray, p: int) -> np.ndarray:
         """For each pixel ``p`` or more from the border: how strongly the (weighted unit)
