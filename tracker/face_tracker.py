@@ -38,7 +38,7 @@ import numpy as np
 
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.clicks import PIXEL_CENTRE
-from tracker.eyes import IRIS_SHOWS, EyeFinder, EyeResult
+from tracker.eyes import CLOSING, IRIS_SHOWS, OPEN_SHARE, EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
                                  locate_face, patch_similarity, reference_vector)
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
@@ -200,6 +200,9 @@ class FaceTracker:
         self.wi = wi = cal.work_ipd
         self.damping = float(damping)
         self.eye_finder = EyeFinder(cal.eye_model, wi) if cal.eye_model is not None else LegacyEyes(cal, wi)
+        # the lid gap (crop px) under which an eye reads as shut: where the eye finder's own rule shuts it
+        lo, hi = CLOSING
+        self._shut_gap = None if cal.eye_model is None else [(lo + OPEN_SHARE * (hi - lo)) * g for g in cal.eye_model.lid_open]
         self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LegacyMouth(cal, wi)
         self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)
@@ -575,10 +578,14 @@ class FaceTracker:
             vals += [self.last.mouth_width, self.last.lip_upper, self.last.lip_lower]
             status = MOUTH_LOST
             self.jaw *= JAW_HOLD
-        # both eyes shut by their lid gaps — unless an iris picture still matches as an iris that shows:
-        # a narrowed, side-glancing eye's gap can be read from a point on its dark corner
+        # both eyes shut by their lid gaps — unless an iris picture still matches as an iris that shows
+        # (a narrowed, side-glancing eye's gap can be read from a point on its dark corner), or the lids
+        # measured through the eye points stand apart (a blink's half-open frames blur the iris, and an
+        # eye the gap rule cannot see is judged by its iris picture alone)
         if (closed[0] and closed[1] and not (doubt[0] and doubt[1])
-                and max(o.iris_match for o, d in zip(obs, doubt) if not d) < IRIS_SHOWS):
+                and max(o.iris_match for o, d in zip(obs, doubt) if not d) < IRIS_SHOWS
+                and (self._shut_gap is None
+                     or all(lid_up[i] + lid_down[i] < self._shut_gap[i] for i in range(2) if not doubt[i]))):
             status = EYES_CLOSED
         scores = [o.score for o in obs]
         conf = min(max(0.5 * (scores[0] + scores[1]), 0.0), 1.0) * (0.5 if mouth_res is None else 1.0)
