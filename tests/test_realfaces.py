@@ -455,16 +455,6 @@ STRESS_CASES = [
     # preferred, were the lash lines: expr_d18's pupils 14 % of the eye distance high from frame 0,
     # and calibration's click refinement moved them onto the lids), and brown ones the lid gap rule
     # cannot tell from the skin (expr_d19's eyes reported shut on 83 % of the frames)
-    # and a brown iris in a dark face, hardly darker than the skin round it: weighed against its own
-    # eye picture (white and all) it looked dark enough for the darkness term, which then found the
-    # lash line or the eye's dark corner whenever the gaze took the white from one side of the iris
-    # (expr_d11's pupil p95 11.4 % of the eye distance; 3.3-4.1 % with the term weighed as the
-    # search sees it)
-    pytest.param("expr_d11", "deep", False, None, id="expr_d11-deep-clicks"),
-    # a blink's half-open frames (the peer at 59-73 % of the eye's usual opening, both irises blurred
-    # to a match of 0.46-0.55): reported 'eyes_closed', i.e. lost, though the lids stood apart (1.1 %
-    # of expr_d18's frames on the copy with a hand over the face, 0.5 % on the shared clip)
-    pytest.param("expr_d18", "covered", False, ("lost_pct",), id="expr_d18-covered-clicks"),
     pytest.param("expr_d18", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye"),
                  id="expr_d18-deep-clicks"),
     # (the eyes only: expr_d19's mouth opening on this copy is 0.74-0.89 with the clicks moved by a pixel)
@@ -478,6 +468,16 @@ STRESS_CASES = [
     # and mouth width are not what this case is about
     pytest.param("talk_a", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_brow"),
                  id="talk_a-deep-clicks"),
+    # a brown iris in a dark face, hardly darker than the skin round it: weighed against its own
+    # eye picture (white and all) it looked dark enough for the darkness term, which then found the
+    # lash line or the eye's dark corner whenever the gaze took the white from one side of the iris
+    # (expr_d11's pupil p95 11.4 % of the eye distance; 3.3-4.1 % with the term weighed as the
+    # search sees it)
+    pytest.param("expr_d11", "deep", False, None, id="expr_d11-deep-clicks"),
+    # a blink's half-open frames (the peer at 59-73 % of the eye's usual opening, both irises blurred
+    # to a match of 0.46-0.55): reported 'eyes_closed', i.e. lost, though the lids stood apart (1.1 %
+    # of expr_d18's frames on the copy with a hand over the face, 0.5 % on the shared clip)
+    pytest.param("expr_d18", "covered", False, ("lost_pct",), id="expr_d18-covered-clicks"),
     # a side light coming up while the child turns her head and looks aside: the face picture fell to
     # 0.3 with both eyes matching at 0.7 and the mouth in its place, and the frames were lost as "not
     # this face" (1.8 %); eyes and mouth found together now outvote the picture
