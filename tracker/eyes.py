@@ -120,6 +120,8 @@ OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
 eye shut below about 40 % of its usual opening."""
+OPEN_GAP = CLOSING[0] + OPEN_SHARE * (CLOSING[1] - CLOSING[0])
+"""The lid gap (× the calibrated one) at and above which an eye counts as open (40 %)."""
 GAP_BLIND = 1.2
 """A calibrated lid gap under this many iris radii on an eye clicked open says the gap rule cannot
 see this person's iris (a brown iris in a dark face is neither far from the skin's colour nor much
@@ -1173,17 +1175,24 @@ class EyeFinder:
             self._eye_q.append((P / np.maximum(np.sqrt((P * P).sum(axis=1, keepdims=True)), 1e-6)).astype(np.float32, copy=False))
 
     # ------------------------------------------------------------------ irises
+    def _half_window(self, grey: np.ndarray, centres: np.ndarray):
+        """The window both irises are searched in, at half resolution: the eye centres rounded to
+        even crop px, and ``(half, x0, y0)`` — the window and the crop px of its full-resolution
+        (0, 0) (half px k is the mean of full px 2k and 2k + 1 from there)."""
+        p = self.pad
+        (ax, ay), (bx, by) = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres.tolist()]
+        x0, y0 = min(ax, bx) - self.sx - p, min(ay, by) - self.sy - p
+        x1, y1 = max(ax, bx) + self.sx + p, max(ay, by) + self.sy + p
+        strip = cut(grey, x0, y0, x1 - x0 + 2, y1 - y0 + 2)
+        half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        return ((ax, ay), (bx, by)), (half, x0, y0)
+
     def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
         """Half-resolution iris score maps of both eyes' candidate windows and the crop px of
         each map's (0, 0): disc darkness against the strip's median grey × (1 + ring votes) ×
         (1 + correlation with the eye's iris picture) × the prior around the prediction."""
         p = self.pad
-        (ax, ay), (bx, by) = [(2 * int(round(c[0] / 2)), 2 * int(round(c[1] / 2))) for c in centres.tolist()]
-        cs = ((ax, ay), (bx, by))
-        x0, y0 = min(ax, bx) - self.sx - p, min(ay, by) - self.sy - p
-        x1, y1 = max(ax, bx) + self.sx + p, max(ay, by) + self.sy + p
-        strip = cut(grey, x0, y0, x1 - x0 + 2, y1 - y0 + 2)
-        half = cv2.resize(strip, (strip.shape[1] // 2, strip.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        cs, (half, x0, y0) = self._half_window(grey, centres)
         self._half = (half, x0, y0)  # the eye picture's score looks here too
         ph = p // 2
         level = _window_level(half)
@@ -1231,8 +1240,7 @@ class EyeFinder:
         the calibrated centres) is: 1 − its disc's mean grey over the window's median grey, both
         at half resolution as the coarse search measures them (:meth:`_coarse_maps`)."""
         centres = np.asarray(irises, dtype=np.float64).reshape(2, 2)
-        self._coarse_maps(np.asarray(grey, dtype=np.float32), centres)
-        half, x0, y0 = self._half
+        _, (half, x0, y0) = self._half_window(np.asarray(grey, dtype=np.float32), centres)
         level = _window_level(half)
         disc = cv2.filter2D(half, -1, self._disc_half)
         h, w = disc.shape

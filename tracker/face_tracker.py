@@ -38,7 +38,7 @@ import numpy as np
 
 from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.clicks import PIXEL_CENTRE
-from tracker.eyes import CLOSING, IRIS_SHOWS, OPEN_SHARE, EyeFinder, EyeResult
+from tracker.eyes import IRIS_SHOWS, OPEN_GAP, EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
                                  locate_face, patch_similarity, reference_vector)
 from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
@@ -201,8 +201,7 @@ class FaceTracker:
         self.damping = float(damping)
         self.eye_finder = EyeFinder(cal.eye_model, wi) if cal.eye_model is not None else LegacyEyes(cal, wi)
         # the lid gap (crop px) under which an eye reads as shut: where the eye finder's own rule shuts it
-        lo, hi = CLOSING
-        self._shut_gap = None if cal.eye_model is None else [(lo + OPEN_SHARE * (hi - lo)) * g for g in cal.eye_model.lid_open]
+        self._shut_gap = None if cal.eye_model is None else [OPEN_GAP * g for g in cal.eye_model.lid_open]
         self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LegacyMouth(cal, wi)
         self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)

@@ -486,11 +486,12 @@ class MouthFinder:
         r, wi = self.r, self.wi
         self.t_up, self.t_dn = float(t_up), float(t_dn)
         self._len = []
-        for t, top in ((self.t_up, THICKNESS[1]), (self.t_dn, OPEN_THICK)):
+        for t, lower in ((self.t_up, False), (self.t_dn, True)):
+            top = OPEN_THICK if lower else THICKNESS[1]
             ln = np.arange(max(int(math.floor(THICKNESS[0] * t)), 1), int(math.ceil(top * t)) + 1)
             log_k = np.log(ln / t)
             price = r * LENGTH_PRICE * log_k ** 2
-            if top == OPEN_THICK:
+            if lower:
                 # the lower lip: growing in an open mouth at OPEN_GROW's price; past THICKNESS only there
                 self._pd_open = np.where(log_k > 0.0, r * OPEN_GROW * log_k ** 2, price)[None, :]
                 price = np.where(ln > math.ceil(THICKNESS[1] * t), np.inf, price)
