@@ -449,6 +449,42 @@ def test_refine_pupils_fits_both_irises_at_one_size(light):
     assert np.hypot(l[0] - 80.0, l[1] - 60.0) < 1.0 and np.hypot(r[0] - 240.0, r[1] - 60.0) < 1.5
 
 
+@pytest.mark.parametrize("light", [150.0, 170.0])
+@pytest.mark.parametrize("dx", [-1.0, 0.0, 1.0])
+def test_refine_pupils_fits_the_irises_not_a_ring_smaller_than_any_iris(light, dx):
+    """Two light irises, each with a dark pupil and a highlight beside it: the circle through those
+    is strongest at the smallest radius tried and stronger still below it, a ring no iris is that
+    small. The rim is the radius where the edge peaks inside the range (at the range's end the
+    centres went 6.5 px to the side, whichever way the clicks moved)."""
+    frame = cv2.cvtColor(np.hstack([_iris_eye(light, True), _iris_eye(light, True)]).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    l, r = refine_pupils(frame, (80.0 + dx, 60.0), (240.0 + dx, 60.0))
+    for p, x in ((l, 80.0), (r, 240.0)):
+        assert abs(p[0] - x) < 1.0 and abs(p[1] - 60.0) < 2.0
+
+
+def test_common_radius_is_a_peak_inside_the_range():
+    """Edges that only grow towards the smallest radius tried (a pupil's ring) lose to a rim that
+    peaks inside the range, even a weaker one; with no such peak the strongest radius is kept."""
+    from tracker import eyes
+
+    flat = np.zeros((10, 10), np.float32)
+    eyes.limbus_scores((flat, flat), (5.0, 5.0))  # makes the grid
+    g = eyes._LIMBUS
+    n = len(g.radii)
+    prior = g.prior
+
+    def scores(by_radius):
+        return np.asarray(by_radius, np.float32)[:, None, None] / prior.max() * np.ones((1,) + prior.shape, np.float32)
+
+    falling = np.linspace(6.0, 1.0, n)
+    k = n // 2
+    bump = falling + 2.5 * np.exp(-0.5 * ((np.arange(n) - k) / 1.5) ** 2)
+    lo, hi = eyes.common_radius((scores(bump), scores(bump)))
+    assert lo < k < hi and bump[k] < bump[0]
+    lo, hi = eyes.common_radius((scores(falling), scores(falling)))
+    assert lo < 0 < hi
+
+
 def test_limbus_centre_prefers_the_rim_near_the_click():
     """Two equal irises in reach: the one nearer the click wins; a flat picture has no edge."""
     img = np.full((60, 100), 200.0, np.float32)

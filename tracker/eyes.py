@@ -1884,11 +1884,19 @@ def common_radius(scores: tuple[np.ndarray, np.ndarray]) -> tuple[int, int]:
     the same size, so the radius is the one at which the two eyes' best rims (each weighted by
     :data:`REFINE_PRIOR`) add up to most, give or take :data:`RADIUS_SLACK` steps (a turned
     head narrows one eye a little). One eye's rim can be missed — a light iris whose pupil and
-    highlight make a small circle's edges beside it — where the other's is plain."""
+    highlight make a small circle's edges beside it — where the other's is plain.
+
+    The radius is a peak of that sum inside :data:`LIMBUS_RADII` where there is one: edges that
+    only grow towards the smallest radius tried belong to a ring smaller than any iris (round
+    the pupil and its highlight), and whichever of it and the rim won used to turn on where the
+    click fell (expr_d18's narrow eyes: both snapped pupils 4–6 % of the eye distance to one
+    side with the points moved by a pixel)."""
     g = _LIMBUS
     best = [np.maximum(S, 0.0).reshape(S.shape[0], -1) for S in scores]
     best = [(b * g.prior.reshape(1, -1)).max(axis=1) for b in best]
-    k = int(np.argmax(best[0] + best[1]))
+    total = best[0] + best[1]
+    peaks = [k for k in range(1, len(total) - 1) if total[k - 1] <= total[k] >= total[k + 1]]
+    k = max(peaks, key=total.__getitem__) if peaks else int(np.argmax(total))
     return k - RADIUS_SLACK, k + RADIUS_SLACK + 1
 
 
