@@ -119,30 +119,39 @@ class ExpressionMap:
         ext = up.max(axis=0) - up.min(axis=0)
         if ext[1] <= _FLAT_TOL * max(ext[0], 1e-300):
             return False
-        # Collinear points on the hull can leave a zero-area simplex; joggling the input ("QJ")
-        # keeps every point a vertex and every triangle invertible.
+        # Three or more collinear points on the hull can leave a zero-area simplex along that edge
+        # (joggling the input, "QJ", does not always remove it): such slivers are dropped, and the
+        # triangles beside them then abut the hull.
+        area_tol = _FLAT_TOL * float((ext * ext).sum())
         for options in (None, "QJ"):
             try:
                 tri = Delaunay(up, qhull_options=options)
             except (QhullError, ValueError):
                 continue
-            if len(tri.simplices) and np.all(np.isfinite(tri.transform)):
+            p = up[tri.simplices]
+            area2 = np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+            keep = (area2 > area_tol) & np.all(np.isfinite(tri.transform), axis=(1, 2))
+            if keep.any() and np.isin(np.arange(len(up)), tri.simplices[keep]).all():
                 break
         else:
             return False
-        simp = tri.simplices
-        T = tri.transform
+        renumber = np.full(len(keep) + 1, -1, dtype=np.intp)  # old simplex (or -1) -> kept index or -1
+        renumber[:-1][keep] = np.arange(int(keep.sum()))
+        simp = tri.simplices[keep]
+        T = tri.transform[keep]
+        neighbours = renumber[tri.neighbors[keep]]
         self._delaunay = tri
+        self._renumber = renumber
         self.triangles = uniq[simp]  # in training-point indices
         # Barycentric tables: c = T[:2] @ (p - T[2]); b = (c0, c1, 1 - c0 - c1)
         self._tri_T = [
             (float(t[0, 0]), float(t[0, 1]), float(t[1, 0]), float(t[1, 1]), float(t[2, 0]), float(t[2, 1])) for t in T
         ]
         self._tri_lab = [tuple(int(self.labels[v]) for v in s) for s in self.triangles]
-        self._nbr = [tuple(int(v) for v in row) for row in tri.neighbors]
+        self._nbr = [tuple(int(v) for v in row) for row in neighbours]
         # Hull edges: (a, b) training indices, the triangle abutting it and which corner is opposite.
         edges = []
-        for t, row in enumerate(tri.neighbors):
+        for t, row in enumerate(neighbours):
             for c in range(3):
                 if row[c] == -1:
                     a, b = [simp[t][j] for j in range(3) if j != c]
@@ -247,7 +256,7 @@ class ExpressionMap:
                 return self._to_hull(px, py)
             t = nt
         # (a Delaunay walk does not cycle; this is a guard for numerical ties)
-        s = int(self._delaunay.find_simplex(np.array([px, py])))
+        s = int(self._renumber[int(self._delaunay.find_simplex(np.array([px, py])))])
         if s < 0:
             return self._to_hull(px, py)
         self._last = s

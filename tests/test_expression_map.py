@@ -164,6 +164,19 @@ def test_query_dimension_is_checked():
         ExpressionMap(np.zeros((0, 3)))
 
 
+def test_three_points_in_a_row_on_the_hull_keep_the_map_two_dimensional():
+    """Grid points whose projection puts three in a row along the hull's edge: qhull leaves a
+    zero-area triangle there (with or without joggling), which is dropped; every drawing is still
+    reproduced at its own point (the map used to fall back to a line and blend them)."""
+    pts = np.array([[1.0, 2, 2], [1, 2, 1], [0, 2, 1], [2, 1, 2], [0, 1, 0], [2, 2, 0], [1, 1, 0], [0, 1, 1]])
+    m = ExpressionMap(pts)
+    assert m.mode == "tri"
+    for i, p in enumerate(pts):
+        np.testing.assert_allclose(m.weights_full(p, len(pts)), np.eye(len(pts))[i], atol=1e-9)
+    idx, w = m.weights(pts.mean(axis=0) + 5.0)  # far outside: on the hull, still a valid blend
+    assert np.all(w >= 0) and abs(w.sum() - 1) < 1e-9
+
+
 @settings(max_examples=200, deadline=None)
 @given(
     pts=arrays(np.float64, st.tuples(st.integers(1, 8), st.just(3)), elements=st.integers(0, 2).map(float)),
