@@ -491,10 +491,11 @@ class CalibrationWindow(QDialog):
     def _calibrate(self) -> None:
         warn = self._shape_warning()
         try:
-            from tracker.calibration import calibrate
+            from tracker.calibration import calibrate, calibration_hints
 
             self.calibration = calibrate(self.frame, self.clicks())
             self.error = ""
+            hints = calibration_hints(self.calibration)
         except Exception as e:
             self.calibration = None
             self.error = _one_line(e)
@@ -521,8 +522,9 @@ class CalibrationWindow(QDialog):
         ipd = getattr(self.calibration, "ipd", None)
         note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, brow middles, "
                 "mouth centre) and drag any that is off, then accept. ") if self._auto_found else ""
+        advice = "".join(h[0].upper() + h[1:] + ". " for h in hints)
         self.info.setText(
-            warn + note
+            warn + note + advice
             + (f"Inter-pupil distance {ipd:.1f} px. " if isinstance(ipd, (int, float)) else "")
             + "Inside the boxes the tracker searches, coloured pixels are what each colour class "
             "takes in: the lips, the inside of the eyes (white, iris, lashes) and the mouth's dark gap "

@@ -163,6 +163,25 @@ def test_calibration_clicks_produce_a_saved_calibration(qtbot, performer, tmp_pa
     assert abs(Calibration.load(path).ipd - dlg.calibration.ipd) < 1e-6
 
 
+def test_calibration_window_passes_on_advice_about_the_frame(qtbot, performer, monkeypatch):
+    """What calibration advises about the frame (the eyes turned aside) is shown with the masks, as
+    a sentence; the performer looking ahead gets none."""
+    import tracker.calibration as tc
+    from app.calibration_window import CalibrationWindow
+
+    c = performer["clicks"]
+    dlg = CalibrationWindow(performer["frames"][c["frame"]], performer="Ann Lee", frame_index=c["frame"])
+    qtbot.addWidget(dlg)
+    for k in ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth"):
+        dlg.click(*c[k])
+    assert dlg.calibration is not None and "look into the camera" not in dlg.info.text()
+    monkeypatch.setattr(tc, "calibration_hints", lambda cal: ["the eyes look to one side; look into the camera"])
+    dlg.undo()  # the mouth point taken back and placed again: calibrated again
+    dlg.click(*c["mouth"])
+    assert dlg.calibration is not None and dlg.accept_btn.isEnabled()
+    assert "The eyes look to one side; look into the camera. " in dlg.info.text()
+
+
 def test_calibration_click_by_mouse_and_drag(qtbot, performer):
     from PySide6.QtCore import Qt
 

@@ -2,6 +2,7 @@
 
 import json
 import math
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -29,6 +30,7 @@ from tracker.eyes import (
     spectacle_rims,
     thin_dark,
     refine_pupils,
+    side_glance,
     walk_length,
 )
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
@@ -483,6 +485,39 @@ def test_common_radius_is_a_peak_inside_the_range():
     assert lo < k < hi and bump[k] < bump[0]
     lo, hi = eyes.common_radius((scores(falling), scores(falling)))
     assert lo < 0 < hi
+
+
+def _glancing_iris(shift: float, iris: float = 60.0, white: float = 215.0, corner: float = 95.0) -> np.ndarray:
+    """A calibrated iris picture (grey, 13 × 29 px, the iris of radius 7 at its centre) of an eye
+    whose white ends ``shift`` px past the iris on the image-left side (negative: on the right) and
+    reaches the picture's edge on the other; the eye's shaded corner beyond the white's end."""
+    pic = np.full((13, 29), white, np.float32)
+    xx = np.arange(29, dtype=np.float32)[None, :] - 14.0
+    yy = np.arange(13, dtype=np.float32)[:, None] - 6.0
+    if shift > 0:
+        pic[:, (xx < -7.0 - shift)[0]] = corner
+    elif shift < 0:
+        pic[:, (xx > 7.0 - shift)[0]] = corner
+    pic[np.hypot(xx, yy) <= 7.0] = iris
+    return cv2.GaussianBlur(pic, (0, 0), 0.8)
+
+
+@pytest.mark.parametrize("left, right, side", [
+    (None, None, 0),   # white both sides: looking ahead
+    (1.0, 1.0, -1),    # the iris against both eyes' image-left corners: turned to image-left
+    (-1.0, -1.0, 1),
+    (1.0, None, 0),    # one eye alone (its corner in shadow, a lid): not a glance
+    (1.0, -1.0, 0),    # opposite ways (crossing eyes, or a squint): not a glance
+])
+def test_side_glance_needs_white_on_one_side_only_in_both_eyes(left, right, side):
+    pics = [_glancing_iris(0.0 if v is None else v) for v in (left, right)]
+    model = SimpleNamespace(iris_pictures=pics, radius=[7.0, 7.0])
+    assert side_glance(model) == side
+
+
+def test_side_glance_says_nothing_of_an_iris_as_light_as_its_white():
+    pics = [_glancing_iris(1.0, iris=205.0, white=215.0, corner=205.0)] * 2
+    assert side_glance(SimpleNamespace(iris_pictures=pics, radius=[7.0, 7.0])) == 0
 
 
 def test_limbus_centre_prefers_the_rim_near_the_click():

@@ -440,6 +440,41 @@ def test_cli_bad_inputs_give_one_line(clip, tmp_path, capsys, case, message):
     assert err.startswith("inkface: ") and message in err and "\n" not in err and "Traceback" not in err
 
 
+def test_cli_notes_a_calibration_frame_with_the_eyes_aside(clip, tmp_path, capsys, monkeypatch):
+    """The performer looking ahead: no note. A calibration whose iris pictures keep a glance: one
+    note on stderr, naming where the points came from; nothing with --quiet."""
+    import tracker.track_cli as tc
+
+    video, clicks, perf = clip
+    assert _cli(video, "--init", clicks, "--csv", tmp_path / "a.csv") == 0
+    assert "note:" not in capsys.readouterr().err
+    monkeypatch.setattr(tc, "calibration_hints", lambda cal: ["the eyes look to one side"])
+    assert _cli(video, "--init", clicks, "--csv", tmp_path / "b.csv", "--force") == 0
+    notes = [ln for ln in capsys.readouterr().err.splitlines() if "note:" in ln]
+    assert notes == [f"inkface: note: the eyes look to one side (clicks {clicks}, frame {perf.clicks()['frame']})"]
+    assert _cli(video, "--init", clicks, "--csv", tmp_path / "c.csv", "--quiet") == 0
+    assert "note:" not in capsys.readouterr().err
+
+
+def test_calibration_hints_name_a_glance_aside(cal):
+    """The synthetic performer's calibration looks ahead; the same with iris pictures whose white
+    lies on one side only (the iris against the eye's shaded corner) asks for a frame looking into
+    the camera."""
+    from dataclasses import replace
+
+    from tracker.calibration import calibration_hints
+
+    assert calibration_hints(cal) == []
+    pics = []
+    for pic in cal.eye_model.iris_pictures:
+        p = np.array(pic, dtype=np.float32)
+        p[:, : p.shape[1] // 2 - int(round(cal.eye_model.radius[0]))] = 90.0  # the shaded corner over the left flank
+        pics.append(p)
+    glancing = replace(cal, eye_model=replace(cal.eye_model, iris_pictures=pics))
+    hints = calibration_hints(glancing)
+    assert len(hints) == 1 and "look into the camera" in hints[0]
+
+
 def test_cli_module_entry_point_exit_code(tmp_path):
     r = subprocess.run(
         [sys.executable, "-m", "tracker.track_cli", str(tmp_path / "x.mp4"), "--init", "c.json", "--csv", "o.csv"],

@@ -32,7 +32,7 @@ from tracker import atomic_file, safe_json
 from tracker.brows import brow_centre, column_profile
 from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
-from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils
+from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils, side_glance
 from tracker.eyes import calibration_crop as eye_calibration_crop
 from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
@@ -674,6 +674,19 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     cal.neutral = r.params.replace(status="ok")
     cal.eye_ref, cal.mouth_ref = tr.colour_refs()
     return cal
+
+
+def calibration_hints(cal: Calibration) -> list[str]:
+    """Advice on the calibration frame for the person calibrating (one sentence each, no trailing
+    full stop; [] when there is none). Calibration never refuses a real face; this only says what
+    would make the track steadier: the eyes turned aside (:func:`~tracker.eyes.side_glance`) leave
+    the iris pictures with white on one side only."""
+    hints = []
+    model = getattr(cal, "eye_model", None)  # (a calibration of the paper's tracker has none)
+    if model is not None and side_glance(model):
+        hints.append("the eyes look to one side in the calibration frame; for a steadier track, "
+                     "calibrate on a frame where you look into the camera")
+    return hints
 
 
 # ---------------------------------------------------------------------------------------------

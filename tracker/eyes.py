@@ -237,6 +237,45 @@ def dark_power(model: "EyeModel") -> float:
     return power
 
 
+GLANCE = 0.4
+"""How one-sided the white beside both calibrated irises must be, the same way, for the calibration
+frame to count as a glance aside (:func:`side_glance`; :func:`iris_lean`'s −1..1). expr_d3's frame,
+the eyes turned to image-left: +0.6 and +0.7, and 0.4 or more on 19 of its 20 stress copies; on
+every other shared clip and copy one eye at least stays under it, but for one behind glasses whose
+glare streak lay over one flank of a light iris."""
+GLANCE_CONTRAST = 20.0
+"""Least contrast (grey levels: the two flanks' differences from the iris, added) for an iris picture
+to show a side at all: an iris hardly darker than the white beside it has none."""
+
+
+def iris_lean(picture: np.ndarray, radius: float) -> float | None:
+    """Which side of a calibrated iris picture (grey, the iris at its centre) the white shows on:
+    (right flank − left flank) over the two flanks' contrast with the iris, −1..1 — 0 with white on
+    both sides (the eye looks ahead), near +1 with the white only on the image-right side (the iris
+    turned towards the eye's image-left corner). The flanks are the columns one to two radii out on
+    the iris's middle rows. None when the flanks hardly differ from the iris (:data:`GLANCE_CONTRAST`)."""
+    p = np.asarray(picture, dtype=np.float64)
+    h, w = p.shape
+    c, cy, r = w // 2, h // 2, max(int(round(float(radius))), 2)
+    band = p[max(cy - r // 2, 0) : cy + r // 2 + 1]
+    left, right = band[:, max(c - 2 * r, 0) : max(c - r, 1)], band[:, min(c + r + 1, w - 1) : c + 2 * r + 1]
+    iris = float(band[:, max(c - r // 2, 0) : c + r // 2 + 1].mean())
+    lf, rf = float(left.mean()), float(right.mean())
+    contrast = abs(rf - iris) + abs(lf - iris)
+    return None if contrast < GLANCE_CONTRAST else (rf - lf) / contrast
+
+
+def side_glance(model: "EyeModel") -> int:
+    """Whether the calibration frame caught the eyes turned aside: −1 towards image-left, +1 towards
+    image-right, 0 not (see :data:`GLANCE`). The iris pictures then hold white on one side and skin
+    or the eye's corner on the other, and the search can later match the corner better than the
+    iris (expr_d3's pupils 20 % of the eye distance off in its wide-eyed frames on a dark copy)."""
+    leans = [iris_lean(p, r) for p, r in zip(model.iris_pictures, model.radius)]
+    if any(v is None for v in leans) or min(abs(v) for v in leans) < GLANCE or leans[0] * leans[1] <= 0:
+        return 0
+    return -1 if leans[0] > 0 else 1
+
+
 class EyeModelError(ValueError):
     """The calibration crop cannot give an eye model, or a stored one is malformed (one line)."""
 

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 from tracker.auto_init import AutoInitError, auto_clicks
-from tracker.calibration import CalibrationError, calibrate
+from tracker.calibration import CalibrationError, calibrate, calibration_hints
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
 from tracker.outputs import OutputError, calibration_files, check_outputs
@@ -165,6 +165,9 @@ def _run(args: argparse.Namespace) -> int:
         clicks.check_inside((w, h), where=str(args.init))
         where = f"clicks {args.init}"
     cal = _calibrate(video, cal_frame, clicks, where)
+    if not args.quiet:
+        for hint in calibration_hints(cal):
+            print(f"inkface: note: {hint} ({where}, frame {clicks.frame})", file=sys.stderr)
     tracker = FaceTracker(cal)
     overlay_dir = Path(args.overlay) if args.overlay else None
     if overlay_dir is not None:
