@@ -240,9 +240,9 @@ def dark_power(model: "EyeModel") -> float:
 GLANCE = 0.4
 """How one-sided the white beside both calibrated irises must be, the same way, for the calibration
 frame to count as a glance aside (:func:`side_glance`; :func:`iris_lean`'s −1..1). expr_d3's frame,
-the eyes turned to image-left: +0.6 and +0.7, and 0.4 or more on 19 of its 20 stress copies; on
-every other shared clip and copy one eye at least stays under it, but for one behind glasses whose
-glare streak lay over one flank of a light iris."""
+the eyes turned to image-left: +0.45 and +0.63, and 0.4 or more on 19 of its 20 stress copies; on
+the other shared clips one eye at least stays under 0.35 or the two lean opposite ways, and of
+their 152 copies one is flagged: behind glasses, a glare streak over one flank of a light iris."""
 GLANCE_CONTRAST = 20.0
 """Least contrast (grey levels: the two flanks' differences from the iris, added) for an iris picture
 to show a side at all: an iris hardly darker than the white beside it has none."""
