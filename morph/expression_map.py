@@ -128,8 +128,9 @@ class ExpressionMap:
                 tri = Delaunay(up, qhull_options=options)
             except (QhullError, ValueError):
                 continue
-            p = up[tri.simplices]
-            area2 = np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+            e1 = up[tri.simplices[:, 1]] - up[tri.simplices[:, 0]]
+            e2 = up[tri.simplices[:, 2]] - up[tri.simplices[:, 0]]
+            area2 = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])  # twice each triangle's area
             keep = (area2 > area_tol) & np.all(np.isfinite(tri.transform), axis=(1, 2))
             if keep.any() and np.isin(np.arange(len(up)), tri.simplices[keep]).all():
                 break

@@ -458,7 +458,8 @@ def test_refine_pupils_fits_the_irises_not_a_ring_smaller_than_any_iris(light, d
     is strongest at the smallest radius tried and stronger still below it, a ring no iris is that
     small. The rim is the radius where the edge peaks inside the range (at the range's end the
     centres went 6.5 px to the side, whichever way the clicks moved)."""
-    frame = cv2.cvtColor(np.hstack([_iris_eye(light, True), _iris_eye(light, True)]).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    eye = _iris_eye(light, True)
+    frame = cv2.cvtColor(np.hstack([eye, eye]).astype(np.uint8), cv2.COLOR_GRAY2BGR)
     l, r = refine_pupils(frame, (80.0 + dx, 60.0), (240.0 + dx, 60.0))
     for p, x in ((l, 80.0), (r, 240.0)):
         assert abs(p[0] - x) < 1.0 and abs(p[1] - 60.0) < 2.0

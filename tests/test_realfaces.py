@@ -523,10 +523,10 @@ def test_harder_copy_of_a_real_clip_meets_the_targets(tmp_path, name, kind, auto
 @pytest.mark.realfaces
 @pytest.mark.parametrize("shift", rf.JITTER)
 def test_calibration_snaps_narrow_eyes_clicks_to_the_irises_wherever_they_fall(shift):
-    """expr_d18's narrow eyes, --auto's points moved as in ``--jitter``: a ring round each pupil and highlight, just under the smallest iris
-    radius tried, edged the rim out whenever the clicks moved a pixel; both snapped pupils then sat
-    4-6 % of the eye distance to one side, and the whole track with them (pupil median 5.2 % with
-    --auto's points moved by (-1, -1), 1.8 % unmoved)."""
+    """expr_d18's narrow eyes, --auto's points moved as in ``--jitter``: a ring round each pupil and
+    its highlight, just under the smallest iris radius tried, edged the rim out whenever the points
+    moved a pixel; both snapped pupils then sat 4-6 % of the eye distance to one side, and the whole
+    track with them (pupil median 5.2 % with the points moved by (-1, -1), 1.8 % unmoved)."""
     from tracker.clicks import PIXEL_CENTRE
     from tracker.eyes import refine_pupils
 
@@ -536,13 +536,15 @@ def test_calibration_snaps_narrow_eyes_clicks_to_the_irises_wherever_they_fall(s
     peer = rf.load_peer(REAL, "expr_d18")
     truth = [peer.points[k][clicks.frame] - PIXEL_CENTRE for k in ("left_pupil", "right_pupil")]
     ipd = float(np.hypot(*(truth[1] - truth[0])))
-    moved = [(x - PIXEL_CENTRE + shift[0], y - PIXEL_CENTRE + shift[1]) for x, y in (clicks.left_pupil, clicks.right_pupil)]
+    moved = [(x - PIXEL_CENTRE + shift[0], y - PIXEL_CENTRE + shift[1])
+             for x, y in (clicks.left_pupil, clicks.right_pupil)]
     for p, t in zip(refine_pupils(frame, *moved), truth):
         assert np.hypot(*(np.array(p) - t)) < 0.03 * ipd
 
 
 @pytest.mark.realfaces
-@pytest.mark.parametrize("name", ["expr_d0", "expr_d3", "expr_d6", "expr_d10", "expr_d11", "expr_d18", "expr_d19", "talk_a", "talk_b"])
+@pytest.mark.parametrize("name", ["expr_d0", "expr_d3", "expr_d6", "expr_d10", "expr_d11", "expr_d18", "expr_d19",
+                                  "talk_a", "talk_b"])
 def test_calibration_advises_only_the_frame_with_the_eyes_turned_aside(name):
     """expr_d3 is calibrated on a frame with both eyes turned to image-left (its pupil median and
     p95 miss on many of its harder copies): calibration says so. The others look ahead."""

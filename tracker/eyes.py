@@ -1751,9 +1751,10 @@ class EyeFinder:
         When both eyes are open and score at least :data:`ADAPT_MIN_SCORE`, ``rate`` per frame
         (default :data:`ADAPT_RATE`; applied on every :data:`ADAPT_EVERY`-th such frame) goes
         into the adapted iris and eye pictures and into the light's gain (measured on the skin
-        around the eyes; by default :data:`GAIN_RATE` with the light's trend, :data:`GAIN_TREND`). The pictures used keep :data:`ADAPT_FLOOR` of the
-        calibration's and the gain stays within :data:`GAIN_LIMITS`, so drift cannot take them
-        further. Returns whether the frame was used.
+        around the eyes; by default at :data:`GAIN_RATE`, with the light's trend at
+        :data:`GAIN_TREND`). The pictures used keep :data:`ADAPT_FLOOR` of the calibration's and
+        the gain stays within :data:`GAIN_LIMITS`, so drift cannot take them further. Returns
+        whether the frame was used.
         """
         if not all(e.open and e.score >= ADAPT_MIN_SCORE for e in result.eyes):
             return False
