@@ -475,6 +475,19 @@ def test_calibration_hints_name_a_glance_aside(cal):
     assert len(hints) == 1 and "look into the camera" in hints[0]
 
 
+def test_calibration_hints_ask_a_small_face_to_come_closer(cal):
+    """A face 36 px between the eyes (a far face, a low-resolution camera) is calibrated as any
+    other, with advice to come closer; at 80 px there is none."""
+    from tracker.calibration import calibration_hints
+
+    far = FaceState(cx=160.0, cy=110.0, ipd=36.0)
+    frame, _ = render_face(far)
+    small = calibrate(frame, Clicks.from_dict(clicks_for(far)))
+    hints = calibration_hints(small)
+    assert len(hints) == 1 and "(36 px between the eyes)" in hints[0] and "come closer" in hints[0]
+    assert calibration_hints(cal) == []
+
+
 def test_cli_module_entry_point_exit_code(tmp_path):
     r = subprocess.run(
         [sys.executable, "-m", "tracker.track_cli", str(tmp_path / "x.mp4"), "--init", "c.json", "--csv", "o.csv"],
