@@ -694,7 +694,7 @@ def calibration_hints(cal: Calibration) -> list[str]:
     if model is not None and side_glance(model):
         hints.append("the eyes look to one side in the calibration frame; for a steadier track, "
                      "calibrate on a frame where you look into the camera")
-    if 0 < cal.ipd < SMALL_FACE:
+    if cal.ipd < SMALL_FACE:
         hints.append(f"the face is small in the picture ({cal.ipd:.0f} px between the eyes); for a finer "
                      "track of the eyelids and lips, come closer to the camera or use a higher resolution")
     return hints

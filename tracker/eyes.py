@@ -1767,18 +1767,17 @@ class EyeFinder:
         m = None if px is None else self._gain_from(px)
         if m is not None:
             g, jumped = m
-            gr = 1.0 if jumped else GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)
-            if jumped or GAIN_TREND <= 0:
+            if jumped:
                 self._gain_trend = np.zeros(3)
-                self._set_gain((1.0 - gr) * self._gain_slow + gr * g)
+                self._set_gain(g)
             else:
                 # the light's level and its trend (log gain per confident frame, Holt's smoothing): a
                 # light that keeps falling is followed without the lag a plain average leaves
-                lo_g, hi_g = GAIN_LIMITS
+                gr = GAIN_RATE if rate is None else min(float(rate) * ADAPT_EVERY, 1.0)
                 prev = np.log(self._gain_slow)
                 level = (1.0 - gr) * (prev + self._gain_trend) + gr * np.log(g)
                 self._gain_trend = (1.0 - GAIN_TREND) * self._gain_trend + GAIN_TREND * (level - prev)
-                self._set_gain(np.clip(np.exp(level), lo_g, hi_g))
+                self._set_gain(np.clip(np.exp(level), *GAIN_LIMITS))
         if phase > 1:
             return True
         # every ADAPT_EVERY-th confident frame counts for all of them; the two picture updates
