@@ -15,7 +15,7 @@ import pytest
 from tracker.calibration import FaceFrame
 from tracker.colour_model import TILE_SHAPE
 from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
-from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth
+from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
 GRIN_CORNERS = pytest.mark.xfail(
@@ -463,3 +463,77 @@ def test_the_mouth_line_starts_between_the_lips_not_in_hair_beside_them(calibrat
     assert abs(res.line_centre[1] - t["mouth"][1]) < 3.0
     w, _, _ = _errors(res, t)
     assert w < 6.0
+
+
+def _bearded(img: np.ndarray, state: FaceState, seed: int = 3) -> np.ndarray:
+    """``img`` with a grey-brown textured beard and moustache round the lips (frame px), the lips
+    left bare: hair in an oval 1.5 mouth-widths wide from under the nose to the chin, minus the lips'
+    lens, with streaks brighter and darker than the hair's mean (as a real beard's hairs are)."""
+    lm = face_landmarks(state)
+    (lx, ly), (rx, ry) = lm["mouth_left"], lm["mouth_right"]
+    cx, cy = 0.5 * (lx + rx), 0.5 * (ly + ry)
+    w = rx - lx
+    h, wd = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    streaks = cv2.resize(rng.normal(0.0, 1.0, (h // 6, wd)).astype(np.float32), (wd, h))
+    hair = np.clip(np.array([70.0, 84.0, 96.0])[None, None] + 30.0 * streaks[..., None], 0, 255)
+    mask = np.zeros((h, wd), np.uint8)
+    cv2.ellipse(mask, (int(cx), int(cy + 0.05 * state.ipd)), (int(0.75 * w), int(0.42 * state.ipd)), 0, 0, 360, 255, -1)
+    lens = lens_outline((lx, ly), (rx, ry), float(lm["lip_upper"][1]), float(lm["lip_lower"][1]), float(cx))
+    cv2.fillPoly(mask, [np.round(lens).astype(np.int32)], 0)
+    out = img.copy()
+    out[mask > 0] = hair[mask > 0].astype(np.uint8)
+    return out
+
+
+@pytest.mark.parametrize("expr", ["neutral", "smile", "ah", "oo", "grin"])
+def test_a_beard_round_the_lips_does_not_widen_the_mouth(expr):
+    """A performer with a beard and moustache right round the lips: the hair is as unlike the cheek
+    past it as the lips are, so the corners were placed at the beard's edge — the calibrated mouth
+    29 px too wide (IPD 80), 20-38 px while tracking, and the lips' split up to 20 px off in the
+    grin (on bearded copies of the shared clips the calibrated mouths were 1.2-1.6 times too wide).
+    Now the corners lie a few px past the lips' colour, at calibration and while tracking."""
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    click = ff.to_face(face_landmarks(BASE)["mouth"][None])[0]
+    crop, origin = _crop(_bearded(img, BASE), ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    t = face_landmarks(BASE)
+    true_width = float(np.hypot(*(t["mouth_right"] - t["mouth_left"]))) * ff.scale
+    assert abs(model.width - true_width) < 5.0
+    centre = np.array(model.centre) + origin
+    state = BASE.with_expression(expr)
+    img, _ = render_face(state)
+    ff = _frame_of(state)
+    crop, origin = _crop(_bearded(img, state), ff, centre)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK
+    ew, eu, el = _errors(res, _truth_in_crop(state, ff, origin))
+    assert ew < 8.0 and eu < 2.5 and el < 2.5
+
+
+def test_lip_end_bounds_a_corner_by_the_lips_last_column():
+    """Pure cases of :func:`lip_end`: the corner comes to ``reach`` past the last lip column; a corner
+    already near it, or a line with too few lip columns in the lips' body (a hand over the mouth with
+    a speck of red), is left alone."""
+    lips = [True] * 12 + [False] * 20
+    assert lip_end(lips, 25.0, 2.0, (2, 9)) == 13.0
+    assert lip_end(lips, 12.5, 2.0, (2, 9)) == 12.5
+    speck = [False] * 6 + [True] + [False] * 25
+    assert lip_end(speck, 25.0, 2.0, (2, 9)) == 25.0
+    assert lip_end([False] * 32, 25.0, 2.0, (2, 9)) == 25.0
+
+
+def test_lip_columns_see_red_bands_and_teeth_but_not_a_beards_odd_red_hair():
+    """Per column of :func:`~tracker.mouth_model.line_columns` features: lip-red in any band, or
+    teeth (light, colourless) in any band, shows the mouth; one red column among hair does not
+    when the redness is averaged over a run of columns."""
+    skin = np.array([20.0, 8.0, 10.0], np.float32)
+    cols = np.tile(np.array([14.0, 2.0, 3.0] * 3, np.float32), (20, 1))  # grey-brown hair
+    cols[:5, 1] = 16.0  # lip-red in the band above
+    cols[5:8, 6:9] = (26.0, 1.0, 1.0)  # teeth in the band below
+    cols[14, 4] = 16.0  # one red hair on the line
+    got = lip_columns(cols, 12.0, skin)
+    assert got[:8] == [True] * 8 and got[14] and not any(got[8:14])
+    smooth = lip_columns(cols, 12.0, skin, run=3)
+    assert not smooth[14] and all(smooth[:4])

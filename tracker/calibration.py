@@ -34,6 +34,7 @@ from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
 from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils, side_glance
 from tracker.eyes import calibration_crop as eye_calibration_crop
+from tracker.mouth_finder import SCORE_OK, MouthFinder
 from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
@@ -65,6 +66,12 @@ the eyes only; the stress matrix 186 and 182 clip-modes of 324 meeting every tar
 (lost on 0-1.2 % of the frames, her lid gap either side of the blind-gap rule's threshold) are lost
 on none with it; expr_d6's mouth opening is the one figure that was better without the mouth's
 consensus (r 0.53 / 0.56 against 0.46 / 0.50)."""
+RIGID_STEPS = 3
+"""Looks the mouth finder takes on the calibration frame for the height of the mouth's rigid place: each
+with the crop and the prediction where the last one put its line's centre, as the tracker will look on
+that frame. Only the height: an open mouth at calibration moves it, and across the face the corners'
+midpoint is as good as the finder's (moving it too left a bearded grin's corners a pixel past the
+search's reach: two of eight one-pixel moves of --auto's points lost a quarter of the frames)."""
 
 
 class CalibrationError(ValueError):
@@ -576,8 +583,23 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         mouths.append((learn_mouth(mcrop, (mouth_f[0] - mrect[0], mouth_f[1] - mrect[1]), wi), mrect, mcrop))
     mouth_model, mrect, mcrop = mouths[consensus([[math.log(max(v, 0.5)) for v in (m.thick_up, m.thick_down, m.width)]
                                                   for m, _, _ in mouths])]
+    # the mouth's rigid place is as high as the finder puts the centre of its line on this frame: the
+    # tracker's jaw is measured by the finder against it, so the calibration frame itself has no jaw (the
+    # model's centre is the corners' midpoint on the line traced through the gap, which in an open mouth
+    # runs below corners that sit higher: talk_b's frame 0 had a jaw 0.12 wi up, and a mouth was then
+    # allowed to rise that much further from a place already too low)
     mcx = mrect[0] + mouth_model.centre[0]
     mcy = mrect[1] + mouth_model.centre[1]
+    finder = MouthFinder(mouth_model, wi)
+    for _ in range(RIGID_STEPS):  # as the tracker will look on this frame: the crop and the prediction at the place
+        rect = mouth_rect((mcx, mcy), wi)
+        found = finder.find(ff.crop(frame_bgr, rect), (mcx - rect[0], mcy - rect[1]))
+        if found is None or found.score < SCORE_OK:
+            break
+        step = rect[1] + found.line_centre[1] - mcy
+        mcy += step
+        if abs(step) < 0.25:
+            break
 
     # lips as a colour class too (the whole-frame search by lip colour after a loss): the pixels
     # inside the mouth's outline that are neither skin-like nor the dark inside

@@ -13,7 +13,10 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    the prediction that has the lower lip's colour under it (the gap, or an open mouth's inside —
    not the shadow under the lower lip, :meth:`MouthFinder.line_seed`) outwards along the darkest
    valley, and on each side the corner is where the columns along it (the bands above, on and below
-   the line) start to look like the cheek; once the corners' heights are known (step 3) the search
+   the line) start to look like the cheek — where the lips are redder than the skin, no further than
+   :data:`~tracker.mouth_model.LIP_END` past the last column that shows them (lip-red, or teeth: hair
+   round the mouth and a reddened cheek beside it are as unlike the cheek as the lips, and a corner
+   ran on through them); once the corners' heights are known (step 3) the search
    is repeated along the line bent to them (a grin's corners rise above the line). A corner with no
    cheek past it (hair, a collar) is placed from the other one at the mouth's last width;
 3. **the lips on the vertical profile through the corners' midpoint** (:meth:`MouthFinder.vertical`):
@@ -59,8 +62,8 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, GAP_RED, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines, line_geometry,
-    lip_red_need, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
+    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines,
+    line_geometry, lip_columns, lip_end, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -477,6 +480,11 @@ class MouthFinder:
         lead = float(min(cls[1, 0, 1], cls[2, 0, 1]) - cls[4, 0, 1])
         self.seed_red = float(cls[4, 0, 1]) + lip_red_need(lead) if SEED_REACH_LIPS > 0 and lead >= GAP_RED[0] else None
         self.seed_reach = max(int(round(SEED_REACH_LIPS * wi)), 3)
+        # the red at which a column along the line shows the lips, where they are red enough for their end to
+        # bound a corner (None: not)
+        self.lips_red = self.seed_red if self.seed_red is not None and lead >= LIP_LEAD and LIP_END > 0 else None
+        self._skin_f = cls[4, 0].copy()
+        self._lip_run = lip_run(wi)
         self._axis_seed = (model.axis_down[:3], model.axis_down[3])  # the lower lip's value: w·bgr + c
 
     def _set_thickness(self, t_up: float, t_dn: float) -> None:
@@ -869,6 +877,12 @@ class MouthFinder:
             xs = np.concatenate([np.arange(x0, x0 + step * len(ys), step) for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
             unlike = unlike_cheek(cols, self._cheek_rows(tuple(0 if ys is None else len(ys) for ys in traced)))
+            lips = None
+            if self.lips_red is not None:
+                lips, start = [], 0
+                for _, ys in live:  # each side on its own: the run of columns must not mix them
+                    lips += lip_columns(cols[start : start + len(ys)], self.lips_red, self._skin_f, self._lip_run)
+                    start += len(ys)
         out, strength, halves, seen, at = [], [], [], [], 0
         for step, ys, prev in zip((-1, +1), traced, last):
             if ys is None:
@@ -880,6 +894,8 @@ class MouthFinder:
             d = unlike[at : at + len(ys)]
             at += len(ys)
             half, g, cheek_seen = corner_search(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
+            if lips is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
+                half = lip_end(lips[at - len(ys) : at], half, LIP_END * self.wi, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
             out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))

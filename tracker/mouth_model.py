@@ -18,7 +18,9 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
   (the shadow under a lower lip is often the strongest change);
 * the **corners**: the mouth line traced from the click outwards along its darkest row, and on
   each side where its columns (the bands above, on and below it) stop differing from the cheek
-  further out (:func:`corner_distance`);
+  further out (:func:`corner_search`) — where the lips are redder than the skin, no further than
+  :data:`LIP_END` past the last column that shows them (:func:`lip_end`: a beard round the lips
+  differs from the cheek as much as they do);
 * what the **rows** of the profile through the centre look like — the skin above the upper lip
   (:data:`SKIN_ROWS`), the upper lip, the lower lip, the skin below — for the finder to split
   every frame's profile into the same five parts; and what the **cheek** beside each corner looks
@@ -41,6 +43,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 
 from tracker.colour_model import TILE_SHAPE, _grid_features, features, lut_index, table_to_tile
 
@@ -835,6 +838,65 @@ def corner_search(d: np.ndarray, lo: float, hi: float, run: int, body: tuple[int
     return x, float(g), True
 
 
+LIP_END = 0.03
+"""Farthest (× wi) a corner may lie past the last column along the line that shows the lips
+(:func:`lip_columns`), where the lips are redder than the skin: hair round the mouth (a beard, a
+moustache) and skin beside the lips redder than the cheek further out are as unlike that cheek as
+the lips are, and the corner search ran on through them — to a beard's edge (calibrated mouths
+1.2–1.6 times too wide on bearded copies of the shared clips), or along expr_d6's reddened right
+cheek up to half the eye distance. On the shared clips the lips end within 0.03 wi of the corner
+the cheek gives wherever neither happens."""
+LIP_LEAD = 4.0
+"""Least lead (r − g chroma units) of the lips' red over the skin's for :data:`LIP_END` to apply: twice
+the least lead that makes rows lip-red at all (:data:`GAP_RED`), so the lips' columns stand clear of
+the need. Paler lips are read column by column at the need's edge, and a grin's thin pale lips then
+ended early (the washed-out copy of expr_d0, lead 2.9: its opening 0.96 -> 0.80)."""
+TEETH = (1.1, 0.8)
+"""Teeth in one of a column's bands: at least ``TEETH[0]`` times the skin's luminance with under
+``TEETH[1]`` times its chroma (a grin's lips are stretched too thin to show their colour there)."""
+LIP_RUN = 0.05
+"""Columns (× wi) along the line whose mean redness counts for each column in :func:`lip_columns`
+(a beard's hairs are as red as lips here and there, one column at a time); see :func:`lip_run`."""
+
+
+def lip_run(wi: float) -> int:
+    """:data:`LIP_RUN` in columns at this scale, odd (centred on the column): 3 at 40 px between the
+    eyes, 5 at 80."""
+    return 2 * int(round(0.5 * LIP_RUN * wi)) + 1
+
+
+def lip_columns(cols: np.ndarray, need: float, skin_f: np.ndarray, run: int = 1) -> list[bool]:
+    """Per column along the line (:func:`line_columns`' features, (n, 9), from the middle out): whether
+    it shows the mouth — one of its three bands at least ``need`` red (r − g chroma,
+    :func:`lip_red_need` over the skin's) on the mean of ``run`` columns centred on it, or teeth in
+    one of them (:data:`TEETH`, against the skin's features ``skin_f`` (3,))."""
+    red = np.maximum(np.maximum(cols[:, 1], cols[:, 4]), cols[:, 7])
+    if run > 1:
+        red = uniform_filter1d(red, run, mode="nearest")
+    lum, sat = TEETH[0] * float(skin_f[0]), TEETH[1] * math.hypot(float(skin_f[1]), float(skin_f[2]))
+    teeth = np.zeros(len(red), bool)
+    for b in (0, 3, 6):  # the band above, the line's, the band below
+        teeth |= (cols[:, b] >= lum) & (np.hypot(cols[:, b + 1], cols[:, b + 2]) < sat)
+    return ((red >= need) | teeth).tolist()
+
+
+LIP_BODY = 0.5
+"""Least share of the lips' body columns (:func:`mouth_body`) that must show the lips for their end to
+bound a corner: a hand or a scarf over the mouth shows none, and a speck of red on it is no lip."""
+
+
+def lip_end(lips: list[bool], half: float, reach: float, body: tuple[int, int]) -> float:
+    """``half`` (a corner's distance from the line's middle column, in columns) brought to at most
+    ``reach`` columns past the last column up to it that shows the lips (``lips`` per column from the
+    middle out, :func:`lip_columns`); unchanged unless :data:`LIP_BODY` of the columns ``body`` do."""
+    k = min(int(half), len(lips) - 1)
+    a, b = min(body[0], k), min(body[1], k)
+    if b <= a or sum(lips[a : b + 1]) < LIP_BODY * (b + 1 - a):
+        return half
+    last = next((j for j in range(k, -1, -1) if lips[j]), None)
+    return half if last is None else min(half, last + reach)
+
+
 def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
                  skin: np.ndarray) -> np.ndarray:
     """Median and spread (5, 2, 3) of the profile's rows in each part — skin above (:data:`SKIN_ROWS`
@@ -905,10 +967,10 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
         # lip: on pale lips the skin just above is as red as they are)
         e_dn = _colour_edge(rows_bgr, bottom, +1, e_dn, skin, (0.05, 0.3), wi)
-        return (top, bottom, y_min, e_up, e_dn, lum_rows)
+        return (top, bottom, y_min, e_up, e_dn, lum_rows, f_rows)
 
     # the gap through the click
-    top, bottom, y_min, y_top, y_bottom, lum_rows = column(cx, cy)
+    top, bottom, y_min, y_top, y_bottom, lum_rows, f_click = column(cx, cy)
 
     # the line through the middle of the gap, traced out to both sides; the corners on it
     y_line = 0.5 * (top + bottom)
@@ -924,6 +986,13 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         traced[name] = (ys, cols, step, cheek_model(cols, wi))
     skin_f = profile_features(skin.astype(np.float32), skin_level)
     fit = {name: cheek_skin_distance(t[3], skin_f) for name, t in traced.items()}
+    # the lips' lead in red over the skin on the click's column: where they are clearly redder, a
+    # corner lies no further than LIP_END past the last column along the line that shows them
+    lips_red = [float(np.median(f_click[int(math.ceil(a)) : int(b) + 1, 1])) for a, b in ((y_top, top), (bottom, y_bottom))
+                if math.isfinite(a) and int(b) >= int(math.ceil(a))]
+    lead = min(lips_red) - skin_red if lips_red else 0.0
+    need = skin_red + lip_red_need(lead) if lead >= LIP_LEAD else None
+    skin_mid = np.median(skin_f, axis=0)
     if _trace is not None:
         _trace["cheek_skin"] = dict(fit)
     for name, other in (("left", "right"), ("right", "left")):
@@ -932,8 +1001,13 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
             traced[name] = (ys, cols, step, traced[other][3])
     sides = {}
     for name, (ys, cols, step, cheek) in traced.items():
-        half = (corner_distance(unlike_cheek(cols, cheek), 0.2 * wi, 0.75 * wi, cheek_run(wi), mouth_body(wi))[0] + CORNER_BIAS
-                if cheek is not None else 0.4 * wi)
+        if cheek is None:
+            half = 0.4 * wi
+        else:
+            half, _, cheek_seen = corner_search(unlike_cheek(cols, cheek), 0.2 * wi, 0.75 * wi, cheek_run(wi), mouth_body(wi))
+            if need is not None and cheek_seen and LIP_END > 0:
+                half = lip_end(lip_columns(cols, need, skin_mid, lip_run(wi)), half, LIP_END * wi, mouth_body(wi))
+            half += CORNER_BIAS
         sides[name] = (ys, cols, half, step, cheek)
     # a mouth is seen when the gap is clearly darker than the profile round it
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
