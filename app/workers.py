@@ -1293,11 +1293,17 @@ class Pipeline:
         self._reader = PictureReader()
         mine, theirs = socket.socketpair()
         ctx = mp.get_context("spawn")
-        self._proc = ctx.Process(target=engine_main, args=(theirs, self.source_spec, self._wire(self.spec),
-                                                           self.realtime, self._fake_ref(self._fake)),
-                                 name="inkface-engine", daemon=True)
-        with _engine_environment():
-            self._proc.start()
+        proc = ctx.Process(target=engine_main, args=(theirs, self.source_spec, self._wire(self.spec),
+                                                     self.realtime, self._fake_ref(self._fake)),
+                           name="inkface-engine", daemon=True)
+        try:
+            with _engine_environment():
+                proc.start()
+        except BaseException:  # no engine: nothing for stop() to join, no socket left open
+            mine.close()
+            theirs.close()
+            raise
+        self._proc = proc  # only a started process: stop() joins it
         theirs.close()
         self._chan = Channel(mine)
         self._notifier = QSocketNotifier(mine.fileno(), QSocketNotifier.Type.Read)

@@ -337,3 +337,32 @@ def test_messages_travel_as_json_and_come_back_whole():
         encode_message(object())
     with _pytest.raises(ValueError):
         decode_message(b'{"c": "os:system", "f": {}}')
+
+
+def test_an_engine_that_never_started_is_stopped_without_an_error(qtbot, monkeypatch):
+    """The engine process failing to start (no memory, a spawn refused) raises from ``start``, and the
+    window's later ``stop`` (on close) has no process to join: it used to join the unstarted one and
+    raise an AssertionError on top. Nothing is left open either."""
+    import multiprocessing.context
+    import socket
+
+    from app.workers import Pipeline, PuppetSpec
+
+    closed = []
+    real_close = socket.socket.close
+
+    def refuse(self):
+        raise OSError("cannot start the engine")
+
+    def close(self):
+        closed.append(self)
+        real_close(self)
+
+    monkeypatch.setattr(multiprocessing.context.SpawnProcess, "start", refuse)
+    monkeypatch.setattr(socket.socket, "close", close)
+    p = Pipeline(SourceSpec(kind="performance", seconds=1.0), PuppetSpec())
+    with pytest.raises(OSError, match="cannot start the engine"):
+        p.start()
+    assert len(closed) == 2 and not p.running
+    p.stop()  # nothing to join, nothing raised
+    p.stop()
