@@ -120,8 +120,12 @@ def run(args) -> int:
         return 2
     qapp = make_app()
     quit_on_ctrl_c(qapp)
-    win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None),
-                      calibration)
+    try:
+        win = open_window(source_from_args(args), art, getattr(args, "fps", None), getattr(args, "performer", None),
+                          calibration)
+    except OSError as e:  # the engine process could not be started (out of memory, processes refused)
+        print(f"inkface: cannot start the tracking engine: {e}", file=sys.stderr)
+        return 1
     rc = qapp.exec()
     del win
     return int(rc)

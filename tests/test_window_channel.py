@@ -366,3 +366,25 @@ def test_an_engine_that_never_started_is_stopped_without_an_error(qtbot, monkeyp
     assert len(closed) == 2 and not p.running
     p.stop()  # nothing to join, nothing raised
     p.stop()
+
+
+def test_the_window_command_says_in_one_line_when_the_engine_cannot_start(qtbot, monkeypatch, capsys):
+    """``python -m app window`` with the engine process refused: one line on stderr, exit status 1,
+    no traceback."""
+    import argparse
+    import multiprocessing.context
+
+    from app import window_cmd
+
+    def refuse(self):
+        raise OSError("Cannot allocate memory")
+
+    import app.qt_env
+
+    monkeypatch.setattr(multiprocessing.context.SpawnProcess, "start", refuse)
+    monkeypatch.setattr(app.qt_env, "display_problem", lambda: "")  # the offscreen platform stands in for a display
+    parser = argparse.ArgumentParser()
+    window_cmd.add_arguments(parser, "window")
+    assert window_cmd.run(parser.parse_args(["--performance"])) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["inkface: cannot start the tracking engine: Cannot allocate memory"]
