@@ -500,6 +500,12 @@ STRESS_CASES = [
     # skin round them read as the eye's inside and the shut eyes as half open (r eye 0.69); the gain
     # now follows the light's trend as well as its level (0.82)
     pytest.param("expr_d0", "dim", False, None, id="expr_d0-dim-clicks"),
+    # a beard right round the lips: it differs from the cheek past it as much as the lips do, so the
+    # corners were placed at the beard's edge — calibrated 1.2 times too wide, and the tracked mouth
+    # wandered with it (opening 0.56, width 0.51); a corner now lies within 0.03 wi of where the lips'
+    # colour ends (opening 0.90-0.97 and width 0.74-0.84 over eight one-pixel moves of the clicks;
+    # its lost frames, 0.2-3.1 % over those moves, are not what this case is about)
+    pytest.param("expr_d10", "beard", False, ("r_open", "r_width"), id="expr_d10-beard-clicks"),
 ]
 
 
