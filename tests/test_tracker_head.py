@@ -345,3 +345,32 @@ def test_the_calibration_frame_has_no_jaw(expr):
     res = tr.track(img)
     assert res.params.status == OK
     assert abs(tr.jaw[1]) < 0.01 * tr.wi
+
+
+def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
+    """The place check (``FaceTracker._plausible_mouth``) against the mouth's rigid place: a mouth up
+    to a quarter of the eye distance above the prediction is plausible — unless that is above the
+    rigid place by more than the jaw ever rises (``JAW_MIN``). Once a jaw had followed a mouth found
+    too high (the philtrum), the next one could rise a quarter further, and the next: one start of
+    expr_d6 with --auto held its mouth on the nostrils for 60 frames, reported ok. After a yawn the
+    mouth may come straight back up to its rigid place, not past it."""
+    from types import SimpleNamespace
+
+    from tracker import face_tracker as ft
+
+    img, _ = render_face(BASE)
+    tr = FaceTracker(calibrate(img, Clicks.from_dict(clicks_for(BASE))))
+    wi, w = tr.wi, tr.cal.mouth_width
+    rigid = (200.0, 300.0)
+
+    def mouth_at(y):
+        return SimpleNamespace(width=w, level_rise=0.0, line_centre=(rigid[0], y))
+
+    def plausible(pred_dy, dy):
+        return tr._plausible_mouth(mouth_at(rigid[1] + dy * wi), (rigid[0], rigid[1] + pred_dy * wi), (0.0, 0.0), rigid)
+
+    top = ft.JAW_MIN[1]
+    assert plausible(0.0, -0.2) and not plausible(0.0, -0.3)  # a quarter above the prediction
+    assert plausible(top, top) and plausible(top, top + 0.05)
+    assert not plausible(top, top - 0.1) and not plausible(top, top - 0.2)  # never above the top
+    assert plausible(0.6, 0.0) and not plausible(0.6, -0.1)  # after a yawn: back to the rigid place, not past it

@@ -333,7 +333,8 @@ class FaceTracker:
         """A mouth of about the calibrated size, its line tilted by under 0.45 of its width (a pulled,
         lopsided mouth: 0.4 seen on real faces), near where the head puts it: near the
         prediction (the rigid place moved by the last jaw), or — a jaw closing fast after a yawn —
-        back up to its rigid place (``rigid``, face px) but not above it."""
+        back up to its rigid place (``rigid``, face px) but not above it; and never higher above the
+        rigid place than the jaw goes (:data:`JAW_MIN`)."""
         w = self.cal.mouth_width
         rise = m.level_rise
         if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.45 * m.width):
@@ -343,7 +344,10 @@ class FaceTracker:
         dy = c[1] + origin[1] - predicted[1]
         lo = -0.25 * self.wi
         if rigid is not None:
-            lo = min(lo, rigid[1] + self._jaw_min[1] - predicted[1])
+            # back up to the rigid place at once, but never above the highest the jaw goes: a mouth
+            # found there is the philtrum or the nostrils, and a jaw that followed it would let the
+            # next one rise further still
+            lo = max(min(lo, rigid[1] - predicted[1]), rigid[1] + self._jaw_min[1] - predicted[1])
         return abs(dx) <= 0.3 * self.wi and lo <= dy <= 0.45 * self.wi
 
     # -------------------------------------------------------------- main entry
