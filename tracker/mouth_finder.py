@@ -877,12 +877,6 @@ class MouthFinder:
             xs = np.concatenate([np.arange(x0, x0 + step * len(ys), step) for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
             unlike = unlike_cheek(cols, self._cheek_rows(tuple(0 if ys is None else len(ys) for ys in traced)))
-            lips = None
-            if self.lips_red is not None:
-                lips, start = [], 0
-                for _, ys in live:  # each side on its own: the run of columns must not mix them
-                    lips += lip_columns(cols[start : start + len(ys)], self.lips_red, self._skin_f, self._lip_run)
-                    start += len(ys)
         out, strength, halves, seen, at = [], [], [], [], 0
         for step, ys, prev in zip((-1, +1), traced, last):
             if ys is None:
@@ -894,8 +888,9 @@ class MouthFinder:
             d = unlike[at : at + len(ys)]
             at += len(ys)
             half, g, cheek_seen = corner_search(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
-            if lips is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
-                half = lip_end(lips[at - len(ys) : at], half, LIP_END * self.wi, self.body)
+            if self.lips_red is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
+                lips = lip_columns(cols[at - len(ys) : at], self.lips_red, self._skin_f, self._lip_run)
+                half = lip_end(lips, half, LIP_END * self.wi, self.body)
             k = min(int(half), len(ys) - 2)
             t = half - k
             out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))

@@ -106,6 +106,12 @@ def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
 # --------------------------------------------------------------------------------------------- tables
 
 
+TEETH = (1.1, 0.8)
+"""White teeth: at least ``TEETH[0]`` times the skin's luminance with under ``TEETH[1]`` times its
+chroma — per pixel in the inside table (:func:`_inside`), and per band mean along the mouth line
+(:func:`lip_columns`: a grin's lips are stretched too thin to show their colour there)."""
+
+
 def _inside(dark: float, skin_level: float, skin_sat: float, skin_bins: np.ndarray | None = None) -> np.ndarray:
     """Bool per 64³ bin: looks like the inside of a mouth — dark (under ``dark``) with little colour
     (absolute chroma under 60 % of the skin's: dark lipstick is dark but strongly coloured), or grey
@@ -119,7 +125,7 @@ def _inside(dark: float, skin_level: float, skin_sat: float, skin_bins: np.ndarr
     sat = np.hypot(f[:, 1], f[:, 2])
     black = (lum < np.float32(dark)) & (sat * lum < np.float32(0.6 * skin_sat * skin_level))
     grey = (sat < np.float32(0.55 * skin_sat)) & (lum > np.float32(0.45 * skin_level))
-    white = (sat < np.float32(0.8 * skin_sat)) & (lum > np.float32(1.1 * skin_level))
+    white = (sat < np.float32(TEETH[1] * skin_sat)) & (lum > np.float32(TEETH[0] * skin_level))
     teeth = grey | white
     if skin_bins is not None and len(skin_bins):
         seen = np.zeros(len(lum), bool)
@@ -851,9 +857,6 @@ LIP_LEAD = 4.0
 the least lead that makes rows lip-red at all (:data:`GAP_RED`), so the lips' columns stand clear of
 the need. Paler lips are read column by column at the need's edge, and a grin's thin pale lips then
 ended early (the washed-out copy of expr_d0, lead 2.9: its opening 0.96 -> 0.80)."""
-TEETH = (1.1, 0.8)
-"""Teeth in one of a column's bands: at least ``TEETH[0]`` times the skin's luminance with under
-``TEETH[1]`` times its chroma (a grin's lips are stretched too thin to show their colour there)."""
 LIP_RUN = 0.05
 """Columns (× wi) along the line whose mean redness counts for each column in :func:`lip_columns`
 (a beard's hairs are as red as lips here and there, one column at a time); see :func:`lip_run`."""
