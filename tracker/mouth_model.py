@@ -956,7 +956,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     teeth0 = _inside(0.0, skin_level, skin_sat).view(np.uint8).take(idx)
 
     band = max(BAND * wi, 1.5)
-    skin_red = float(np.median(profile_features(skin.astype(np.float32), skin_level)[:, 1]))
+    skin_f = profile_features(skin.astype(np.float32), skin_level)  # per pixel (n, 3)
+    skin_red = float(np.median(skin_f[:, 1]))
 
     def column(x: float, y: float):
         """The gap and the outer lip edges on the profile through column ``x`` near row ``y``, and
@@ -987,7 +988,6 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         ys = trace_line(lum, x0, y_line, step, max(n, 1))
         cols = line_columns(crop, x0, ys, step, a1, a2, skin_level)
         traced[name] = (ys, cols, step, cheek_model(cols, wi))
-    skin_f = profile_features(skin.astype(np.float32), skin_level)
     fit = {name: cheek_skin_distance(t[3], skin_f) for name, t in traced.items()}
     # the lips' lead in red over the skin on the click's column: where they are clearly redder, a
     # corner lies no further than LIP_END past the last column along the line that shows them
@@ -1067,7 +1067,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
     b0, b1 = band_columns(centre[0], band, W)
     f_centre = profile_features(crop[:, b0:b1].astype(np.float32).mean(axis=1), skin_level)
-    classes = _row_classes(f_centre, y_top, top, bottom, y_bottom, wi, profile_features(skin.astype(np.float32), skin_level))
+    classes = _row_classes(f_centre, y_top, top, bottom, y_bottom, wi, skin_f)
     typical = np.stack([np.zeros(9), np.full(9, 10.0)])  # no cheek seen: nothing is much unlike it
     cheeks = {name: np.stack(sides[name][4]) if sides[name][4] is not None else typical for name in ("left", "right")}
 
