@@ -19,6 +19,7 @@ side     light from one side: full on the frame's left, falling smoothly to 40 %
 shade    the side light of ``side`` comes up over the clip, from none to all of it (the sun going
          off a window, a lamp on one side): calibration sees even light
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
+washed   a third of the colour kept (a cheap webcam in a dim room, whose colours are mostly gone)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
 tilt     the picture turns slowly about its middle, up to 25° each way and back, a wave of 175
@@ -71,9 +72,11 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
+VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
+WASHED_COLOUR = 0.35
+"""Share of the colour the ``washed`` variant keeps (the rest is the pixel's grey)."""
 SIDE_LIGHT = 0.4
 """The light on the frame's right edge in ``side`` (× the clip's; the left edge keeps all of it)."""
 AWAY = (0.4, 15, 25)
@@ -361,10 +364,11 @@ def _photometric(kind: str, n: int, seed: int,
             t = 1.0 if kind == "side" else i / max(n - 1, 1)
             return np.clip(img.astype(np.float32) * (1.0 - np.float32(t) * falls[(h, w)]), 0, 255).astype(np.uint8)
         return side
-    if kind == "pale":
+    if kind in ("pale", "washed"):
+        keep = 0.5 if kind == "pale" else WASHED_COLOUR
         def pale(img: np.ndarray, i: int) -> np.ndarray:
             grey = cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
-            return cv2.addWeighted(img, 0.5, grey, 0.5, 0.0)
+            return cv2.addWeighted(img, keep, grey, 1.0 - keep, 0.0)
         return pale
     if kind == "deep":
         tone = np.array(DEEP_SKIN, np.float32)

@@ -62,7 +62,7 @@ import numpy as np
 
 from tracker.colour_model import lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines,
+    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, chroma_gain, corner_search, lens_outlines,
     line_geometry, lip_columns, lip_end, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
@@ -420,6 +420,7 @@ class MouthFinder:
 
     def __init__(self, model: MouthModel, work_ipd: float):
         self.model = model
+        self._chroma = chroma_gain(model.skin_sat)
         self.wi_crop = float(work_ipd)
         # everything runs on the crop shrunk to WORK_IPD px between the eyes (lips are several px
         # thick there; edges are placed sub-pixel), whatever the camera's resolution
@@ -632,7 +633,7 @@ class MouthFinder:
         x0, x1 = band_columns(x, self.half, maps.shape[1])
         inv = np.float32(1.0 / (x1 - x0))
         c = maps.colour[:, x1] - maps.colour[:, x0]  # (H+1, 3): sums over the band of the rows above
-        f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level)
+        f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level, self._chroma)
         i = maps.inside[:, x1] - maps.inside[:, x0]
         inside = (i[1:] - i[:-1]).astype(np.float32) * inv
         return f, np.maximum(inside, self._darker_than_lips(f), out=inside)
@@ -674,7 +675,7 @@ class MouthFinder:
             # hair under the lower lip or over the upper one is darker than a closed mouth's line but has
             # the lips on one side only (a valley with them on neither side, say between the teeth and a
             # pale stretched lip, stays a candidate)
-            red = profile_features(bgr.astype(np.float32), self.model.skin_level)[:, 1]
+            red = profile_features(bgr.astype(np.float32), self.model.skin_level, self._chroma)[:, 1]
             sides = lip_sides(red, [a + k for k in cands], self.seed_reach, self.seed_red, any_row=True)
             if any(up and down for up, down in sides):
                 cands = [k for k, (up, down) in zip(cands, sides) if up == down]
@@ -957,7 +958,7 @@ class MouthFinder:
         inv = np.array(inv, np.float32)[:, None]
         c = maps.colour[a : b + 1].take(at, axis=1)
         c = c[:, :k] - c[:, k:]  # (n+1, k, 3)
-        f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level)  # (k, n, 3)
+        f = profile_features(((c[1:] - c[:-1]) * inv[None, :, :]).transpose(1, 0, 2), self.model.skin_level, self._chroma)  # (k, n, 3)
         d = f[:, None, :, :] - self._mu_skins
         unlike = np.minimum.reduce(np.einsum("kprc,kprc,pc->kpr", d, d, self._inv_skins), axis=1)  # (k, n)
         np.minimum(unlike, np.float32(ROW_CAP), out=unlike)
@@ -1005,7 +1006,7 @@ class MouthFinder:
         sums = maps.crow_px.take(bounds * W + xs, axis=0)  # (6, n, 3)
         cnt = np.maximum(bounds[1::2] - bounds[0::2], 1).astype(np.float32)  # (3, n)
         means = (sums[1::2] - sums[0::2]).astype(np.float32) / cnt[:, :, None]  # (3, n, 3)
-        return profile_features(means.transpose(1, 0, 2), self.model.skin_level).reshape(len(ys), 9)
+        return profile_features(means.transpose(1, 0, 2), self.model.skin_level, self._chroma).reshape(len(ys), 9)
 
     @staticmethod
     def shifted(res: MouthResult, dx: float, dy: float) -> MouthResult:

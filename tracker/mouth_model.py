@@ -32,7 +32,8 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
 
 Profiles are means of small bands of pixels in colour features (:func:`profile_features`):
 luminance relative to the skin's, and two brightness-free chroma ratios, each in units of a just
-noticeable difference. :func:`learn_mouth` never refuses a face: a crop with no visible mouth gets
+noticeable difference (in a picture whose colours the camera washed out, the chroma is scaled back up
+by the skin's own: :func:`chroma_gain`). :func:`learn_mouth` never refuses a face: a crop with no visible mouth gets
 a typical one at the click, and the finder's score says how sure each frame is.
 """
 
@@ -64,6 +65,17 @@ SKIN_ROWS = 0.12
 """Rows (× wi) of skin beyond each lip's outer edge in the vertical templates."""
 LINE_BANDS = (0.03, 0.09)
 """Rows (× wi) above and below the mouth line that a column's "above" and "below" bands cover."""
+SKIN_CHROMA = 0.1
+"""Least chroma (the median chroma ratio of the skin round the mouth, as
+:func:`~tracker.colour_model.features` measures it) of skin in a colour camera's picture of a lit face:
+the nine shared clips' skins have 0.106-0.29. A camera or a dim light that washes the colours out
+leaves less (those clips with their colour scaled by 0.38: 0.038-0.10), and every chroma rule of the
+mouth then sees lips barely apart from the skin — the lips' red lead, each column's unlikeness to the
+cheek, the split's lip rows — and the mouth was refused or half found (4 of those 18 clip-modes met
+every target; their mean mouth-opening correlation 0.71): :func:`chroma_gain` scales chroma back up."""
+CHROMA_GAIN_MAX = 3.0
+"""Most :func:`chroma_gain` scales chroma by: a picture with next to no colour (a monochrome camera,
+skin chroma 0.007) has none to bring back, only noise."""
 L_UNIT, C_UNIT = 0.05, 0.012
 """One unit of the profile features: 5 % of the skin's luminance; 0.012 of a chroma ratio."""
 _FEATURE_MIX = np.array([[0.114, 0.0, -1.0, 1.0], [0.587, -1.0, 0.5, 1.0], [0.299, 1.0, 0.5, 1.0]], np.float32)
@@ -80,10 +92,11 @@ def luminance(bgr: np.ndarray) -> np.ndarray:
     return c[..., 0] * np.float32(0.114) + c[..., 1] * np.float32(0.587) + c[..., 2] * np.float32(0.299)
 
 
-def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
+def profile_features(bgr: np.ndarray, skin_level: float, chroma: float = 1.0) -> np.ndarray:
     """Colour features (float32 ``(..., 3)``) of mean BGR values ``(..., 3)``: luminance in units of
     :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
-    units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference."""
+    units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference — times
+    ``chroma`` (:func:`chroma_gain`: a washed-out picture's colours brought back up)."""
     c = np.asarray(bgr, dtype=np.float32)
     if c.ndim == 2:
         out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
@@ -93,8 +106,16 @@ def profile_features(bgr: np.ndarray, skin_level: float) -> np.ndarray:
     den += np.float32(24.0)
     np.divide(out[..., 1:3], den, out=out[..., 1:3])
     out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
-    out[..., 1:3] *= np.float32(1.0 / C_UNIT)
+    out[..., 1:3] *= np.float32(chroma / C_UNIT)
     return out[..., :3]
+
+
+def chroma_gain(skin_sat: float) -> float:
+    """The factor :func:`profile_features` takes chroma by for a face whose skin has chroma
+    ``skin_sat`` (the median chroma ratio of :func:`~tracker.colour_model.features`): 1 for skin with
+    at least :data:`SKIN_CHROMA`, more for a picture whose colours the camera or the light washed
+    out, at most :data:`CHROMA_GAIN_MAX`."""
+    return min(max(SKIN_CHROMA / max(float(skin_sat), 1e-6), 1.0), CHROMA_GAIN_MAX)
 
 
 def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
@@ -413,7 +434,7 @@ def trace_line(lum: np.ndarray, x0: int, y0: float, step: int, n: int) -> np.nda
 
 
 def line_columns(strip: np.ndarray, x0: int, ys: np.ndarray, step: int, a1: int, a2: int, skin_level: float,
-                 gains: np.ndarray | None = None) -> np.ndarray:
+                 gains: np.ndarray | None = None, chroma: float = 1.0) -> np.ndarray:
     """Features (len(ys), 9) of the columns along a traced line: :func:`profile_features` of the mean
     BGR of the band ``a1..a2`` rows above the line, of the line's own three rows, and of the band
     ``a1..a2`` rows below, per column ``x0 + step·k``."""
@@ -427,7 +448,7 @@ def line_columns(strip: np.ndarray, x0: int, ys: np.ndarray, step: int, a1: int,
     means = np.stack([px[:, :m].mean(1), px[:, m : m + 3].mean(1), px[:, m + 3 :].mean(1)], axis=1)  # (n, 3, 3)
     if gains is not None:
         means *= gains.astype(np.float32)
-    return profile_features(means, skin_level).reshape(n, 9)
+    return profile_features(means, skin_level, chroma).reshape(n, 9)
 
 
 def line_geometry(wi: float) -> tuple[int, int]:
@@ -951,12 +972,13 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     fs = features(skin, 1.0)
     skin_level = float(np.median(fs[:, 0]) * 255.0)
     skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))
+    chroma = chroma_gain(skin_sat)
     idx = lut_index(crop)
     inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
     teeth0 = _inside(0.0, skin_level, skin_sat).view(np.uint8).take(idx)
 
     band = max(BAND * wi, 1.5)
-    skin_f = profile_features(skin.astype(np.float32), skin_level)  # per pixel (n, 3)
+    skin_f = profile_features(skin.astype(np.float32), skin_level, chroma)  # per pixel (n, 3)
     skin_red = float(np.median(skin_f[:, 1]))
 
     def column(x: float, y: float):
@@ -965,7 +987,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         b0, b1 = band_columns(x, band, W)
         rows_bgr = cv2.GaussianBlur(crop[:, b0:b1].astype(np.float32).mean(axis=1).reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
         lum_rows = luminance(rows_bgr)
-        f_rows = profile_features(rows_bgr, skin_level)
+        f_rows = profile_features(rows_bgr, skin_level, chroma)
         top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi, f_rows[:, 1] - skin_red)
         e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi, math.nan), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
         # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
@@ -986,7 +1008,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     for name, step in (("left", -1), ("right", +1)):
         n = min(n_side, x0 if step < 0 else W - 1 - x0)
         ys = trace_line(lum, x0, y_line, step, max(n, 1))
-        cols = line_columns(crop, x0, ys, step, a1, a2, skin_level)
+        cols = line_columns(crop, x0, ys, step, a1, a2, skin_level, chroma=chroma)
         traced[name] = (ys, cols, step, cheek_model(cols, wi))
     fit = {name: cheek_skin_distance(t[3], skin_f) for name, t in traced.items()}
     # the lips' lead in red over the skin on the click's column: where they are clearly redder, a
@@ -1066,7 +1088,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
 
     # what the rows through the centre look like: skin, upper lip, (gap), lower lip, skin
     b0, b1 = band_columns(centre[0], band, W)
-    f_centre = profile_features(crop[:, b0:b1].astype(np.float32).mean(axis=1), skin_level)
+    f_centre = profile_features(crop[:, b0:b1].astype(np.float32).mean(axis=1), skin_level, chroma)
     classes = _row_classes(f_centre, y_top, top, bottom, y_bottom, wi, skin_f)
     typical = np.stack([np.zeros(9), np.full(9, 10.0)])  # no cheek seen: nothing is much unlike it
     cheeks = {name: np.stack(sides[name][4]) if sides[name][4] is not None else typical for name in ("left", "right")}
