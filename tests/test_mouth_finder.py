@@ -13,11 +13,9 @@ import numpy as np
 import pytest
 
 from tracker.calibration import FaceFrame
-from tracker.colour_model import TILE_SHAPE
+from tracker.colour_model import CHROMA_GAIN_MAX, SKIN_CHROMA, TILE_SHAPE, chroma_gain
 from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
-from tracker.mouth_model import (
-    CHROMA_GAIN_MAX, MOUTH_RECT, SKIN_CHROMA, MouthModel, chroma_gain, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end,
-)
+from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
 GRIN_CORNERS = pytest.mark.xfail(

@@ -60,9 +60,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import lut_index
+from tracker.colour_model import chroma_gain, lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, chroma_gain, corner_search, lens_outlines,
+    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines,
     line_geometry, lip_columns, lip_end, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 

@@ -46,7 +46,7 @@ import cv2
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-from tracker.colour_model import TILE_SHAPE, _grid_features, features, lut_index, table_to_tile
+from tracker.colour_model import TILE_SHAPE, _grid_features, chroma_gain, features, lut_index, table_to_tile
 
 FORMAT = 2
 MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
@@ -65,17 +65,6 @@ SKIN_ROWS = 0.12
 """Rows (× wi) of skin beyond each lip's outer edge in the vertical templates."""
 LINE_BANDS = (0.03, 0.09)
 """Rows (× wi) above and below the mouth line that a column's "above" and "below" bands cover."""
-SKIN_CHROMA = 0.1
-"""Least chroma (the median chroma ratio of the skin round the mouth, as
-:func:`~tracker.colour_model.features` measures it) of skin in a colour camera's picture of a lit face:
-the nine shared clips' skins have 0.106-0.29. A camera or a dim light that washes the colours out
-leaves less (those clips with their colour scaled by 0.38: 0.038-0.10), and every chroma rule of the
-mouth then sees lips barely apart from the skin — the lips' red lead, each column's unlikeness to the
-cheek, the split's lip rows — and the mouth was refused or half found (4 of those 18 clip-modes met
-every target; their mean mouth-opening correlation 0.71): :func:`chroma_gain` scales chroma back up."""
-CHROMA_GAIN_MAX = 3.0
-"""Most :func:`chroma_gain` scales chroma by: a picture with next to no colour (a monochrome camera,
-skin chroma 0.007) has none to bring back, only noise."""
 L_UNIT, C_UNIT = 0.05, 0.012
 """One unit of the profile features: 5 % of the skin's luminance; 0.012 of a chroma ratio."""
 _FEATURE_MIX = np.array([[0.114, 0.0, -1.0, 1.0], [0.587, -1.0, 0.5, 1.0], [0.299, 1.0, 0.5, 1.0]], np.float32)
@@ -109,13 +98,6 @@ def profile_features(bgr: np.ndarray, skin_level: float, chroma: float = 1.0) ->
     out[..., 1:3] *= np.float32(chroma / C_UNIT)
     return out[..., :3]
 
-
-def chroma_gain(skin_sat: float) -> float:
-    """The factor :func:`profile_features` takes chroma by for a face whose skin has chroma
-    ``skin_sat`` (the median chroma ratio of :func:`~tracker.colour_model.features`): 1 for skin with
-    at least :data:`SKIN_CHROMA`, more for a picture whose colours the camera or the light washed
-    out, at most :data:`CHROMA_GAIN_MAX`."""
-    return min(max(SKIN_CHROMA / max(float(skin_sat), 1e-6), 1.0), CHROMA_GAIN_MAX)
 
 
 def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
@@ -971,7 +953,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     skin = _skin(crop, cx, cy, wi, skin_samples)
     fs = features(skin, 1.0)
     skin_level = float(np.median(fs[:, 0]) * 255.0)
-    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))
+    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))  # skin_chroma, from the features made here
     chroma = chroma_gain(skin_sat)
     idx = lut_index(crop)
     inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
