@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from tracker.auto_init import EYE_WI, IRIS_RADIUS, _lip_span, _mouth, centre_votes, find_brows, find_pupils, iris_contrast
+from tracker.brows import brow_centre, column_profile
 from tracker.face_finder import DEFAULT_EYES
 
 
@@ -182,3 +183,26 @@ def test_the_brow_point_is_on_the_brow_not_on_a_spectacle_rim(glasses, roll):
     grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
     for b, p in zip(find_brows(grey, pts[0], pts[1]), pts):
         assert math.dist(b, p) == pytest.approx(0.38 * ipd, abs=0.04 * ipd)
+
+
+def test_the_brow_point_keeps_calibration_off_the_lids_shadow():
+    """On a dark face the shadow of the upper lid is darker than the brow and runs up to it. The
+    darkest band's middle sat on the brow's lower edge, within 0.08 eye distances (calibration's
+    reach for the brow) of that shadow, and calibration took the shadow for the brow; the point
+    is in the brow's upper half, and calibration finds the brow from it."""
+    ipd, skin = 100.0, 70.0
+    img = np.full((300, 400), skin, np.float32)
+    pts = np.array([[150.0, 220.0], [250.0, 220.0]])
+    for x, y in pts:
+        rows = lambda a, b: slice(int(round(y - b * ipd)), int(round(y - a * ipd)))  # noqa: E731
+        cols = slice(int(x - 0.3 * ipd), int(x + 0.3 * ipd))
+        img[rows(0.05, 0.17), cols] = 20.0  # the lid's shadow, darker than the brow
+        img[rows(0.17, 0.20), cols] = 34.0
+        img[rows(0.20, 0.32), cols] = 30.0  # the brow
+    img = cv2.GaussianBlur(img, (0, 0), 1.0)
+    for b, (x, y) in zip(find_brows(img, pts[0], pts[1]), pts):
+        assert 0.26 * ipd < y - b[1] < 0.32 * ipd  # the brow: 0.2-0.32
+        top = int(y - 1.1 * ipd)
+        prof = column_profile(img, x, top, int(y), 2)
+        found = y - (top + brow_centre(prof, int(round(b[1] - top)), int(round(0.08 * ipd))))
+        assert 0.2 * ipd < found < 0.32 * ipd

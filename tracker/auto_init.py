@@ -10,7 +10,8 @@ from. Steps, each using only what every face has:
    cues, and the best *pair* of them: both dark round centres with white beside them, mirror
    images of each other, level and about the box's distance apart (:func:`find_pupils`);
 3. brows: the darkest band on the column above each pupil (a spectacle rim's upper bar, which
-   goes round the eye, filled in first: :func:`tracker.eyes.spectacle_rims`);
+   goes round the eye, filled in first: :func:`tracker.eyes.spectacle_rims`), the point in its
+   upper half, where a person clicks a brow (:func:`_brow`);
 4. mouth: the darkest line across the lower face, a little more than one inter-pupil
    distance below the eyes — the gap between closed lips or the inside of an open mouth
    (the nostrils sit higher, the chin's shadow lower); where the lips are redder than the
@@ -270,8 +271,13 @@ def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.nd
 
 def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray,
           rim: tuple[float, float] | None = None) -> tuple[float, float]:
-    """The middle of the darkest band above a pupil, along ``up``; ``rim``: the distances (px along
-    ``up``) of a spectacle rim's upper bar, filled in first (it is darker than many brows)."""
+    """A point in the upper half of the darkest band above a pupil, along ``up``: halfway from its
+    middle to its upper edge (the grey halfway from the band's darkest to the forehead above). The
+    lid's shadow often darkens a brow's lower edge (on a dark face it is darker than the brow), so
+    the band's middle sits low in the brow, and calibration, which takes the darkest band within
+    0.08 eye distances of the point, took the lid's crease; a person clicks higher, the brow's
+    middle. ``rim``: the distances (px along ``up``) of a spectacle rim's upper bar, filled in
+    first (it is darker than many brows)."""
     n = int(round(BROW_RANGE[1] * ipd)) + 2
     side = np.array([-up[1], up[0]])
     prof = _strip(grey, np.asarray(pupil, dtype=np.float64), up, side, n, max(int(0.12 * ipd), 1))
@@ -282,12 +288,16 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
     if len(seg) < 3:
         raise AutoInitError("the face is too small to find its eyebrows")
     # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
-    d = min(max(brow_centre(prof, lo + int(np.argmin(seg)), max(int(0.05 * ipd), 2)), lo), hi)
+    k = lo + int(np.argmin(seg))
+    d = min(max(brow_centre(prof, k, max(int(0.05 * ipd), 2)), lo), hi)
+    above = prof[k:hi]
+    top = k + int(np.argmax(above >= 0.5 * (prof[k] + float(above.max()))))
+    d = 0.5 * (d + top)
     return (float(pupil[0] + d * up[0]), float(pupil[1] + d * up[1]))
 
 
 def find_brows(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> list[tuple[float, float]]:
-    """Both brows' middles (frame px) above the pupils ``left`` and ``right`` (:func:`_brow`), with
+    """Both brow points (frame px) above the pupils ``left`` and ``right`` (:func:`_brow`), with
     any spectacle rim's upper bar (:func:`tracker.eyes.spectacle_rims`, found on the eye band at the
     eye finder's scale) filled in first."""
     ipd = math.dist(left, right)
