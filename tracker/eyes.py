@@ -28,6 +28,9 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   same runs with what is much darker than any skin counted as interior too: a dark iris
   shows by that rule even where its colour is close to the skin's, but the lash line and a
   shadowed crease are as dark, so the rule says that the iris shows, not where the lids are.
+  A light iris (grey, green, hazel) is not much darker than the skin, so that rule is off for
+  it; within its radius a row counts as interior as far as it looks more like the calibrated
+  iris than the skin (:meth:`EyeFinder._iris_likeness`).
 * **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
   the eye point moves from the iris to the middle of what is visible of the eye (the slit
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
@@ -115,7 +118,9 @@ interior whatever its colour. A dark brown iris can lie nearer a broad skin mode
 walk's ramp middle (a shared clip's skin runs from a lit bridge to a shadowed lid: the iris 3.8 from
 it, 3.3 behind glasses whose glare broadens it, against a middle of 3.5 or more); by colour alone
 both walks then end at the pupil and the eye reads shut while it is open. Nearer than the whole
-radius: a narrowed eye's lash line lies on the iris's rim, and blur spreads it inwards."""
+radius: a narrowed eye's lash line lies on the iris's rim, and blur spreads it inwards. Where the
+dark rule is off (a light iris) the floor within the whole radius is the iris's likeness instead
+(:meth:`EyeFinder._iris_likeness`)."""
 OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
@@ -662,7 +667,9 @@ class EyeModel:
     negative) of a spectacle rim's upper bar on the brow's column, filled in before the brow is
     read (None: no rim, see :func:`spectacle_rims`); ``search_dark`` how much darker than the iris
     search's window the paler iris was (:meth:`EyeFinder.search_darkness`; None: not measured, a
-    model saved before it was).
+    model saved before it was); ``iris_colour`` the calibrated irises' colour (their middles and the
+    rings round the pupils) as a Gaussian in YCrCb, ``(mean (3,), cov (3, 3))`` grey levels with
+    :data:`SKIN_FLOOR` in it (None: a model saved before it was; see :meth:`EyeFinder._iris_likeness`).
     """
 
     work_ipd: float
@@ -680,6 +687,7 @@ class EyeModel:
     light: list[np.ndarray] | None = None
     rims: list[tuple[float, float] | None] = field(default_factory=lambda: [None, None])
     search_dark: float | None = None
+    iris_colour: tuple[np.ndarray, np.ndarray] | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -705,6 +713,9 @@ class EyeModel:
             **({} if self.light is None else {"light": [np.asarray(f, dtype=float).round(4).tolist() for f in self.light]}),
             **({} if all(r is None for r in self.rims) else {"rims": [None if r is None else [float(v) for v in r] for r in self.rims]}),
             **({} if self.search_dark is None else {"search_dark": round(float(self.search_dark), 4)}),
+            **({} if self.iris_colour is None else {"iris_colour": {
+                "mean": np.asarray(self.iris_colour[0], dtype=float).round(4).tolist(),
+                "cov": np.asarray(self.iris_colour[1], dtype=float).round(4).tolist()}}),
             "skin": self.skin.to_dict(),
             "skin_bgr": np.asarray(self.skin_bgr, dtype=float).round(3).tolist(),
         }
@@ -739,6 +750,9 @@ class EyeModel:
                 light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
                 rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
                 search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
+                iris_colour=None if d.get("iris_colour") is None else (
+                    np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
+                    np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),
                 skin=SkinModel.from_dict(d["skin"]),
                 skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
             )
@@ -755,6 +769,11 @@ class EyeModel:
             raise EyeModelError("eye model: a spectacle rim's rows must be finite and rising")
         if m.search_dark is not None and not math.isfinite(m.search_dark):
             raise EyeModelError("eye model: the irises' search darkness must be a finite number")
+        if m.iris_colour is not None:
+            mean, cov = m.iris_colour
+            if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov)) and np.allclose(cov, cov.T)
+                    and np.all(np.linalg.eigvalsh(cov) > 0)):
+                raise EyeModelError("eye model: the irises' colour needs a finite mean and a positive definite covariance")
         return m
 
 
@@ -1035,11 +1054,14 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     skin.set_levels([ring, sclera])
     # darker than every skin sample, even a shadowed lid
     skin.set_dark([g for k, g in groups.items() if k not in doubtful], middle, [groups[k] for k in doubtful])
+    iris_ycc = np.concatenate((middle, ring)).reshape(-1, 3).astype(np.float64) @ _YCC.T
     model = EyeModel(
         work_ipd=wi, radius=radius, iris_pictures=iris_pics, eye_pictures=eye_pics, brow_profiles=brow_profiles,
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin, rims=rims,
         skin_bgr=np.ones(3), white=float(np.median(skin.distance(sclera))) if len(sclera) >= 3 else None,
         light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
+        iris_colour=(iris_ycc.mean(0), np.cov(iris_ycc.T) + np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2))
+        if len(iris_ycc) >= 6 else None,
     )
     f = EyeFinder(model, wi)
     model.search_dark = f.search_darkness(grey, pupils)
@@ -1124,6 +1146,9 @@ class EyeFinder:
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self._walk_k = [max(int(round(r)), 2) for r in self.radius]  # samples of a walk's interior level
         self.skin = model.skin
+        self._iris_M = self._iris_transform()
+        self._iris_gain: tuple[np.ndarray | None, np.ndarray | None] = (None, self._iris_M)
+        self._ones3 = np.ones((1, 3), np.float32)
         self._luma = _YCC[:1].astype(np.float32).reshape(1, 3)
         self.brow_lo = [max(h - BROW_DOWN * wi, 0.1 * wi) for h in model.brow_heights]
         self.brow_hi = [h + BROW_UP * wi for h in model.brow_heights]
@@ -1383,22 +1408,71 @@ class EyeFinder:
             col *= self._light[i]
         return col, c
 
+    def _iris_transform(self) -> np.ndarray | None:
+        """The ``(3, 4)`` float32 matrix that takes a BGR pixel to its whitened coordinates under the
+        calibrated irises' colour (:attr:`EyeModel.iris_colour`), for ``cv2.transform``; None when
+        the dark rule is on (it already keeps a dark iris interior) or the model has no iris colour."""
+        if self.model.iris_colour is None or self.skin.dark > 0:
+            return None
+        mean, cov = self.model.iris_colour
+        L = np.linalg.cholesky(np.linalg.inv(cov))
+        W = L.T @ _YCC
+        return np.concatenate([W, -(L.T @ mean)[:, None]], axis=1).astype(np.float32)
+
+    def _iris_likeness(self, column: np.ndarray, gain: np.ndarray | None, dist: list[float]) -> list[float] | None:
+        """How much each row of ``column`` (``(n, 1, 3)`` BGR float32, ``gain`` applied as in
+        :meth:`SkinModel.distances`) looks like the calibrated iris rather than the skin, 0..1: its
+        Mahalanobis distance from the skin (``dist``) less its distance from the iris's colour, over
+        the interior ramp's width (0: as near the skin as the iris, 1: nearer the iris by that
+        width). None where the dark rule is on.
+
+        The dark rule keeps a dark iris interior whatever its colour; a light one is hardly farther
+        from the skin than the ramp's middle, its lit lower half no farther (a green-grey iris behind
+        glasses: 3-4 units, the middle 3.5). At low resolution the skin's colour bleeds into it
+        (video keeps colour at half the resolution of grey), the lower walk ends inside the iris and
+        stops following the lid (a shared clip at a third of its size: 2.7 crop px for twelve frames
+        while the lid went from 6 to 9 px below the iris's centre). A row still nearer the iris's
+        colour than the skin's is the iris."""
+        M = self._iris_M
+        if M is None:
+            return None
+        if gain is not None:
+            key, Mg = self._iris_gain
+            if gain is not key:
+                Mg = M * np.append(np.asarray(gain, dtype=np.float32), 1.0)[None, :]
+                self._iris_gain = (gain, Mg)
+            M = Mg
+        z = cv2.transform(column, M)
+        t = np.sqrt(cv2.transform(z * z, self._ones3).ravel())
+        np.subtract(np.asarray(dist, dtype=np.float32), t, out=t)
+        t *= 1.0 / (self.skin.hi - self.skin.lo)
+        return np.minimum(np.maximum(t, 0.0, out=t), 1.0, out=t).tolist()
+
     def _lid_runs(self, e: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
         """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s)."""
         dy = round(at[1]) - at[1]
         return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
     def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float],
-                   dark: list[float] | None = None) -> tuple[float, float]:
+                   dark: list[float] | None = None, iris: list[float] | None = None) -> tuple[float, float]:
         """``(upper, lower)`` by colour from the strip's distances from the skin ``dist`` (row ``c``
         is ``at``'s), each walk's ramp set by :func:`walk_length`; ``dark`` (the strip's interior
-        with the dark rule, ``at`` on the iris) is its floor within :data:`IRIS_FLOOR` radii."""
+        with the dark rule, ``at`` on the iris) is its floor within :data:`IRIS_FLOOR` radii, and
+        ``iris`` (:meth:`_iris_likeness`) within the iris's radius."""
         dy = round(at[1]) - at[1]
         lo, hi, k, white = self.skin.lo, self.skin.hi, self._walk_k[i], self.model.white
         fu = fd = None
         if dark is not None:
             nr = int(math.floor(IRIS_FLOOR * self.radius[i])) + 1
             fu, fd = dark[c::-1][:nr], dark[c : c + nr]
+        if iris is not None:
+            nr = int(math.floor(self.radius[i])) + 1
+            iu, id_ = iris[c::-1][:nr], iris[c : c + nr]
+            for f, g in ((fu, iu), (fd, id_)):
+                for j, v in enumerate((f or [])[: len(g)]):
+                    if v > g[j]:
+                        g[j] = v
+            fu, fd = iu, id_
         up = walk_length(dist[c::-1], lo, hi, k, white, fu)
         down = walk_length(dist[c:], lo, hi, k, white, fd)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
@@ -1422,11 +1496,13 @@ class EyeFinder:
         are the lash line and a shadowed crease beside the lids, so the rule tells that the
         iris shows, not where the lids are."""
         (c0, k0), (c1, k1) = self._column(crop, 0, ats[0]), self._column(crop, 1, ats[1])
-        dist, ed = self.skin.distances(np.concatenate((c0, c1)), gain)
+        cols = np.concatenate((c0, c1))
+        dist, ed = self.skin.distances(cols, gain)
+        like = self._iris_likeness(cols, gain, dist)
         n = len(c0)
         out = []
         for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
-            up, down = self._lid_walks(dist[a:b], k, i, ats[i], ed[a:b])
+            up, down = self._lid_walks(dist[a:b], k, i, ats[i], ed[a:b], None if like is None else like[a:b])
             gu, gd = self._lid_runs(ed[a:b], k, i, ats[i])
             out.append((up, down, gu + gd))
         return out
