@@ -32,9 +32,10 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
 
 Profiles are means of small bands of pixels in colour features (:func:`profile_features`):
 luminance relative to the skin's, and two brightness-free chroma ratios, each in units of a just
-noticeable difference (in a picture whose colours the camera washed out, the chroma is scaled back up
-by the skin's own: :func:`chroma_gain`). :func:`learn_mouth` never refuses a face: a crop with no visible mouth gets
-a typical one at the click, and the finder's score says how sure each frame is.
+noticeable difference (in a picture whose colours the camera washed out, the chroma is scaled back
+up by the skin's own: :func:`~tracker.colour_model.chroma_gain`). :func:`learn_mouth` never refuses
+a face: a crop with no visible mouth gets a typical one at the click, and the finder's score says
+how sure each frame is.
 """
 
 from __future__ import annotations
@@ -85,7 +86,8 @@ def profile_features(bgr: np.ndarray, skin_level: float, chroma: float = 1.0) ->
     """Colour features (float32 ``(..., 3)``) of mean BGR values ``(..., 3)``: luminance in units of
     :data:`L_UNIT` × the skin's, and the chroma ratios of :func:`~tracker.colour_model.features` in
     units of :data:`C_UNIT` — a squared distance of about 1 is a just visible difference — times
-    ``chroma`` (:func:`chroma_gain`: a washed-out picture's colours brought back up)."""
+    ``chroma`` (:func:`~tracker.colour_model.chroma_gain`: a washed-out picture's colours brought back
+    up)."""
     c = np.asarray(bgr, dtype=np.float32)
     if c.ndim == 2:
         out = c @ _FEATURE_MIX  # luminance, r − g, (r + g − 2b) / 2, b + g + r
@@ -97,7 +99,6 @@ def profile_features(bgr: np.ndarray, skin_level: float, chroma: float = 1.0) ->
     out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
     out[..., 1:3] *= np.float32(chroma / C_UNIT)
     return out[..., :3]
-
 
 
 def band_columns(x: float, half: float, width: int) -> tuple[int, int]:
@@ -953,7 +954,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     skin = _skin(crop, cx, cy, wi, skin_samples)
     fs = features(skin, 1.0)
     skin_level = float(np.median(fs[:, 0]) * 255.0)
-    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))  # skin_chroma, from the features made here
+    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))  # skin_chroma, of the features already made
     chroma = chroma_gain(skin_sat)
     idx = lut_index(crop)
     inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
