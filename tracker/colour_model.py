@@ -37,7 +37,8 @@ def features(bgr: np.ndarray, y_weight: float) -> np.ndarray:
 
 
 SKIN_CHROMA = 0.1
-"""Least chroma (:func:`skin_chroma`) of skin in a colour camera's picture of a lit face: the nine
+"""Least chroma (the median length of :func:`features`' two chroma ratios over the skin round the
+mouth: ``MouthModel.skin_sat``) of skin in a colour camera's picture of a lit face: the nine
 shared clips' skins round the mouth have 0.106-0.29. A camera or a dim room that washes the colours
 out leaves less (those clips with 35 % of their colour, the ``washed`` stress copies: 0.037-0.098),
 and every chroma rule of the mouth then reads lips as skin — the lips' red lead, a column's
@@ -50,16 +51,9 @@ CHROMA_GAIN_MAX = 3.0
 skin chroma 0.007) has none to bring back, only noise."""
 
 
-def skin_chroma(bgr: np.ndarray) -> float:
-    """The median chroma of skin pixels ``(n, 3)`` BGR: the length of :func:`features`' two chroma
-    ratios (0 for grey)."""
-    f = features(bgr, 1.0)
-    return float(np.median(np.hypot(f[:, 1], f[:, 2]))) if len(f) else 0.0
-
-
 def chroma_gain(skin_sat: float) -> float:
     """The factor the mouth's colour features take chroma by, for skin of chroma ``skin_sat``
-    (:func:`skin_chroma`): 1 for skin with at least :data:`SKIN_CHROMA`, more where the camera or
+    (see :data:`SKIN_CHROMA`): 1 for skin with at least :data:`SKIN_CHROMA`, more where the camera or
     the light washed the colours out, at most :data:`CHROMA_GAIN_MAX`."""
     return min(max(SKIN_CHROMA / max(float(skin_sat), 1e-6), 1.0), CHROMA_GAIN_MAX)
 

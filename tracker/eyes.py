@@ -433,6 +433,11 @@ def _run(e) -> float:
     return total
 
 
+def _higher_floor(a: list[float] | None, b: list[float]) -> list[float]:
+    """The larger of two walk floors sample by sample (``a`` None or no longer than ``b``)."""
+    return b if a is None else [max(u, v) for u, v in zip(a, b)] + b[len(a):]
+
+
 def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None, floor: list[float] | None = None) -> float:
     """Soft length (samples) of the interior run of one lid walk whose samples lie ``dist``
     (Mahalanobis units) from the skin, ``dist[0]`` at the eye point.
@@ -1467,12 +1472,7 @@ class EyeFinder:
             fu, fd = dark[c::-1][:nr], dark[c : c + nr]
         if iris is not None:
             nr = int(math.floor(self.radius[i])) + 1
-            iu, id_ = iris[c::-1][:nr], iris[c : c + nr]
-            for f, g in ((fu, iu), (fd, id_)):
-                for j, v in enumerate((f or [])[: len(g)]):
-                    if v > g[j]:
-                        g[j] = v
-            fu, fd = iu, id_
+            fu, fd = _higher_floor(fu, iris[c::-1][:nr]), _higher_floor(fd, iris[c : c + nr])
         up = walk_length(dist[c::-1], lo, hi, k, white, fu)
         down = walk_length(dist[c:], lo, hi, k, white, fd)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)

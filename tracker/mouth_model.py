@@ -954,7 +954,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     skin = _skin(crop, cx, cy, wi, skin_samples)
     fs = features(skin, 1.0)
     skin_level = float(np.median(fs[:, 0]) * 255.0)
-    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))  # skin_chroma, of the features already made
+    skin_sat = float(np.median(np.hypot(fs[:, 1], fs[:, 2])))
     chroma = chroma_gain(skin_sat)
     idx = lut_index(crop)
     inside0 = _inside(0.5 * skin_level, skin_level, skin_sat).view(np.uint8).take(idx)
