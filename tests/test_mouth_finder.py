@@ -15,7 +15,7 @@ import pytest
 from tracker.calibration import FaceFrame
 from tracker.colour_model import CHROMA_GAIN_MAX, SKIN_CHROMA, TILE_SHAPE, chroma_gain
 from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
-from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end
+from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end, lip_gap
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
 GRIN_CORNERS = pytest.mark.xfail(
@@ -465,10 +465,10 @@ def test_the_mouth_line_starts_between_the_lips_not_in_hair_beside_them(calibrat
     assert w < 6.0
 
 
-def _bearded(img: np.ndarray, state: FaceState, seed: int = 3) -> np.ndarray:
+def _bearded(img: np.ndarray, state: FaceState, seed: int = 3, reach: float = 0.75) -> np.ndarray:
     """``img`` with a grey-brown textured beard and moustache round the lips (frame px), the lips
-    left bare: hair in an oval 1.5 mouth-widths wide from under the nose to the chin, minus the lips'
-    lens, with streaks brighter and darker than the hair's mean (as a real beard's hairs are)."""
+    left bare: hair in an oval ``2 · reach`` mouth-widths wide from under the nose to the chin, minus
+    the lips' lens, with streaks brighter and darker than the hair's mean (as a real beard's hairs are)."""
     lm = face_landmarks(state)
     (lx, ly), (rx, ry) = lm["mouth_left"], lm["mouth_right"]
     cx, cy = 0.5 * (lx + rx), 0.5 * (ly + ry)
@@ -478,7 +478,7 @@ def _bearded(img: np.ndarray, state: FaceState, seed: int = 3) -> np.ndarray:
     streaks = cv2.resize(rng.normal(0.0, 1.0, (h // 6, wd)).astype(np.float32), (wd, h))
     hair = np.clip(np.array([70.0, 84.0, 96.0])[None, None] + 30.0 * streaks[..., None], 0, 255)
     mask = np.zeros((h, wd), np.uint8)
-    cv2.ellipse(mask, (int(cx), int(cy + 0.05 * state.ipd)), (int(0.75 * w), int(0.42 * state.ipd)), 0, 0, 360, 255, -1)
+    cv2.ellipse(mask, (int(cx), int(cy + 0.05 * state.ipd)), (int(reach * w), int(0.42 * state.ipd)), 0, 0, 360, 255, -1)
     lens = lens_outline((lx, ly), (rx, ry), float(lm["lip_upper"][1]), float(lm["lip_lower"][1]), float(cx))
     cv2.fillPoly(mask, [np.round(lens).astype(np.int32)], 0)
     out = img.copy()
@@ -511,6 +511,45 @@ def test_a_beard_round_the_lips_does_not_widen_the_mouth(expr):
     ew, eu, el = _errors(res, _truth_in_crop(state, ff, origin))
     assert ew < 8.0 and eu < 2.5 and el < 2.5
 
+
+
+@pytest.mark.parametrize("expr", ["neutral", "ah"])
+def test_a_full_beard_leaves_no_cheek_and_the_lips_end_the_corners(expr):
+    """Calibrated with skin between the beard and the cheek beside it, tracked where hair reaches past
+    where the corners are looked for on both sides (the bearded copy of expr_d18 laughing: the
+    lips stretch into the beard, and the skin calibration saw past the corners is out of reach).
+    Along the mouth line there was no cheek on either side, the corners ran to the search's ends and
+    the mouth was refused ("ah"). The lips' own red ends at the corners, and the mouth is found there.
+    (Calibrated with one beard and tracked with a wider one, the other expressions still go wrong,
+    with the change or without it: not claimed here.)"""
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    click = ff.to_face(face_landmarks(BASE)["mouth"][None])[0]
+    crop, origin = _crop(_bearded(img, BASE), ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    centre = np.array(model.centre) + origin
+    state = BASE.with_expression(expr)
+    img, _ = render_face(state)
+    ff = _frame_of(state)
+    crop, origin = _crop(_bearded(img, state, reach=2.4), ff, centre)
+    res = MouthFinder(model, WI).find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK, expr
+    ew, eu, el = _errors(res, _truth_in_crop(state, ff, origin))
+    assert ew < 8.0 and eu < 3.0 and el < 3.0, (expr, round(ew, 2), round(eu, 2), round(el, 2))
+
+
+def test_lip_gap_ends_the_lips_at_their_first_gap():
+    """Pure cases of :func:`lip_gap`: the lips end ``reach`` past the last lip column before the first
+    ``run`` columns without them, whatever lies further out (bright skin past a beard passing for
+    teeth); a stray non-lip column inside the lips is no gap; no gap before the corner, or too few
+    lip columns in the body (a hand over the mouth), gives None."""
+    lips = [True] * 12 + [False] * 8 + [True] * 12
+    assert lip_gap(lips, 30.0, 1.0, (2, 9), 3) == 12.0
+    holed = [True] * 10 + [False] + [True] * 5 + [False] * 16
+    assert lip_gap(holed, 30.0, 1.0, (2, 9), 3) == 16.0
+    assert lip_gap([True] * 32, 30.0, 1.0, (2, 9), 3) is None
+    speck = [False] * 6 + [True] + [False] * 25
+    assert lip_gap(speck, 30.0, 1.0, (2, 9), 3) is None
 
 def test_lip_end_bounds_a_corner_by_the_lips_last_column():
     """Pure cases of :func:`lip_end`: the corner comes to ``reach`` past the last lip column; a corner

@@ -63,7 +63,7 @@ import numpy as np
 from tracker.colour_model import chroma_gain, lut_index
 from tracker.mouth_model import (
     BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines,
-    line_geometry, lip_columns, lip_end, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
+    line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -868,7 +868,9 @@ class MouthFinder:
         ``previous`` (a result in this crop's pixels scoring at least :data:`SCORE_OK`): each corner
         holds its last place where the columns past it are as unlike the cheek as the corner level
         (:func:`~tracker.mouth_model.corner_search`). Also whether each side saw the cheek past its
-        corner."""
+        corner. Where neither did but the lips' red ends on both sides (a full beard round the
+        mouth), the corners go to the lips' ends (:func:`~tracker.mouth_model.lip_gap`) and count as
+        seen: on the bearded copies of the shared clips, expr_d18's lost frames 9.7 % → 2.3 %."""
         last = (None, None)
         if previous is not None and previous.score >= SCORE_OK:
             bias = CORNER_BIAS * self.r
@@ -898,6 +900,20 @@ class MouthFinder:
             strength.append(g)
             halves.append(half)
             seen.append(cheek_seen)
+        if self.lips_red is not None and len(live) == 2 and not (seen[0] or seen[1]):
+            # hair all round the mouth (a full beard): the lips' own red ends at both corners
+            ends, at = [], 0
+            for (step, ys), half in zip(live, halves):
+                lips = lip_columns(cols[at : at + len(ys)], self.lips_red, self._skin_f, self._lip_run)
+                at += len(ys)
+                ends.append(lip_gap(lips, half, LIP_END * self.wi, self.body, self.run))
+            if all(e is not None and e < h - 1.0 for e, h in zip(ends, halves)):
+                for j, ((step, ys), half) in enumerate(zip(live, ends)):
+                    k = min(int(half), len(ys) - 2)
+                    t = half - k
+                    out[j] = (x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t))
+                    halves[j] = half
+                seen = [True, True]
         return out[0], out[1], strength, halves, seen
 
     def _cheek_rows(self, counts: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:

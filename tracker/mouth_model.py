@@ -904,6 +904,24 @@ def lip_end(lips: list[bool], half: float, reach: float, body: tuple[int, int]) 
     return half if last is None else min(half, last + reach)
 
 
+
+def lip_gap(lips: list[bool], half: float, reach: float, body: tuple[int, int], run: int) -> float | None:
+    """Where the lips end along one side of a mouth whose corners saw no cheek (:func:`corner_search`
+    ran to its end through hair, a beard or a collar): ``reach`` columns past the last lip column
+    before the first ``run`` columns in a row past the body ``body`` that do not show the lips
+    (``lips`` per column from the middle out, :func:`lip_columns`). None when under
+    :data:`LIP_BODY` of the body's columns show the lips, or no such gap comes before ``half``. The
+    first gap, not the last lip column (:func:`lip_end`): beyond a beard, bright skin or a wall can
+    pass for teeth."""
+    k = min(int(half), len(lips) - 1)
+    a, b = min(body[0], k), min(body[1], k)
+    if b <= a or sum(lips[a : b + 1]) < LIP_BODY * (b + 1 - a):
+        return None
+    for j in range(b + 1, k - run + 2):
+        if not any(lips[j : j + run]):
+            return min(half, j - 1 + reach)
+    return None
+
 def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
                  skin: np.ndarray) -> np.ndarray:
     """Median and spread (5, 2, 3) of the profile's rows in each part — skin above (:data:`SKIN_ROWS`
