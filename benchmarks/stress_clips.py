@@ -20,6 +20,10 @@ shade    the side light of ``side`` comes up over the clip, from none to all of 
          off a window, a lamp on one side): calibration sees even light
 pale     colour halved (pale or low-contrast lips, a washed-out camera)
 washed   a third of the colour kept (a cheap webcam in a dim room, whose colours are mostly gone)
+lowlight a dim room at night: the light at 30 %, sensor noise, the gain bringing it back (a third
+         of the grey levels left, the noise tripled) and 40 % of the colour lost, as webcams do
+warm     a tungsten lamp's cast from the first frame on: blue at 72 %, red at 115 %, so calibration
+         sees it too (a living room in the evening)
 blur     out of focus (Gaussian σ 1.6 px)
 mirror   flipped left to right (every left/right rule must hold both ways)
 tilt     the picture turns slowly about its middle, up to 25° each way and back, a wave of 175
@@ -72,11 +76,17 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
+VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed",
+            "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 WASHED_COLOUR = 0.35
 """Share of the colour the ``washed`` variant keeps (the rest is the pixel's grey)."""
+LOW_LIGHT = (0.3, 2.5, 0.6)
+"""The ``lowlight`` variant: the light's share, the sensor noise (σ, grey levels, before the gain
+brings the level back by the light's inverse) and the share of the colour left."""
+WARM_BGR = (0.72, 0.95, 1.15)
+"""The ``warm`` variant's cast: each channel's factor (B, G, R), a tungsten lamp's."""
 SIDE_LIGHT = 0.4
 """The light on the frame's right edge in ``side`` (× the clip's; the left edge keeps all of it)."""
 AWAY = (0.4, 15, 25)
@@ -364,6 +374,19 @@ def _photometric(kind: str, n: int, seed: int,
             t = 1.0 if kind == "side" else i / max(n - 1, 1)
             return np.clip(img.astype(np.float32) * (1.0 - np.float32(t) * falls[(h, w)]), 0, 255).astype(np.uint8)
         return side
+    if kind == "lowlight":
+        light, sigma, keep = LOW_LIGHT
+
+        def lowlight(img: np.ndarray, i: int) -> np.ndarray:
+            f = np.round(img.astype(np.float32) * np.float32(light))  # what the sensor's levels keep
+            f += rng.normal(0.0, sigma, f.shape).astype(np.float32)
+            f = cv2.GaussianBlur(f, (0, 0), 0.7) * np.float32(1.0 / light)  # denoised a little, gained back
+            grey = cv2.cvtColor(np.clip(f, 0, 255), cv2.COLOR_BGR2GRAY)[..., None]
+            return np.clip(keep * f + (1.0 - keep) * grey, 0, 255).astype(np.uint8)
+        return lowlight
+    if kind == "warm":
+        cast = np.array(WARM_BGR, np.float32)
+        return lambda img, i: np.clip(img.astype(np.float32) * cast, 0, 255).astype(np.uint8)
     if kind in ("pale", "washed"):
         keep = 0.5 if kind == "pale" else WASHED_COLOUR
         def pale(img: np.ndarray, i: int) -> np.ndarray:

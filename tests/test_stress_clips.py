@@ -163,6 +163,23 @@ def test_the_light_steps_by_quarters_and_falls_across_the_side_lit_frame():
     assert np.array_equal(shade(img, n - 1), sc._photometric("side", n, 0)(img, 0))
 
 
+
+def test_low_light_is_noisy_coarse_and_greyer_and_warm_light_is_orange():
+    """``lowlight``: the level kept on average, but noisy and with less colour; ``warm``: every
+    channel by WARM_BGR."""
+    img = np.zeros((40, 60, 3), np.uint8)
+    img[:, :30] = (90, 120, 200)  # a skin-like colour
+    img[:, 30:] = np.linspace(40, 220, 30, dtype=np.uint8)[None, :, None]  # a grey ramp
+    out = sc._photometric("lowlight", 4, 0)(img, 0).astype(np.float32)
+    skin = out[5:35, 5:25].reshape(-1, 3)
+    assert np.abs(skin.mean(axis=0) - (90, 120, 200)).max() < 0.5 * 110  # the colour partly gone ...
+    assert skin[:, 2].mean() - skin[:, 0].mean() > 30  # ... not all of it
+    assert skin[:, 2].mean() - skin[:, 0].mean() < 0.8 * (200 - 90)
+    assert 1.5 < skin.std(axis=0).max() < 25.0  # noisy, less than a broken camera
+    assert abs(float(out[:, 30:].mean()) - float(img[:, 30:].mean())) < 6.0  # the level brought back
+    warm = sc._photometric("warm", 4, 0)(img, 0)
+    assert warm[0, 0].tolist() == [int(90 * 0.72), int(120 * 0.95), 230]
+
 def test_the_beard_darkens_round_the_mouth_and_leaves_the_lips_and_eyes_bare():
     """``beard``: hair (dark) under the lower lip, beside the corners and over the upper lip; the lips
     between the corners and the outer lip edges, the eyes and the cheeks far out keep their pixels."""
