@@ -634,6 +634,19 @@ def test_the_white_beside_the_iris_stays_inside_the_run():
     assert walk_length(walk, 2.0, 5.0, 3, math.inf) < 3.0  # the iris's level alone cuts the white off
 
 
+
+def test_pale_skin_under_the_eye_ends_the_lower_walk_when_no_white_is_below():
+    # down from the iris (9) over the lower lid to skin lit paler and greyer than the calibrated
+    # skin (4, where the calibrated white is 2.6 from the skin): the capped ramp (its interior at
+    # the white's level) took that skin for the eye and ran on to the walk's end; with no sample as
+    # skin-like as the white, the lower walk's ramp sits between its own interior and skin
+    walk = [9.4, 9.3, 8.9, 8.4, 7.6, 6.7, 5.7, 5.2, 5.0, 4.3, 4.1] + [4.0] * 9
+    assert walk_length(walk, 2.0, 5.0, 8, 2.6) > 15.0
+    assert walk_length(walk, 2.0, 5.0, 8, 2.6, below=True) == pytest.approx(5.1, abs=0.5)
+    # white below the iris (2.5) is as skin-like as the calibrated white: capped as before
+    white = [9.4, 9.3, 8.9, 8.4, 7.6, 2.5, 2.4, 2.6, 2.5, 3.0, 4.0, 4.5] + [1.0] * 4
+    assert walk_length(white, 2.0, 5.0, 8, 2.6, below=True) == walk_length(white, 2.0, 5.0, 8, 2.6)
+
 def test_a_model_without_a_white_level_loads_and_keeps_the_calibrated_ramp(finder):
     d = json.loads(json.dumps(finder.model.to_dict()))
     assert d["white"] == pytest.approx(finder.model.white)

@@ -438,7 +438,8 @@ def _higher_floor(a: list[float] | None, b: list[float]) -> list[float]:
     return b if a is None else [max(u, v) for u, v in zip(a, b)] + b[len(a):]
 
 
-def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None, floor: list[float] | None = None) -> float:
+def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | None, floor: list[float] | None = None,
+                below: bool = False) -> float:
     """Soft length (samples) of the interior run of one lid walk whose samples lie ``dist``
     (Mahalanobis units) from the skin, ``dist[0]`` at the eye point.
 
@@ -453,14 +454,22 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
     more than ``b`` above it (a walk that reaches skin like the calibrated one keeps the
     calibrated ramp). A blurred edge crosses half-way exactly at the edge. ``white`` None: the
     calibrated ramp only. ``floor`` (optional, 0..1 per sample from ``dist[0]``) is the least
-    membership of its samples: what is known to be interior whatever its colour."""
+    membership of its samples: what is known to be interior whatever its colour.
+
+    ``below`` (the walk down to the lower lid): where even the walk's most skin-like sample is
+    farther from the skin than the white, no white lies along it and the interior is not capped.
+    The skin under an eye lit from above is paler and greyer than the calibrated skin, more so
+    through a dim camera, and was then less like it than the white: the capped ramp took it for
+    the eye, and the lower lid ran on to the cheek (a dim-room copy of talk_a: 20 px down where
+    the lid was 7). Not the upper walk, whose lid is darkened by its own shadow and lashes
+    (expr_d6's eye opening loses there)."""
     if not dist:
         return 0.0
     mid, width = 0.5 * (lo + hi), hi - lo
     if white is not None:
         inner = sorted(dist[: max(k, 1)])
-        a = min(inner[len(inner) // 2], white)
         b = min(dist)
+        a = inner[len(inner) // 2] if below and b > white else min(inner[len(inner) // 2], white)
         mid = max(mid, min(mid + b, 0.5 * (a + b)))
     start = mid - 0.5 * width
     ramp = [0.0 if (r := (d - start) / width) < 0.0 else 1.0 if r > 1.0 else r for d in dist]  # clamped, without min/max calls
@@ -1474,7 +1483,7 @@ class EyeFinder:
             nr = int(math.floor(self.radius[i])) + 1
             fu, fd = _higher_floor(fu, iris[c::-1][:nr]), _higher_floor(fd, iris[c : c + nr])
         up = walk_length(dist[c::-1], lo, hi, k, white, fu)
-        down = walk_length(dist[c:], lo, hi, k, white, fd)
+        down = walk_length(dist[c:], lo, hi, k, white, fd, below=True)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
 
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
