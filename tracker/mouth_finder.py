@@ -894,9 +894,7 @@ class MouthFinder:
             if self.lips_red is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
                 lips = lip_columns(cols[at - len(ys) : at], self.lips_red, self._skin_f, self._lip_run)
                 half = lip_end(lips, half, LIP_END * self.wi, self.body)
-            k = min(int(half), len(ys) - 2)
-            t = half - k
-            out.append((x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)))
+            out.append(self._corner_at(x0, step, ys, half))
             strength.append(g)
             halves.append(half)
             seen.append(cheek_seen)
@@ -908,13 +906,16 @@ class MouthFinder:
                 at += len(ys)
                 ends.append(lip_gap(lips, half, LIP_END * self.wi, self.body, self.run))
             if all(e is not None and e < h - 1.0 for e, h in zip(ends, halves)):
-                for j, ((step, ys), half) in enumerate(zip(live, ends)):
-                    k = min(int(half), len(ys) - 2)
-                    t = half - k
-                    out[j] = (x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t))
-                    halves[j] = half
-                seen = [True, True]
+                out = [self._corner_at(x0, step, ys, half) for (step, ys), half in zip(live, ends)]
+                halves, seen = ends, [True, True]
         return out[0], out[1], strength, halves, seen
+
+    def _corner_at(self, x0: int, step: int, ys: np.ndarray, half: float) -> tuple[float, float]:
+        """The corner ``half`` columns (sub-pixel) from ``x0`` along one side's traced rows ``ys``
+        (``step`` −1: the left side), moved out by :data:`~tracker.mouth_model.CORNER_BIAS`."""
+        k = min(int(half), len(ys) - 2)
+        t = half - k
+        return x0 + step * (half + CORNER_BIAS * self.r), float(ys[k] * (1 - t) + ys[k + 1] * t)
 
     def _cheek_rows(self, counts: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         """The cheeks' medians and spreads (n, 9) for ``counts`` columns of the left side's then the right

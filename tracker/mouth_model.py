@@ -904,7 +904,6 @@ def lip_end(lips: list[bool], half: float, reach: float, body: tuple[int, int]) 
     return half if last is None else min(half, last + reach)
 
 
-
 def lip_gap(lips: list[bool], half: float, reach: float, body: tuple[int, int], run: int) -> float | None:
     """Where the lips end along one side of a mouth whose corners saw no cheek (:func:`corner_search`
     ran to its end through hair, a beard or a collar): ``reach`` columns past the last lip column
@@ -921,6 +920,7 @@ def lip_gap(lips: list[bool], half: float, reach: float, body: tuple[int, int], 
         if not any(lips[j : j + run]):
             return min(half, j - 1 + reach)
     return None
+
 
 def _row_classes(f: np.ndarray, y_top: float, top: int, bottom: int, y_bottom: float, wi: float,
                  skin: np.ndarray) -> np.ndarray:
