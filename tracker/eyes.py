@@ -161,6 +161,8 @@ LEVEL_MAX = 10.0
 """Highest centre of the interior ramp (Mahalanobis units)."""
 SKIN_FLOOR = (2.0, 1.0, 1.0)
 """Spread (std, grey levels) added to the skin's Y, Cr, Cb: noise, shading."""
+_FLOOR_COV = np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2)
+""":data:`SKIN_FLOOR` as the covariance added to a fitted colour Gaussian (the skin's, the irises')."""
 LINE_WIDTH = 0.12
 """Width (wi) of a disc wider than a spectacle rim or a lash line (see :func:`thin_dark`)."""
 LINE_DARK = 0.25
@@ -468,8 +470,9 @@ def walk_length(dist: list[float], lo: float, hi: float, k: int, white: float | 
     mid, width = 0.5 * (lo + hi), hi - lo
     if white is not None:
         inner = sorted(dist[: max(k, 1)])
-        b = min(dist)
-        a = inner[len(inner) // 2] if below and b > white else min(inner[len(inner) // 2], white)
+        a, b = inner[len(inner) // 2], min(dist)
+        if not (below and b > white):
+            a = min(a, white)
         mid = max(mid, min(mid + b, 0.5 * (a + b)))
     start = mid - 0.5 * width
     ramp = [0.0 if (r := (d - start) / width) < 0.0 else 1.0 if r > 1.0 else r for d in dist]  # clamped, without min/max calls
@@ -596,7 +599,6 @@ class SkinModel:
         """The skin from named groups of BGR samples, pooled; a ``doubtful`` group whose own
         Gaussian would call the ``iris`` pixels (BGR) skin caught lashes or the iris and is
         left out."""
-        floor = np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2)
         inner = np.asarray(iris, dtype=np.float64).reshape(-1, 3) @ _YCC.T
         kept = []
         for name, px in groups.items():
@@ -605,14 +607,14 @@ class SkinModel:
                 continue
             if name in doubtful and len(inner):
                 dv = inner - ycc.mean(0)
-                ic = np.linalg.inv(np.cov(ycc.T) + floor)
+                ic = np.linalg.inv(np.cov(ycc.T) + _FLOOR_COV)
                 if np.median(np.sqrt(np.einsum("ni,ij,nj->n", dv, ic, dv))) < NOT_SKIN_HI + 1.0:
                     continue
             kept.append(ycc)
         if not kept:
             raise EyeModelError("eye model: no skin around the eyes in the calibration crop")
         ycc = np.concatenate(kept)
-        return cls(ycc.mean(0), np.cov(ycc.T) + floor)
+        return cls(ycc.mean(0), np.cov(ycc.T) + _FLOOR_COV)
 
     def set_levels(self, parts: list[np.ndarray]) -> None:
         """Centre the interior ramp half-way between the skin and the nearer of the interior's
@@ -1074,7 +1076,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_centres=brow_centres, brow_heights=brow_heights, lid_open=[0.0, 0.0], skin=skin, rims=rims,
         skin_bgr=np.ones(3), white=float(np.median(skin.distance(sclera))) if len(sclera) >= 3 else None,
         light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
-        iris_colour=(iris_ycc.mean(0), np.cov(iris_ycc.T) + np.diag(np.asarray(SKIN_FLOOR, dtype=np.float64) ** 2))
+        iris_colour=(iris_ycc.mean(0), np.cov(iris_ycc.T) + _FLOOR_COV)
         if len(iris_ycc) >= 6 else None,
     )
     f = EyeFinder(model, wi)

@@ -892,13 +892,19 @@ LIP_BODY = 0.5
 bound a corner: a hand or a scarf over the mouth shows none, and a speck of red on it is no lip."""
 
 
+def _lips_in_body(lips: list[bool], k: int, body: tuple[int, int]) -> int | None:
+    """The last column of the lips' body ``body`` up to column ``k`` when :data:`LIP_BODY` of those
+    columns show the lips (``lips``, :func:`lip_columns`), else None."""
+    a, b = min(body[0], k), min(body[1], k)
+    return b if b > a and sum(lips[a : b + 1]) >= LIP_BODY * (b + 1 - a) else None
+
+
 def lip_end(lips: list[bool], half: float, reach: float, body: tuple[int, int]) -> float:
     """``half`` (a corner's distance from the line's middle column, in columns) brought to at most
     ``reach`` columns past the last column up to it that shows the lips (``lips`` per column from the
     middle out, :func:`lip_columns`); unchanged unless :data:`LIP_BODY` of the columns ``body`` do."""
     k = min(int(half), len(lips) - 1)
-    a, b = min(body[0], k), min(body[1], k)
-    if b <= a or sum(lips[a : b + 1]) < LIP_BODY * (b + 1 - a):
+    if _lips_in_body(lips, k, body) is None:
         return half
     last = next((j for j in range(k, -1, -1) if lips[j]), None)
     return half if last is None else min(half, last + reach)
@@ -913,8 +919,8 @@ def lip_gap(lips: list[bool], half: float, reach: float, body: tuple[int, int], 
     first gap, not the last lip column (:func:`lip_end`): beyond a beard, bright skin or a wall can
     pass for teeth."""
     k = min(int(half), len(lips) - 1)
-    a, b = min(body[0], k), min(body[1], k)
-    if b <= a or sum(lips[a : b + 1]) < LIP_BODY * (b + 1 - a):
+    b = _lips_in_body(lips, k, body)
+    if b is None:
         return None
     for j in range(b + 1, k - run + 2):
         if not any(lips[j : j + run]):
