@@ -10,6 +10,8 @@ half     half the resolution (a 256 px face crop: a cheap webcam, a face far awa
 third    a third of the resolution (about 35 px between the eyes: the smallest face worth tracking)
 small    the clip at 0.45× inside a 640×480 frame, drifting slowly (a small face in a room)
 shake    shifted and turned every frame (a hand-held phone, a fast-moving head)
+jolt     the same kind of wander, each frame smeared along its motion over half the frame time (a
+         webcam's exposure in room light: the faster the move, the blurrier the face)
 noisy    sensor noise σ 8 and JPEG quality 40 (a dark room's gain, a streaming codec)
 dim      the light falls to half over the clip, turning warm (auto-exposure, a lamp)
 step     the light jumps between full and 55 % every quarter of the clip (a lamp switched, an
@@ -76,7 +78,7 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed",
+VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed",
             "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
@@ -89,6 +91,9 @@ WARM_BGR = (0.72, 0.95, 1.15)
 """The ``warm`` variant's cast: each channel's factor (B, G, R), a tungsten lamp's."""
 SIDE_LIGHT = 0.4
 """The light on the frame's right edge in ``side`` (× the clip's; the left edge keeps all of it)."""
+EXPOSURE = (0.5, 8)
+"""The ``jolt`` variant's exposure (share of the frame time, ending at the frame) and the warped
+copies averaged over it."""
 AWAY = (0.4, 15, 25)
 """The away variants' event: it starts at this share of the clip, takes this many frames to go (and
 as many to come back) and stays away this many frames. Leaving the frame in 15 frames moves the
@@ -128,7 +133,7 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
         ox = 0.5 * (W - s * w) + 0.25 * (W - s * w) * np.sin(2 * math.pi * t / 9.0 + rng.uniform(0, 6.28))
         oy = 0.5 * (H - s * h) + 0.2 * (H - s * h) * np.sin(2 * math.pi * t / 7.0 + rng.uniform(0, 6.28))
         return [np.array([[s, 0.0, ox[i]], [0.0, s, oy[i]]]) for i in range(n)], (W, H)
-    if kind == "shake":
+    if kind in ("shake", "jolt"):
         # a hand-held camera: a smooth random wander of ±30 px and ±8° with quick jolts
         def wander(amp: float) -> np.ndarray:
             k = np.cumsum(rng.normal(0.0, 1.0, n + 30))
@@ -545,6 +550,14 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     h, w = frames[0].shape[:2]
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
     maps, (W, H) = _affine_frames(n, kind, (w, h), seed)
+    smear = None
+    if kind == "jolt":
+        # each frame's exposure runs over the last EXPOSURE[0] of the motion from the frame before; the
+        # points sit where its middle puts them
+        share, k = EXPOSURE
+        spans = [(maps[max(i - 1, 0)], maps[i]) for i in range(n)]
+        smear = [[a + (b - a) * (1.0 - share * (j + 0.5) / k) for j in range(k)] for a, b in spans]
+        maps = [a + (b - a) * (1.0 - 0.5 * share) for a, b in spans]
     points = _read_points(src / f"{name}.points.csv")
     pix = _photometric(kind, n, seed, points)
     room = _room(frames[0]) if kind == "leave" else None
@@ -560,6 +573,11 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             interp = cv2.INTER_AREA if kind in ("half", "third") else cv2.INTER_LINEAR
             if kind in ("half", "third"):
                 img = cv2.resize(img, (W, H), interpolation=interp)
+            elif smear is not None:
+                acc = np.zeros((H, W, 3), np.float32)
+                for mj in smear[i]:
+                    acc += cv2.warpAffine(img, mj, (W, H), flags=interp, borderMode=cv2.BORDER_CONSTANT, borderValue=border)
+                img = np.clip(acc * np.float32(1.0 / len(smear[i])) + 0.5, 0, 255).astype(np.uint8)
             elif room is not None:
                 img = cv2.warpAffine(img, m, (W, H), dst=room.copy(), flags=interp, borderMode=cv2.BORDER_TRANSPARENT)
             else:

@@ -465,6 +465,40 @@ def test_the_lines_shade_is_not_a_thin_upper_lip():
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI)) - 3.0) < 1.0
 
 
+# a lower lip as a profile through expr_d6's first frame shows it (features L, c1, c2 per row from the
+# gap's last row on, rounded): the line's blurred shade, dark and red, then the lip lit and shaded
+# (rows 1-19), then the chin
+_D6_LOWER = np.array([
+    [8.4, 30.2, 17.7], [10.0, 25.9, 14.9], [11.9, 22.3, 12.4], [13.1, 20.4, 11.1], [14.1, 19.2, 10.4],
+    [14.9, 18.2, 9.9], [15.8, 17.3, 9.4], [16.6, 16.5, 9.0], [17.3, 15.9, 8.6], [17.2, 16.0, 8.7],
+    [16.5, 16.6, 9.0], [15.8, 17.3, 9.4], [15.3, 17.8, 9.7], [15.1, 17.5, 10.0], [15.0, 16.2, 10.4],
+    [14.9, 15.4, 10.7], [15.0, 15.1, 10.7], [15.6, 14.6, 10.3], [16.5, 13.9, 9.8], [17.5, 13.2, 9.3],
+    [18.3, 12.6, 8.9], [18.7, 12.3, 8.7], [18.9, 12.2, 8.6], [19.0, 12.1, 8.6], [19.1, 12.0, 8.5],
+    [19.2, 11.7, 8.5], [19.4, 10.9, 8.3], [19.6, 10.4, 8.2], [19.8, 10.2, 8.1], [19.9, 10.1, 8.1]])
+
+
+def test_the_lines_shade_is_not_a_thin_lower_lip():
+    """The same near tie under the gap (expr_d6's first frame): the thinnest lip the search allows
+    split a little better than the whole lip against the chin on some columns and a little worse on
+    others, so which one calibration took turned on a pixel of the click — one copy of the clip
+    calibrated a lower lip of 4 px at 80 px between the eyes where the others had 16, and the
+    tracker looked for a 4 px lip all clip long (a hand-held camera's copy of expr_d6, ``--auto``:
+    its opening followed the peer at r .45; .82 with this). The peak further out is the edge. A
+    lower lip that really is that thin keeps its edge."""
+    import tracker.mouth_model as mm
+
+    above = np.vstack([np.tile([12.0, 20.0, 12.0], (40, 1)), [[7.8, 31.7, 18.7]]])  # the upper lip, the gap
+    gap = len(above)  # _D6_LOWER's first row
+    f = np.vstack([above, _D6_LOWER, np.tile(_D6_LOWER[-1], (30, 1))])
+    assert 17.0 < mm._outer_edge(f, gap, +1, 0.05, 0.3, WI) - gap < 22.0
+    # the rule is what moved it: without the far peak the split at the thinnest lip wins here
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(mm, "EDGE_INTERIOR", 99.0)
+        assert mm._outer_edge(f, gap, +1, 0.05, 0.3, WI) - gap < 5.0
+    thin = np.vstack([above, _D6_LOWER[:1], np.tile([16.0, 18.0, 10.0], (4, 1)), np.tile(_D6_LOWER[-1], (40, 1))])
+    assert abs(mm._outer_edge(thin, gap, +1, 0.05, 0.3, WI) - gap - 4.5) < 1.0
+
+
 def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
     """When only the line's blurred shade tells the rows apart (a soft or low-resolution picture, a
     lip as pale as the skin) the split improves all the way to the gap and no edge stands out

@@ -61,7 +61,7 @@ def test_peer_params_follow_the_readme_definitions():
     assert v["mouth_width"] == 20.0 and v["lip_upper"] == pytest.approx(5.0) and v["lip_lower"] == pytest.approx(10.0)
 
 
-@pytest.mark.parametrize("kind", ["half", "mirror", "shake"])
+@pytest.mark.parametrize("kind", ["half", "mirror", "shake", "jolt"])
 def test_variant_moves_points_with_pixels(tmp_path, kind):
     src, out = tmp_path / "src", tmp_path / kind
     src.mkdir()
@@ -83,6 +83,42 @@ def test_variant_moves_points_with_pixels(tmp_path, kind):
         assert lp[0] < rp[0] and clicks["left_pupil"][0] < clicks["right_pupil"][0]
     assert peer.ipd[0] == pytest.approx(float(np.hypot(*(rp - lp))), abs=0.01)
     assert clicks["left_pupil"] == pytest.approx(list(lp), abs=0.06)
+
+
+def test_jolt_smears_each_frame_along_its_motion_and_puts_the_points_mid_exposure(tmp_path):
+    """``jolt``: the shake's kind of wander, each frame the average of the picture over the last
+    EXPOSURE of the motion since the frame before — a white square on grey gets soft edges across
+    the way it moved, as many more mid-grey pixels as it moved far — and the peer's points where
+    the middle of that exposure put them."""
+    src, out = tmp_path / "src", tmp_path / "jolt"
+    src.mkdir()
+    pts = _write_clip(src, n=24, w=160, h=120)
+    img = np.full((120, 160, 3), 40, np.uint8)
+    img[50:70, 70:90] = 230
+    vw = cv2.VideoWriter(str(src / "c.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), 25.0, (160, 120))
+    for _ in range(24):
+        vw.write(img)
+    vw.release()
+    sc.make_variant(src, "c", "jolt", out)
+    maps, _ = sc._affine_frames(24, "jolt", (160, 120), sum(map(ord, "c")) + sum(map(ord, "jolt")))
+    centre = np.array([79.5, 59.5])
+    moves = [float(np.hypot(*(sc._move(centre, maps[i]) - sc._move(centre, maps[i - 1])))) for i in range(1, 24)]
+    i = 1 + int(np.argmax(moves))
+    assert moves[i - 1] > 3.0
+    cap = cv2.VideoCapture(str(out / "c.mp4"))
+    frames = [cap.read()[1] for _ in range(24)]
+    cap.release()
+    share = sc.EXPOSURE[0]
+    mid = maps[i - 1] + (maps[i] - maps[i - 1]) * (1.0 - 0.5 * share)
+    peer = rf.load_peer(out, "c")
+    assert peer.points["left_pupil"][i] == pytest.approx(sc._move(np.array(pts["left_pupil"], float), mid), abs=0.01)
+    sharp = cv2.warpAffine(img, mid, (160, 120), flags=cv2.INTER_LINEAR, borderValue=(40, 40, 40))
+
+    def soft(a: np.ndarray) -> int:
+        g = a.mean(axis=2)
+        return int(((g > 80) & (g < 190)).sum())
+
+    assert soft(frames[i]) > soft(sharp) + 2.0 * moves[i - 1]
 
 
 def test_stress_summary_counts_targets():
