@@ -78,8 +78,8 @@ POINTS = (
     "left_pupil", "right_pupil", "left_upper_lid", "left_lower_lid", "right_upper_lid", "right_lower_lid",
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
-VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale", "washed",
-            "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
+VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale",
+            "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 WASHED_COLOUR = 0.35

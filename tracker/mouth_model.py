@@ -599,12 +599,14 @@ EDGE_INTERIOR = 0.5
 towards the gap, gives way to a peak further out scoring at least this share of it
 (:func:`_outer_edge`); without one, an upper lip's edge is not seen (:data:`UPPER_UNSEEN`) and a
 lower lip's stays where it is (its colour places it next, :func:`_colour_edge`). The two splits are
-often a near tie (on expr_d6's first frame 61 against 54): which one won turned on a pixel of the
-click, and one copy of a clip calibrated a lower lip a third as thick as the next — 8 of the
-calibrations of the 22 unbearded harder copies of the shared clips (clicks and ``--auto``) lay more than 0.05
-IPD from their clip's median lower lip, 2 with the rule for both lips; the mean spread over the
-copies 0.012 → 0.007 IPD. The tracker then looked for a lower lip of 4 px at 80 px between the eyes
-all clip long: expr_d6 smeared by a hand-held camera's motion, ``--auto``, opening r .45 → .82."""
+often a near tie (on expr_d6's first frame 61 against 54), so a pixel of the click decided which one
+won: of the calibrations of the 22 unbearded harder copies of the shared clips (clicks and
+``--auto``), 8 lay more than 0.05 IPD from their clip's median lower lip, 2 with the rule for both
+lips (mean spread over the copies 0.012 → 0.007 IPD). The tracker then looked for a lower lip of 4 px
+at 80 px between the eyes all clip long: expr_d6 smeared by a hand-held camera's motion, ``--auto``,
+opening r .45 → .82. The dark-skinned copy of expr_d19 with ``--auto``, whose lower lip barely differs
+from the skin, followed the peer better with the thin lip it had calibrated (.89; .78 with the lip as
+thick as the other copies of the clip calibrate it)."""
 UPPER_UNSEEN = 0.075
 """Thickness (× wi) taken for an upper lip whose outer edge the calibration frame does not show: the
 split improves all the way to the gap and no peak further out stands up (:data:`EDGE_INTERIOR`) —
