@@ -958,12 +958,15 @@ def main(argv: list[str] | None = None) -> int:
                                                        "since an earlier --save")
     ap.add_argument("--variants", help="with --stress: comma-separated variants (default: all; 'original' is the "
                                        "shared clips as they are)")
+    ap.add_argument("--mirror", metavar="DIR", nargs="?", const="out/stress",
+                    help="instead: each clip against its mirror copy (made in DIR/mirror, default out/stress, when "
+                         "missing), frame by frame: where the two disagree a decision is balanced on a knife edge")
     args = ap.parse_args(argv)
     if (args.save or args.against or args.variants) and not args.stress:
         print("realfaces: --save, --against and --variants go with --stress", file=sys.stderr)
         return 2
-    if args.jitter and args.stress:
-        print("realfaces: --jitter and --stress are two different runs: give one", file=sys.stderr)
+    if sum(bool(x) for x in (args.jitter, args.stress, args.mirror)) > 1:
+        print("realfaces: --jitter, --stress and --mirror are different runs: give one", file=sys.stderr)
         return 2
     folder = real_dir(args.dir)
     want = None
@@ -996,12 +999,14 @@ def main(argv: list[str] | None = None) -> int:
                 return 2
         return stress_main(Path(args.stress), args.dir, args.serial, save=args.save, against=old, variants=variants, clips=want)
 
+    modes = (True,) if args.auto else (False, True) if args.both else (False,)
+    workers = 1 if args.serial else 2
+    if args.mirror:
+        return mirror_main(Path(args.mirror), args.dir, want, modes, workers)
     if folder is None:
         print(f"realfaces: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
         return 0
     names = want or clip_names(folder)
-    modes = (True,) if args.auto else (False, True) if args.both else (False,)
-    workers = 1 if args.serial else 2
     if args.jitter:
         cv2.setNumThreads(1)
         t0 = time.perf_counter()
@@ -1025,6 +1030,94 @@ def main(argv: list[str] | None = None) -> int:
     if args.synth:
         print()
         print(synth_table(measure_synthetic(workers=workers)).render())
+    print(f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+MIRROR_VALUES: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
+    ("open", ("lip_upper", "lip_lower"), ("lip_upper", "lip_lower")),
+    ("width", ("mouth_width",), ("mouth_width",)),
+    ("eye L", ("eye_open_l",), ("eye_open_r",)),
+    ("eye R", ("eye_open_r",), ("eye_open_l",)),
+    ("brow L", ("brow_l",), ("brow_r",)),
+    ("brow R", ("brow_r",), ("brow_l",)),
+)
+"""The shape values ``--mirror`` compares: name, our parameters on the clip, and the parameters that
+measure the same thing on its mirror copy (image-left there is image-right here)."""
+
+
+def mirror_disagreement(ours: np.ndarray, mirrored: np.ndarray, ok: np.ndarray, ipd: np.ndarray
+                        ) -> dict[str, tuple[float, float, int]]:
+    """How far our shape values on a clip (``ours``, (n, 10) in :data:`PARAM_NAMES` order) and on its
+    mirror copy (``mirrored``) disagree, frame by frame, over the frames ``ok`` in both: per
+    :data:`MIRROR_VALUES` name, the median and the 95th percentile of the difference in % of
+    ``ipd`` (n,) and the frame where it is largest (-1: no such frame). A mirrored picture is the
+    same face, so a large disagreement is a decision that one pixel more or less could flip."""
+    ix = {k: i for i, k in enumerate(PARAM_NAMES)}
+    n = min(len(ours), len(mirrored), len(ok), len(ipd))
+    out = {}
+    for name, here, there in MIRROR_VALUES:
+        a = ours[:n, [ix[k] for k in here]].sum(axis=1)
+        b = mirrored[:n, [ix[k] for k in there]].sum(axis=1)
+        d = np.abs(a - b) / ipd[:n] * 100.0
+        m = ok[:n] & np.isfinite(d)
+        if not m.any():
+            out[name] = (math.nan, math.nan, -1)
+            continue
+        out[name] = (float(np.median(d[m])), float(np.percentile(d[m], 95)), int(np.flatnonzero(m)[np.argmax(d[m])]))
+    return out
+
+
+def _mirror_job(folder: Path, mirror: Path, name: str, auto: bool) -> tuple[str, str, dict | None, int, str | None]:
+    """One clip in one mode against its mirror copy: ``(name, mode, mirror_disagreement, frames
+    whose status differs, error)``."""
+    runs = [run_clip(d / f"{name}.mp4", d / f"{name}.clicks.json", auto=auto, name=name) for d in (folder, mirror)]
+    mode = runs[0].mode
+    err = next((r.error for r in runs if r.error is not None), None)
+    if err is not None:
+        return name, mode, None, 0, err
+    vals = [np.array([[getattr(p, k) for k in PARAM_NAMES] for p in r.params], np.float64) for r in runs]
+    sts = [np.array([s == OK for s in r.statuses]) for r in runs]
+    n = min(len(v) for v in vals)
+    peer = load_peer(folder, name)
+    ipd = np.full(n, np.nan)
+    k = min(n, len(peer))
+    ipd[:k] = peer.ipd[:k]
+    ipd = np.where(np.isfinite(ipd), ipd, np.nanmedian(ipd))
+    both = sts[0][:n] & sts[1][:n]
+    differ = int(np.sum(sts[0][:n] != sts[1][:n]))
+    return name, mode, mirror_disagreement(vals[0][:n], vals[1][:n], both, ipd), differ, None
+
+
+def mirror_main(out: Path, src: str | None, names: Sequence[str] | None, modes: Sequence[bool], workers: int) -> int:
+    """``--mirror``: every clip (and mode) against its mirror copy (made in ``out``/mirror when missing):
+    a table of :func:`mirror_disagreement` per shape value and the frames whose status differs."""
+    from benchmarks import stress_clips
+    from benchmarks.harness import Table
+
+    folder = real_dir(src)
+    if folder is None:
+        print(f"realfaces --mirror: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
+        return 0
+    names = list(names) if names else clip_names(folder)
+    d = out / "mirror"
+    for nm in names:
+        if not ((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists()):
+            stress_clips.make_variant(folder, nm, "mirror", d)
+    cv2.setNumThreads(1)
+    t0 = time.perf_counter()
+    res = _map(_mirror_job, [(folder, d, nm, a) for nm in names for a in modes], workers)
+    t = Table("Real faces against their mirror copies: shape values, |ours − mirrored| in % IPD, median / p95 (frame of the largest)",
+              ["clip", "mode"] + [v[0] for v in MIRROR_VALUES] + ["status differs"])
+    for name, mode, dis, differ, err in res:
+        if dis is None:
+            t.add(name, mode, *(["—"] * len(MIRROR_VALUES)), f"error: {err}")
+            continue
+        t.add(name, mode, *[f"{m:.1f}/{p:.1f} ({f})" if f >= 0 else "—" for m, p, f in (dis[v[0]] for v in MIRROR_VALUES)], str(differ))
+    t.note = ("A mirrored picture is the same face: where the two disagree, a decision (a lip edge, a lid, a corner) "
+              "was balanced on a knife edge, and another camera or click can tip it. Left/right values are compared "
+              "with their mirrored partners.")
+    print(t.render())
     print(f"({time.perf_counter() - t0:.1f} s)")
     return 0
 

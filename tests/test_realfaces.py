@@ -336,6 +336,50 @@ def test_stress_runs_only_the_variants_and_clips_asked_for(tmp_path, monkeypatch
     assert rows == ["original", "pale"]
 
 
+def test_mirror_disagreement_compares_each_value_with_its_mirrored_partner():
+    """A clip and its mirror copy: the left eye here is the right eye there. Identical measurements
+    (swapped left for right) disagree by nothing; one frame's opening read 10 px apart (IPD 100) is
+    10 % at that frame, and frames not ok in both are left out."""
+    ix = {k: i for i, k in enumerate(PARAM_NAMES)}
+    n = 20
+    rng = np.random.default_rng(1)
+    ours = rng.uniform(10, 50, (n, len(PARAM_NAMES)))
+    mirrored = ours.copy()
+    for a, b in (("eye_open_l", "eye_open_r"), ("brow_l", "brow_r")):
+        mirrored[:, [ix[a], ix[b]]] = ours[:, [ix[b], ix[a]]]
+    ok, ipd = np.ones(n, bool), np.full(n, 100.0)
+    d = rf.mirror_disagreement(ours, mirrored, ok, ipd)
+    assert set(d) == {v[0] for v in rf.MIRROR_VALUES}
+    assert all(m == 0.0 and p == 0.0 for m, p, _ in d.values())
+    mirrored[7, ix["lip_upper"]] += 10.0
+    mirrored[3, ix["eye_open_l"]] += 30.0  # the right eye's partner there: left out when frame 3 is not ok
+    ok[3] = False
+    d = rf.mirror_disagreement(ours, mirrored, ok, ipd)
+    assert d["open"][2] == 7 and d["open"][1] > 0.0 and d["open"][0] == 0.0
+    assert d["eye R"] == (0.0, 0.0, 0) and d["eye L"][1] == 0.0
+    assert rf.mirror_disagreement(ours, mirrored, np.zeros(n, bool), ipd)["width"][2] == -1
+
+
+def test_mirror_is_its_own_run_and_makes_only_the_mirror_copies(tmp_path, monkeypatch, capsys):
+    from benchmarks import stress_clips
+
+    assert rf.main(["--mirror", str(tmp_path / "m"), "--stress", str(tmp_path / "s")]) == 2
+    assert "different runs" in capsys.readouterr().err
+    src = tmp_path / "real"
+    src.mkdir()
+    for n in ("a", "b"):
+        (src / f"{n}.clicks.json").write_text("{}")
+        (src / f"{n}.mp.csv").write_text("frame\n")
+        (src / f"{n}.mp4").write_bytes(b"")
+    made, jobs = [], []
+    monkeypatch.setattr(stress_clips, "make_variant", lambda folder, name, v, d: made.append((name, v)))
+    monkeypatch.setattr(rf, "_mirror_job", lambda folder, mirror, name, auto: jobs.append((mirror.name, name, auto)) or (
+        name, "auto" if auto else "clicks", None, 0, "no frames"))
+    assert rf.main(["--mirror", str(tmp_path / "out"), "--dir", str(src), "--clips", "b", "--both", "--serial"]) == 0
+    assert made == [("b", "mirror")] and jobs == [("mirror", "b", False), ("mirror", "b", True)]
+    assert "error: no frames" in capsys.readouterr().out
+
+
 def test_jitter_runs_every_clip_once_per_move_and_counts_the_runs_that_meet_every_target(tmp_path, monkeypatch):
     peer = _peer(n=60)
     good = rf.compare(_ours(peer.values), peer)
