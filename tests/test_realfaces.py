@@ -315,15 +315,21 @@ def test_stress_variants_are_checked_and_go_with_stress(tmp_path, capsys):
     assert "no stress variant dep" in err and "glasses" in err and err.count("\n") == 1
 
 
-def test_stress_runs_only_the_variants_and_clips_asked_for(tmp_path, monkeypatch, capsys):
-    from benchmarks import stress_clips
-
+def _empty_clips(tmp_path):
+    """A folder of real clips "a" and "b" whose files are there but empty (for the runs' wiring)."""
     src = tmp_path / "real"
     src.mkdir()
     for n in ("a", "b"):
         (src / f"{n}.clicks.json").write_text("{}")
         (src / f"{n}.mp.csv").write_text("frame\n")
         (src / f"{n}.mp4").write_bytes(b"")
+    return src
+
+
+def test_stress_runs_only_the_variants_and_clips_asked_for(tmp_path, monkeypatch, capsys):
+    from benchmarks import stress_clips
+
+    src = _empty_clips(tmp_path)
     made, measured = [], []
     monkeypatch.setattr(stress_clips, "make_variant", lambda folder, name, v, d: made.append((name, v)))
     monkeypatch.setattr(rf, "measure_all", lambda d, names, modes, workers=2: measured.append((d.name, list(names))) or [
@@ -365,12 +371,7 @@ def test_mirror_is_its_own_run_and_makes_only_the_mirror_copies(tmp_path, monkey
 
     assert rf.main(["--mirror", str(tmp_path / "m"), "--stress", str(tmp_path / "s")]) == 2
     assert "different runs" in capsys.readouterr().err
-    src = tmp_path / "real"
-    src.mkdir()
-    for n in ("a", "b"):
-        (src / f"{n}.clicks.json").write_text("{}")
-        (src / f"{n}.mp.csv").write_text("frame\n")
-        (src / f"{n}.mp4").write_bytes(b"")
+    src = _empty_clips(tmp_path)
     made, jobs = [], []
     monkeypatch.setattr(stress_clips, "make_variant", lambda folder, name, v, d: made.append((name, v)))
     monkeypatch.setattr(rf, "_mirror_job", lambda folder, mirror, name, auto: jobs.append((mirror.name, name, auto)) or (
