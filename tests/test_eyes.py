@@ -675,7 +675,7 @@ def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder
     finder.forget()
     h, m = finder._brow_peak(score, top, py, 0)
     assert h == pytest.approx(base - crease_k) and m == pytest.approx(0.93)  # no history: the best
-    finder._brow_last[0] = base - brow_k
+    finder._brow_last[0] = py - (base - brow_k)  # the brow's row
     h, _ = finder._brow_peak(score, top, py, 0)
     assert h == pytest.approx(base - brow_k)  # the brow was here: it stays
     score[crease_k] = 1.0
@@ -684,6 +684,27 @@ def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder
     assert h == pytest.approx(base - crease_k, abs=0.5)
     finder.forget()
     assert all(math.isnan(v) for v in finder._brow_last)
+
+
+def test_a_blink_moving_the_eye_point_down_does_not_pull_the_brow_onto_the_crease(finder):
+    """In a blink the eye point goes down to the slit (here 12 px) while the brow stays where it was
+    in the crop, which follows the head. The lid's crease 15 px under the brow matches its
+    cross-section a little better. Held as a height above the eye point, the last brow sat 3 px from
+    the crease and 12 from itself, and the brow went to the crease (talk_a with ``--auto``, after a
+    blink: the left brow 20 px low for ten frames); held as a row of the crop it stays on the brow."""
+    n, c = 50, finder.model.brow_centres[0]
+    finder.forget()
+    score = np.zeros(n, np.float32)
+    score[19:22] = (0.7, 0.9, 0.7)  # frame 1: the brow at offset 20 (row c + 20), alone
+    h1, _ = finder._brow_peak(score, 0, 50.0, 0)
+    assert h1 == pytest.approx(50.0 - c - 20)
+    top, py = 12, 62.0  # frame 2: the eye point and its window 12 px lower
+    score = np.zeros(n, np.float32)
+    score[7:10] = (0.7, 0.9, 0.7)  # the brow, same row: offset 8
+    score[22:25] = (0.72, 0.93, 0.72)  # the crease, 15 px lower: offset 23
+    h2, _ = finder._brow_peak(score, top, py, 0)
+    assert py - h2 == pytest.approx(c + 20)  # the same row as before
+    assert h2 == pytest.approx(h1 + 12)
 
 
 def test_checking_a_guess_without_the_brows_finds_the_same_eyes_and_keeps_the_brow_memory(finder):

@@ -146,7 +146,7 @@ SOCKET_SEARCH = (0.17, 0.05)
 BROW_DOWN, BROW_UP = 0.15, 0.3
 """Brow search range: this far below / above its calibrated height."""
 BROW_STEADY = 1.0
-"""Correlation a brow height costs per work ipd away from the last frame's (see
+"""Correlation a brow costs per work ipd away from the last frame's row (see
 :meth:`EyeFinder._brow_peak`)."""
 BROW_HW = 0.03
 """Half-width of the strip of columns the brow's cross-section averages."""
@@ -1175,7 +1175,7 @@ class EyeFinder:
             t = t - t.mean()
             self._brow_t.append(t / max(float(np.linalg.norm(t)), 1e-6))
         self._brow_ones = [np.ones(len(t), np.float32) for t in self._brow_t]
-        self._brow_last = [math.nan, math.nan]  # the last heights found (crop px), see _brow_peak
+        self._brow_last = [math.nan, math.nan]  # the last brows' rows (crop px), see _brow_peak
         self._offsets: dict[int, np.ndarray] = {}  # 0, 1, … n−1 (float32), by n, for _brow_peak
         self._socket_search = (max(int(round(SOCKET_SEARCH[0] * wi / 2)), 1), max(int(round(SOCKET_SEARCH[1] * wi / 2)), 1))
         self._skin_step = max(int(round(wi / 20.0)), 1)
@@ -1620,11 +1620,17 @@ class EyeFinder:
 
     def _brow_peak(self, score: np.ndarray, top: int, py: float, i: int) -> tuple[float, float]:
         """The brow's height and correlation from the correlation at every offset of its strip:
-        the best offset, less :data:`BROW_STEADY` per work ipd away from the last frame's
-        height (a lid crease or a lock of hair can look as much like the brow's cross-section
-        as the brow; the brow does not jump between them from one frame to the next)."""
+        the best offset, less :data:`BROW_STEADY` per work ipd away from the last frame's brow
+        (a lid crease or a lock of hair can look as much like the brow's cross-section as the
+        brow; the brow does not jump between them from one frame to the next). The last brow is
+        kept as a row of the crop, which follows the head: the eye point under it moves with the
+        gaze and goes down to the slit in a blink, and a brow held at its height above that point
+        was pulled down onto the lid's crease (talk_a with ``--auto``, after a blink: the left brow
+        20 px low for ten frames)."""
         base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
         last = self._brow_last[i]
+        if math.isfinite(last):
+            last = py - last  # the last brow's row as a height above this frame's eye point
         n = len(score)
         if math.isfinite(last):
             offsets = self._offsets.get(n)
@@ -1640,7 +1646,7 @@ class EyeFinder:
         else:
             b, d = float(score[k]), 0.0
         h = float(base - k - d)
-        self._brow_last[i] = h
+        self._brow_last[i] = py - h
         return h, min(b, 1.0)
 
     def _brow(self, grey: np.ndarray, at: tuple[float, float], i: int, centre=None) -> tuple[float, float]:
