@@ -1629,10 +1629,9 @@ class EyeFinder:
         20 px low for ten frames)."""
         base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
         last = self._brow_last[i]
-        if math.isfinite(last):
-            last = py - last  # the last brow's row as a height above this frame's eye point
         n = len(score)
         if math.isfinite(last):
+            last = py - last  # the last brow's row as a height above this frame's eye point
             offsets = self._offsets.get(n)
             if offsets is None:
                 offsets = self._offsets[n] = np.arange(n, dtype=np.float32)
