@@ -65,7 +65,7 @@ from tracker.auto_init import AutoInitError
 from tracker.calibration import CalibrationError, calibrate
 from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
-from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams
+from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams, params_array
 from tracker.track_cli import TrackCliError, _auto, _frame_at, _Video
 
 if TYPE_CHECKING:
@@ -1076,7 +1076,7 @@ def _mirror_job(folder: Path, mirror: Path, name: str, auto: bool) -> tuple[str,
     err = next((r.error for r in runs if r.error is not None), None)
     if err is not None:
         return name, mode, None, 0, err
-    vals = [np.array([[getattr(p, k) for k in PARAM_NAMES] for p in r.params], np.float64) for r in runs]
+    vals = [params_array(r.params) for r in runs]
     sts = [np.array([s == OK for s in r.statuses]) for r in runs]
     n = min(len(v) for v in vals)
     peer = load_peer(folder, name)
@@ -1089,10 +1089,21 @@ def _mirror_job(folder: Path, mirror: Path, name: str, auto: bool) -> tuple[str,
     return name, mode, mirror_disagreement(vals[0][:n], vals[1][:n], both, ipd), differ, None
 
 
+def _variant_dir(folder: Path, names: Sequence[str], kind: str, out: Path) -> Path:
+    """``out``/``kind``, holding variant ``kind`` (:mod:`benchmarks.stress_clips`) of each clip
+    ``names`` of ``folder``: all of them made again when any is missing."""
+    from benchmarks import stress_clips
+
+    d = out / kind
+    if not all((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists() for nm in names):
+        for nm in names:
+            stress_clips.make_variant(folder, nm, kind, d)
+    return d
+
+
 def mirror_main(out: Path, src: str | None, names: Sequence[str] | None, modes: Sequence[bool], workers: int) -> int:
     """``--mirror``: every clip (and mode) against its mirror copy (made in ``out``/mirror when missing):
     a table of :func:`mirror_disagreement` per shape value and the frames whose status differs."""
-    from benchmarks import stress_clips
     from benchmarks.harness import Table
 
     folder = real_dir(src)
@@ -1100,10 +1111,7 @@ def mirror_main(out: Path, src: str | None, names: Sequence[str] | None, modes: 
         print(f"realfaces --mirror: skipped — no folder of real clips (set ${REAL_DIR_ENV} or provide ../shared/real)")
         return 0
     names = list(names) if names else clip_names(folder)
-    d = out / "mirror"
-    for nm in names:
-        if not ((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists()):
-            stress_clips.make_variant(folder, nm, "mirror", d)
+    d = _variant_dir(folder, names, "mirror", out)
     cv2.setNumThreads(1)
     t0 = time.perf_counter()
     res = _map(_mirror_job, [(folder, d, nm, a) for nm in names for a in modes], workers)
@@ -1222,11 +1230,7 @@ def stress_main(out: Path, src: str | None = None, serial: bool = False, save: s
     wanted = list(variants) if variants else ["original", *stress_clips.VARIANTS]
     sets = [("original", folder)] if "original" in wanted else []
     for v in (v for v in stress_clips.VARIANTS if v in wanted):
-        d = out / v
-        if not all((d / f"{nm}.mp4").exists() and (d / f"{nm}.mp.csv").exists() for nm in names):
-            for nm in names:
-                stress_clips.make_variant(folder, nm, v, d)
-        sets.append((v, d))
+        sets.append((v, _variant_dir(folder, names, v, out)))
     cv2.setNumThreads(1)
     rows, total, count, records = [], {k: 0 for k in STRESS_SHORT}, 0, []
     t0 = time.perf_counter()
