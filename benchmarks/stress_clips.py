@@ -43,6 +43,9 @@ deep     the face darkened to a deep brown, all of it alike (a washed-out forehe
 glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a glare on
          the lenses that moves as the head moves (a rim between the eye and the brow and under the
          lower lid, a bright streak near or over the eye)
+child    a young child's proportions: each eye 25 % larger about its pupil, and the face under the
+         eyes drawn up towards them, most just under the lower lids (the mouth about 0.95 of the
+         eye distance below the eyes, where an adult's is 1.05-1.2); brows and forehead as they were
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -79,7 +82,8 @@ POINTS = (
     "left_brow", "right_brow", "left_mouth_corner", "right_mouth_corner", "upper_lip_top", "lower_lip_bottom",
 )
 VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale",
-            "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep")
+            "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep",
+            "child")
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 WASHED_COLOUR = 0.35
@@ -277,6 +281,87 @@ def _beard(points: dict[str, np.ndarray], shape: tuple[int, int], seed: int):
         return np.clip(img * (1.0 - hair) + fur * hair, 0, 255).astype(np.uint8)
 
     return paint
+
+
+CHILD = (0.75, 1.6, 0.15)
+"""The ``child`` variant's squeeze ``(k, D, v0)``: a point at distance v below the eye line (× the
+inter-pupil distance) past ``v0`` (under the lower lids: the eyes keep their shape) goes to
+v − (1 − k)·(v − v0)·exp(−((v − v0) / D)²): distances just under the eyes shrink by k and the squeeze
+fades out past the chin. An adult's mouth 1.15 below the eyes lands at 0.98."""
+
+
+def child_squeeze(v: np.ndarray) -> np.ndarray:
+    """Where the ``child`` variant puts a point ``v`` (× the inter-pupil distance, down from the eye
+    line; above :data:`CHILD`'s ``v0`` it stays) — increasing, so each output row has one source."""
+    k, reach, v0 = CHILD
+    v = np.asarray(v, dtype=np.float64)
+    pos = np.maximum(v - v0, 0.0)
+    return v - (1.0 - k) * pos * np.exp(-((pos / reach) ** 2))
+
+
+CHILD_EYES = (1.25, 0.22)
+"""The ``child`` variant's eyes ``(m, R)``: a point at distance r from a pupil (× the inter-pupil
+distance) goes to r·(1 + (m − 1)·exp(−(r / R)²)) — the eye 25 % larger about its pupil, the brow
+nearly where it was (a child's iris is nearly an adult's, 11-12 mm, between eyes 48-55 mm apart)."""
+
+
+def child_eye(r: np.ndarray) -> np.ndarray:
+    """Where the ``child`` variant puts a point ``r`` from a pupil (× the inter-pupil distance, along
+    the same direction) — increasing, so each output distance has one source."""
+    m, reach = CHILD_EYES
+    r = np.asarray(r, dtype=np.float64)
+    return r * (1.0 + (m - 1.0) * np.exp(-((r / reach) ** 2)))
+
+
+def _child(points: dict[str, np.ndarray], shape: tuple[int, int]):
+    """What ``child`` does: per frame, the picture and a point (image px) moved by :func:`child_eye`
+    about each of the peer's pupils of that frame, then by :func:`child_squeeze` across the eye
+    line through them."""
+    h, w = shape
+    table = np.linspace(CHILD[2], CHILD[2] + 8.0 * CHILD[1], 4001)
+    squeezed = child_squeeze(table)
+    radii = np.linspace(0.0, 6.0 * CHILD_EYES[1], 4001)
+    grown = child_eye(radii)
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float64)
+
+    def frame(i: int):
+        lp, rp = points["left_pupil"][i] - PIXEL_CENTRE, points["right_pupil"][i] - PIXEL_CENTRE
+        if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))):
+            return None
+        d, u, dn = _eye_line(lp, rp)
+        return lp, rp, d, dn
+
+    def image(img: np.ndarray, i: int) -> np.ndarray:
+        f = frame(i)
+        if f is None:
+            return img
+        lp, rp, d, dn = f
+        v = ((xs - lp[0]) * dn[0] + (ys - lp[1]) * dn[1]) / d
+        src = np.where(v > CHILD[2], np.interp(v, squeezed, table), v)  # the output row's source
+        shift = (src - v) * d
+        mx, my = xs + shift * dn[0], ys + shift * dn[1]
+        for c in (lp, rp):  # then the eyes, each about its pupil (the two hardly overlap)
+            dx, dy = mx - c[0], my - c[1]
+            r = np.hypot(dx, dy) / d
+            k = np.where(r < grown[-1], np.interp(r, grown, radii) / np.maximum(r, 1e-9), 1.0)  # far out: as it was
+            mx, my = c[0] + dx * k, c[1] + dy * k
+        return cv2.remap(img, mx.astype(np.float32), my.astype(np.float32), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE)
+
+    def point(p: np.ndarray, i: int) -> np.ndarray:
+        f = frame(i)
+        if f is None or not np.all(np.isfinite(p)):
+            return p
+        lp, rp, d, dn = f
+        q = np.asarray(p, dtype=np.float64) - PIXEL_CENTRE
+        for c in (lp, rp):
+            r = float(np.hypot(*(q - c))) / d
+            if r > 0:
+                q = c + (q - c) * (float(child_eye(r)) / r)
+        v = float(np.dot(q - lp, dn)) / d
+        return q + (float(child_squeeze(v)) - v) * d * dn + PIXEL_CENTRE
+
+    return image, point
 
 
 DEEP_SKIN = (0.34, 0.41, 0.52)
@@ -563,6 +648,7 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
     worn = _beard(points, (h, w), seed) if kind == "beard" else _glasses(points, (h, w)) if kind == "glasses" else None
+    squeeze = _child(points, (h, w)) if kind == "child" else None
     writer = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (W, H))
     if not writer.isOpened():
         raise RuntimeError(f"{out / name}.mp4: cannot open a video writer")
@@ -588,11 +674,15 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             img = hand[0](img, i)
         if worn is not None and i < len(points["left_pupil"]):
             img = worn(img, i)
+        if squeeze is not None and i < len(points["left_pupil"]):
+            img = squeeze[0](img, i)
         writer.write(np.ascontiguousarray(pix(img, i)))
     writer.release()
 
     n = min(n, len(points["left_pupil"]))
     moved = {p: np.array([_move(points[p][i], maps[i]) for i in range(n)]) for p in POINTS}
+    if squeeze is not None:
+        moved = {p: np.array([squeeze[1](q[i], i) for i in range(n)]) for p, q in moved.items()}
     for p in POINTS if kind in ("leave", "covered") else ():  # out of the frame or under the hand: unseen
         q = moved[p]
         hidden = ~((q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1))
@@ -620,7 +710,10 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     m0 = maps[int(clicks.get("frame", 0))]
     new = {"frame": clicks.get("frame", 0)}
     for k in ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth"):
-        new[k] = [round(float(v), 1) for v in _move(np.array(clicks[k], float), m0)]
+        q = _move(np.array(clicks[k], float), m0)
+        if squeeze is not None:
+            q = squeeze[1](q, int(clicks.get("frame", 0)))
+        new[k] = [round(float(v), 1) for v in q]
     if kind == "mirror":
         new["left_pupil"], new["right_pupil"] = new["right_pupil"], new["left_pupil"]
         new["left_brow"], new["right_brow"] = new["right_brow"], new["left_brow"]

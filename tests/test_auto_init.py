@@ -156,6 +156,35 @@ def test_the_mouth_point_is_on_the_lips_not_on_a_pinker_chin():
     assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
 
 
+def test_a_childs_smile_close_under_the_eyes_is_found_between_its_lips():
+    """A young child's mouth sits about 0.95 eye distances below the eyes (an adult's 1.05-1.2). A
+    wide smile: the upper lip, the upper teeth, the gap, the lower teeth, a redder lower lip. The
+    search once began at 0.9: the upper lip fell outside it, the lower lip's red alone was the
+    lips, and the point went to the lower lip (the ``child`` copy of talk_b: 0.34 eye distances low)."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey = np.full((260, 200), 170.0, np.float32)
+    red = np.full((260, 200), 145.0, np.float32)
+    for (y0, y1), g, r in (((116, 127), 120.0, 165.0), ((127, 133), 225.0, 138.0), ((133, 136), 30.0, 150.0),
+                           ((136, 141), 225.0, 138.0), ((141, 153), 125.0, 175.0)):
+        grey[y0:y1, 60:140] = g
+        red[y0:y1, 60:140] = r
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 134.5) <= 2 and abs(x - 100.0) < 1
+
+
+def test_the_mouth_line_is_not_the_nostrils():
+    """Without the lips' colour the mouth is the darkest line across the face: two nostrils darken
+    most of a short row's mean but a quarter of it stays bright, while a closed mouth's paler gap
+    darkens all of its row."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey = np.full((260, 200), 170.0, np.float32)
+    grey[122:130, 80:94] = 40.0
+    grey[122:130, 106:120] = 40.0
+    grey[149:152, 60:140] = 110.0
+    x, y = _mouth(grey, left, right, np.full_like(grey, 145.0))
+    assert abs(y - 150.0) <= 2 and abs(x - 100.0) < 1
+
+
 def test_lip_span_joins_an_open_mouths_two_lips_and_needs_a_lead_over_the_skin():
     red = np.full(80, 140.0)
     red[10:16] = 160.0  # upper lip
@@ -206,3 +235,29 @@ def test_the_brow_point_keeps_calibration_off_the_lids_shadow():
         prof = column_profile(img, x, top, int(y), 2)
         found = y - (top + brow_centre(prof, int(round(b[1] - top)), int(round(0.08 * ipd))))
         assert 0.2 * ipd < found < 0.32 * ipd
+
+
+@pytest.mark.parametrize("brow", [(0.36, 0.46), (0.12, 0.21)])
+def test_the_brow_point_is_on_the_brow_not_on_a_childs_lid(brow):
+    """A child's eye is larger against the eye distance: its lid and lashes reach past 0.2 eye
+    distances over the pupil, where the brow's range starts, darkest there and darker still below.
+    With a brow higher up, a band clearly darker than the skin round it, the point is on the brow;
+    before, it was on the lid (the ``child`` copy of expr_d11: 0.25 eye distances low). A low brow
+    that begins under the range (an adult's, expr_d18's at 0.15) still gives the range's start."""
+    ipd, skin = 100.0, 150.0
+    img = np.full((300, 400), skin, np.float32)
+    pts = np.array([[150.0, 220.0], [250.0, 220.0]])
+    for x, y in pts:
+        rows = lambda a, b: slice(int(round(y - b * ipd)), int(round(y - a * ipd)))  # noqa: E731
+        cols = slice(int(x - 0.3 * ipd), int(x + 0.3 * ipd))
+        if brow[0] > 0.2:
+            img[rows(0.08, 0.23), cols] = 40.0  # the lid and lashes
+            img[rows(*brow), cols] = 90.0
+        else:
+            img[rows(*brow), cols] = 40.0  # over the lid's skin
+    img = cv2.GaussianBlur(img, (0, 0), 1.5)
+    for b, (x, y) in zip(find_brows(img, pts[0], pts[1]), pts):
+        if brow[0] > 0.2:
+            assert brow[0] * ipd < y - b[1] < brow[1] * ipd + 2
+        else:
+            assert 0.19 * ipd < y - b[1] < 0.26 * ipd

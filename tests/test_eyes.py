@@ -369,6 +369,22 @@ def test_refine_pupils_snaps_clicks_to_the_irises():
     assert np.hypot(*(np.array(r) - lm["right_pupil"])) < 0.5
 
 
+@pytest.mark.parametrize("iris", [1.35, 1.45])
+def test_refine_pupils_snaps_to_a_childs_larger_iris(iris, monkeypatch):
+    """A young child's iris is nearly an adult's between eyes 45-50 mm apart: 0.12-0.14 of the eye
+    distance in radius (the performer's is 0.095). Refinement once tried radii up to 0.13 only, a
+    smaller circle's rim beside the iris won, and both clicks moved 4 % of the eye distance to one
+    side."""
+    import tracker.synthetic as synthetic
+
+    monkeypatch.setattr(synthetic, "IRIS_R", synthetic.IRIS_R * iris)
+    frame, _ = render_face(BASE)
+    lm = face_landmarks(BASE)
+    l, r = refine_pupils(frame, tuple(lm["left_pupil"] + (2, -1)), tuple(lm["right_pupil"] + (-1, 2)))
+    assert np.hypot(*(np.array(l) - lm["left_pupil"])) < 0.02 * BASE.ipd
+    assert np.hypot(*(np.array(r) - lm["right_pupil"])) < 0.02 * BASE.ipd
+
+
 def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
     flat = np.full((200, 300, 3), 140, np.uint8)
     assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))

@@ -303,3 +303,44 @@ def test_deep_darkens_the_whole_face_but_the_whites_of_the_eyes_and_the_teeth():
     assert np.allclose(out[70, 62], img[70, 62], atol=3)  # the white of the eye
     assert np.allclose(out[140, 100], img[140, 100], atol=3)  # the teeth
     assert np.allclose(out[100, 195], img[100, 195], atol=3)  # the wall
+
+
+def test_child_squeeze_keeps_the_eyes_and_draws_the_mouth_up():
+    """``child``: nothing moves above the lower lids, distances under them shrink, an adult's mouth
+    1.15 eye distances below the eyes lands near 0.98, the squeeze fades out far below, and the map
+    only increases (each output row has one source)."""
+    k, reach, v0 = sc.CHILD
+    v = np.linspace(-1.0, 6.0, 2001)
+    f = sc.child_squeeze(v)
+    assert np.array_equal(f[v <= v0], v[v <= v0])
+    assert np.all(np.diff(f) > 0)
+    assert 0.95 < float(sc.child_squeeze(1.15)) < 1.0
+    assert abs(float(sc.child_squeeze(6.0)) - 6.0) < 0.01
+
+
+@pytest.mark.parametrize("roll", [0.0, 20.0])
+def test_child_moves_the_points_with_the_pixels(roll):
+    """Bright dots where the mouth and an upper lid are land where their points are moved to (the
+    face level or rolled): the mouth up the face, the lid away from its pupil; the pupil stays."""
+    h, w = 200, 200
+    a = np.radians(roll)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    centre = np.array([100.0, 70.0])
+    place = lambda p: (np.asarray(p, float) - centre) @ rot.T + centre  # noqa: E731
+    pupil = place((70.0, 60.0))
+    points = {"left_pupil": np.array([pupil + 0.5]), "right_pupil": np.array([place((130.0, 60.0)) + 0.5])}  # as the files count
+    image, point = sc._child(points, (h, w))
+    ys, xs = np.mgrid[0:h, 0:w]
+    for spot, radius in ((place((100.0, 129.0)), 3), (place((70.0, 52.0)), 2)):
+        img = np.full((h, w, 3), 60, np.uint8)
+        cv2.circle(img, (int(round(spot[0] * 8)), int(round(spot[1] * 8))), radius * 8, (250, 250, 250), -1, cv2.LINE_AA, shift=3)
+        g = image(img, 0)[..., 0].astype(float) - 60.0
+        moved = point(spot + 0.5, 0) - 0.5  # the files' points count pixel centres at 0.5
+        near = np.hypot(xs - moved[0], ys - moved[1]) < 4 * radius
+        c = np.array([(g * xs)[near].sum(), (g * ys)[near].sum()]) / g[near].sum()
+        assert np.hypot(*(c - moved)) < 0.5
+        assert np.hypot(*(moved - spot)) > 1.0  # it did move
+    mouth, lid = place((100.0, 129.0)), place((70.0, 52.0))
+    assert np.dot(point(mouth + 0.5, 0) - 0.5 - mouth, pupil - mouth) > 0  # towards the eyes
+    assert np.hypot(*(point(lid + 0.5, 0) - 0.5 - pupil)) > np.hypot(*(lid - pupil)) + 1.0  # away from the pupil
+    assert np.allclose(point(pupil + 0.5, 0) - 0.5, pupil)

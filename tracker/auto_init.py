@@ -8,12 +8,14 @@ from. Steps, each using only what every face has:
 2. pupils: the detector's box says roughly where the eyes are (5–10 %, at times 20 %, of the
    inter-pupil distance off on real faces); near there, candidates for each eye from three
    cues, and the best *pair* of them: both dark round centres with white beside them, mirror
-   images of each other, level and about the box's distance apart (:func:`find_pupils`);
+   images of each other, level and about the box's distance apart (:func:`find_pupils`), then
+   snapped to the limbus as calibration snaps clicked pupils (:func:`tracker.eyes.refine_pupils`);
 3. brows: the darkest band on the column above each pupil (a spectacle rim's upper bar, which
    goes round the eye, filled in first: :func:`tracker.eyes.spectacle_rims`), the point in its
    upper half, where a person clicks a brow (:func:`_brow`);
-4. mouth: the darkest line across the lower face, a little more than one inter-pupil
-   distance below the eyes — the gap between closed lips or the inside of an open mouth
+4. mouth: the darkest line across the lower face, 0.8–1.6 inter-pupil distances below the
+   eyes (an adult's mouth about 1.1, a young child's about 0.95) — the gap between closed lips
+   or the inside of an open mouth
    (the nostrils sit higher, the chin's shadow lower); where the lips are redder than the
    cheeks, the darkest line between them (a beard or a moustache is darker than the gap, but
    not red; :func:`_lip_span`).
@@ -31,16 +33,23 @@ import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import PIXEL_CENTRE, Clicks
-from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, spectacle_rims
+from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, refine_pupils, spectacle_rims
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
+from tracker.pupils import parabola_offset
 
 IRIS_RADIUS = 0.09
 """Iris radius as a fraction of the inter-pupil distance (about 5.8 mm of 63 mm)."""
 BROW_RANGE = (0.2, 0.75)
 """Where brows are looked for above the pupils, in inter-pupil distances."""
-MOUTH_RANGE = (0.9, 1.6)
-"""Where the mouth's dark line is looked for below the eye line, in inter-pupil distances."""
-
+BROW_BAND = 0.25
+"""How much darker than the skin on its darker side (× the range's spread of grey) a band above the
+range's dark start must be to be taken for the brow (see :func:`_brow`)."""
+MOUTH_RANGE = (0.8, 1.6)
+"""Where the mouth's dark line is looked for below the eye line, in inter-pupil distances. Adults'
+mouths lie 1.05-1.2 below their eyes (the shared clips: 1.03-1.21), a young child's about 0.95:
+from 0.9 a child's upper lip was cut off, and a wide-open smile's red lower lip alone was taken
+for the lips (the ``child`` copy of talk_b: the mouth click 0.34 eye distances low). Above 0.8 lie
+the nostrils and, on a bearded face, the reddish skin under the nose beside the moustache."""
 
 LIP_RED = 4.0
 """Lab a* (0–255 scale) by which the reddest row below the eyes must outdo the cheeks for the lips'
@@ -54,6 +63,14 @@ mouth's lower lip has ended and the chin begins."""
 LINE_OVER = 0.06
 """How far (× the inter-pupil distance) above the lip-red rows the mouth's line may lie: an upper
 lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
+LINE_SHARE = 75.0
+"""Percentile of each row's grey across the band the mouth's dark line is looked for on where the
+lips' colour does not say where they are: a row is dark only where three quarters of it are. The gap between the lips or an open mouth darkens the
+whole row; the nostrils darken two patches of theirs, with bright skin between and beside them,
+and a row's mean took them for a line (expr_d0's ``washed`` copy, its lips' colour gone, once the
+search began at 0.8: the mouth click on the nostrils)."""
+LINE_HALF = 0.2
+"""Half-width (× the inter-pupil distance) of the band across the face the mouth's line is read on."""
 
 
 class AutoInitError(RuntimeError):
@@ -259,14 +276,20 @@ def find_pupils(grey: np.ndarray, box: tuple[float, float, float, float]) -> tup
     return pts[0], pts[1]
 
 
-def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.ndarray, n: int, half: int) -> np.ndarray:
-    """Mean grey of ``n`` samples (1 px apart) from ``origin`` along ``along``, each averaged over
-    ``±half`` px along ``across``."""
+def _band(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.ndarray, n: int, half: int) -> np.ndarray:
+    """``img`` sampled (bilinear) on ``n`` rows 1 px apart from ``origin`` along ``along``, each row
+    ``±half`` px along ``across``: an (n, 2·half + 1) float32 array."""
     ts = np.arange(n, dtype=np.float32).reshape(-1, 1)
     offs = np.arange(-half, half + 1, dtype=np.float32).reshape(1, -1)
     mx = (origin[0] + ts * along[0] + offs * across[0]).astype(np.float32)
     my = (origin[1] + ts * along[1] + offs * across[1]).astype(np.float32)
-    return cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).mean(axis=1)
+    return cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.ndarray, n: int, half: int) -> np.ndarray:
+    """Mean grey of ``n`` samples (1 px apart) from ``origin`` along ``along``, each averaged over
+    ``±half`` px along ``across`` (:func:`_band`'s rows' means)."""
+    return _band(img, origin, along, across, n, half).mean(axis=1)
 
 
 def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray,
@@ -289,6 +312,16 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
         raise AutoInitError("the face is too small to find its eyebrows")
     # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
     k = lo + int(np.argmin(seg))
+    if prof[k - 1] < prof[k]:
+        # darkest at the range's start and darker still below it: a low brow that begins under the
+        # range (expr_d18's, 0.15 eye distances over the pupils), or a child's larger eye whose lid
+        # and lashes reach into it with the brow higher up: then a band in the range, clearly darker
+        # than the skin on both sides of it, is the brow
+        contrast = float(seg.max() - seg.min())
+        bands = [i for i in range(lo + 1, hi - 1) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]
+                 and min(float(prof[lo:i].max()), float(prof[i:hi].max())) - float(prof[i]) >= BROW_BAND * contrast]
+        if bands:
+            k = min(bands, key=prof.__getitem__)
     d = min(max(brow_centre(prof, k, max(int(0.05 * ipd), 2)), lo), hi)
     above = prof[k:hi]
     top = k + int(np.argmax(above >= 0.5 * (prof[k] + float(above.max()))))
@@ -332,7 +365,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
     redder than the cheeks; :func:`_lip_span`): a beard, a moustache or the shadow under the lower
     lip is darker than the gap between closed lips, but not redder than the skin. There the darkest
     valley between the lips' first and last rows or just above them (a closed mouth's gap, an open
-    mouth's inside; :data:`LINE_OVER`)."""
+    mouth's inside; :data:`LINE_OVER`), on the rows' mean grey; without the lips' colour the line
+    must also be told from the nostrils, so on :data:`LINE_SHARE` of each row."""
     ipd = math.dist(left, right)
     u = (right - left) / ipd
     down = np.array([-u[1], u[0]])
@@ -341,9 +375,10 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
     n = int(round((MOUTH_RANGE[1] - MOUTH_RANGE[0]) * ipd))
     if n < 3:
         raise AutoInitError("the face is too small to find its mouth")
-    prof = _strip(grey, start, down, u, n, max(int(0.2 * ipd), 1))
-    prof = cv2.GaussianBlur(prof.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
-    k = int(np.argmin(prof))
+    band = _band(grey, start, down, u, n, max(int(LINE_HALF * ipd), 1))
+    sigma = max(0.02 * ipd, 0.5)
+    valley = cv2.GaussianBlur(np.percentile(band, LINE_SHARE, axis=1).astype(np.float32).reshape(-1, 1), (1, 0), sigma).ravel()
+    k = int(np.argmin(valley))
     if lab_a is not None:
         half = max(int(0.2 * ipd), 1)
         red = _strip(lab_a, start, down, u, n, half)
@@ -354,12 +389,16 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
                          max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
         if span is not None:
             a, b = span
+            prof = cv2.GaussianBlur(band.mean(axis=1).reshape(-1, 1), (1, 0), sigma).ravel()
             # the line may also lie just over the span: an upper lip darker than it is red (in
             # shade, on a darker face) falls short of the span while the lower lip holds it
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
             inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
-            k = min(inner, key=prof.__getitem__) if inner else (a + b) // 2
-    return (float(start[0] + k * down[0]), float(start[1] + k * down[1]))
+            k, valley = (min(inner, key=prof.__getitem__), prof) if inner else ((a + b) // 2, None)
+    t = float(k)
+    if valley is not None and 0 < k < n - 1:  # between rows: the valley's bottom
+        t += parabola_offset(valley[k - 1], valley[k], valley[k + 1])
+    return (float(start[0] + t * down[0]), float(start[1] + t * down[1]))
 
 
 def _face_cascade_check() -> None:
@@ -377,7 +416,10 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
         raise AutoInitError("no face found by the bundled face detector (use --init CLICKS.json instead)")
     grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     face = faces[0]
-    left, right = find_pupils(grey, face)
+    # snapped to the limbus as calibration snaps clicks, before the brows and the mouth are looked for
+    # from them: the candidates' cues are sized for an adult's iris (IRIS_RADIUS), and a child's
+    # larger one put them 4 % of the eye distance low, the mouth's search with them
+    left, right = (np.asarray(p, dtype=np.float64) for p in refine_pupils(grey, *find_pupils(grey, face)))
     brows = find_brows(grey, left, right)
     lab_a = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2LAB)[..., 1].astype(np.float32)
     mouth = _mouth(grey, left, right, lab_a)

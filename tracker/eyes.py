@@ -1907,8 +1907,11 @@ REFINE_PRIOR = (0.06, 0.04)
 careful click to be from the iris centre: its preference for irises near the clicks."""
 REFINE_REACH = 0.08
 """How far (× the clicked ipd) from a click :func:`refine_pupils` looks for the iris centre."""
-LIMBUS_RADII = (0.07, 0.13)
-"""Iris radii (× ipd) :func:`refine_pupils` tries: a child's to an adult's, near and far."""
+LIMBUS_RADII = (0.07, 0.16)
+"""Iris radii (× ipd) :func:`refine_pupils` tries: an adult's (about 0.09) to a young child's (an
+iris nearly an adult's, 11-12 mm, between eyes 45-50 mm apart: 0.12-0.13), with room above it for
+the radius to be a peak (:func:`common_radius`; up to 0.13 a child's iris was at the range's end, and
+the rim of a smaller circle won: both clicks moved 4 % of the eye distance to one side)."""
 LIMBUS_ARC = (20.0, 40.0)
 """Degrees above and below the horizontal that the limbus arcs span on either side of the iris:
 the upper lid and its lashes cover the iris's top on most eyes (their edges are as strong as the
