@@ -214,21 +214,27 @@ def test_the_brow_point_is_on_the_brow_not_on_a_spectacle_rim(glasses, roll):
         assert math.dist(b, p) == pytest.approx(0.38 * ipd, abs=0.04 * ipd)
 
 
+def _bands_over_eyes(skin: float, bands, blur: float):
+    """A grey face (eyes 100 px apart at row 220) with ``bands`` (from, to, grey) painted over each
+    eye, from and to in eye distances above the pupil, 0.6 eye distances wide, then blurred by
+    ``blur`` px: the picture, the pupils and the eye distance."""
+    ipd = 100.0
+    img = np.full((300, 400), skin, np.float32)
+    pts = np.array([[150.0, 220.0], [250.0, 220.0]])
+    for x, y in pts:
+        cols = slice(int(x - 0.3 * ipd), int(x + 0.3 * ipd))
+        for a, b, g in bands:
+            img[int(round(y - b * ipd)) : int(round(y - a * ipd)), cols] = g
+    return cv2.GaussianBlur(img, (0, 0), blur), pts, ipd
+
+
 def test_the_brow_point_keeps_calibration_off_the_lids_shadow():
     """On a dark face the shadow of the upper lid is darker than the brow and runs up to it. The
     darkest band's middle sat on the brow's lower edge, within 0.08 eye distances (calibration's
     reach for the brow) of that shadow, and calibration took the shadow for the brow; the point
     is in the brow's upper half, and calibration finds the brow from it."""
-    ipd, skin = 100.0, 70.0
-    img = np.full((300, 400), skin, np.float32)
-    pts = np.array([[150.0, 220.0], [250.0, 220.0]])
-    for x, y in pts:
-        rows = lambda a, b: slice(int(round(y - b * ipd)), int(round(y - a * ipd)))  # noqa: E731
-        cols = slice(int(x - 0.3 * ipd), int(x + 0.3 * ipd))
-        img[rows(0.05, 0.17), cols] = 20.0  # the lid's shadow, darker than the brow
-        img[rows(0.17, 0.20), cols] = 34.0
-        img[rows(0.20, 0.32), cols] = 30.0  # the brow
-    img = cv2.GaussianBlur(img, (0, 0), 1.0)
+    # the lid's shadow, darker than the brow; then the brow
+    img, pts, ipd = _bands_over_eyes(70.0, [(0.05, 0.17, 20.0), (0.17, 0.20, 34.0), (0.20, 0.32, 30.0)], 1.0)
     for b, (x, y) in zip(find_brows(img, pts[0], pts[1]), pts):
         assert 0.26 * ipd < y - b[1] < 0.32 * ipd  # the brow: 0.2-0.32
         top = int(y - 1.1 * ipd)
@@ -244,18 +250,9 @@ def test_the_brow_point_is_on_the_brow_not_on_a_childs_lid(brow):
     With a brow higher up, a band clearly darker than the skin round it, the point is on the brow;
     before, it was on the lid (the ``child`` copy of expr_d11: 0.25 eye distances low). A low brow
     that begins under the range (an adult's, expr_d18's at 0.15) still gives the range's start."""
-    ipd, skin = 100.0, 150.0
-    img = np.full((300, 400), skin, np.float32)
-    pts = np.array([[150.0, 220.0], [250.0, 220.0]])
-    for x, y in pts:
-        rows = lambda a, b: slice(int(round(y - b * ipd)), int(round(y - a * ipd)))  # noqa: E731
-        cols = slice(int(x - 0.3 * ipd), int(x + 0.3 * ipd))
-        if brow[0] > 0.2:
-            img[rows(0.08, 0.23), cols] = 40.0  # the lid and lashes
-            img[rows(*brow), cols] = 90.0
-        else:
-            img[rows(*brow), cols] = 40.0  # over the lid's skin
-    img = cv2.GaussianBlur(img, (0, 0), 1.5)
+    # the lid and lashes, then the brow; or the brow alone, over the lid's skin
+    bands = [(0.08, 0.23, 40.0), (*brow, 90.0)] if brow[0] > 0.2 else [(*brow, 40.0)]
+    img, pts, ipd = _bands_over_eyes(150.0, bands, 1.5)
     for b, (x, y) in zip(find_brows(img, pts[0], pts[1]), pts):
         if brow[0] > 0.2:
             assert brow[0] * ipd < y - b[1] < brow[1] * ipd + 2

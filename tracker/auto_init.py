@@ -65,10 +65,11 @@ LINE_OVER = 0.06
 lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
 LINE_SHARE = 75.0
 """Percentile of each row's grey across the band the mouth's dark line is looked for on where the
-lips' colour does not say where they are: a row is dark only where three quarters of it are. The gap between the lips or an open mouth darkens the
-whole row; the nostrils darken two patches of theirs, with bright skin between and beside them,
-and a row's mean took them for a line (expr_d0's ``washed`` copy, its lips' colour gone, once the
-search began at 0.8: the mouth click on the nostrils)."""
+lips' colour does not say where they are: a row is dark only where three quarters of it are. The
+gap between the lips or an open mouth darkens the whole row; the nostrils darken two patches of
+theirs, with bright skin between and beside them, and a row's mean took them for a line (expr_d0's
+``washed`` copy, its lips' colour gone, once the search began at 0.8: the mouth click on the
+nostrils)."""
 LINE_HALF = 0.2
 """Half-width (× the inter-pupil distance) of the band across the face the mouth's line is read on."""
 
