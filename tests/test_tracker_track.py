@@ -359,6 +359,31 @@ def test_auto_init_finds_the_clicks(style):
     assert abs(c.ipd - st.ipd) < 1.5
 
 
+@pytest.mark.parametrize("roll", [20.0, -25.0, 30.0])
+def test_auto_init_finds_a_rolled_head(roll):
+    """The face detector finds faces within about 15° of upright; a head rolled further at the start is
+    found on the frame turned by 20° either way, and the points come back to the frame as it is."""
+    st = BASE.replace(roll_deg=roll)
+    img, _ = render_face(st, STYLES["default"])
+    got = auto_clicks(img)
+    want = Clicks.from_dict(clicks_for(st))
+    for k in ("left_pupil", "right_pupil", "mouth"):
+        assert np.hypot(*np.subtract(got.points()[k], want.points()[k])) < 0.05 * st.ipd, k
+
+
+def test_auto_init_finds_a_small_face_far_from_the_camera():
+    """A face about 30 px between the eyes in a 640×480 frame, the rest of it a dark room: too small for
+    the detector on the 160-px copy an any-size search starts with; found on the larger one."""
+    img, _ = render_face(BASE, STYLES["default"])
+    small = cv2.resize(img, None, fx=0.35, fy=0.35, interpolation=cv2.INTER_AREA)
+    frame = np.full_like(img, 30)
+    frame[100 : 100 + small.shape[0], 300 : 300 + small.shape[1]] = small
+    got = auto_clicks(frame)
+    want = Clicks.from_dict(clicks_for(BASE))
+    lp = np.multiply(want.left_pupil, 0.35) + (300.0, 100.0)  # where the shrunk face put it (pixel centres at .5)
+    assert np.hypot(*np.subtract(got.left_pupil, lp)) < 0.08 * 0.35 * BASE.ipd
+
+
 def test_auto_init_says_when_nothing_is_found():
     blank = np.full((240, 320, 3), 128, np.uint8)
     with pytest.raises(AutoInitError, match="no face"):
