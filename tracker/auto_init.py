@@ -76,6 +76,11 @@ points come from the turn whose pupil pair scores best (:func:`pupil_pair`), fou
 frame and turned back. The cascade finds faces within about 15° of upright, and the pair is looked
 for level (the ``tilt`` copies, heads rolled up to 25°: 37 of 168 frames sampled had no face
 upright, and 28 of the rest, rolled 10-27°, a pupil a tenth of the eye distance or more off)."""
+TURNED_NEIGHBOURS = 5
+"""Neighbouring detections the cascade needs for a face on a turned frame (3 on the frame as it is):
+a turned frame gives the detector another chance at a false face (the performer rolled 33°: a box
+on its neck, whose "pupils" scored 9.2), and a real face there is found by many neighbours (all the
+``tilt`` copies' frames still are)."""
 ROLL_MARGIN = 0.5
 """How much better a turned frame's pupil pair must score than the upright frame's to be taken."""
 ROLL_SURE = 10.0
@@ -438,7 +443,7 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
         turn = cv2.getRotationMatrix2D((0.5 * (w - 1), 0.5 * (h - 1)), angle, 1.0)
         img = frame_bgr if angle == 0 else cv2.warpAffine(frame_bgr, turn, (w, h), flags=cv2.INTER_LINEAR,
                                                          borderMode=cv2.BORDER_REPLICATE)
-        faces = detect_faces(img, None)
+        faces = detect_faces(img, None, neighbours=3 if angle == 0 else TURNED_NEIGHBOURS)
         if not faces:
             continue
         grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)

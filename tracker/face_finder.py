@@ -47,13 +47,14 @@ def face_cascade() -> cv2.CascadeClassifier | None:
 
 def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.8,
                  band: tuple[int, int] | None = None,
-                 grey: tuple[np.ndarray, float] | None = None) -> list[tuple[float, float, float, float]]:
+                 grey: tuple[np.ndarray, float] | None = None, neighbours: int = 3) -> list[tuple[float, float, float, float]]:
     """Frontal face boxes ``(x, y, w, h)`` in frame px, largest first.
 
     With ``ipd_px`` (the face's expected inter-pupil distance) the search is limited to faces
     within ``spread``× of that size and runs on a copy scaled to make such a face about
     :data:`DETECT_FACE_PX` wide; without it every size is searched on a 160-px-high copy, then
-    on larger ones and unequalised while none is found (:data:`ANY_SIZE_HEIGHTS`).
+    on larger ones and unequalised while none is found (:data:`ANY_SIZE_HEIGHTS`); ``neighbours``
+    is how many overlapping detections a face needs there (the cascade's ``minNeighbors``).
     ``band`` ``(k, n)`` (with ``ipd_px``) searches only the k-th of n equal parts (in scale) of
     that range of sizes, a little overlapping: n frames in turn cover it all at a third of
     the cost each for n = 3 (a lost face is looked for every frame). ``grey`` ``(image, scale)``
@@ -69,7 +70,7 @@ def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.
         for height in ANY_SIZE_HEIGHTS:
             s = min(1.0, height / h)
             for equalize in (True, False):
-                boxes = _detect(casc, frame_bgr, s, None, spread, band, grey, equalize)
+                boxes = _detect(casc, frame_bgr, s, None, spread, band, grey, equalize, neighbours)
                 if boxes:
                     return boxes
             if s >= 1.0:
@@ -81,7 +82,7 @@ def detect_faces(frame_bgr: np.ndarray, ipd_px: float | None, spread: float = 1.
 
 def _detect(casc, frame_bgr: np.ndarray, s: float, ipd_px: float | None, spread: float,
             band: tuple[int, int] | None, grey: tuple[np.ndarray, float] | None,
-            equalize: bool = True) -> list[tuple[float, float, float, float]]:
+            equalize: bool = True, neighbours: int = 3) -> list[tuple[float, float, float, float]]:
     """:func:`detect_faces` on a copy of the frame scaled by ``s``, its histogram equalised or not."""
     h, w = frame_bgr.shape[:2]
     size = (max(int(round(w * s)), 24), max(int(round(h * s)), 24))
@@ -101,7 +102,7 @@ def _detect(casc, frame_bgr: np.ndarray, s: float, ipd_px: float | None, spread:
         lo, hi = max(int(a), 20), max(int(b), 21)
         boxes = casc.detectMultiScale(grey, DETECT_STEP, 2, minSize=(lo, lo), maxSize=(hi, hi))
     else:
-        boxes = casc.detectMultiScale(grey, 1.1, 3, minSize=(20, 20))
+        boxes = casc.detectMultiScale(grey, 1.1, neighbours, minSize=(20, 20))
     out = [(x / s, y / s, bw / s, bh / s) for x, y, bw, bh in (tuple(float(v) for v in b) for b in boxes)]
     return sorted(out, key=lambda b: -b[2] * b[3])
 
