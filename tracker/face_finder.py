@@ -31,7 +31,7 @@ before found none; on each, the copy with its histogram equalised (a dark or dim
 that found none, as it is (equalising a frame that is mostly a dark room stretches the room's
 greys and flattens the face's). The ``small`` copy of expr_d19 (a man in glasses, 50 px between
 the eyes in a 640×480 frame, the rest of it dark): found on 7 of 20 frames with the equalised
-160-px copy alone, on all 20 now; no frame of 17 other copies lost (the dark-skinned copy needs the
+160-px copy alone, on all 20 now; no frame of 19 other copies lost (the dark-skinned copy needs the
 equalised one: without it, 5 of 20 on one clip)."""
 
 
