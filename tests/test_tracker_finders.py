@@ -199,3 +199,21 @@ def test_brow_clicks_next_to_the_lashes_still_calibrate():
     frame, _ = render_face(BASE)
     cal = calibrate(frame, Clicks.from_dict(c))
     assert all(0.08 * BASE.ipd < h < BASE.ipd for h in cal.brow_heights)
+
+
+def test_a_face_in_a_dark_room_is_found_without_equalising_the_frame():
+    """A small face in a frame that is otherwise nearly black: equalising the whole frame's histogram
+    spends its grey levels on the room and flattens the face, and the cascade misses it on the 320-px
+    copy; the unequalised copy, tried next, shows it. The frame is equalised first because a dim
+    face needs it."""
+    from tracker.face_finder import detect_faces
+
+    img, _ = render_face(BASE, STYLES["default"])
+    small = cv2.resize(img, None, fx=0.3, fy=0.3, interpolation=cv2.INTER_AREA)
+    frame = np.full((720, 960, 3), 10, np.uint8)
+    frame[60 : 60 + small.shape[0], 200 : 200 + small.shape[1]] = small
+    boxes = detect_faces(frame, None)
+    assert boxes
+    x, y, w, h = boxes[0]
+    cx, cy = 200 + 0.3 * BASE.cx, 60 + 0.3 * BASE.cy  # the performer's face centre, shrunk and placed
+    assert x < cx < x + w and y < cy + 0.1 * h and cy - 0.1 * h < y + h
