@@ -401,21 +401,23 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
     n = int(round((MOUTH_RANGE[1] - MOUTH_RANGE[0]) * ipd))
     if n < 3:
         raise AutoInitError("the face is too small to find its mouth")
-    band = _band(grey, start, down, u, n, max(int(LINE_HALF * ipd), 1))
-    sigma = max(0.02 * ipd, 0.5)
-    valley = cv2.GaussianBlur(np.percentile(band, LINE_SHARE, axis=1).astype(np.float32).reshape(-1, 1), (1, 0), sigma).ravel()
+    half, sigma = max(int(LINE_HALF * ipd), 1), max(0.02 * ipd, 0.5)
+
+    def smooth(profile: np.ndarray) -> np.ndarray:  # along the face, σ 0.02 eye distances
+        return cv2.GaussianBlur(np.asarray(profile, np.float32).reshape(-1, 1), (1, 0), sigma).ravel()
+
+    band = _band(grey, start, down, u, n, half)
+    valley = smooth(np.percentile(band, LINE_SHARE, axis=1))
     k = int(np.argmin(valley))
     if lab_a is not None:
-        half = max(int(0.2 * ipd), 1)
-        red = _strip(lab_a, start, down, u, n, half)
-        red = cv2.GaussianBlur(red.reshape(-1, 1), (1, 0), max(0.02 * ipd, 0.5)).ravel()
+        red = smooth(_strip(lab_a, start, down, u, n, half))
         cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
                   for s in (-1.0, 1.0)]
         span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd,
                          max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
         if span is not None:
             a, b = span
-            prof = cv2.GaussianBlur(band.mean(axis=1).reshape(-1, 1), (1, 0), sigma).ravel()
+            prof = smooth(band.mean(axis=1))
             # the line may also lie just over the span: an upper lip darker than it is red (in
             # shade, on a darker face) falls short of the span while the lower lip holds it
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
