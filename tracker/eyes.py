@@ -173,6 +173,12 @@ lid are nearer; see :func:`spectacle_rims`)."""
 RIM_SIDE = 0.3
 """How far (wi) beside a pupil a spectacle rim lies at least (the eye's corners, with their lashes
 and eyeliner, are nearer)."""
+RIM_BAR = 0.1
+"""Share of the skin band below an eye (:data:`BANDS`) that must be thin dark lines (:func:`thin_dark`)
+for the face to be taken as behind glasses when :func:`spectacle_rims` finds no rim going round an
+eye: a rim's lower bar crosses that band, and on bare faces under 2 % of it is such lines (the shared
+clips: 0-1 %; their copies with thick rims: 16-46 %). A thick rim over dark hair beside the eye is no
+thin line there, and the ring the rim test looks for is broken."""
 DARK_RATIO = 0.6
 """The iris's middle must be at most this fraction as bright as the darkest skin for "much
 darker than any skin" to count as interior."""
@@ -931,19 +937,30 @@ def fill_rows(prof: np.ndarray, a: float, b: float) -> None:
 
 
 def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, wi: float,
-                    lines: np.ndarray | None = None):
+                    lines: np.ndarray | None = None, glasses: bool = True):
     """BGR samples of the calibration crop: skin groups (a band below each eye, a band above
     it up to the brow's lower edge, the bridge between the eyes), the irises' middles (no
-    skin may claim them), a ring of each iris around the pupil and the sclera beside it. The skin
-    groups leave out the pixels of ``lines`` (bool, the crop's shape): behind glasses the thin dark
-    lines (:func:`thin_dark`), since the rims cross both bands and the bridge, a quarter to a third
-    of them."""
+    skin may claim them), a ring of each iris around the pupil and the sclera beside it. Behind
+    glasses the skin groups leave out the pixels of ``lines`` (bool, the crop's shape: the thin dark
+    lines, :func:`thin_dark`), since the rims cross both bands and the bridge, a quarter to a third
+    of them: with ``glasses`` (a rim was found), or where :data:`RIM_BAR` of the band below either eye
+    is such lines. On a bare face the lines in the band above are its lashes and crease, which the
+    skin model keeps."""
     h, w = crop.shape[:2]
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32)
     if lines is None:
         lines = np.zeros((h, w), bool)
     below, above, middle, ring, sclera = [], [], [], [], []
     hx = max(int(round(BANDS["half"] * wi)), 2)
+    bands = []
+    for px, py in pupils:
+        xi = int(round(px))
+        b0, b1 = int(round(py + BANDS["below"][0] * wi)), int(round(py + BANDS["below"][1] * wi)) + 1
+        bands.append((max(b0, 0), max(min(b1, h), 0), max(xi - hx, 0), min(xi + hx + 1, w)))
+    if not glasses:
+        glasses = any(lines[y0:y1, x0:x1].mean() >= RIM_BAR for y0, y1, x0, x1 in bands if y1 > y0 and x1 > x0)
+    if not glasses:
+        lines = np.zeros((h, w), bool)
 
     def skin_of(y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
         """The pixels of a band, without its thin dark lines (all of them when those are most of it)."""
@@ -951,10 +968,8 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
         px, keep = crop[y0:y1, x0:x1].reshape(-1, 3), ~lines[y0:y1, x0:x1].ravel()
         return px[keep] if keep.sum() >= 0.3 * len(px) else px
 
-    for (px, py), r, hb in zip(pupils, radius, brow_heights):
+    for (px, py), r, hb, (b0, b1, x0, x1) in zip(pupils, radius, brow_heights, bands):
         xi, yi = int(round(px)), int(round(py))
-        x0, x1 = max(xi - hx, 0), min(xi + hx + 1, w)
-        b0, b1 = int(round(py + BANDS["below"][0] * wi)), int(round(py + BANDS["below"][1] * wi)) + 1
         below.append(skin_of(b0, b1, x0, x1))
         a1 = int(round(py - BANDS["above"][0] * wi))
         a0 = min(int(round(py - min(BANDS["above"][1] * wi, hb - 0.08 * wi))), a1 - 2)
@@ -1062,9 +1077,8 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         brow_centres.append(half + (cy_b - math.floor(cy_b)))
         brow_heights.append(float(height))
 
-    glasses = any(r is not None for r in rims)
-    groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi,
-                                                          thin_dark(grey, wi, closed) if glasses else None)
+    groups, middle, ring, sclera, light = _colour_samples(crop, pupils, radius, brow_heights, wi, thin_dark(grey, wi, closed),
+                                                          glasses=any(r is not None for r in rims))
     doubtful = ("above the eyes",)
     skin = SkinModel.fit(groups, middle, doubtful=doubtful)
     skin.set_levels([ring, sclera])
