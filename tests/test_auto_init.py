@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import EYE_WI, IRIS_RADIUS, _lip_span, _mouth, centre_votes, find_brows, find_pupils, iris_contrast
+from tracker.auto_init import EYE_WI, IRIS_RADIUS, _lip_span, _mouth, _upright, centre_votes, find_brows, find_pupils, iris_contrast, rim_bars
 from tracker.brows import brow_centre, column_profile
 from tracker.face_finder import DEFAULT_EYES
 
@@ -62,6 +62,46 @@ def test_narrow_light_eyes_are_found_from_a_box_that_is_off(roll, shift, grow):
     found = find_pupils(grey, box_for(pts, shift, grow))
     for p, q in zip(found, pts):
         assert math.dist(p, q) < 0.03 * 90.0
+
+
+def _with_rims(img: np.ndarray, pts: np.ndarray, ipd: float, roll: float, thick: int = 4) -> np.ndarray:
+    """``img`` with near-black spectacle rims (0.76 × 0.47 eye distances, ``thick`` px) round both eyes."""
+    c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
+    u, dn = np.array([c, -s]), np.array([s, c])
+    out = img.copy()
+    for p in pts:
+        centre = p + 0.03 * ipd * dn
+        box = [centre + ipd * (a * u + b * dn) for a, b in ((-0.38, -0.22), (0.38, -0.22), (0.38, 0.25), (-0.38, 0.25))]
+        cv2.polylines(out, [np.round(np.array(box) * 8).astype(np.int32)], True, (25, 25, 25), thick, cv2.LINE_AA, shift=3)
+    return out
+
+
+@pytest.mark.parametrize("roll", [0.0, 8.0])
+@pytest.mark.parametrize("thick", [4, 6])
+def test_narrow_eyes_behind_thick_rims_are_found_not_the_rims_bars(roll, thick):
+    """A thick rim's lower bar is a dark line with skin above and below, and its middle draws the
+    votes of a dark round thing more than narrow light eyes do (a copy of a shared clip with thick
+    rims: both pupils on the lower bars, 0.28 eye distances low). A line that runs on level past an
+    eye's width is no eye (:data:`~tracker.auto_init.BAR_RUN`)."""
+    ipd = 90.0
+    img, pts = narrow_face(ipd=ipd, roll=roll)
+    grey = cv2.cvtColor(_with_rims(img, pts, ipd, roll, thick), cv2.COLOR_BGR2GRAY).astype(np.float32)
+    for p, q in zip(find_pupils(grey, box_for(pts)), pts):
+        assert math.dist(p, q) < 0.03 * ipd
+
+
+def test_rim_bars_mark_a_rims_bars_not_an_eye():
+    img, pts = narrow_face()
+    grey = cv2.cvtColor(_with_rims(img, pts, 90.0, 0.0), cv2.COLOR_BGR2GRAY).astype(np.float32)
+    band, m = _upright(grey, pts[0], pts[1])
+    bars = rim_bars(band)
+    for x, y in (m @ np.c_[pts, np.ones(2)].T).T:
+        x, y = int(round(x)), int(round(y))
+        assert not bars[y - 6 : y + 7, x - 8 : x + 9].any()  # the eye, its lashes and its crease
+        assert bars[y + int(0.28 * EYE_WI) - 2 : y + int(0.28 * EYE_WI) + 3, x].any()  # the lower bar under it
+        assert bars[y + 2, x + int(0.41 * EYE_WI) - 2 : x + int(0.41 * EYE_WI) + 3].any()  # the lens's side
+    bare, _ = _upright(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32), pts[0], pts[1])
+    assert not rim_bars(bare).any()  # the brows, the creases and the lashes are no bars
 
 
 def test_votes_peak_on_a_dark_disc_not_on_a_dark_line():

@@ -33,7 +33,7 @@ import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import PIXEL_CENTRE, Clicks
-from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, refine_pupils, spectacle_rims
+from tracker.eyes import REFINE_WI, fill_rows, limbus_scores, refine_pupils, spectacle_rims, thin_dark
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
 from tracker.pupils import parabola_offset
 
@@ -103,6 +103,13 @@ EYE_REACH = (0.35, 0.25)
 around the box's guess: the box puts real eyes 5–10 %, at times 20 % (a rolled head), off."""
 PEAKS = 4
 """Local maxima each cue map gives as candidates, per eye."""
+BAR_RUN = 0.55
+"""Length (× :data:`EYE_WI`) of a level thin dark line from which it is a spectacle rim's bar, not an
+eye (:func:`rim_bars`): an eye with its lashes and eyeliner is under 0.45 across (the shared clips and
+their copies: 0-0.44), a rim's upper or lower bar 0.65 or more."""
+BAR_TALL = 0.35
+"""Height (× :data:`EYE_WI`) of an upright thin dark line from which it is a rim's side, not an eye
+(a narrowed eye with its lashes is under 0.2 tall; a lens 0.4-0.5)."""
 PAIR_DISTANCE = 0.2
 """|log(pair distance / the box's estimate)| that costs nothing (real faces' boxes: 0.9–1.17)."""
 PAIR_WEIGHTS = {"votes": 4.0, "iris": 0.5, "rim": 0.5, "mirror": 2.0, "tilt": 4.0, "distance": 10.0, "near": 2.0}
@@ -208,6 +215,20 @@ def _peaks(m: np.ndarray, k: int, apart: int = 4) -> list[tuple[int, int]]:
     return [(int(xs[j]), int(ys[j])) for j in order]
 
 
+def rim_bars(band: np.ndarray) -> np.ndarray:
+    """Where ``band`` (grey, at :data:`EYE_WI`) has a spectacle rim's bar (bool, its shape): thin dark
+    pixels (:func:`tracker.eyes.thin_dark`) on a level run of at least :data:`BAR_RUN` or an upright
+    run of at least :data:`BAR_TALL` (each allowing a pixel's slant), grown by a pixel."""
+    bar = thin_dark(np.asarray(band, dtype=np.float32), EYE_WI).astype(np.uint8)
+    out = np.zeros_like(bar)
+    for along, across, n in (((1, 0), (0, 1), BAR_RUN), ((0, 1), (1, 0), BAR_TALL)):
+        k = max(int(round(n * EYE_WI)), 3)
+        slack = cv2.dilate(bar, np.ones((3, 1) if along == (1, 0) else (1, 3), np.uint8))
+        line = np.ones((1, k) if along == (1, 0) else (k, 1), np.uint8)
+        out |= cv2.morphologyEx(slack, cv2.MORPH_OPEN, line) & bar
+    return cv2.dilate(out, np.ones((3, 3), np.uint8)).astype(bool)
+
+
 def _rim(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> float:
     """The limbus's strength at ``p`` (band px): the best mean outward grey step on the sides
     of an iris-sized circle centred within 2 px of it (see :func:`tracker.eyes.limbus_centre`)."""
@@ -257,6 +278,12 @@ def pupil_pair(grey: np.ndarray, box: tuple[float, float, float, float]) -> tupl
     rx, ry = EYE_REACH[0] * EYE_WI, EYE_REACH[1] * EYE_WI
     contrast = iris_contrast(band)
     blobs = _blobs(band, 0.0625 * EYE_WI)
+    # a spectacle rim's bars are dark lines with skin on both sides: their middles draw the votes of
+    # a dark round thing and the contrast of a disc with white beside it, but they run on well past
+    # an eye's size, and give no candidates (the cues are still weighed against their best anywhere:
+    # a heavy lash line can pass for a bar, and leaving it out must not change the eyes' weights)
+    bars = rim_bars(band)
+    keep = ~bars if bars.any() else None
     smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
     grad = (cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0))
     eyes = []
@@ -267,7 +294,8 @@ def pupil_pair(grey: np.ndarray, box: tuple[float, float, float, float]) -> tupl
         vh, vw = votes.shape
         cands: list[tuple[int, int]] = []
         for mp in (votes, contrast[oy : oy + vh, ox : ox + vw], blobs[oy : oy + vh, ox : ox + vw]):
-            for x, y in _peaks(np.ascontiguousarray(mp, dtype=np.float32), PEAKS):
+            mp = np.ascontiguousarray(mp, dtype=np.float32) if keep is None else np.where(keep[oy : oy + vh, ox : ox + vw], mp, 0.0).astype(np.float32)
+            for x, y in _peaks(mp, PEAKS):
                 if all(abs(x - u) > 2 or abs(y - v) > 2 for u, v in cands):
                     cands.append((x, y))
         if not cands:
