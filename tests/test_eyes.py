@@ -24,6 +24,7 @@ from tracker.eyes import (
     dark_power,
     eye_light,
     iris_darkness,
+    mirrored_sides,
     iris_radius,
     learn_eyes,
     limbus_centre,
@@ -884,6 +885,21 @@ def test_spectacle_rims_across_the_skin_bands_do_not_shut_the_eyes(thick):
         res, truth, _, _ = _find(finder, state, frame=_with_glasses(img, state, thick))
         assert all(e.open for e in res.eyes)
         _check(res, truth, lid=2.0, brow=math.inf)
+
+
+def test_mirrored_sides_even_out_the_sides_but_keep_the_iris():
+    """Beyond the radius a quarter of the mirror image comes in (a streak on one side is three
+    quarters as strong there and a quarter as strong on the other); the iris's columns, its
+    off-centre catch-light among them, are kept as they were."""
+    pic = np.full((9, 31), 100.0, np.float32)
+    pic[:, 8:23] = 30.0  # an iris of radius 7 in the middle (column 15)
+    pic[4, 17] = 250.0  # its catch-light, right of the centre
+    pic[:, 1:4] = 200.0  # a bright streak on the left side only
+    out = mirrored_sides(pic, 7.0, 0.25)
+    assert np.array_equal(out[:, 8:23], pic[:, 8:23])
+    assert out[0, 2] == pytest.approx(0.75 * 200.0 + 0.25 * 100.0)
+    assert out[0, 28] == pytest.approx(0.75 * 100.0 + 0.25 * 200.0)
+    assert np.array_equal(mirrored_sides(pic, 7.0, 0.0), pic)
 
 
 def _hair_over_temples(frame: np.ndarray, state: FaceState) -> np.ndarray:
