@@ -221,10 +221,10 @@ def rim_bars(band: np.ndarray) -> np.ndarray:
     run of at least :data:`BAR_TALL` (each allowing a pixel's slant), grown by a pixel."""
     bar = thin_dark(np.asarray(band, dtype=np.float32), EYE_WI).astype(np.uint8)
     out = np.zeros_like(bar)
-    for along, across, n in (((1, 0), (0, 1), BAR_RUN), ((0, 1), (1, 0), BAR_TALL)):
+    for level, n in ((True, BAR_RUN), (False, BAR_TALL)):
         k = max(int(round(n * EYE_WI)), 3)
-        slack = cv2.dilate(bar, np.ones((3, 1) if along == (1, 0) else (1, 3), np.uint8))
-        line = np.ones((1, k) if along == (1, 0) else (k, 1), np.uint8)
+        slack = cv2.dilate(bar, np.ones((3, 1) if level else (1, 3), np.uint8))
+        line = np.ones((1, k) if level else (k, 1), np.uint8)
         out |= cv2.morphologyEx(slack, cv2.MORPH_OPEN, line) & bar
     return cv2.dilate(out, np.ones((3, 3), np.uint8)).astype(bool)
 

@@ -1036,8 +1036,9 @@ def mirrored_sides(picture: np.ndarray, radius: float, share: float = IRIS_MIRRO
     An iris is round, but the picture's sides hold whatever lay beside it on the calibration frame:
     the white on one side only (the eyes looked aside), a shadow, or glare on one side of a lens.
     Matched on later frames, such a side pulls the found centre towards it; the iris's own catch-light
-    stays where it is (mirrored, it made a second one). On the shared clips and their copies: pupil
-    medians 0.02-0.15 % of the eye distance lower on five of the nine, 0.01-0.05 higher on three."""
+    stays where it is (mirrored, it made a second one). Over one-pixel moves of the shared clips'
+    points, the pupils' median error came down by 0.02-0.15 % of the eye distance on five of the nine
+    clips and went up by 0.01-0.05 on three."""
     q = np.asarray(picture, dtype=np.float32)
     x = np.abs(np.arange(q.shape[1], dtype=np.float32) - 0.5 * (q.shape[1] - 1))
     a = (share * np.clip(x - radius, 0.0, 1.0))[None, :]
