@@ -584,6 +584,55 @@ def test_harder_copy_of_a_real_clip_meets_the_targets(tmp_path, name, kind, auto
     assert not missed, f"{name} {kind} {r.mode}: " + ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
 
 
+def _clip_from(folder, name: str, start: int, out) -> None:
+    """``name`` from frame ``start`` on, written to ``out`` with the peer's rows renumbered (the
+    clicks file as it is: only ``--auto`` is run on such a copy)."""
+    import csv
+    import json
+
+    import cv2
+
+    cap = cv2.VideoCapture(str(folder / f"{name}.mp4"))
+    fps, frames = cap.get(cv2.CAP_PROP_FPS), []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        frames.append(f)
+    cap.release()
+    h, w = frames[0].shape[:2]
+    vw = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
+    for f in frames[start:]:
+        vw.write(f)
+    vw.release()
+    for kind in ("mp.csv", "points.csv"):
+        with open(folder / f"{name}.{kind}", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        with open(out / f"{name}.{kind}", "w", newline="") as fh:
+            wr = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            wr.writeheader()
+            for r in rows:
+                if int(float(r["frame"])) >= start:
+                    wr.writerow({**r, "frame": str(int(float(r["frame"])) - start)})
+    (out / f"{name}.clicks.json").write_text(json.dumps(json.loads((folder / f"{name}.clicks.json").read_text())))
+
+
+@pytest.mark.realfaces
+@pytest.mark.parametrize("start", [10, 34])
+def test_auto_on_a_clip_that_starts_in_a_blink(tmp_path, start):
+    """talk_b cut to start where the peer sees her eyes shut: --auto learned the eyes from shut lids
+    and the whole clip missed (pupil median 21 % of the eye distance both times); it now calibrates
+    on the frame in the first second whose eyes show most, and meets every target."""
+    if REAL is None or "talk_b" not in rf.clip_names(REAL):
+        pytest.skip(f"real clip talk_b not available (../shared/real or ${rf.REAL_DIR_ENV})")
+    _clip_from(REAL, "talk_b", start, tmp_path)
+    r = rf.measure_clip(tmp_path, "talk_b", auto=True)
+    assert r.error is None, r.error
+    missed = [k for k, v in rf.misses(r.metrics, auto=True).items() if v and not k.startswith("ms")]
+    vals = rf.metric_values(r.metrics)
+    assert not missed, ", ".join(f"{k}={vals[k]:.2f}" for k in missed)
+
+
 @pytest.mark.realfaces
 @pytest.mark.parametrize("shift", rf.JITTER)
 def test_calibration_snaps_narrow_eyes_clicks_to_the_irises_wherever_they_fall(shift):

@@ -408,6 +408,34 @@ def clip(tmp_path_factory):
     return video, clicks, perf
 
 
+@pytest.mark.parametrize("shown, want", [
+    ({0: 5.0}, 0),  # the first frame's eyes show: taken at once
+    ({0: 1.0, 2: 1.5, 4: 6.0, 6: 3.0}, 4),  # shut at first: the frame whose eyes show most within the look
+    ({0: 1.0}, 0),  # nothing better within the look: the first after all
+])
+def test_auto_start_looks_past_a_first_frame_with_shut_eyes(clip, monkeypatch, shown, want):
+    """``--auto`` takes the first frame with a face, unless its eyes look shut (a clip that starts in a
+    blink or a squeeze: an eye model learned there misreads the whole clip); then the frame within
+    :data:`~tracker.track_cli.AUTO_LOOK` whose eyes show most. (The measure itself is judged on real
+    clips: the synthetic performer's shut lids are crisp lines that look like an eye's ring to it.)"""
+    import tracker.track_cli as tc
+
+    video, _, _ = clip
+    seen = []
+
+    def fake(img, found):
+        seen.append(found.frame)
+        return shown.get(found.frame, 0.5)
+
+    monkeypatch.setattr(tc, "eyes_shown", fake)
+    found, img = tc._auto(video)
+    assert found.frame == want and img.shape[2] == 3
+    if shown[0] >= tc.EYES_SHOWN:
+        assert seen == [0]
+    else:
+        assert seen == list(range(0, tc.AUTO_LOOK[0], tc.AUTO_LOOK[1]))
+
+
 def _cli(*argv):
     import argparse
 

@@ -462,6 +462,28 @@ def _face_cascade_check() -> None:
         raise AutoInitError("this OpenCV build ships no Haar cascades (use --init CLICKS.json instead)")
 
 
+EYES_SHOWN = 2.0
+"""Least :func:`eyes_shown` for a frame to show both eyes open. On the shared clips, frames where
+the peer has the eyes at under 0.3 of their usual opening: 1.4 median, two thirds of them under this;
+open ones (over 0.8 of it): 7.0 median, 2 % under (4 % on their darkened and third-size copies).
+The first frame of every shared clip and of all their copies: 2.2 or more."""
+
+
+def eyes_shown(frame_bgr: np.ndarray, clicks: Clicks) -> float:
+    """How plainly the weaker of the two eyes shows an iris at the clicked pupils: the limbus's
+    strength there (:func:`_rim`, the best outward grey step round an iris-sized circle near the
+    pupil) over the median grey gradient of the eye band, in an upright picture at :data:`EYE_WI`.
+    A shut eye's lid and lashes have edges but no ring of them; see :data:`EYES_SHOWN`."""
+    grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    left = np.asarray(clicks.left_pupil, np.float64) - PIXEL_CENTRE
+    right = np.asarray(clicks.right_pupil, np.float64) - PIXEL_CENTRE
+    band, m = _upright(grey, left, right)
+    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
+    grad = (cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0))
+    level = max(float(np.median(cv2.magnitude(*grad))), 1e-3)
+    return min(_rim(grad, tuple(m[:, :2] @ p + m[:, 2])) for p in (left, right)) / level
+
+
 def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
     """The five clicks for the largest face in ``frame_bgr``; raises :class:`AutoInitError`."""
     if not (isinstance(frame_bgr, np.ndarray) and frame_bgr.ndim == 3 and frame_bgr.shape[2] == 3):

@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tracker.auto_init import AutoInitError, auto_clicks
+from tracker.auto_init import EYES_SHOWN, AutoInitError, auto_clicks, eyes_shown
 from tracker.calibration import CalibrationError, calibrate, calibration_hints
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
@@ -29,6 +29,11 @@ from tracker.params import TrackCsvWriter
 
 AUTO_TRIES = 10
 """How many of the first frames ``--auto`` tries before giving up."""
+AUTO_LOOK = (30, 2)
+"""Where the first face found has its eyes shut (:func:`~tracker.auto_init.eyes_shown`), ``--auto``
+looks on up to this frame, every so many frames, for one with the eyes open: a blink lasts 3-5
+frames, and an eye model learned from shut eyes misreads the whole clip. The first open one is
+taken, or else the one whose eyes show most."""
 
 
 class TrackCliError(RuntimeError):
@@ -105,16 +110,27 @@ def _frame_at(path: Path, index: int) -> np.ndarray:
 def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
     v = _Video(path)
     last: Exception | None = None
+    best: tuple[float, Clicks, np.ndarray] | None = None
     try:
         for i, img in v.frames():
-            if i >= AUTO_TRIES:
+            if i >= (AUTO_TRIES if best is None else AUTO_LOOK[0]):
                 break
+            if best is not None and (i - best[1].frame) % AUTO_LOOK[1]:
+                continue
             try:
-                return auto_clicks(img, frame_index=i), img
+                found = auto_clicks(img, frame_index=i)
             except AutoInitError as e:
                 last = e
+                continue
+            shown = eyes_shown(img, found)
+            if best is None and shown >= EYES_SHOWN:
+                return found, img
+            if best is None or shown > best[0]:
+                best = (shown, found, img)
     finally:
         v.close()
+    if best is not None:
+        return best[1], best[2]
     if last is None:
         raise TrackCliError(f"{path}: no frames could be read")
     raise TrackCliError(f"{path}: {last}")
