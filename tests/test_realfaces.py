@@ -592,14 +592,9 @@ def _clip_from(folder, name: str, start: int, out) -> None:
 
     import cv2
 
-    cap = cv2.VideoCapture(str(folder / f"{name}.mp4"))
-    fps, frames = cap.get(cv2.CAP_PROP_FPS), []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
+    from benchmarks.stress_clips import read_frames
+
+    frames, fps = read_frames(folder / f"{name}.mp4")
     h, w = frames[0].shape[:2]
     vw = cv2.VideoWriter(str(out / f"{name}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
     for f in frames[start:]:
