@@ -106,6 +106,21 @@ def test_masks_appear_as_soon_as_auto_places_the_points(qtbot, performance, monk
     assert dlg.accept_btn.isEnabled()
     assert all(mv.image is not None for mv in dlg.mask_views)
     assert "Found automatically" in dlg.info.text()
+    assert "look shut" not in dlg.info.text()
+
+
+def test_auto_on_a_frame_with_shut_eyes_says_so_and_still_places_the_points(qtbot, performance, monkeypatch):
+    """Where the eyes look shut at Auto's pupils (tracker.auto_init.eyes_shown), the points are placed
+    and calibrated as usual, and the window asks for a frame with the eyes open: the eyes' pictures
+    and lid gap are learned from this frame."""
+    from tracker import auto_init
+
+    truth = _truth(performance, 320)
+    _fake_auto(monkeypatch, {k: truth[k] for k in POINTS})
+    monkeypatch.setattr(auto_init, "eyes_shown", lambda frame, clicks: 0.5)
+    dlg = _dialog(qtbot, performance.frame(320), frame_index=320)
+    assert dlg.auto() and dlg.calibration is not None and dlg.accept_btn.isEnabled()
+    assert "look shut" in dlg.info.text() and "Found automatically" in dlg.info.text()
 
 
 def test_masks_say_why_when_the_tracker_learns_nothing_from_five_points(qtbot, performance):
