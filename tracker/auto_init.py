@@ -473,7 +473,8 @@ def eyes_shown(frame_bgr: np.ndarray, clicks: Clicks) -> float:
     """How plainly the weaker of the two eyes shows an iris at the clicked pupils: the limbus's
     strength there (:func:`_rim`, the best outward grey step round an iris-sized circle near the
     pupil) over the median grey gradient of the eye band, in an upright picture at :data:`EYE_WI`.
-    A shut eye's lid and lashes have edges but no ring of them; see :data:`EYES_SHOWN`."""
+    A shut eye's lid and lashes have edges but mostly no ring of them (a lid with eyeliner or heavy
+    lashes can make one); see :data:`EYES_SHOWN`."""
     grey = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY).astype(np.float32)
     left = np.asarray(clicks.left_pupil, np.float64) - PIXEL_CENTRE
     right = np.asarray(clicks.right_pupil, np.float64) - PIXEL_CENTRE

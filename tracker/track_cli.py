@@ -31,9 +31,8 @@ AUTO_TRIES = 10
 """How many of the first frames ``--auto`` tries before giving up."""
 AUTO_LOOK = (30, 2)
 """Where the first face found has its eyes shut (:func:`~tracker.auto_init.eyes_shown`), ``--auto``
-looks on up to this frame, every so many frames, for one with the eyes open: a blink lasts 3-5
-frames, and an eye model learned from shut eyes misreads the whole clip. The first open one is
-taken, or else the one whose eyes show most."""
+looks on up to this frame, every so many frames, and calibrates on the frame whose eyes show most:
+a blink lasts 3-5 frames, and an eye model learned from shut eyes misreads the whole clip."""
 
 
 class TrackCliError(RuntimeError):
@@ -110,12 +109,13 @@ def _frame_at(path: Path, index: int) -> np.ndarray:
 def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
     v = _Video(path)
     last: Exception | None = None
-    best: tuple[float, Clicks, np.ndarray] | None = None
+    best: tuple[float, Clicks, np.ndarray] | None = None  # eyes shown, points, frame
+    first = 0  # the first frame with a face
     try:
         for i, img in v.frames():
             if i >= (AUTO_TRIES if best is None else AUTO_LOOK[0]):
                 break
-            if best is not None and (i - best[1].frame) % AUTO_LOOK[1]:
+            if best is not None and (i - first) % AUTO_LOOK[1]:
                 continue
             try:
                 found = auto_clicks(img, frame_index=i)
@@ -125,6 +125,8 @@ def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
             shown = eyes_shown(img, found)
             if best is None and shown >= EYES_SHOWN:
                 return found, img
+            if best is None:
+                first = i
             if best is None or shown > best[0]:
                 best = (shown, found, img)
     finally:
