@@ -2023,16 +2023,22 @@ class _LimbusGrid:
 _LIMBUS: _LimbusGrid | None = None
 
 
+def limbus_grid() -> _LimbusGrid:
+    """The circles :func:`limbus_scores` tries (made once): their centre offsets, radii and
+    :meth:`_LimbusGrid.across`."""
+    global _LIMBUS
+    if _LIMBUS is None:
+        _LIMBUS = _LimbusGrid()
+    return _LIMBUS
+
+
 def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> np.ndarray:
     """The mean outward grey step (grey levels per px) on the limbus arcs (:data:`LIMBUS_ARC`) of
     every circle :func:`limbus_centre` tries around ``at``, in a picture at :data:`REFINE_WI` px
     between the eyes (its x and y gradients ``grad``): ``(radius, x, y)``, radii
     :data:`LIMBUS_RADII`, centres every :data:`REFINE_STEP` px within :data:`REFINE_REACH` of
     ``at`` (the middle index is ``at``)."""
-    global _LIMBUS
-    if _LIMBUS is None:
-        _LIMBUS = _LimbusGrid()
-    return _LIMBUS.scores(grad[0], grad[1], at[0], at[1])
+    return limbus_grid().scores(grad[0], grad[1], at[0], at[1])
 
 
 def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
@@ -2113,10 +2119,8 @@ def refine_pupils(
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
     if ipd < 8:
         return lp, rp
-    global _LIMBUS
-    if _LIMBUS is None:
-        _LIMBUS = _LimbusGrid()
-    wi, reach = REFINE_WI, _LIMBUS.reach
+    grid = limbus_grid()
+    wi, reach = REFINE_WI, grid.reach
     ff = FaceFrame.from_pupils(lp, rp, wi)
     x0, y0 = int(math.floor(-0.5 * wi - reach)), int(math.floor(-reach))
     rect = (x0, y0, int(math.ceil(wi + 2 * reach)) + 1, int(math.ceil(2 * reach)) + 1)
@@ -2132,7 +2136,7 @@ def refine_pupils(
     radii = common_radius((scores[0], scores[1]))
     for at, S in zip(ats, scores):
         x, y, r, edge = limbus_centre((gx, gy), at, S, radii)
-        rim = edge >= LIMBUS_MIN_EDGE and _LIMBUS.across(gx, gy, x, y, r) >= 0.0
+        rim = edge >= LIMBUS_MIN_EDGE and grid.across(gx, gy, x, y, r) >= 0.0
         found.append((x + x0, y + y0) if rim else (at[0] + x0, 0.0))
     img = ff.to_image(np.array(found))
     nl, nr = (float(img[0, 0]), float(img[0, 1])), (float(img[1, 0]), float(img[1, 1]))
