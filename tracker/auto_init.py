@@ -229,12 +229,28 @@ def rim_bars(band: np.ndarray) -> np.ndarray:
     return cv2.dilate(out, np.ones((3, 3), np.uint8)).astype(bool)
 
 
-def _rim(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> float:
-    """The limbus's strength at ``p`` (band px): the best mean outward grey step on the sides
-    of an iris-sized circle centred within 2 px of it (see :func:`tracker.eyes.limbus_centre`)."""
+def _gradients(band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The x and y grey gradients (per px) of ``band``, smoothed by a pixel first, as the limbus
+    circles read them (:func:`tracker.eyes.limbus_scores`)."""
+    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
+    return cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+
+
+def _rim_circle(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> tuple[float, float, float, float]:
+    """The limbus's strength at ``p`` (band px): the best mean outward grey step on the sides of an
+    iris-sized circle centred within 2 px of it (see :func:`tracker.eyes.limbus_centre`), and that
+    circle's centre and radius ``(strength, x, y, r)``."""
     s = limbus_scores(grad, p)
-    c = s.shape[1] // 2
-    return float(s[:, c - 2 : c + 3, c - 2 : c + 3].max())
+    grid, c = limbus_grid(), s.shape[1] // 2
+    near = s[:, c - 2 : c + 3, c - 2 : c + 3]
+    k, i, j = np.unravel_index(int(near.argmax()), near.shape)
+    return (float(near[k, i, j]), float(p[0] + grid.offs[c - 2 + i]), float(p[1] + grid.offs[c - 2 + j]),
+            float(grid.radii[k]))
+
+
+def _rim(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> float:
+    """The limbus's strength at ``p`` (:func:`_rim_circle`'s first value)."""
+    return _rim_circle(grad, p)[0]
 
 
 def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -284,8 +300,7 @@ def pupil_pair(grey: np.ndarray, box: tuple[float, float, float, float]) -> tupl
     # a heavy lash line can pass for a bar, and leaving it out must not change the eyes' weights)
     bars = rim_bars(band)
     keep = ~bars if bars.any() else None
-    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
-    grad = (cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0))
+    grad = _gradients(band)
     eyes = []
     for cx in (0.5 * w - 0.5 * EYE_WI, 0.5 * w + 0.5 * EYE_WI):
         cy = 0.5 * h
@@ -487,19 +502,14 @@ def eyes_shown(frame_bgr: np.ndarray, clicks: Clicks) -> float:
     left = np.asarray(clicks.left_pupil, np.float64) - PIXEL_CENTRE
     right = np.asarray(clicks.right_pupil, np.float64) - PIXEL_CENTRE
     band, m = _upright(grey, left, right)
-    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
-    gx, gy = cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+    gx, gy = _gradients(band)
     level = max(float(np.median(cv2.magnitude(gx, gy))), 1e-3)
     out = []
     for p in (left, right):
         q = m[:, :2] @ p + m[:, 2]
-        s = limbus_scores((gx, gy), (float(q[0]), float(q[1])))
-        grid, c = limbus_grid(), s.shape[1] // 2
-        near = s[:, c - 2 : c + 3, c - 2 : c + 3]
-        k, i, j = np.unravel_index(int(near.argmax()), near.shape)
-        x, y = float(q[0] + grid.offs[c - 2 + i]), float(q[1] + grid.offs[c - 2 + j])
-        line = grid.across(gx, gy, x, y, float(grid.radii[k])) < 0.0
-        out.append(float(near.max()) / level - (SHUT_LINE if line else 0.0))
+        strength, x, y, r = _rim_circle((gx, gy), (float(q[0]), float(q[1])))
+        line = limbus_grid().across(gx, gy, x, y, r) < 0.0
+        out.append(strength / level - (SHUT_LINE if line else 0.0))
     return min(out)
 
 
