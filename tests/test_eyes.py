@@ -1,5 +1,6 @@
 """The eye finder (tracker.eyes) on synthetic faces with exact truth."""
 
+import dataclasses
 import json
 import math
 from types import SimpleNamespace
@@ -338,6 +339,9 @@ def test_model_round_trips_through_json(finder):
         lambda d, i: d.update(light=[[1.0, 1.0], [1.0, 1.0]]),
         lambda d, i: d.update(search_dark="dark"),
         lambda d, i: d.update(search_dark=float("nan")),
+        lambda d, i: d.update(glance=2),
+        lambda d, i: d.update(glance=True),
+        lambda d, i: d.update(glance="left"),
     ],
 )
 def test_malformed_models_give_one_line_errors(finder, change):
@@ -531,6 +535,22 @@ def test_side_glance_needs_white_on_one_side_only_in_both_eyes(left, right, side
     pics = [_glancing_iris(0.0 if v is None else v) for v in (left, right)]
     model = SimpleNamespace(iris_pictures=pics, radius=[7.0, 7.0])
     assert side_glance(model) == side
+
+
+@pytest.mark.parametrize("gaze, side", [(0.0, 0), (-0.25, -1), (0.25, 1)])
+def test_a_calibration_frame_with_the_eyes_aside_is_told_after_the_pictures_are_evened_out(gaze, side):
+    """The model keeps the glance seen on the pictures as cut: their sides are evened out
+    (:func:`mirrored_sides`) before they are kept, which halves the white's lean, so the pictures
+    kept would not tell it; a saved model keeps it too."""
+    model, _ = _learn(dataclasses.replace(BASE, gaze_x=gaze))
+    assert model.glance == side and side_glance(model) == side
+    back = EyeModel.from_dict(json.loads(json.dumps(model.to_dict())), model.images())
+    assert back.glance == side
+    if side:
+        assert side_glance(SimpleNamespace(iris_pictures=model.iris_pictures, radius=model.radius)) == 0
+    old = model.to_dict()
+    old.pop("glance")  # a model saved before the glance was kept: read from its pictures
+    assert EyeModel.from_dict(old, model.images()).glance is None
 
 
 def test_side_glance_says_nothing_of_an_iris_as_light_as_its_white():

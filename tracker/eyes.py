@@ -289,8 +289,16 @@ def side_glance(model: "EyeModel") -> int:
     """Whether the calibration frame caught the eyes turned aside: −1 towards image-left, +1 towards
     image-right, 0 not (see :data:`GLANCE`). The iris pictures then hold white on one side and skin
     or the eye's corner on the other, and the search can later match the corner better than the
-    iris (expr_d3's pupils 20 % of the eye distance off in its wide-eyed frames on a dark copy)."""
-    leans = [iris_lean(p, r) for p, r in zip(model.iris_pictures, model.radius)]
+    iris (expr_d3's pupils 20 % of the eye distance off in its wide-eyed frames on a dark copy).
+    A model's ``glance`` when it has one (measured before its pictures' sides were evened out,
+    :func:`mirrored_sides`), else its pictures'."""
+    glance = getattr(model, "glance", None)
+    return int(glance) if glance is not None else _pictures_glance(model.iris_pictures, model.radius)
+
+
+def _pictures_glance(pictures, radius) -> int:
+    """:func:`side_glance` of two iris pictures as cut from the frame."""
+    leans = [iris_lean(p, r) for p, r in zip(pictures, radius)]
     if any(v is None for v in leans) or min(abs(v) for v in leans) < GLANCE or leans[0] * leans[1] <= 0:
         return 0
     return -1 if leans[0] > 0 else 1
@@ -691,7 +699,9 @@ class EyeModel:
     search's window the paler iris was (:meth:`EyeFinder.search_darkness`; None: not measured, a
     model saved before it was); ``iris_colour`` the calibrated irises' colour (their middles and the
     rings round the pupils) as a Gaussian in YCrCb, ``(mean (3,), cov (3, 3))`` grey levels with
-    :data:`SKIN_FLOOR` in it (None: a model saved before it was; see :meth:`EyeFinder._iris_likeness`).
+    :data:`SKIN_FLOOR` in it (None: a model saved before it was; see :meth:`EyeFinder._iris_likeness`);
+    ``glance`` which way the eyes looked on the calibration frame (:func:`side_glance`, read before the
+    iris pictures' sides were evened out; None: a model saved before it was, read from its pictures).
     """
 
     work_ipd: float
@@ -710,6 +720,7 @@ class EyeModel:
     rims: list[tuple[float, float] | None] = field(default_factory=lambda: [None, None])
     search_dark: float | None = None
     iris_colour: tuple[np.ndarray, np.ndarray] | None = None
+    glance: int | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -735,6 +746,7 @@ class EyeModel:
             **({} if self.light is None else {"light": [np.asarray(f, dtype=float).round(4).tolist() for f in self.light]}),
             **({} if all(r is None for r in self.rims) else {"rims": [None if r is None else [float(v) for v in r] for r in self.rims]}),
             **({} if self.search_dark is None else {"search_dark": round(float(self.search_dark), 4)}),
+            **({} if self.glance is None else {"glance": int(self.glance)}),
             **({} if self.iris_colour is None else {"iris_colour": {
                 "mean": np.asarray(self.iris_colour[0], dtype=float).round(4).tolist(),
                 "cov": np.asarray(self.iris_colour[1], dtype=float).round(4).tolist()}}),
@@ -772,6 +784,7 @@ class EyeModel:
                 light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
                 rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
                 search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
+                glance=None if d.get("glance") is None else d["glance"],
                 iris_colour=None if d.get("iris_colour") is None else (
                     np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
                     np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),
@@ -789,6 +802,8 @@ class EyeModel:
             raise EyeModelError("eye model: the eyes' light factors must be positive numbers")
         if not all(r is None or (all(map(math.isfinite, r)) and r[0] < r[1]) for r in m.rims):
             raise EyeModelError("eye model: a spectacle rim's rows must be finite and rising")
+        if m.glance is not None and (type(m.glance) is not int or m.glance not in (-1, 0, 1)):
+            raise EyeModelError(f"eye model: glance must be -1, 0 or 1, not {m.glance!r}")
         if m.search_dark is not None and not math.isfinite(m.search_dark):
             raise EyeModelError("eye model: the irises' search darkness must be a finite number")
         if m.iris_colour is not None:
@@ -1072,6 +1087,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
 
     radius = [iris_radius(grey, (float(p[0]), float(p[1])), wi) for p in pupils]
     iris_pics = [subpixel_cut(grey, p[0], p[1], *iris_picture_size(r)) for p, r in zip(pupils, radius)]
+    glance = _pictures_glance(iris_pics, radius)
     iris_pics = [mirrored_sides(q, r) for q, r in zip(iris_pics, radius)]
     eye_pics = [subpixel_cut(grey, p[0], p[1], _even(SOCKET_HW * wi), _even(SOCKET_HH * wi)) for p in pupils]
 
@@ -1114,6 +1130,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
         light=None if light is None else [np.asarray(f, dtype=np.float64) for f in light],
         iris_colour=(iris_ycc.mean(0), np.cov(iris_ycc.T) + _FLOOR_COV)
         if len(iris_ycc) >= 6 else None,
+        glance=glance,
     )
     f = EyeFinder(model, wi)
     model.search_dark = f.search_darkness(grey, pupils)
