@@ -14,7 +14,8 @@ import pytest
 
 from tracker.calibration import FaceFrame
 from tracker.colour_model import CHROMA_GAIN_MAX, SKIN_CHROMA, TILE_SHAPE, chroma_gain
-from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, MouthFinder, polygon_measures
+from tracker import mouth_finder
+from tracker.mouth_finder import OPEN_THICK, SCORE_OK, THICKNESS, WORK_IPD, MouthFinder, polygon_measures
 from tracker.mouth_model import MOUTH_RECT, MouthModel, fisher_axis, learn_mouth, lens_outline, lip_columns, lip_end, lip_gap
 from tracker.synthetic import STYLES, FaceState, face_landmarks, render_face
 
@@ -614,3 +615,34 @@ def test_chroma_gain_lifts_only_washed_out_skin():
     assert chroma_gain(0.25) == chroma_gain(SKIN_CHROMA) == 1.0
     assert chroma_gain(0.5 * SKIN_CHROMA) == pytest.approx(2.0)
     assert chroma_gain(0.0) == chroma_gain(0.001) == CHROMA_GAIN_MAX
+
+
+@pytest.mark.parametrize("expr", ["neutral", "smile"])
+def test_a_seed_in_the_hair_under_the_lip_is_checked_against_the_last_line(calibrated, expr, monkeypatch):
+    """Teeth filling the gap leave the shadow or hair under the lower lip the darkest row near the
+    prediction, and the line seeded there runs along the hair: a whole mouth found 20-30 px low that
+    scores as well as the real one (the bearded copy of expr_d10, frames 16-41: ``ok`` on the chin).
+    With a sure mouth the frame before, the line is also traced from that frame's row, and the
+    better-scoring mouth kept: the jump away from the last mouth costs the one in the hair."""
+    model, centre = calibrated
+    state = BASE.with_expression(expr)
+    img, _ = render_face(state)
+    ff = _frame_of(state)
+    crop, origin = _crop(img, ff, centre)
+    t = _truth_in_crop(state, ff, origin)
+    x0, x1 = int(t["mouth_left"][0]) - 12, int(t["mouth_right"][0]) + 12
+    y0 = int(math.ceil(t["lip_lower"][1])) + 1
+    crop = crop.copy()
+    crop[y0 : y0 + 16, x0:x1] = (28, 32, 38)
+    finder = MouthFinder(model, WI)
+    before = finder.find(crop, tuple(centre - origin))
+    assert before.score >= SCORE_OK and abs(before.line_centre[1] - t["mouth"][1]) < 3.0
+    s = WORK_IPD / WI
+    monkeypatch.setattr(finder, "line_seed", lambda *a: (y0 + 8 + 0.5) * s - 0.5)  # the hair's middle row
+    lost = finder.find(crop, tuple(centre - origin))
+    assert lost.line_centre[1] - t["mouth"][1] > 12.0  # (the case: seeded in the hair, nothing else tells)
+    res = finder.find(crop, tuple(centre - origin), before)
+    assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    assert _errors(res, t)[0] < 3.0
+    monkeypatch.setattr(mouth_finder, "HOLD_LINE", 0.0)
+    assert finder.find(crop, tuple(centre - origin), before).line_centre[1] - t["mouth"][1] > 12.0

@@ -523,7 +523,8 @@ def test_calibration_hints_name_a_glance_aside(cal):
         p = np.array(pic, dtype=np.float32)
         p[:, : p.shape[1] // 2 - int(round(cal.eye_model.radius[0]))] = 90.0  # the shaded corner over the left flank
         pics.append(p)
-    glancing = replace(cal, eye_model=replace(cal.eye_model, iris_pictures=pics))
+    # (glance None: read from these pictures, as for a model saved before the glance was kept)
+    glancing = replace(cal, eye_model=replace(cal.eye_model, iris_pictures=pics, glance=None))
     hints = calibration_hints(glancing)
     assert len(hints) == 1 and "look into the camera" in hints[0]
 

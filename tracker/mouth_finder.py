@@ -126,6 +126,9 @@ SEED_REACH_LIPS = 0.5
 RETRACE = 0.03
 """How far (× wi) below the lips' opening the traced line may run before it is traced again from
 inside the opening."""
+HOLD_LINE = 0.2
+"""How far (× wi) the seed row may lie from the last sure frame's mouth line before the line is also
+traced from that frame's row and the better-scoring mouth kept (0: never)."""
 WIDE_REF = 0.65
 """Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
 pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
@@ -1083,6 +1086,21 @@ class MouthFinder:
         # the mouth line from a dark valley near the prediction with the lower lip under it, traced out
         # to the corners; the lips on the column through the corners' midpoint
         seed = self.line_seed(maps, px, y_line)
+        res = self._from_seed(maps, px, py, seed, previous)
+        if previous is not None and previous.score >= SCORE_OK and HOLD_LINE > 0:
+            # the valley chosen lies far from the last sure frame's line (teeth filling the gap leave
+            # the shadow under the lower lip the darkest row): the line traced from where it was too
+            held = previous.line_centre[1]
+            if abs(seed - held) > HOLD_LINE * self.wi:
+                alt = self._from_seed(maps, px, py, held, previous)
+                if alt.score > res.score:
+                    res = alt
+        return res
+
+    def _from_seed(self, maps: "_Maps", px: float, py: float, seed: float, previous: MouthResult | None) -> MouthResult:
+        """The mouth traced from the line's seed row ``seed`` on column ``px`` (working-scale crop px;
+        ``(px, py)`` the predicted centre), scored (:meth:`_score`)."""
+        H, W = maps.shape
         x0, traced, left, right, strength, halves, seen, (cx, cy), v = self._line_and_lips(maps, px, seed, previous)
         if cy + self.line0 > v[1] + RETRACE * self.wi and v[1] > v[0]:
             # the lips put the mouth's opening above the traced line (which ran along the shadow under
