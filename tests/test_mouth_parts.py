@@ -579,3 +579,30 @@ def test_closed_lips_over_a_lip_coloured_shadow_keep_their_line(shade):
     assert model.thick_down <= LIP_MAX[1] * WI + 1e-6
     if not shade:
         assert abs(model.thick_down - (y_low - y_line)) < 2.0  # an ordinary lip keeps its own edge
+
+
+def test_the_gap_between_lips_in_a_beard_does_not_run_on_into_the_moustache():
+    """A closed mouth in a full beard: the line between the lips is a faint dip, lighter than the hair
+    round the lips, so the profile's median is darker than the gap. Rows "nearly as dark as the gap"
+    were then rows darker than it, and the gap ran up through the upper lip's darker top into the
+    moustache (the bearded copy of expr_d18 with --auto's mouth point: a 21 px gap at calibration,
+    the moustache learned as an upper lip). The gap is the line's row."""
+    from tracker.mouth_model import _gap
+
+    lum = np.full(90, 50.0)  # moustache and beard
+    lum[40:45] = [60.0, 70.0, 80.0, 88.0, 93.0]  # the upper lip, darker at its top
+    lum[45] = 90.0  # the line between the lips
+    lum[46:57] = np.linspace(95.0, 118.0, 11)  # the lower lip
+    red = np.full(90, -1.0)
+    red[40:57] = 8.0
+    top, bottom, darkest = _gap(lum, np.zeros(90), 48.0, 80.0, red)
+    assert darkest == 45 and top == 45 and bottom == 45
+    # a lit face round an open mouth: the dark inside is the gap, as before
+    lum = np.full(90, 150.0)
+    lum[38:44] = 120.0  # upper lip
+    lum[44:56] = 30.0   # the inside
+    lum[56:64] = 125.0  # lower lip
+    red = np.full(90, -1.0)
+    red[38:44] = red[56:64] = 8.0
+    top, bottom, _ = _gap(lum, np.zeros(90), 50.0, 80.0, red)
+    assert (top, bottom) == (44, 55)

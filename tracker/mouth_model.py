@@ -513,7 +513,8 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
     next to it, that valley is (a moustache over thin closed lips is darker than the line between
     them; the inside of an open mouth has its lips further off). The gap spreads up and down over
     rows nearly as dark (15 % of the way from that row to the profile's median: a dark lip is not
-    that dark) or teeth (``inside_rows``: the share of teeth-like pixels), across a row or two of
+    that dark; none where the median is darker than that row, a light line between lips in a beard,
+    or the gap ran up through the moustache) or teeth (``inside_rows``: the share of teeth-like pixels), across a row or two of
     neither (the blurred edge between them), at most 0.35 wi each way; below, past a tongue on the
     lower teeth: lip-like rows followed by more teeth within 0.15 wi are inside too."""
     H = len(lum_rows)
@@ -525,8 +526,9 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
         if lips:
             y_min = min(lips, key=lambda y: lum_rows[y])
     ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
-    level = lum_rows[y_min] + 0.15 * (float(np.median(lum_rows[ra:rb])) - lum_rows[y_min])
-    skip = (lum_rows < level) | (inside_rows > 0.5)
+    spread = float(np.median(lum_rows[ra:rb])) - lum_rows[y_min]
+    skip = (lum_rows < lum_rows[y_min] + 0.15 * spread) if spread > 0 else np.zeros(H, bool)
+    skip |= inside_rows > 0.5
     limit = int(round(0.35 * wi))
     bridge = max(int(round(0.025 * wi)), 1)
 
