@@ -1044,7 +1044,8 @@ class MouthFinder:
         centre, the calibrated mouth centre under the head's motion), or None when nothing there can be
         a mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
         moves with the head; :meth:`shifted`): a mouth's gap cannot jump from one frame to the next,
-        so a result far from it scores lower. Works on the crop shrunk to :data:`WORK_IPD`; the
+        so a result far from it scores lower, and a line seeded far from its line (:data:`HOLD_LINE`)
+        is traced from its line too. Works on the crop shrunk to :data:`WORK_IPD`; the
         result is in the given crop's pixels."""
         s = self.s
         if s >= 1.0:
@@ -1077,7 +1078,6 @@ class MouthFinder:
     def _find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
               previous: MouthResult | None = None) -> MouthResult | None:
         """:meth:`find` on a crop at the working scale."""
-        H, W = crop_bgr.shape[:2]
         px, py = float(predicted_centre_crop[0]), float(predicted_centre_crop[1])
         maps = self.prepare(crop_bgr)
         y_line = py + self.line0

@@ -513,10 +513,11 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
     next to it, that valley is (a moustache over thin closed lips is darker than the line between
     them; the inside of an open mouth has its lips further off). The gap spreads up and down over
     rows nearly as dark (15 % of the way from that row to the profile's median: a dark lip is not
-    that dark; none where the median is darker than that row, a light line between lips in a beard,
-    or the gap ran up through the moustache) or teeth (``inside_rows``: the share of teeth-like pixels), across a row or two of
-    neither (the blurred edge between them), at most 0.35 wi each way; below, past a tongue on the
-    lower teeth: lip-like rows followed by more teeth within 0.15 wi are inside too."""
+    that dark; none where the median is darker than that row — a light line between lips in a
+    beard, where the gap ran up through the moustache) or teeth (``inside_rows``: the share of
+    teeth-like pixels), across a row or two of neither (the blurred edge between them), at most
+    0.35 wi each way; below, past a tongue on the lower teeth: lip-like rows followed by more teeth
+    within 0.15 wi are inside too."""
     H = len(lum_rows)
     ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
     y_min = ya + int(np.argmin(lum_rows[ya:yb]))
