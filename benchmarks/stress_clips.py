@@ -46,6 +46,9 @@ glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms 
 child    a young child's proportions: each eye 25 % larger about its pupil, and the face under the
          eyes drawn up towards them, most just under the lower lids (the mouth about 0.95 of the
          eye distance below the eyes, where an adult's is 1.05-1.2); brows and forehead as they were
+late     the clip from 40 % of its length on, with the clicks put on the peer's points there (a
+         performance joined in the middle: the first frame, which calibration and ``--auto`` look
+         at, shows whatever the face was doing — a grimace, a word, a blink)
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -83,7 +86,9 @@ POINTS = (
 )
 VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale",
             "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep",
-            "child")
+            "child", "late")
+LATE = 0.4
+"""Where in the clip (share of its frames) the ``late`` variant starts."""
 STEP_LIGHT = 0.55
 """The light in the dark quarters of ``step`` (× the clip's)."""
 WASHED_COLOUR = 0.35
@@ -631,6 +636,10 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     """Write variant ``kind`` of clip ``name`` (from folder ``src``) into folder ``out``; its video path."""
     out.mkdir(parents=True, exist_ok=True)
     frames, fps = read_frames(src / f"{name}.mp4")
+    points = _read_points(src / f"{name}.points.csv")
+    if kind == "late":
+        start = int(LATE * len(frames))
+        frames, points = frames[start:], {p: q[start:] for p, q in points.items()}
     n = len(frames)
     h, w = frames[0].shape[:2]
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
@@ -643,7 +652,6 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
         spans = [(maps[max(i - 1, 0)], maps[i]) for i in range(n)]
         smear = [[a + (b - a) * (1.0 - share * (j + 0.5) / k) for j in range(k)] for a, b in spans]
         maps = [a + (b - a) * (1.0 - 0.5 * share) for a, b in spans]
-    points = _read_points(src / f"{name}.points.csv")
     pix = _photometric(kind, n, seed, points)
     room = _room(frames[0]) if kind == "leave" else None
     hand = _hand(frames, points, seed) if kind == "covered" else None
@@ -706,6 +714,9 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
             row = vals[i] if np.isfinite(vals[i]).all() else np.full(len(vals[i]), np.nan)  # any point unseen: no face
             wr.writerow([i] + [_num(v, ".3f") for v in row])
 
+    if kind == "late":
+        (out / f"{name}.clicks.json").write_text(json.dumps(_clicks_from_points(moved, 0)))
+        return out / f"{name}.mp4"
     clicks = json.loads((src / f"{name}.clicks.json").read_text())
     m0 = maps[int(clicks.get("frame", 0))]
     new = {"frame": clicks.get("frame", 0)}
@@ -719,6 +730,17 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
         new["left_brow"], new["right_brow"] = new["right_brow"], new["left_brow"]
     (out / f"{name}.clicks.json").write_text(json.dumps(new))
     return out / f"{name}.mp4"
+
+
+def _clicks_from_points(points: dict[str, np.ndarray], i: int) -> dict:
+    """The five clicks a careful person would make on frame ``i``, from the peer's points there, as the
+    shared clips' clicks were made on their frame 0: the pupils, the brows, and the mouth's centre
+    (the midpoint of its corners)."""
+    mouth = 0.5 * (points["left_mouth_corner"][i] + points["right_mouth_corner"][i])
+    out = {"frame": i, "mouth": mouth}
+    for k in ("left_pupil", "right_pupil", "left_brow", "right_brow"):
+        out[k] = points[k][i]
+    return {k: v if k == "frame" else [round(float(c), 1) for c in v] for k, v in out.items()}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

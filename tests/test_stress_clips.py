@@ -344,3 +344,38 @@ def test_child_moves_the_points_with_the_pixels(roll):
     assert np.dot(point(mouth + 0.5, 0) - 0.5 - mouth, pupil - mouth) > 0  # towards the eyes
     assert np.hypot(*(point(lid + 0.5, 0) - 0.5 - pupil)) > np.hypot(*(lid - pupil)) + 1.0  # away from the pupil
     assert np.allclose(point(pupil + 0.5, 0) - 0.5, pupil)
+
+
+def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
+    """``late``: the clip from :data:`~benchmarks.stress_clips.LATE` of its frames on, the peer's rows
+    renumbered from 0, and the clicks put where the shared clips' clicks are put on their frame 0
+    (pupils and brows on the peer's, the mouth at the midpoint of its corners) — on the new frame 0,
+    whatever the face is doing there."""
+    src, out = tmp_path / "src", tmp_path / "late"
+    src.mkdir()
+    _write_clip(src, n=10, w=160, h=120)
+    with open(src / "c.points.csv", newline="") as f:  # a face that moves: frame i's points i px right
+        rows = list(csv.DictReader(f))
+    for i, r in enumerate(rows):
+        for k in r:
+            if k.endswith("_x"):
+                r[k] = str(float(r[k]) + i)
+    with open(src / "c.points.csv", "w", newline="") as f:
+        wr = csv.DictWriter(f, fieldnames=list(rows[0]))
+        wr.writeheader()
+        wr.writerows(rows)
+    frames, _ = sc.read_frames(src / "c.mp4")
+    sc.make_variant(src, "c", "late", out)
+    start = int(sc.LATE * 10)
+    got, _ = sc.read_frames(out / "c.mp4")
+    assert len(got) == 10 - start
+    assert np.abs(got[0].astype(int) - frames[start].astype(int)).mean() < 12  # the codec's loss only
+    peer = rf.load_peer(out, "c")
+    assert peer.points["left_pupil"][0] == pytest.approx([20 + start, 15], abs=0.01)
+    clicks = json.loads((out / "c.clicks.json").read_text())
+    assert clicks["frame"] == 0
+    assert clicks["left_pupil"] == pytest.approx([20 + start, 15], abs=0.06)
+    assert clicks["right_brow"] == pytest.approx([45 + start, 5], abs=0.06)
+    assert clicks["mouth"] == pytest.approx([32 + start, 35.5], abs=0.06)
+    with open(out / "c.mp.csv", newline="") as f:
+        assert [r["frame"] for r in csv.DictReader(f)] == [str(i) for i in range(10 - start)]
