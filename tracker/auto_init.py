@@ -248,11 +248,6 @@ def _rim_circle(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> 
             float(grid.radii[k]))
 
 
-def _rim(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> float:
-    """The limbus's strength at ``p`` (:func:`_rim_circle`'s first value)."""
-    return _rim_circle(grad, p)[0]
-
-
 def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) -> float:
     """Normalised correlation of the eye round ``a`` with the mirrored eye round ``b`` (both
     cut upright along the line a→b): two real eyes are mirror images; an iris and a lid
@@ -317,7 +312,7 @@ def pupil_pair(grey: np.ndarray, box: tuple[float, float, float, float]) -> tupl
             cands = [(vw // 2, vh // 2)]
         vmax = max(float(votes.max()), 1e-6)
         cmax = max(float(contrast[oy : oy + vh, ox : ox + vw].max()), 1e-6)
-        rims = [_rim(grad, (x + ox, y + oy)) for x, y in cands]
+        rims = [_rim_circle(grad, (x + ox, y + oy))[0] for x, y in cands]
         rmax = max(max(rims), 1e-6)
         near = PAIR_WEIGHTS["near"]
         eyes.append([((x + ox, y + oy), float(votes[max(y - 1, 0) : y + 2, max(x - 1, 0) : x + 2].max()) / vmax,

@@ -2071,7 +2071,7 @@ def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
     ``(x, y, radius, edge)``: picture px, and the mean outward step there (grey levels per px).
     """
     S = limbus_scores(grad, at) if scores is None else scores
-    g = _LIMBUS
+    g = limbus_grid()
     nr, n = S.shape[0], S.shape[1]
     r0, r1 = (0, nr) if radii is None else (max(radii[0], 0), min(radii[1], nr))
     P = np.maximum(S[r0:r1], 0.0) * g.prior
@@ -2104,7 +2104,7 @@ def common_radius(scores: tuple[np.ndarray, np.ndarray]) -> tuple[int, int]:
     the pupil and its highlight), and whichever of it and the rim won used to turn on where the
     click fell (expr_d18's narrow eyes: both snapped pupils 4–6 % of the eye distance to one
     side with the points moved by a pixel)."""
-    g = _LIMBUS
+    g = limbus_grid()
     best = [np.maximum(S, 0.0).reshape(S.shape[0], -1) for S in scores]
     best = [(b * g.prior.reshape(1, -1)).max(axis=1) for b in best]
     total = best[0] + best[1]
