@@ -374,3 +374,43 @@ def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
     assert plausible(top, top) and plausible(top, top + 0.05)
     assert not plausible(top, top - 0.1) and not plausible(top, top - 0.2)  # never above the top
     assert plausible(0.6, 0.0) and not plausible(0.6, -0.1)  # after a yawn: back to the rigid place, not past it
+
+
+def _two_motions(img: np.ndarray, split_x: float, m: np.ndarray, shift: tuple[float, float]) -> np.ndarray:
+    """``img`` moved by ``m`` left of column ``split_x`` and shifted by ``shift`` right of it."""
+    h, w = img.shape[:2]
+    a = cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    t = np.float64([[1, 0, shift[0]], [0, 1, shift[1]]])
+    b = cv2.warpAffine(img, t, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    out = b.copy()
+    out[:, : int(split_x)] = a[:, : int(split_x)]
+    return out
+
+
+@pytest.mark.parametrize("trust", [True, False])
+def test_a_motion_most_corners_disagree_with_keeps_its_turn_and_shift_but_not_its_scale(trust, monkeypatch):
+    """A quick turn tears the corners into groups that move apart: the largest group's scale is
+    not taken when it holds under SCALE_TRUST of them (a head once read 6 % larger in one frame)."""
+    import tracker.head_motion as hmod
+
+    share = hmod.SCALE_TRUST
+    if not trust:
+        monkeypatch.setattr(hmod, "SCALE_TRUST", 0.0)
+    img = _textured(4)
+    face = np.array([[200, 120], [440, 120], [440, 360], [200, 360]], dtype=np.float64)
+    hm = HeadMotion()
+    hm.set_scale(80.0)
+    assert hm.seed(img, face) >= 20
+    m = cv2.getRotationMatrix2D((270.0, 240.0), 2.0, 1.06)
+    m[:, 2] += (3.0, -2.0)
+    motion = hm.step(_two_motions(img, 318.0, m, (9.0, 7.0)), face)
+    assert motion is not None
+    assert 0.4 <= motion.inliers / motion.tracked < share
+    assert motion.angle == pytest.approx(math.radians(2.0), abs=0.01)
+    if trust:
+        assert motion.scale == pytest.approx(1.0, abs=1e-9)
+        # the agreeing corners' middle still goes where they went
+        c = np.array([[262.0, 240.0]])
+        assert np.allclose(apply(motion.matrix, c), apply(m, c), atol=1.5)
+    else:
+        assert motion.scale == pytest.approx(1.06, abs=0.01)
