@@ -517,8 +517,11 @@ STRESS_CASES = [
     # head's scale 7 % wider while her face narrowed 10 %: every pupil after it 10 % of the eye
     # distance off, reported ok (the scale now follows weak eyes only where the face picture agrees,
     # with the flow or without it: a frame without the flow grew it 4 % at a time, two of eight
-    # one-pixel moves of the clicks ended 10 % off). Her eye opening (r 0.66-0.75 over those moves)
-    # and mouth width are not what this case is about
+    # one-pixel moves of the clicks ended 10 % off). On the OpenCV 4.14 wheels it failed again the same
+    # way (lost 10 %, pupil median 8.4 %, p95 13.9 %) from the flow itself: in that turn one frame whose
+    # motion 12 of 30 corners agreed with read the head 6 % larger, and nothing took it back. A motion
+    # most corners disagree with now keeps its scale out (head_motion.SCALE_TRUST): lost 0, 0.8 / 4.0 %.
+    # Her eye opening (r 0.66-0.75 over those moves) and mouth width are not what this case is about
     pytest.param("talk_a", "deep", False, ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_brow"),
                  id="talk_a-deep-clicks"),
     # a brown iris in a dark face, hardly darker than the skin round it: weighed against its own
@@ -574,11 +577,6 @@ STRESS_CASES = [
     # meet every target on all eight one-pixel moves of --auto's points
     pytest.param("talk_b", "child", True, None, id="talk_b-child-auto"),
     pytest.param("expr_d11", "child", True, None, id="expr_d11-child-auto"),
-    # a darker-skinned copy turning quickly: one flow frame in which 12 of 30 corners agreed read the
-    # head 6 % larger, nothing took it back, and the image-right eye was searched on its dark outer
-    # corner and reported ok there for the rest of the clip (lost 10 %, pupil median 8.4 %, p95 13.9 %).
-    # A motion most corners disagree with keeps its scale out: lost 0, 0.8 / 4.0 %
-    pytest.param("talk_a", "deep", False, ("lost_pct", "pupil_med", "pupil_p95"), id="talk_a-deep-clicks"),
 ]
 
 
