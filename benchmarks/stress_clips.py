@@ -40,6 +40,9 @@ deep     the face darkened to a deep brown, all of it alike (a washed-out forehe
          whites of the eyes between the peer's lids and the teeth between its lips, and outside the
          face whatever has skin's colour (a darker-skinned face: the brows, the lashes, a brown iris
          and the mouth's inside barely darker than the skin; a grey or green iris lighter than it)
+darkeyes ``deep`` with each iris, where it shows between the peer's lids, darkened to
+         :data:`DARK_IRIS` of its light: the usual eye of a darker-skinned face, a dark brown iris
+         darker than the skin round it (``deep`` keeps the clip's own, often lighter, irises)
 glasses  dark plastic spectacle frames round both eyes, with a bridge, the arms and a glare on
          the lenses that moves as the head moves (a rim between the eye and the brow and under the
          lower lid, a bright streak near or over the eye)
@@ -86,7 +89,7 @@ POINTS = (
 )
 VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale",
             "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep",
-            "child", "late")
+            "darkeyes", "child", "late")
 LATE = 0.4
 """Where in the clip (share of its frames) the ``late`` variant starts."""
 STEP_LIGHT = 0.55
@@ -436,8 +439,8 @@ def _glasses(points: dict[str, np.ndarray], shape: tuple[int, int]):
 def _photometric(kind: str, n: int, seed: int,
                  points: dict[str, np.ndarray] | None = None) -> Callable[[np.ndarray, int], np.ndarray]:
     """The per-frame pixel change of a photometric variant: ``f(frame, index) -> frame``. With the
-    peer's ``points``, ``deep`` darkens the whole face oval but the eye openings and the teeth;
-    without them only what has skin's colour."""
+    peer's ``points``, ``deep`` darkens the whole face oval but the eye openings and the teeth, and
+    ``darkeyes`` also the irises inside the openings; without them only what has skin's colour."""
     rng = np.random.default_rng(seed)
     if kind == "noisy":
         def noisy(img: np.ndarray, i: int) -> np.ndarray:
@@ -488,7 +491,7 @@ def _photometric(kind: str, n: int, seed: int,
             grey = cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
             return cv2.addWeighted(img, keep, grey, 1.0 - keep, 0.0)
         return pale
-    if kind == "deep":
+    if kind in ("deep", "darkeyes"):
         tone = np.array(DEEP_SKIN, np.float32)
 
         def deep(img: np.ndarray, i: int) -> np.ndarray:
@@ -507,9 +510,15 @@ def _photometric(kind: str, n: int, seed: int,
                 np.maximum(skin, face, out=skin)
                 sat = np.abs(cr - 128.0) + np.abs(cb - 128.0)
                 skin *= 1.0 - mouth * ramp(y, 120.0, 160.0) * (1.0 - ramp(sat, 25.0, 40.0))
-                skin *= 1.0 - _eye_openings(points, i, skin.shape)
+                openings = _eye_openings(points, i, skin.shape)
+                skin *= 1.0 - openings
+                if kind == "darkeyes":  # the irises where they show, darker than the darkened skin
+                    iris = _iris_discs(points, i, skin.shape) * openings
             skin = skin[..., None]
-            return np.clip(img * (1.0 - skin + skin * tone), 0, 255).astype(np.uint8)
+            out = img * (1.0 - skin + skin * tone)
+            if kind == "darkeyes" and points is not None and i < len(points["left_pupil"]):
+                out *= 1.0 - np.float32(1.0 - DARK_IRIS) * iris[..., None]
+            return np.clip(out, 0, 255).astype(np.uint8)
         return deep
     if kind == "blur":
         return lambda img, i: cv2.GaussianBlur(img, (0, 0), 1.6)
@@ -573,6 +582,29 @@ FACE_OVAL = (1.05, 1.3, 0.35)
 """The ``deep`` variant's face oval, darkened throughout (× the inter-pupil distance): half its
 width, half its height, and how far below the eyes' midpoint its centre lies (towards the mouth):
 cheek to cheek, forehead to chin."""
+
+
+DARK_IRIS = 0.45
+"""Share of its light each iris keeps in ``darkeyes``: a clip's brown, grey or blue iris to a dark
+brown one, darker than the ``deep`` skin round it."""
+IRIS_SIZE = 0.095
+"""An iris's radius (× the inter-pupil distance): 12 mm across on a 63 mm IPD."""
+
+
+def _iris_discs(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -> np.ndarray:
+    """Frame ``i``'s two irises as discs (:data:`IRIS_SIZE`) about the peer's pupils, 1 inside and 0
+    outside (float32, ``shape``, softened by a tenth of the radius); the lids over them are not cut
+    out here (see :func:`_eye_openings`)."""
+    mask = np.zeros(shape, np.float32)
+    lp, rp = points["left_pupil"][i], points["right_pupil"][i]
+    if not (np.all(np.isfinite(lp)) and np.all(np.isfinite(rp))):
+        return mask
+    r = IRIS_SIZE * float(np.hypot(*(rp - lp)))
+    if r < 1.0:
+        return mask
+    for p in (lp, rp):
+        cv2.circle(mask, tuple(_fixed(p).tolist()), int(round(r * 8)), 1.0, -1, cv2.LINE_AA, 3)
+    return cv2.GaussianBlur(mask, (0, 0), max(0.1 * r, 0.7))
 
 
 def _face_ovals(points: dict[str, np.ndarray], i: int, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:

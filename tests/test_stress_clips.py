@@ -305,6 +305,31 @@ def test_deep_darkens_the_whole_face_but_the_whites_of_the_eyes_and_the_teeth():
     assert np.allclose(out[100, 195], img[100, 195], atol=3)  # the wall
 
 
+def test_darkeyes_darkens_the_irises_where_they_show_and_keeps_the_whites():
+    """``darkeyes``: ``deep``, and each iris between the lids darker still (DARK_IRIS of its light),
+    darker than the deep skin round it; the white beside it is kept, and the skin over the iris's
+    top (under the upper lid) is darkened as skin, not as iris."""
+    h, w = 200, 200
+    img = np.zeros((h, w, 3), np.uint8)
+    img[:] = (150, 170, 210)  # skin
+    img[64:77, 50:91] = (185, 190, 225)  # the left eye's pinkish white
+    cv2.circle(img, (70, 70), 6, (90, 110, 130), -1)  # a light brown iris, its top under the lid
+    pts = {"left_pupil": (70.0, 70.0), "right_pupil": (130.0, 70.0),
+           "left_upper_lid": (70.0, 66.0), "left_lower_lid": (70.0, 76.0),
+           "right_upper_lid": (130.0, 66.0), "right_lower_lid": (130.0, 76.0),
+           "left_mouth_corner": (72.0, 140.0), "right_mouth_corner": (128.0, 140.0),
+           "upper_lip_top": (100.0, 124.0), "lower_lip_bottom": (100.0, 158.0)}
+    points = {k: np.array([v], float) for k, v in pts.items()}
+    deep = sc._photometric("deep", 1, 0, points)(img, 0).astype(float)
+    dark = sc._photometric("darkeyes", 1, 0, points)(img, 0).astype(float)
+    assert np.allclose(dark[71, 70], img[71, 70] * sc.DARK_IRIS, atol=3)  # the iris, between the lids
+    assert np.allclose(deep[71, 70], img[71, 70], atol=3)  # deep keeps it
+    assert dark[71, 70].sum() < dark[100, 40].sum()  # darker than the deep skin
+    assert np.allclose(dark[70, 60], deep[70, 60], atol=1) and dark[70, 60].sum() > 0.9 * img[70, 60].sum()  # the white
+    assert np.allclose(dark[100, 40], deep[100, 40], atol=1)  # a cheek, as deep has it
+    assert np.allclose(dark[62, 70], deep[62, 70], atol=1)  # the lid over the iris's top: skin
+
+
 def test_child_squeeze_keeps_the_eyes_and_draws_the_mouth_up():
     """``child``: nothing moves above the lower lids, distances under them shrink, an adult's mouth
     1.15 eye distances below the eyes lands near 0.98, the squeeze fades out far below, and the map
