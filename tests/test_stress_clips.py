@@ -279,6 +279,17 @@ def test_deep_darkens_skin_and_lips_and_leaves_whites_and_hair():
         assert np.allclose(out[20, x], img[20, x], atol=2)
 
 
+def _one_face(upper_lid: float) -> dict[str, np.ndarray]:
+    """The peer's points of one frame of a 200 × 200 face: eyes at rows 70 (60 px apart), the upper
+    lids at row ``upper_lid``, the mouth from row 124 to 158."""
+    pts = {"left_pupil": (70.0, 70.0), "right_pupil": (130.0, 70.0),
+           "left_upper_lid": (70.0, upper_lid), "left_lower_lid": (70.0, 76.0),
+           "right_upper_lid": (130.0, upper_lid), "right_lower_lid": (130.0, 76.0),
+           "left_mouth_corner": (72.0, 140.0), "right_mouth_corner": (128.0, 140.0),
+           "upper_lip_top": (100.0, 124.0), "lower_lip_bottom": (100.0, 158.0)}
+    return {k: np.array([v], float) for k, v in pts.items()}
+
+
 def test_deep_darkens_the_whole_face_but_the_whites_of_the_eyes_and_the_teeth():
     """``deep`` with the peer's points: a washed-out, nearly grey forehead inside the face is
     darkened like the skin (it is skin that lost its chroma to the light), while the pinkish
@@ -291,12 +302,7 @@ def test_deep_darkens_the_whole_face_but_the_whites_of_the_eyes_and_the_teeth():
     img[:, 185:] = (200, 205, 205)  # a grey wall beside the face
     img[68:73, 55:86] = (185, 190, 225)  # the left eye's pinkish white
     img[138:143, 85:116] = (235, 240, 240)  # teeth
-    pts = {"left_pupil": (70.0, 70.0), "right_pupil": (130.0, 70.0),
-           "left_upper_lid": (70.0, 64.0), "left_lower_lid": (70.0, 76.0),
-           "right_upper_lid": (130.0, 64.0), "right_lower_lid": (130.0, 76.0),
-           "left_mouth_corner": (72.0, 140.0), "right_mouth_corner": (128.0, 140.0),
-           "upper_lip_top": (100.0, 124.0), "lower_lip_bottom": (100.0, 158.0)}
-    points = {k: np.array([v], float) for k, v in pts.items()}
+    points = _one_face(upper_lid=64.0)
     out = sc._photometric("deep", 1, 0, points)(img, 0).astype(float)
     assert np.allclose(out[100, 40], np.array([150, 170, 210]) * sc.DEEP_SKIN, atol=3)  # a cheek
     assert out[37, 100].sum() < 0.6 * img[37, 100].astype(float).sum()  # the forehead
@@ -314,12 +320,7 @@ def test_darkeyes_darkens_the_irises_where_they_show_and_keeps_the_whites():
     img[:] = (150, 170, 210)  # skin
     img[64:77, 50:91] = (185, 190, 225)  # the left eye's pinkish white
     cv2.circle(img, (70, 70), 6, (90, 110, 130), -1)  # a light brown iris, its top under the lid
-    pts = {"left_pupil": (70.0, 70.0), "right_pupil": (130.0, 70.0),
-           "left_upper_lid": (70.0, 66.0), "left_lower_lid": (70.0, 76.0),
-           "right_upper_lid": (130.0, 66.0), "right_lower_lid": (130.0, 76.0),
-           "left_mouth_corner": (72.0, 140.0), "right_mouth_corner": (128.0, 140.0),
-           "upper_lip_top": (100.0, 124.0), "lower_lip_bottom": (100.0, 158.0)}
-    points = {k: np.array([v], float) for k, v in pts.items()}
+    points = _one_face(upper_lid=66.0)
     deep = sc._photometric("deep", 1, 0, points)(img, 0).astype(float)
     dark = sc._photometric("darkeyes", 1, 0, points)(img, 0).astype(float)
     assert np.allclose(dark[71, 70], img[71, 70] * sc.DARK_IRIS, atol=3)  # the iris, between the lids
