@@ -527,7 +527,7 @@ STRESS_CASES = [
     # a darker-skinned face with dark brown irises (darker than the skin round them), glancing far aside:
     # neither eye looked like its calibrated picture, the face picture matched at 0.56, and the rule
     # for a hand over the face (both eyes unlike their pictures, the picture weak, two frames) declared
-    # her gone for 9 frames in full view (lost 2.0 %); her eyes were open between their lids, which a
+    # her gone for 9 frames in full view (lost 2.7 %); her eyes were open between their lids, which a
     # hand's are not. Only the frames lost are what this case is about
     pytest.param("expr_d10", "darkeyes", False, ("lost_pct",), id="expr_d10-darkeyes-clicks"),
     # a brown iris in a dark face, hardly darker than the skin round it: weighed against its own
