@@ -174,6 +174,7 @@ LOOK_GROW = 0.1  # a second look that changes the head's scale by more than this
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
+BOX_PICTURE = 0.3  # in a detector's box, two eyes matching their pictures well (EYE_STRONG) need the face picture only this much
 EYE_LOOSE = 0.45  # in a face the detector found and whose picture matches well (FACE_SURE), eyes this sure will do
 FACE_SURE = 0.7  # face-picture correlation that, with a detector's box, vouches for eyes a glance or a stare has changed
 FACE_UNSURE = 0.6  # a face picture matching less than this leaves a frame unsure (1-5 % of real frames; one eye over: 0.55)
@@ -741,8 +742,13 @@ class FaceTracker:
         return pupils, low
 
     def _looks_like_face(self, pupils: np.ndarray) -> bool:
+        return self._picture_allows(pupils, FACE_PRESENT)
+
+    def _picture_allows(self, pupils: np.ndarray, level: float) -> bool:
+        """Whether the face picture at eyes ``pupils`` (frame px) matches at least ``level`` (or
+        there is no picture)."""
         p = self.presence(pupils)
-        return p is None or p >= FACE_PRESENT
+        return p is None or p >= level
 
     def _second_look(self, frame: np.ndarray) -> np.ndarray | None:
         """The pupils (frame px) of a face the face finder sees clearly somewhere else, or None.
@@ -798,15 +804,17 @@ class FaceTracker:
 
     def _face_in_box(self, frame: np.ndarray, box) -> np.ndarray | None:
         """The pupils (frame px) of this performer in a face detector's box, or None: both eyes sure
-        where the box puts them and the face picture there this face's — or, a glance to the side or
-        a wide stare changing the eye pictures, the eyes less sure (:data:`EYE_LOOSE`) but the face
-        picture plainly this face's (:data:`FACE_SURE`): three cues agree."""
+        where the box puts them and the face picture there not another face's (:data:`BOX_PICTURE`:
+        a dark face after a cut to a new framing matched at 0.35-0.41 with both eyes at 0.8, and
+        stayed lost for 17 frames under the usual 0.45) — or, a glance to the side or a wide stare
+        changing the eye pictures, the eyes less sure (:data:`EYE_LOOSE`) but the face picture
+        plainly this face's (:data:`FACE_SURE`): three cues agree."""
         guess = eyes_in_box(box, self._box_eyes)
         pair = self._eye_pair(frame, guess, EYE_LOOSE)
         if pair is None:
             return None
         found, low = pair
-        if low >= EYE_STRONG and self._looks_like_face(found):
+        if low >= EYE_STRONG and self._picture_allows(found, BOX_PICTURE):
             return found
         if self.cal.face_patch is not None:
             # the picture where the box puts the eyes (found, the irises a glance moved tilt and shift it)
