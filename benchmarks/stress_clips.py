@@ -502,6 +502,7 @@ def _photometric(kind: str, n: int, seed: int,
             # soft at the edges; the whites of the eyes, the teeth, hair and most backgrounds are not
             skin = ramp(cr, 130.0, 137.0) * ramp(-np.abs(cb - 108.0), -30.0, -22.0) * ramp(y, 40.0, 60.0)
             skin = cv2.GaussianBlur(skin, (0, 0), 1.0)
+            iris_keep = None  # darkeyes: the share of its light each pixel keeps for its iris
             if points is not None and i < len(points["left_pupil"]):
                 # the whole face alike (a washed-out cheek has lost its chroma, a shadow its light,
                 # and both are skin all the same) but for the whites of the eyes and the teeth:
@@ -513,11 +514,11 @@ def _photometric(kind: str, n: int, seed: int,
                 openings = _eye_openings(points, i, skin.shape)
                 skin *= 1.0 - openings
                 if kind == "darkeyes":  # the irises where they show, darker than the darkened skin
-                    iris = _iris_discs(points, i, skin.shape) * openings
+                    iris_keep = 1.0 - np.float32(1.0 - DARK_IRIS) * (_iris_discs(points, i, skin.shape) * openings)
             skin = skin[..., None]
             out = img * (1.0 - skin + skin * tone)
-            if kind == "darkeyes" and points is not None and i < len(points["left_pupil"]):
-                out *= 1.0 - np.float32(1.0 - DARK_IRIS) * iris[..., None]
+            if iris_keep is not None:
+                out *= iris_keep[..., None]
             return np.clip(out, 0, 255).astype(np.uint8)
         return deep
     if kind == "blur":

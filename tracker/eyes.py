@@ -784,7 +784,7 @@ class EyeModel:
                 light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
                 rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
                 search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
-                glance=None if d.get("glance") is None else d["glance"],
+                glance=d.get("glance"),
                 iris_colour=None if d.get("iris_colour") is None else (
                     np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
                     np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),

@@ -1081,13 +1081,14 @@ class MouthFinder:
         px, py = float(predicted_centre_crop[0]), float(predicted_centre_crop[1])
         maps = self.prepare(crop_bgr)
         y_line = py + self.line0
-        if previous is not None and previous.score >= SCORE_OK:
+        sure = previous is not None and previous.score >= SCORE_OK
+        if sure:
             px = 0.5 * (px + previous.centre[0])
         # the mouth line from a dark valley near the prediction with the lower lip under it, traced out
         # to the corners; the lips on the column through the corners' midpoint
         seed = self.line_seed(maps, px, y_line)
         res = self._from_seed(maps, px, py, seed, previous)
-        if previous is not None and previous.score >= SCORE_OK and HOLD_LINE > 0:
+        if sure and HOLD_LINE > 0:
             # the valley chosen lies far from the last sure frame's line (teeth filling the gap leave
             # the shadow under the lower lip the darkest row): the line traced from where it was too
             held = previous.line_centre[1]
