@@ -154,6 +154,8 @@ class TrackResult:
 
 # Sizes and rates, as fractions of the working inter-pupil distance unless said.
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
+GAZE_X_PAIR = 0.35  # ... for two clear open eyes moved alike (one gaze): a calibration frame that caught the eyes at one side leaves a glance to the other twice as far
+PAIR_AGREE = 0.06  # most the two irises' moves from their calibrated places may differ (x and y) to count as one gaze
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
 EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
 EYE_CLEAR = 0.8  # ... and at least this sure: they outvote a face picture under FACE_ABSENT (a side light's ramp)
@@ -430,32 +432,43 @@ class FaceTracker:
         return anchors, presence
 
     def _judge_eyes(self, res: EyeResult, found: np.ndarray, flow_ok: bool, face_there: bool,
-                    eyes_win=None) -> tuple[list[bool], bool]:
-        """Which eyes are doubtful (not on this person's eye, or where no gaze can put it), and
-        whether both are sure enough to turn the head's pose.
+                    eyes_win=None) -> tuple[list[bool], bool, list[bool]]:
+        """Which eyes are doubtful (not on this person's eye, or where no gaze can put it), whether
+        both are sure enough to turn the head's pose, and which eyes were let past one eye's gaze
+        reach only as one of a pair (their brows are held: see below).
 
         A shut eye does not look like the calibrated open one, so its low score is not doubt
         when the face itself is there (``face_there``: its picture matched, or the flow follows it).
-        Two open eyes whose distance or tilt disagree with the head's pose doubt the less sure
-        one — unless ``eyes_win()`` says the face picture matches better at the eyes than at the
-        pose: then the pose has drifted (the flow's scale and roll do), and the eyes stay to set
-        it right (blaming an eye every frame would keep the wrong pose for good).
+        An iris lies within :data:`GAZE_X` / :data:`GAZE_Y` of its calibrated place — or, both eyes
+        clear and open and moved alike (one gaze), within :data:`GAZE_X_PAIR` aside: the calibration
+        frame may have caught the eyes turned to one side, and a glance to the other then moves them
+        twice as far (a stress copy of expr_d0 joined mid-glance: both eyes doubted for being 0.25 wi
+        aside, held where the gaze last was, and the pupils drifted onto the calibrated corner, 30 %
+        of the eye distance off, reported ok). An eye let through that way is read through the eye's
+        far corner, where the brow's calibrated cross-section does not fit. Two open eyes whose
+        distance or tilt disagree with the head's pose doubt the less sure one — unless
+        ``eyes_win()`` says the face picture matches better at the eyes than at the pose: then the
+        pose has drifted (the flow's scale and roll do), and the eyes stay to set it right (blaming
+        an eye every frame would keep the wrong pose for good).
         """
         wi = self.wi
         preds = self._pupils_face.tolist()
         f = found.tolist()
         obs = res.eyes
         doubt = [o.score < EYE_DOUBT and (o.open or not face_there) for o in obs]
-        strong = all(o.open and o.score >= EYE_STRONG for o in obs)
-        if strong:  # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
-            gx = 0.5 * (f[0][0] + f[1][0] - preds[0][0] - preds[1][0]) / wi
-            gy = 0.5 * (f[0][1] + f[1][1] - preds[0][1] - preds[1][1]) / wi
-            strong = (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 <= 1.0
+        moves = [((f[i][0] - preds[i][0]) / wi, (f[i][1] - preds[i][1]) / wi) for i in range(2)]
+        within = lambda g, reach: (g[0] / reach) ** 2 + (g[1] / GAZE_Y) ** 2 <= 1.0
+        clear = all(o.open and o.score >= EYE_STRONG for o in obs)
+        alike = abs(moves[0][0] - moves[1][0]) <= PAIR_AGREE and abs(moves[0][1] - moves[1][1]) <= PAIR_AGREE
+        reach = max(GAZE_X_PAIR, GAZE_X) if clear and alike else GAZE_X
+        mean = (0.5 * (moves[0][0] + moves[1][0]), 0.5 * (moves[0][1] + moves[1][1]))
+        # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
+        near = clear and within(mean, GAZE_X)
+        strong = clear and within(mean, reach)
         for i in range(2):
-            if not doubt[i] and not strong:
-                gx, gy = (f[i][0] - preds[i][0]) / wi, (f[i][1] - preds[i][1]) / wi
-                if (gx / GAZE_X) ** 2 + (gy / GAZE_Y) ** 2 > 1.0:
-                    doubt[i] = True
+            if not doubt[i] and not strong and not within(moves[i], reach):
+                doubt[i] = True
+        far = [not (doubt[i] or near) and not within(moves[i], GAZE_X) for i in range(2)]
         if not any(doubt) and obs[0].open and obs[1].open:
             d = (f[1][0] - f[0][0], f[1][1] - f[0][1])
             ratio = math.hypot(*d) / wi
@@ -464,7 +477,7 @@ class FaceTracker:
             if (not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi) and not (eyes_win is not None and eyes_win()):
                 doubt[int(np.argmin([o.score for o in obs]))] = True
                 strong = False
-        return doubt, strong
+        return doubt, strong, far
 
     def _track(self, frame: np.ndarray, index: int, time: float, flow_ok: bool) -> TrackResult:
         wi = self.wi
@@ -485,7 +498,7 @@ class FaceTracker:
             def eyes_win() -> bool:
                 at_eyes = face_similarity(self._grey, self.motion.scale, ff.to_image(found), self._face_ref)
                 return at_eyes > face_similarity(self._grey, self.motion.scale, anchors, self._face_ref)
-        doubt, strong = self._judge_eyes(res, found, flow_ok, face_there, eyes_win)
+        doubt, strong, far = self._judge_eyes(res, found, flow_ok, face_there, eyes_win)
         closed = [not o.open for o in obs]
         pup_f = found.copy()
         for i in range(2):
@@ -542,7 +555,10 @@ class FaceTracker:
                 brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
             else:
                 lid_up[i], lid_down[i] = max(o.upper, 0.0), max(o.lower, 0.0)
-                brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
+                if far[i]:  # read through the eye's far corner: hold the brow
+                    brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
+                else:
+                    brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
         (plx, ply), (prx, pry) = pup_f.tolist()
         pts = [
             pup_f,

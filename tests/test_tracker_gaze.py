@@ -1,0 +1,99 @@
+"""How far the eyes may look aside: a calibration frame that caught the eyes turned to one side
+leaves a glance to the other side twice as far from the calibrated irises; both eyes moving
+alike is one gaze, not two wrong matches."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tracker.face_tracker as face_tracker
+from tracker.calibration import calibrate
+from tracker.clicks import Clicks
+from tracker.eyes import EyeObservation, EyeResult
+from tracker.face_tracker import FaceTracker
+from tracker.synthetic import FaceState, clicks_for, render_face
+
+LOOK_LEFT, LOOK_RIGHT = -0.12, 0.13
+"""Gazes (× the eye distance) of the calibration frame and of the glance the other way."""
+
+
+@pytest.fixture(scope="module")
+def glancing_cal():
+    start = FaceState(cx=320.0, cy=210.0, ipd=80.0, gaze_x=LOOK_LEFT)
+    return start, calibrate(render_face(start)[0], Clicks.from_dict(clicks_for(start)))
+
+
+def _glance_across(start: FaceState, cal, frames: int = 16, hold: int = 6):
+    """Track the eyes turning from the calibration's gaze to :data:`LOOK_RIGHT` over ``frames``
+    frames, then held there ``hold`` frames: per frame, the pupils' errors (% of the eye
+    distance) and which eyes were doubted."""
+    tr = FaceTracker(cal)
+    out = []
+    for i in range(frames + hold):
+        state = start.replace(gaze_x=LOOK_LEFT + (LOOK_RIGHT - LOOK_LEFT) * min(i / frames, 1.0))
+        r = tr.track(render_face(state)[0], i)
+        t = clicks_for(state)
+        truth = np.array([t["left_pupil"], t["right_pupil"]], dtype=np.float64) - 0.5  # OpenCV's pixel centres
+        err = np.linalg.norm(r.overlay.pupils - truth, axis=1) / state.ipd * 100.0
+        out.append((r.params.status, err, list(r.debug.get("doubtful", [False, False]))))
+    return out
+
+
+def test_a_glance_twice_as_far_as_one_eye_may_reach_is_followed(glancing_cal):
+    start, cal = glancing_cal
+    frames = _glance_across(start, cal)
+    assert all(status == "ok" for status, _, _ in frames)
+    assert max(float(err.max()) for _, err, _ in frames) < 3.0
+    assert not any(any(doubt) for _, _, doubt in frames[-6:])
+
+
+def test_without_the_pairs_reach_the_glance_is_doubted_and_the_pupils_drift(glancing_cal, monkeypatch):
+    """The control: with a pair reaching no further than one eye, both eyes are doubted once the
+    glance passes :data:`~tracker.face_tracker.GAZE_X`, and the pupils held from the last gaze drift
+    back towards the calibrated irises while the status says ok."""
+    monkeypatch.setattr(face_tracker, "GAZE_X_PAIR", face_tracker.GAZE_X)
+    start, cal = glancing_cal
+    frames = _glance_across(start, cal)
+    assert all(doubt == [True, True] for _, _, doubt in frames[-4:])
+    assert float(frames[-1][1].max()) > 6.0
+
+
+def _eye(x: float, y: float, score: float = 0.8, open_: bool = True) -> EyeObservation:
+    return EyeObservation(x=x, y=y, score=score, open=open_, upper=5.0, lower=5.0, brow=30.0, iris=(x, y), radius=6.0)
+
+
+@pytest.fixture(scope="module")
+def tracker_at_rest(glancing_cal):
+    _, cal = glancing_cal
+    return FaceTracker(cal)
+
+
+def _judge(tr: FaceTracker, moves, scores=(0.8, 0.8)):
+    """:meth:`FaceTracker._judge_eyes` for both eyes moved by ``moves`` (× wi, (2, 2)) from their
+    calibrated places in the face frame (the flow following, the face picture there)."""
+    found = tr._pupils_face + np.asarray(moves, dtype=np.float64) * tr.wi
+    res = EyeResult((_eye(*found[0], score=scores[0]), _eye(*found[1], score=scores[1])))
+    return tr._judge_eyes(res, found, True, True)
+
+
+def test_one_gaze_of_two_clear_eyes_may_reach_further_than_one_eye(tracker_at_rest):
+    tr = tracker_at_rest
+    aside = 0.5 * (face_tracker.GAZE_X + face_tracker.GAZE_X_PAIR)
+    doubt, strong, far = _judge(tr, [[aside, 0.0], [aside, 0.0]])
+    assert doubt == [False, False] and strong and far == [True, True]
+    # within one eye's reach nothing is far, and the brows are read as before
+    doubt, strong, far = _judge(tr, [[0.1, 0.0], [0.1, 0.0]])
+    assert doubt == [False, False] and strong and far == [False, False]
+
+
+@pytest.mark.parametrize("moves,scores", [
+    ([[0.28, 0.0], [0.02, 0.0]], (0.8, 0.8)),    # only one eye moved that far: a wrong match
+    ([[0.28, 0.0], [0.28 - 0.1, 0.0]], (0.8, 0.8)),  # the two moved differently
+    ([[0.28, 0.0], [0.28, 0.0]], (0.8, 0.5)),    # one eye not clear
+    ([[0.4, 0.0], [0.4, 0.0]], (0.8, 0.8)),      # past the pair's reach too
+])
+def test_what_is_not_one_gaze_keeps_one_eyes_reach(tracker_at_rest, moves, scores):
+    doubt, strong, _ = _judge(tracker_at_rest, moves, scores)
+    far_eyes = [i for i in range(2) if abs(moves[i][0]) > face_tracker.GAZE_X]
+    assert not strong and all(doubt[i] for i in far_eyes)
