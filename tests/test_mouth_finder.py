@@ -646,3 +646,39 @@ def test_a_seed_in_the_hair_under_the_lip_is_checked_against_the_last_line(calib
     assert _errors(res, t)[0] < 3.0
     monkeypatch.setattr(mouth_finder, "HOLD_LINE", 0.0)
     assert finder.find(crop, tuple(centre - origin), before).line_centre[1] - t["mouth"][1] > 12.0
+
+
+@pytest.mark.parametrize("held_wider", [True, False])
+def test_of_two_sure_mouths_from_this_frames_line_and_the_last_ones_the_wider_is_kept(calibrated, monkeypatch, held_wider):
+    """The line seeded far from the last sure frame's line is also traced from that line; when both
+    mouths score the same (full marks, as most real mouths do), the wider one is kept: a line traced
+    off the mouth's middle (the teeth's lower edge, a dark lower lip) ends where that edge ends, short
+    of the corners (a grin in a dark face read as its teeth, 0.6-0.8 of its width)."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    finder = MouthFinder(model, WI)
+    before = finder.find(crop, tuple(centre - origin))
+    assert before.score >= SCORE_OK
+    s = WORK_IPD / WI
+    held_row = (before.line_centre[1] + 0.5) * s - 0.5
+    far = held_row + 2.0 * mouth_finder.HOLD_LINE * WORK_IPD
+    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
+    real = finder._from_seed
+    widths = {}
+
+    def traced(maps, px, py, seed, previous):
+        """The mouth traced from the true line, full marks, 4 px narrower for one of the two rows."""
+        r = real(maps, px, py, held_row, previous)
+        if (seed == far) == held_wider:
+            r = mouth_finder._moved(r, left=(r.left[0] + 2.0, r.left[1]), right=(r.right[0] - 2.0, r.right[1]))
+        widths["held" if seed == held_row else "seeded"] = r.right[0] - r.left[0]
+        return mouth_finder._moved(r, score=1.0, line_ends=((0.0, seed), (1.0, seed)))
+
+    monkeypatch.setattr(finder, "_from_seed", traced)
+    res = finder.find(crop, tuple(centre - origin), before)
+    assert set(widths) == {"held", "seeded"} and widths["held"] != widths["seeded"]
+    kept = "held" if held_wider else "seeded"
+    assert (res.right[0] - res.left[0]) * s == pytest.approx(widths[kept], abs=0.01)
+    assert res.line_centre[1] == pytest.approx(((held_row if held_wider else far) + 0.5) / s - 0.5, abs=0.01)

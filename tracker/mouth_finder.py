@@ -128,7 +128,8 @@ RETRACE = 0.03
 inside the opening."""
 HOLD_LINE = 0.2
 """How far (× wi) the seed row may lie from the last sure frame's mouth line before the line is also
-traced from that frame's row and the better-scoring mouth kept (0: never)."""
+traced from that frame's row and the better-scoring mouth kept — the wider one when both score the
+same (0: never)."""
 WIDE_REF = 0.65
 """Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
 pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
@@ -1094,7 +1095,12 @@ class MouthFinder:
             held = previous.line_centre[1]
             if abs(seed - held) > HOLD_LINE * self.wi:
                 alt = self._from_seed(maps, px, py, held, previous)
-                if alt.score > res.score:
+                # both may be sure (the score is full for most real mouths): then the wider one. A
+                # line traced off the mouth's middle (the shadow under the lower lip, the teeth's lower
+                # edge, a lower lip darker than the skin) ends where that shadow, edge or lip ends,
+                # short of the corners; the line between the lips runs on to them (a grin in a dark
+                # face was read as its teeth and lower lip, 0.6-0.8 of its width)
+                if alt.score > res.score or (alt.score == res.score and alt.right[0] - alt.left[0] > res.right[0] - res.left[0]):
                     res = alt
         return res
 
