@@ -181,8 +181,7 @@ EYE_LOOSE = 0.45  # in a face the detector found and whose picture matches well 
 FACE_SURE = 0.7  # face-picture correlation that, with a detector's box, vouches for eyes a glance or a stare has changed
 FACE_UNSURE = 0.6  # a face picture matching less than this leaves a frame unsure (1-5 % of real frames; one eye over: 0.55)
 EYE_BLIND = 0.5  # neither eye scoring this much (a hand: 0.26-0.44; eyes a quick nod moved off the pose: 0.45-0.55) ...
-BLIND_FRAMES = 2  # ... and the picture under FACE_UNSURE, this many frames in a row: the face is not there ...
-BLIND_OPEN = True  # ... unless both eyes show between their lids (a hand has no eyes; eyes turned far aside do)
+BLIND_FRAMES = 2  # ... and the picture under FACE_UNSURE, this many frames in a row: the face is not there (unless both eyes show between their lids)
 RECHECK_EVERY = 10  # unsure frames (not ok, or not both eyes seen; a sure frame takes one back) after which the face finder takes a second look
 RECHECK_GAP = 5  # frames at least between two second looks
 RECHECK_MOVE = 0.25  # a face the second look finds this far (× the IPD) from where we are is where the face went
@@ -518,7 +517,7 @@ class FaceTracker:
         # both eyes show between their lids: a dark face whose dark irises are turned far aside
         # matches neither picture, and was declared gone for 9 frames while in full view
         blind = (n_seen == 0 and max(o.score for o in obs) < EYE_BLIND and (presence is None or presence < FACE_UNSURE)
-                 and not (BLIND_OPEN and obs[0].open and obs[1].open))
+                 and not (obs[0].open and obs[1].open))
         self._blind = self._blind + 1 if blind else 0
         why = ""
         if presence is not None and presence < FACE_ABSENT and not (
@@ -552,13 +551,12 @@ class FaceTracker:
         for i, o in enumerate(obs):
             if doubt[i]:  # not seen: hold what the cartoon shows
                 lid_up[i] = lid_down[i] = 0.5 * (self.last.eye_open_l if i == 0 else self.last.eye_open_r) * k
-                brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
             else:
                 lid_up[i], lid_down[i] = max(o.upper, 0.0), max(o.lower, 0.0)
-                if far[i]:  # read through the eye's far corner: hold the brow
-                    brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
-                else:
-                    brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
+            if doubt[i] or far[i]:  # not seen, or read through the eye's far corner: hold the brow
+                brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
+            else:
+                brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
         (plx, ply), (prx, pry) = pup_f.tolist()
         pts = [
             pup_f,
