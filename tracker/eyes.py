@@ -1553,6 +1553,15 @@ class EyeFinder:
             return self._lid_walks(self.skin.distances(col, gain)[0], c, i, at)
         return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at)
 
+    def lids_at(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[float, float]:
+        """``(upper, lower)`` lid distances (crop px) of eye ``i`` through a point of the caller's
+        choosing (where the head's pose puts an eye the finder did not see clearly): where the skin
+        ends up and down the strip through ``at``, in the light the finder follows, capped as
+        :meth:`find` caps them. No iris is assumed at ``at`` (the strip's dark rows are not taken for
+        the eye's inside as they are through a found iris)."""
+        up, down = self.lids(crop, i, at, self._gain, dark=False)
+        return min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
+
     def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float, float]]:
         """For both eyes (at ``ats[0]``, ``ats[1]``), their colours classified together: the
         :meth:`lids` by colour only — where the skin ends — and the gap with the dark rule,

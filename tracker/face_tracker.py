@@ -156,6 +156,7 @@ class TrackResult:
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
 GAZE_X_PAIR = 0.35  # ... for two clear open eyes moved alike (one gaze): a calibration frame that caught the eyes at one side leaves a glance to the other twice as far
 PAIR_AGREE = 0.06  # most the two irises' moves from their calibrated places may differ (x and y) to count as one gaze
+PAIR_GAP = 0.3  # least share of the seen eye's lid gap a doubted eye's gap measured at the pose may be (else held)
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
 EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
 EYE_CLEAR = 0.8  # ... and at least this sure: they outvote a face picture under FACE_ABSENT (a side light's ramp)
@@ -549,7 +550,18 @@ class FaceTracker:
         k = ff.scale
         lid_up, lid_down, brow_h = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
         for i, o in enumerate(obs):
-            if doubt[i]:  # not seen: hold what the cartoon shows
+            at_pose = None
+            if doubt[i] and face_there and hasattr(self.eye_finder, "lids_at"):
+                # not seen, but the face is there (a blink blurs the iris, and the pair then disagrees
+                # with the pose): the lids where the pose and the gaze put the eye — unless that gap is
+                # a small share of the other eye's, seen (a pupil calibrated on the lid reads skin)
+                at_pose = self.eye_finder.lids_at(crop, i, (pup_f[i, 0] - ox, pup_f[i, 1] - oy))
+                j = 1 - i
+                if not doubt[j] and sum(at_pose) < PAIR_GAP * (max(obs[j].upper, 0.0) + max(obs[j].lower, 0.0)):
+                    at_pose = None
+            if at_pose is not None:
+                lid_up[i], lid_down[i] = at_pose
+            elif doubt[i]:  # not seen: hold what the cartoon shows
                 lid_up[i] = lid_down[i] = 0.5 * (self.last.eye_open_l if i == 0 else self.last.eye_open_r) * k
             else:
                 lid_up[i], lid_down[i] = max(o.upper, 0.0), max(o.lower, 0.0)
