@@ -101,6 +101,94 @@ def test_working_grey_is_the_mean_of_each_block_of_frame_pixels(w, h, k, seed):
     assert np.abs(g - want).max() <= 0.5 * k + 0.5
 
 
+@settings(max_examples=40, deadline=None)
+@given(w=st.integers(40, 300), h=st.integers(40, 300), k=st.integers(0, 3), seed=st.integers(0, 2**16),
+       box=st.tuples(st.floats(-50, 350), st.floats(-50, 350), st.floats(0, 300), st.floats(0, 300)))
+def test_a_part_of_the_frame_made_anew_is_the_whole_frames_grey_there_to_the_bit(w, h, k, seed, box):
+    """:meth:`HeadMotion.grey` with a box refreshes the working pixels the box touches with exactly
+    the values the whole frame's copy has there, whatever the box (past the frame's edges too), and
+    never writes into the image the flow holds as the previous frame."""
+    rng = np.random.default_rng(seed)
+    old, new = (rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(2))
+    hm = HeadMotion()
+    hm.scale = 0.5**k
+    hm._prev = prev = hm.grey(old)
+    kept = prev.copy()
+    x0, y0, bw, bh = box
+    g = hm.grey(new, (x0, y0, x0 + bw, y0 + bh))
+    assert g is not prev and np.array_equal(prev, kept)
+    full = HeadMotion()
+    full.scale = hm.scale
+    want = full.grey(new)
+    b = 2**k
+    a, c = max(int(math.floor(x0 / b)), 0), max(int(math.floor(y0 / b)), 0)
+    e, f = min(int(math.ceil((x0 + bw) / b)), want.shape[1]), min(int(math.ceil((y0 + bh) / b)), want.shape[0])
+    assert g.shape == want.shape
+    assert np.array_equal(g[c:f, a:e], want[c:f, a:e])
+
+
+def test_the_flow_on_the_corners_part_of_a_large_frame_finds_the_same_motion(monkeypatch):
+    """A face at arm's length in a webcam frame: the search on the tracked corners' part of the images
+    (:data:`~tracker.head_motion.LK_PART`) finds the motion the whole images give, to float rounding."""
+    import tracker.head_motion as head_motion
+
+    big = np.full((720, 1280, 3), 90, np.uint8)
+    big[200:440, 500:740] = _textured(4, (240, 240))
+    face = np.array([[520, 220], [720, 220], [720, 420], [520, 420]], dtype=np.float64)
+    m = cv2.getRotationMatrix2D((620.0, 320.0), 1.5, 1.02)
+    m[:, 2] += (3.0, -2.0)
+    moved = cv2.warpAffine(big, m, (1280, 720), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    got = []
+    for share in (0.0, 1.0):  # the whole images; the corners' part always
+        monkeypatch.setattr(head_motion, "LK_PART", share)
+        hm = HeadMotion()
+        hm.set_scale(80.0)
+        hm.seed(big, face)
+        motion = hm.step(moved, face)
+        assert motion is not None and motion.inliers >= 20
+        got.append(motion.matrix)
+    assert np.allclose(got[0], got[1], atol=1e-3)
+    assert np.allclose(apply(got[0], face), apply(m, face), atol=0.3)
+
+
+@pytest.mark.parametrize("margin", [None, -1.0])
+def test_a_small_face_in_a_large_frame_is_tracked_as_with_the_whole_frame_in_grey(margin, monkeypatch):
+    """The tracker converts only the part of a large frame round the face it follows
+    (:meth:`FaceTracker._grey_box`); every value it reports is the one it reports converting the
+    whole frame each time (the synthetic performer talking and moving in a 1280 × 720 frame). The
+    control: a part cut an eye distance inside :data:`~tracker.face_tracker.GREY_MARGIN` leaves the
+    face picture's search and the flow reading older frames, and the values differ."""
+    import tracker.face_tracker as face_tracker
+
+    if margin is not None:
+        monkeypatch.setattr(face_tracker, "GREY_MARGIN", margin)
+    perf = Performance(seconds=2, seed=5)
+    at = (300, 100)
+
+    def canvas(img: np.ndarray) -> np.ndarray:
+        out = np.full((720, 1280, 3), 60, np.uint8)
+        out[at[1] : at[1] + img.shape[0], at[0] : at[0] + img.shape[1]] = img
+        return out
+
+    frames = [canvas(perf.frame(i)) for i in range(len(perf))]
+    clicks = {k: [v[0] + at[0], v[1] + at[1]] if isinstance(v, (list, tuple)) else v
+              for k, v in clicks_for(perf.state(0)).items()}
+    big_cal = calibrate(frames[0], Clicks.from_dict(clicks))
+    runs = []
+    for whole in (False, True):
+        tr = FaceTracker(big_cal)
+        if whole:
+            monkeypatch.setattr(tr, "_grey_box", lambda shape: None)
+        parts, values = 0, []
+        for i, f in enumerate(frames):
+            parts += tr._grey_box(f.shape) is not None
+            values.append(tr.track(f, i).params.values())
+        runs.append((parts, values))
+    assert runs[0][0] > len(frames) // 2  # the part was what was converted
+    same = np.array_equal(np.array(runs[0][1], dtype=float), np.array(runs[1][1], dtype=float), equal_nan=True)
+    assert same == (margin is None)
+
+
 def _face_picture_setup():
     """The neutral frame, its true pupils, a head-motion working scale for it and its face picture."""
     frame, _ = render_face(BASE)

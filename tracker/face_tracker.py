@@ -41,7 +41,7 @@ from tracker.clicks import PIXEL_CENTRE
 from tracker.eyes import IRIS_SHOWS, OPEN_GAP, EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
                                  locate_face, patch_similarity, reference_vector)
-from tracker.head_motion import HeadMotion, apply, compose, similarity_from_pairs
+from tracker.head_motion import LK_REACH, HeadMotion, apply, compose, similarity_from_pairs
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
 from tracker.mouth_finder import WIDE_REF
@@ -186,6 +186,16 @@ BLIND_FRAMES = 2  # ... and the picture under FACE_UNSURE, this many frames in a
 RECHECK_EVERY = 10  # unsure frames (not ok, or not both eyes seen; a sure frame takes one back) after which the face finder takes a second look
 RECHECK_GAP = 5  # frames at least between two second looks
 RECHECK_MOVE = 0.25  # a face the second look finds this far (× the IPD) from where we are is where the face went
+GREY_MARGIN = 0.5
+"""Eye distances round the flow's face region of the last frame (and the flow windows' reach,
+:data:`~tracker.head_motion.LK_REACH`) that each frame's grey copy covers
+(:meth:`FaceTracker._grey_box`): a face moving half its eye distance in a frame, the face
+picture's search and the flow's corners picked at its edge stay inside it; a face further off is
+lost, and lost frames convert the whole frame."""
+GREY_PART = 0.5
+"""Share of the frame over which that part is not worth cutting out: the whole frame is converted
+in one go (a face filling a 512 × 512 clip; a 1280 × 720 webcam frame with the face at arm's length
+needs a third of it)."""
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
@@ -290,6 +300,25 @@ class FaceTracker:
         mid = 0.5 * (left + right)
         return mid + ipd * (self._outline[:, :1] * u + self._outline[:, 1:] * d)
 
+    def _grey_box(self, shape: tuple[int, ...]) -> tuple[float, float, float, float] | None:
+        """The part of the frame (x0, y0, x1, y1, frame px) whose grey copy this frame needs while
+        the face is followed: the flow's face region at the last frame's eyes and
+        :data:`GREY_MARGIN` eye distances round it (a head moving fast, the face picture's search),
+        and the flow's tracked corners' reach (:meth:`~tracker.head_motion.HeadMotion.points_box`).
+        None (the whole frame) when that is most of a frame of this ``shape`` anyway
+        (:data:`GREY_PART`)."""
+        ipd = float(math.hypot(*(self.anchors[1] - self.anchors[0])))
+        m = GREY_MARGIN * ipd + LK_REACH / self.motion.scale
+        if (2.1 * ipd + 2 * m) * (2.2 * ipd + 2 * m) >= GREY_PART * shape[0] * shape[1]:
+            return None
+        poly = self.face_outline()
+        (x0, y0), (x1, y1) = poly.min(axis=0).tolist(), poly.max(axis=0).tolist()
+        x0, y0, x1, y1 = x0 - m, y0 - m, x1 + m, y1 + m
+        near = self.motion.points_box()
+        if near is not None:  # corners the flow carried off the face's region (a lag, a slip)
+            x0, y0, x1, y1 = min(x0, near[0]), min(y0, near[1]), max(x1, near[2]), max(y1, near[3])
+        return x0, y0, x1, y1
+
     def colour_refs(self) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
         """Median colours of the eye and mouth crops of the last tracked frame (for calibration)."""
         out = []
@@ -360,7 +389,8 @@ class FaceTracker:
         if frame_bgr.ndim != 3 or frame_bgr.shape[2] != 3 or frame_bgr.dtype != np.uint8:
             raise ValueError("frames must be uint8 (H, W, 3) BGR")
         flow = None
-        self._grey = self.motion.grey(frame_bgr)
+        second = not self.lost and self.unsure_frames >= RECHECK_EVERY and self._since_look >= RECHECK_GAP
+        self._grey = self.motion.grey(frame_bgr, None if self.lost or second else self._grey_box(frame_bgr.shape))
         reacquired = self.lost
         found = None
         if self.lost:
@@ -370,7 +400,7 @@ class FaceTracker:
                 if self.lost_frames == RESET_ADAPTATION:
                     self._reset_adaptation()
                 return self._lost_result(index, time, "not found")
-        elif self.unsure_frames >= RECHECK_EVERY and self._since_look >= RECHECK_GAP:
+        elif second:
             self._since_look = 0
             found = self._second_look(frame_bgr)
             reacquired = found is not None

@@ -35,6 +35,14 @@ SCALE_TRUST = 0.6
 to count (under it, the rotation and the shift about the agreeing corners' middle only): in a quick
 turn or a blur most corners are lost or torn, and 12 of 30 once read a head 6 % larger in one
 frame, which nothing took back."""
+LK_REACH = 40
+"""Working px round a tracked corner whose grey values can change where the flow puts it: its
+9 × 9 window at the pyramid's third level (four px a step there), that level's smoothing and a
+move of twice the window."""
+LK_PART = 0.3
+"""Share of the image under which the flow's search runs on the tracked corners' part of it alone
+(their box and :data:`LK_REACH` round it): the same corners found to within float rounding, for a
+fraction of the pyramids' cost; over it, on the whole image."""
 _LK = dict(winSize=(9, 9), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03))
 
 
@@ -119,21 +127,51 @@ class HeadMotion:
         self._pts: np.ndarray | None = None  # (n, 1, 2) float32, scaled px
         self._age = 0
         self._buf: dict[tuple, np.ndarray] = {}
+        self._greys: list[np.ndarray | None] = []  # the working-scale grey images :meth:`grey` keeps
 
     # ------------------------------------------------------------------ images
-    def grey(self, frame_bgr: np.ndarray) -> np.ndarray:
+    def grey(self, frame_bgr: np.ndarray, box: tuple[float, float, float, float] | None = None) -> np.ndarray:
         """The frame in grey at the working scale :attr:`scale` (a power of two: area
-        averaging by a whole factor is several times cheaper than by a fraction)."""
-        g = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
-        s = self.scale
-        while s < 0.999:
-            # one halving at a time: OpenCV's area averaging by exactly 2 is ten times quicker than
-            # by 4 in one go (a 1080p frame: 0.05 against 0.5 ms), and two of them average the same
-            # 4 × 4 pixels (to within a grey level of rounding)
-            h, w = g.shape
-            g = cv2.resize(g[: h & ~1, : w & ~1], (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-            s *= 2.0
-        return g
+        averaging by a whole factor is several times cheaper than by a fraction).
+
+        With ``box`` (x0, y0, x1, y1, frame px) only that part is made anew, in a kept image of the
+        frame's size at the working scale whose other pixels hold earlier frames: while the face is
+        followed nothing outside it is looked at, and a face at arm's length from a webcam needs a
+        fifth to a half of its frame. The part made anew is the pixels the whole frame's copy has
+        there, to the bit: the box is widened to whole working pixels and each halving is an
+        average of 2 × 2 pixels."""
+        h, w = frame_bgr.shape[:2]
+        f = 1
+        while f * self.scale < 0.999:
+            f *= 2
+        size = (h // f, w // f)
+        # two kept images in turn, never the one the flow holds as the previous frame
+        keep = self._greys
+        if len(keep) != 2 or keep[0] is None or keep[0].shape != size:
+            keep[:] = [None, None]
+            box = None
+        slot = 1 if keep[0] is self._prev and keep[0] is not None else 0
+        if box is None or keep[slot] is None:
+            g = _grey_scaled(frame_bgr, f)
+            keep[slot] = g
+            return g
+        out = keep[slot]
+        x0, y0, x1, y1 = box
+        a, b = max(int(math.floor(x0 / f)), 0), min(int(math.ceil(x1 / f)), size[1])
+        c, d = max(int(math.floor(y0 / f)), 0), min(int(math.ceil(y1 / f)), size[0])
+        if b > a and d > c:
+            out[c:d, a:b] = _grey_scaled(frame_bgr[c * f : d * f, a * f : b * f], f)
+        return out
+
+    def points_box(self) -> tuple[float, float, float, float] | None:
+        """The part of the frame (x0, y0, x1, y1, frame px) the next :meth:`step` reads round the
+        tracked corners: their box and :data:`LK_REACH` working px round it (None: no corners)."""
+        if self._pts is None or not len(self._pts):
+            return None
+        q = self._pts.reshape(-1, 2)
+        lo, hi = q.min(axis=0).tolist(), q.max(axis=0).tolist()
+        k = 1.0 / self.scale
+        return (lo[0] - LK_REACH) * k, (lo[1] - LK_REACH) * k, (hi[0] + LK_REACH) * k, (hi[1] + LK_REACH) * k
 
     def set_scale(self, ipd_px: float) -> None:
         """Choose the working scale for a face with this inter-pupil distance (frame px):
@@ -224,8 +262,21 @@ class HeadMotion:
             self._pts = self._pick(g, _polygon(face_polygon), None) if face_polygon is not None else None
             self._age = 0
             return None
-        nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
         h, w = g.shape
+        # the search on the corners' part of the two images alone where that is a small part of them
+        # (a face at arm's length from a webcam): its pyramids cost by area
+        q = pts.reshape(-1, 2)
+        (x0, y0), (x1, y1) = q.min(axis=0).tolist(), q.max(axis=0).tolist()
+        k = 1 << _LK["maxLevel"]  # from a multiple of 2^levels: the crop's pyramids sample the whole image's pixels
+        a, c = max(int(x0) - LK_REACH, 0) // k * k, max(int(y0) - LK_REACH, 0) // k * k
+        b, d = min(int(x1) + LK_REACH + 1, w), min(int(y1) + LK_REACH + 1, h)
+        if (b - a) * (d - c) < LK_PART * w * h:
+            at = np.array([a, c], np.float32)
+            nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev[c:d, a:b], g[c:d, a:b], pts - at, None, **_LK)
+            if nxt is not None:
+                nxt += at
+        else:
+            nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
         if nxt is not None:
             q = nxt.reshape(-1, 2)
             inside = (q >= 0.0) & (q < self._limits(w, h))
@@ -266,6 +317,20 @@ class HeadMotion:
                 self._age = 0
         self._pts = pts
         return motion
+
+
+def _grey_scaled(frame_bgr: np.ndarray, f: int) -> np.ndarray:
+    """``frame_bgr`` in grey, averaged over ``f`` × ``f`` pixels (``f`` a power of two; a last
+    row or column short of a whole block is dropped)."""
+    g = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2GRAY)
+    while f > 1:
+        # one halving at a time: OpenCV's area averaging by exactly 2 is ten times quicker than
+        # by 4 in one go (a 1080p frame: 0.05 against 0.5 ms), and two of them average the same
+        # 4 × 4 pixels (to within a grey level of rounding)
+        h, w = g.shape
+        g = cv2.resize(g[: h & ~1, : w & ~1], (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        f //= 2
+    return g
 
 
 def _without_scale(m: np.ndarray, pts: np.ndarray) -> None:
