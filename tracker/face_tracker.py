@@ -230,6 +230,7 @@ class FaceTracker:
         ff0 = FaceFrame.from_pupils(tuple(self._cal_pupils[0]), tuple(self._cal_pupils[1]), wi)
         self._cal_mouth = ff0.to_image(np.array([cal.mouth_offset]))[0]
         self._outline = np.array(FACE_OUTLINE, dtype=np.float64)
+        self._outline_span = tuple(np.ptp(self._outline, axis=0).tolist())  # its width and height (× ipd)
         self._box_eyes = cal.face_box_eyes or DEFAULT_EYES
         self._face_ref = None if cal.face_patch is None else reference_vector(cal.face_patch)
         self.motion = HeadMotion()
@@ -309,7 +310,8 @@ class FaceTracker:
         (:data:`GREY_PART`)."""
         ipd = float(math.hypot(*(self.anchors[1] - self.anchors[0])))
         m = GREY_MARGIN * ipd + LK_REACH / self.motion.scale
-        if (2.1 * ipd + 2 * m) * (2.2 * ipd + 2 * m) >= GREY_PART * shape[0] * shape[1]:
+        sx, sy = self._outline_span
+        if (sx * ipd + 2 * m) * (sy * ipd + 2 * m) >= GREY_PART * shape[0] * shape[1]:
             return None
         poly = self.face_outline()
         (x0, y0), (x1, y1) = poly.min(axis=0).tolist(), poly.max(axis=0).tolist()
