@@ -39,7 +39,7 @@ LK_REACH = 40
 """Working px round a tracked corner whose grey values can change where the flow puts it: its
 9 × 9 window at the pyramid's third level (four px a step there), that level's smoothing and a
 move of twice the window."""
-LK_PART = 0.3
+LK_PART = 0.2
 """Share of the image under which the flow's search runs on the tracked corners' part of it alone
 (their box and :data:`LK_REACH` round it): the same corners found to within float rounding, for a
 fraction of the pyramids' cost; over it, on the whole image."""
