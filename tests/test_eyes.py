@@ -1111,3 +1111,21 @@ def test_the_iris_colour_round_trips_and_an_older_model_goes_without_it():
         with pytest.raises(EyeModelError) as e:
             EyeModel.from_dict(d, model.images())
         assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("key,value", [("brow_profiles", 1e39), ("brow_heights", float("inf")), ("lash", float("nan")),
+                                       ("lid_open", 1e400)])
+def test_an_eye_model_with_a_number_past_float_range_is_refused_in_one_line(key, value, recwarn):
+    """A calibration file edited or damaged to hold a number no float32 (or no float) holds: one
+    line naming what is wrong, not an infinite brow profile that turns every correlation into NaN
+    (nor a cast's overflow warning)."""
+    model, _ = _learn()
+    d = json.loads(json.dumps(model.to_dict()))
+    if key == "brow_profiles":
+        d[key][0][0] = value
+    else:
+        d[key][1] = value
+    with pytest.raises(EyeModelError) as e:
+        EyeModel.from_dict(d, model.images())
+    assert "\n" not in str(e.value) and "finite" in str(e.value)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]

@@ -770,27 +770,28 @@ class EyeModel:
                 if p.ndim != 2 or p.shape[0] % 2 == 0 or p.shape[1] % 2 == 0 or min(p.shape) < 3:
                     raise EyeModelError(f"eye model: picture {k!r} must be grey with odd sides, not {p.shape}")
                 pics.append(p)
-            m = cls(
-                work_ipd=float(d["work_ipd"]),
-                radius=[float(v) for v in d["radius"]],
-                iris_pictures=pics[:2],
-                eye_pictures=pics[2:],
-                brow_profiles=[np.asarray(p, dtype=np.float32).reshape(-1) for p in d["brow_profiles"]],
-                brow_centres=[float(v) for v in d["brow_centres"]],
-                brow_heights=[float(v) for v in d["brow_heights"]],
-                lid_open=[float(v) for v in d["lid_open"]],
-                lash=[float(v) for v in d["lash"]],
-                white=None if d.get("white") is None else float(d["white"]),
-                light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
-                rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
-                search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
-                glance=d.get("glance"),
-                iris_colour=None if d.get("iris_colour") is None else (
-                    np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
-                    np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),
-                skin=SkinModel.from_dict(d["skin"]),
-                skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
-            )
+            with np.errstate(over="ignore"):  # a value past float32's range becomes inf, refused below
+                m = cls(
+                    work_ipd=float(d["work_ipd"]),
+                    radius=[float(v) for v in d["radius"]],
+                    iris_pictures=pics[:2],
+                    eye_pictures=pics[2:],
+                    brow_profiles=[np.asarray(p, dtype=np.float32).reshape(-1) for p in d["brow_profiles"]],
+                    brow_centres=[float(v) for v in d["brow_centres"]],
+                    brow_heights=[float(v) for v in d["brow_heights"]],
+                    lid_open=[float(v) for v in d["lid_open"]],
+                    lash=[float(v) for v in d["lash"]],
+                    white=None if d.get("white") is None else float(d["white"]),
+                    light=None if d.get("light") is None else [np.asarray(f, dtype=np.float64).reshape(3) for f in d["light"]],
+                    rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
+                    search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
+                    glance=d.get("glance"),
+                    iris_colour=None if d.get("iris_colour") is None else (
+                        np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
+                        np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),
+                    skin=SkinModel.from_dict(d["skin"]),
+                    skin_bgr=np.asarray(d["skin_bgr"], dtype=np.float64).reshape(3),
+                )
         except EyeModelError:
             raise
         except (KeyError, TypeError, ValueError, AttributeError) as e:
@@ -798,6 +799,10 @@ class EyeModel:
         lists = (m.radius, m.brow_profiles, m.brow_centres, m.brow_heights, m.lid_open, m.lash, m.rims) + (() if m.light is None else (m.light,))
         if any(len(v) != 2 for v in lists) or not m.work_ipd > 0 or not all(r > 0 for r in m.radius):
             raise EyeModelError("eye model: every per-eye entry needs two values and the sizes must be positive")
+        numbers = [m.work_ipd, *m.radius, *m.brow_centres, *m.brow_heights, *m.lid_open, *m.lash]
+        if not all(map(math.isfinite, numbers)) or not all(
+                np.all(np.isfinite(p)) for p in (*m.iris_pictures, *m.eye_pictures, *m.brow_profiles)):
+            raise EyeModelError("eye model: sizes, pictures and brow profiles must be finite numbers")
         if m.light is not None and not all(np.all(np.isfinite(f)) and np.all(f > 0) for f in m.light):
             raise EyeModelError("eye model: the eyes' light factors must be positive numbers")
         if not all(r is None or (all(map(math.isfinite, r)) and r[0] < r[1]) for r in m.rims):
