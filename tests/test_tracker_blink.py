@@ -8,10 +8,10 @@ import cv2
 import numpy as np
 import pytest
 
+import tracker.face_tracker as face_tracker
 from tracker.calibration import calibrate
 from tracker.clicks import Clicks
 from tracker.eyes import EyeFinder
-import tracker.face_tracker as face_tracker
 from tracker.face_tracker import FaceTracker
 from tracker.synthetic import FaceState, clicks_for, render_face
 
@@ -69,7 +69,7 @@ def test_without_reading_it_the_doubted_eye_stays_open_through_the_blink(open_ca
 
 def test_lids_at_the_found_iris_agree_with_the_finder(open_cal):
     """:meth:`EyeFinder.lids_at` through the iris the finder found measures an open eye's gap as the
-    finder does (to within a pixel), and a shut eye's as a slit."""
+    finder does (to within a pixel and a half), and a shut eye's as a slit."""
     start, cal = open_cal
     tr = FaceTracker(cal)
     for k in (1.0, 0.15):
@@ -89,7 +89,12 @@ def _covered_right_eye(start: FaceState, cal, monkeypatch) -> tuple[float, float
     eye painted over in the cheek's colour and doubted."""
     tr = FaceTracker(cal)
     judge = tr._judge_eyes
-    monkeypatch.setattr(tr, "_judge_eyes", lambda *a, **k: (lambda d, s, f: ([d[0], True], False, f))(*judge(*a, **k)))
+
+    def right_doubted(*args, **kwargs):
+        doubt, _, far = judge(*args, **kwargs)
+        return [doubt[0], True], False, far
+
+    monkeypatch.setattr(tr, "_judge_eyes", right_doubted)
     img = render_face(start)[0]
     rx, ry = (int(round(v)) for v in clicks_for(start)["right_pupil"])
     covered = img.copy()

@@ -195,7 +195,7 @@ lost, and lost frames convert the whole frame."""
 GREY_PART = 0.5
 """Share of the frame over which that part is not worth cutting out: the whole frame is converted
 in one go (a face filling a 512 × 512 clip; a 1280 × 720 webcam frame with the face at arm's length
-needs a third of it)."""
+needs a quarter to a half of it)."""
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
