@@ -492,7 +492,7 @@ class FaceTracker:
         within = lambda g, reach: (g[0] / reach) ** 2 + (g[1] / GAZE_Y) ** 2 <= 1.0
         clear = all(o.open and o.score >= EYE_STRONG for o in obs)
         alike = abs(moves[0][0] - moves[1][0]) <= PAIR_AGREE and abs(moves[0][1] - moves[1][1]) <= PAIR_AGREE
-        reach = max(GAZE_X_PAIR, GAZE_X) if clear and alike else GAZE_X
+        reach = GAZE_X_PAIR if clear and alike else GAZE_X
         mean = (0.5 * (moves[0][0] + moves[1][0]), 0.5 * (moves[0][1] + moves[1][1]))
         # two clear eyes outvote the flow's roll and scale, but not the gaze's reach
         near = clear and within(mean, GAZE_X)

@@ -168,10 +168,9 @@ class HeadMotion:
         tracked corners: their box and :data:`LK_REACH` working px round it (None: no corners)."""
         if self._pts is None or not len(self._pts):
             return None
-        q = self._pts.reshape(-1, 2)
-        lo, hi = q.min(axis=0).tolist(), q.max(axis=0).tolist()
+        x0, y0, x1, y1 = _bounds(self._pts)
         k = 1.0 / self.scale
-        return (lo[0] - LK_REACH) * k, (lo[1] - LK_REACH) * k, (hi[0] + LK_REACH) * k, (hi[1] + LK_REACH) * k
+        return (x0 - LK_REACH) * k, (y0 - LK_REACH) * k, (x1 + LK_REACH) * k, (y1 + LK_REACH) * k
 
     def set_scale(self, ipd_px: float) -> None:
         """Choose the working scale for a face with this inter-pupil distance (frame px):
@@ -263,20 +262,7 @@ class HeadMotion:
             self._age = 0
             return None
         h, w = g.shape
-        # the search on the corners' part of the two images alone where that is a small part of them
-        # (a face at arm's length from a webcam): its pyramids cost by area
-        q = pts.reshape(-1, 2)
-        (x0, y0), (x1, y1) = q.min(axis=0).tolist(), q.max(axis=0).tolist()
-        k = 1 << _LK["maxLevel"]  # from a multiple of 2^levels: the crop's pyramids sample the whole image's pixels
-        a, c = max(int(x0) - LK_REACH, 0) // k * k, max(int(y0) - LK_REACH, 0) // k * k
-        b, d = min(int(x1) + LK_REACH + 1, w), min(int(y1) + LK_REACH + 1, h)
-        if (b - a) * (d - c) < LK_PART * w * h:
-            at = np.array([a, c], np.float32)
-            nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev[c:d, a:b], g[c:d, a:b], pts - at, None, **_LK)
-            if nxt is not None:
-                nxt += at
-        else:
-            nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
+        nxt, st = _search(prev, g, pts)
         if nxt is not None:
             q = nxt.reshape(-1, 2)
             inside = (q >= 0.0) & (q < self._limits(w, h))
@@ -317,6 +303,34 @@ class HeadMotion:
                 self._age = 0
         self._pts = pts
         return motion
+
+
+def _bounds(pts: np.ndarray) -> tuple[float, float, float, float]:
+    """The box (x0, y0, x1, y1) of corners ``pts`` (n, 1, 2)."""
+    q = pts.reshape(-1, 2)
+    (x0, y0), (x1, y1) = q.min(axis=0).tolist(), q.max(axis=0).tolist()
+    return x0, y0, x1, y1
+
+
+def _search(prev: np.ndarray, g: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
+    """Pyramidal Lucas–Kanade from ``prev`` to ``g`` for corners ``pts`` (working px): where they
+    are, and whether each was found. On the corners' part of the two images alone (their box and
+    :data:`LK_REACH` round it) where that is under :data:`LK_PART` of them — a face at arm's length
+    from a webcam: the pyramids cost by area. The part starts on a multiple of 2^levels, so its
+    pyramids sample the whole images' pixels."""
+    h, w = g.shape
+    x0, y0, x1, y1 = _bounds(pts)
+    k = 1 << _LK["maxLevel"]
+    a, c = max(int(x0) - LK_REACH, 0) // k * k, max(int(y0) - LK_REACH, 0) // k * k
+    b, d = min(int(x1) + LK_REACH + 1, w), min(int(y1) + LK_REACH + 1, h)
+    if (b - a) * (d - c) >= LK_PART * w * h:
+        nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, g, pts, None, **_LK)
+        return nxt, st
+    at = np.array([a, c], np.float32)
+    nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev[c:d, a:b], g[c:d, a:b], pts - at, None, **_LK)
+    if nxt is not None:
+        nxt += at
+    return nxt, st
 
 
 def _grey_scaled(frame_bgr: np.ndarray, f: int) -> np.ndarray:
