@@ -7,7 +7,9 @@
   the jaw's offset is bounded asymmetrically (far down, little up: the nostrils sit above the mouth);
 * a mouth is "too wide" only against max(calibrated width, :data:`~tracker.mouth_finder.WIDE_REF` wi);
 * at calibration a moustache over thin closed lips, darker than the line between them, is not the gap;
-* a lower lip redder than at calibration is still lip (a tongue paler than it is not).
+* a lower lip redder than at calibration is still lip (a tongue paler than it is not);
+* an open mouth's corners that stopped inside it (a grin's dark corners above the line) go out to the
+  ends of its inside.
 """
 
 import cv2
@@ -262,3 +264,54 @@ def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
     monkeypatch.setattr(mfm, "LIP_BEYOND", 0.0)
     gap_err, _ = split()
     assert gap_err < -3.0, "without the allowance the tongue is the lower lip (else this case shows nothing)"
+
+
+def _grin_crop(wedges: bool = True, line: bool = False) -> np.ndarray:
+    """A grin at the working scale (40 px between the eyes): skin, an upper lip, teeth from column 26
+    to 50, a lower lip, and (``wedges``) a near-black triangle beside each end of the teeth rising to
+    a tip at (17, 17) and (59, 17) — the dark corners of a grin, which the lips hide from the line's
+    rows on a dark face — or (``line``) a one-row dark line running on from the teeth's right end
+    (a crease)."""
+    from tracker.synthetic import STYLES
+
+    st = STYLES["default"]
+    img = np.empty((64, 76, 3), np.uint8)
+    img[:] = st.skin
+    img[14:20, 20:57] = st.lip
+    img[26:32, 22:55] = st.lip
+    img[20:26, 26:51] = st.teeth
+    dark = (30, 25, 35)
+    if wedges:
+        for tri in ([(27, 19), (27, 26), (17, 17)], [(49, 19), (49, 26), (59, 17)]):
+            cv2.fillPoly(img, [np.array(tri, np.int32)], dark)
+    if line:
+        img[22, 51:62] = dark
+    return img
+
+
+def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
+    """A grin whose corners the line search left inside the mouth (on the teeth's ends, the dark
+    corners above the line's rows): the corners move out to the ends of the mouth's inside, at its
+    rows there. A closed mouth, a corner outside the inside's thick part (a crease running on from
+    it) and an inside running on past OPEN_REACH are left alone."""
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    mf = MouthFinder(model, model.work_ipd)
+    assert mf.wi == pytest.approx(40.0) and mf.r == pytest.approx(1.0)
+    bias = mfm.CORNER_BIAS
+    maps = mf.prepare(_grin_crop())
+    left, right = mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0))
+    assert abs(left[0] - (17 - bias)) <= 1.0 and abs(right[0] - (59 + bias)) <= 1.0, (left, right)
+    assert 16.0 <= left[1] <= 19.0 and 16.0 <= right[1] <= 19.0, (left, right)
+    # the lips shut: no inside to go by
+    assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (22.5, 23.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
+    # a corner already past the teeth, on a one-row crease running on from them, stays
+    creased = mf.prepare(_grin_crop(wedges=False, line=True))
+    assert mf.inside_ends(creased, (25.0, 23.0), (53.0, 22.0), (19.0, 26.0), (14.0, 31.0))[1] == (53.0, 22.0)
+    # an inside running on past OPEN_REACH is not the mouth's own (hair round it): the corners stay
+    # (the finder's maps are one buffer: the grin again)
+    maps = mf.prepare(_grin_crop())
+    monkeypatch.setattr(mfm, "OPEN_REACH", 0.25)
+    assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))

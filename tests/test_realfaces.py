@@ -598,6 +598,12 @@ STRESS_CASES = [
     # scored more (opening 0.52 / 0.51). Of two sure mouths the wider is now kept (0.93 / 0.95)
     pytest.param("talk_b", "deep", False, ("r_open",), id="talk_b-deep-clicks"),
     pytest.param("talk_b", "pale", True, ("r_open",), id="talk_b-pale-auto"),
+    # a grin on a dark face: its dark corners rise above the line's rows and its lips beside them are as
+    # dark as the skin, so the corners stopped on the teeth's ends or a little past them, a different
+    # place each frame (r width 0.45 with the clicks, 0.65 with --auto); the corners now go out to the
+    # ends of the mouth's inside where they stopped inside it (0.99, 0.97)
+    pytest.param("expr_d0", "darkeyes", False, ("r_width",), id="expr_d0-darkeyes-clicks"),
+    pytest.param("expr_d0", "darkeyes", True, ("r_width",), id="expr_d0-darkeyes-auto"),
 ]
 
 

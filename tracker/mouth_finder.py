@@ -147,6 +147,20 @@ the corner is looked for again (:meth:`MouthFinder.bent`)."""
 CORNER_UNLIKE = 1.5
 """Least row cost as skin (see :meth:`MouthFinder.row_costs`) near the line that shows the mouth's
 body on a corner's column."""
+OPEN_ENDS = 0.1
+"""Least gap (× wi) between the lips on the centre column for the corners to be brought out to the ends
+of the mouth's inside (:meth:`MouthFinder.inside_ends`)."""
+OPEN_FILL = 0.5
+"""Least share of the gap's middle (its middle third of rows across the mouth's middle half) one piece
+of the inside must fill for :meth:`MouthFinder.inside_ends` to go by it: an open mouth's teeth or dark
+inside fill it; where the split took hair over or under shut lips for the gap, lip fills it."""
+OPEN_ROWS_MIN = 2
+"""Least rows of the mouth's inside on a corner's column for that corner to have stopped inside it
+(:meth:`MouthFinder.inside_ends`); a crease or a shaded lip edge running on from the gap is one row."""
+OPEN_REACH = 0.3
+"""Farthest (× wi) the inside may run on past a corner for :meth:`MouthFinder.inside_ends` to move the
+corner there (a grin's dark corners on the copies of the shared clips: up to 0.28); further on it is
+not the mouth's own (hair round the mouth joined to an open mouth's dark inside)."""
 PREVIOUS_CAP = 16.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
@@ -438,6 +452,7 @@ class MouthFinder:
         self.r = r = wi / 40.0
         self.near_rows = max(int(round(CORNER_NEAR * r)), 1)
         self.bend = max(CORNER_BEND * wi, 1.0)
+        self._close = np.ones((3, 3), np.uint8)
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
         self.line0 = model.line * k
@@ -1140,6 +1155,9 @@ class MouthFinder:
                 seen = [True, True]
                 yl, yr = self.corner_heights(maps, left, right)
         left, right = (left[0], yl), (right[0], yr)
+        if seen[0] and seen[1]:  # (a side that saw no cheek is placed from the other one)
+            left, right = self.inside_ends(maps, left, right, (gap_top, gap_bottom), (top, bottom))
+            yl, yr = left[1], right[1]
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
         score = self._score(width, bottom - top, line_c, (mx, cy), (px, py), fit, strength, previous)
@@ -1158,6 +1176,55 @@ class MouthFinder:
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
             stretch=stretch, shape=(H, W), line_ends=line_ends, _split=self._split,
         )
+
+    def inside_ends(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float],
+                    gap: tuple[float, float], lips: tuple[float, float]) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The corners ``left``, ``right`` (working-scale crop px) of a mouth open by at least
+        :data:`OPEN_ENDS` wi (``gap``: the gap's top and bottom rows on the centre column), each moved
+        out to the end of the mouth's inside where the corner search stopped inside it.
+
+        The inside: the inside-like pixels (the inside table: dark, or teeth) between the outer lip
+        edges ``lips`` (rows), one-pixel gaps closed, and of its connected pieces the one that fills
+        :data:`OPEN_FILL` of the gap's middle. A corner on a column that holds :data:`OPEN_ROWS_MIN` of
+        its rows stopped inside it: in a grin the dark corners rise above the line's rows, and on a
+        dark face the lips beside them are dark too, so the columns along the line turned to cheek
+        short of the corner, at a different place each frame (the ``darkeyes`` copy of expr_d0's
+        grin: 0.63-0.97 of the peer's width from frame to frame). Such a corner goes to the piece's
+        last column on its side (plus :data:`~tracker.mouth_model.CORNER_BIAS`), at the mean of its
+        rows there. A corner already past the thick of the inside (on a crease or a lip's shaded edge
+        running on from the gap) stays, and so does one the piece runs on from by more than
+        :data:`OPEN_REACH` wi."""
+        if gap[1] - gap[0] < OPEN_ENDS * self.wi:
+            return left, right
+        H, W = maps.shape
+        a, b = max(int(math.floor(lips[0])), 0), min(int(math.ceil(lips[1])) + 1, H)
+        third = (gap[1] - gap[0]) / 3.0
+        xa, xb = max(int(round(0.75 * left[0] + 0.25 * right[0])), 0), int(round(0.25 * left[0] + 0.75 * right[0])) + 1
+        ya, yb = max(int(round(gap[0] + third)) - a, 0), min(int(round(gap[1] - third)) - a + 1, b - a)
+        if b - a < 3 or xb <= xa or yb <= ya:
+            return left, right
+        ii = maps.inside  # (an integral image: one pixel each is four of its corners)
+        inside = (ii[a + 1 : b + 1, 1:] - ii[a:b, 1:] - ii[a + 1 : b + 1, :-1] + ii[a:b, :-1]).astype(np.uint8)
+        n, pieces, stats, _ = cv2.connectedComponentsWithStats(cv2.morphologyEx(inside, cv2.MORPH_CLOSE, self._close), connectivity=8)
+        counts = np.bincount(pieces[ya:yb, xa:xb].ravel(), minlength=n)
+        counts[0] = 0
+        k = int(counts.argmax())
+        if counts[k] < OPEN_FILL * (yb - ya) * (xb - xa):
+            return left, right
+        mine = pieces == k
+        height = np.count_nonzero(mine, axis=0).tolist()  # the piece's rows on each column
+        ends = (int(stats[k, cv2.CC_STAT_LEFT]), int(stats[k, cv2.CC_STAT_LEFT] + stats[k, cv2.CC_STAT_WIDTH] - 1))
+        bias, reach = CORNER_BIAS * self.r, OPEN_REACH * self.wi
+        out = []
+        for side, corner, end in ((-1, left, ends[0]), (+1, right, ends[1])):
+            move = side * (end + side * bias - corner[0])
+            if move <= 0.0 or move > reach or height[min(max(int(round(corner[0] - side * bias)), 0), W - 1)] < OPEN_ROWS_MIN:
+                out.append(corner)
+                continue
+            x = corner[0] + side * move
+            rows = np.flatnonzero(mine[:, min(max(int(round(x - side * bias)), 0), W - 1)])
+            out.append((float(x), a + float(rows.mean()) if len(rows) else corner[1]))
+        return out[0], out[1]
 
     def _one_corner_held(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], left: tuple[float, float],
                          right: tuple[float, float], line_c: tuple[float, float], pred: tuple[float, float],
