@@ -266,12 +266,12 @@ def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
     assert gap_err < -3.0, "without the allowance the tongue is the lower lip (else this case shows nothing)"
 
 
-def _grin_crop(wedges: bool = True, line: bool = False) -> np.ndarray:
+def _grin_crop(wedges: bool = True, line: bool = False, edge: bool = False) -> np.ndarray:
     """A grin at the working scale (40 px between the eyes): skin, an upper lip, teeth from column 26
     to 50, a lower lip, and (``wedges``) a near-black triangle beside each end of the teeth rising to
     a tip at (17, 17) and (59, 17) — the dark corners of a grin, which the lips hide from the line's
     rows on a dark face — or (``line``) a one-row dark line running on from the teeth's right end
-    (a crease)."""
+    (a crease), or (``edge``) a dark edge running down from it (dark lipstick's lower edge)."""
     from tracker.synthetic import STYLES
 
     st = STYLES["default"]
@@ -286,6 +286,8 @@ def _grin_crop(wedges: bool = True, line: bool = False) -> np.ndarray:
             cv2.fillPoly(img, [np.array(tri, np.int32)], dark)
     if line:
         img[22, 51:62] = dark
+    if edge:  # the lower lip's dark outer edge, running down and out from the teeth's right end
+        cv2.line(img, (51, 24), (53, 33), dark, 2)
     return img
 
 
@@ -293,7 +295,8 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     """A grin whose corners the line search left inside the mouth (on the teeth's ends, the dark
     corners above the line's rows): the corners move out to the ends of the mouth's inside, at its
     rows there. A closed mouth, a corner outside the inside's thick part (a crease running on from
-    it) and an inside running on past OPEN_REACH are left alone."""
+    it), a lip's dark edge running down from it and an inside running on past OPEN_REACH are left
+    alone."""
     from tests.test_mouth_finder import _calibrate
     import tracker.mouth_finder as mfm
 
@@ -310,6 +313,12 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     # a corner already past the teeth, on a one-row crease running on from them, stays
     creased = mf.prepare(_grin_crop(wedges=False, line=True))
     assert mf.inside_ends(creased, (25.0, 23.0), (53.0, 22.0), (19.0, 26.0), (14.0, 31.0))[1] == (53.0, 22.0)
+    # an inside that goes down more steeply than OPEN_SLOPE from the corner is a lip's edge: it stays
+    edged = mf.prepare(_grin_crop(wedges=False, edge=True))
+    assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1] == (49.0, 23.0)
+    monkeypatch.setattr(mfm, "OPEN_SLOPE", 10.0)
+    assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1][0] > 51.5
+    monkeypatch.setattr(mfm, "OPEN_SLOPE", 1.0)
     # an inside running on past OPEN_REACH is not the mouth's own (hair round it): the corners stay
     # (the finder's maps are one buffer: the grin again)
     maps = mf.prepare(_grin_crop())

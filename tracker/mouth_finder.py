@@ -161,6 +161,10 @@ OPEN_REACH = 0.3
 """Farthest (× wi) the inside may run on past a corner for :meth:`MouthFinder.inside_ends` to move the
 corner there (a grin's dark corners on the copies of the shared clips: up to 0.28); further on it is
 not the mouth's own (hair round the mouth joined to an open mouth's dark inside)."""
+OPEN_SLOPE = 1.0
+"""Most a corner :meth:`MouthFinder.inside_ends` moves may drop per column it moves out: a grin's corners
+rise steeply above the line's rows, but an inside reached by going down more steeply than that is the
+lower lip's dark edge or the shadow beside it (talk_b's dark lipstick: her corners on her lower lip)."""
 PREVIOUS_CAP = 16.0
 """Most the last frame's gap height can weigh against a split of this frame's profile."""
 OPEN_SKIN = 1.0
@@ -1193,7 +1197,7 @@ class MouthFinder:
         last column on its side (plus :data:`~tracker.mouth_model.CORNER_BIAS`), at the mean of its
         rows there. A corner already past the thick of the inside (on a crease or a lip's shaded edge
         running on from the gap) stays, and so does one the piece runs on from by more than
-        :data:`OPEN_REACH` wi."""
+        :data:`OPEN_REACH` wi, or whose place there lies lower than :data:`OPEN_SLOPE` allows."""
         if gap[1] - gap[0] < OPEN_ENDS * self.wi:
             return left, right
         H, W = maps.shape
@@ -1223,7 +1227,8 @@ class MouthFinder:
                 continue
             x = corner[0] + side * move
             rows = np.flatnonzero(mine[:, min(max(int(round(x - side * bias)), 0), W - 1)])
-            out.append((float(x), a + float(rows.mean()) if len(rows) else corner[1]))
+            y = a + float(rows.mean()) if len(rows) else corner[1]
+            out.append((float(x), y) if y - corner[1] <= OPEN_SLOPE * move else corner)
         return out[0], out[1]
 
     def _one_corner_held(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], left: tuple[float, float],
