@@ -1207,7 +1207,7 @@ class MouthFinder:
         ya, yb = max(int(round(gap[0] + third)) - a, 0), min(int(round(gap[1] - third)) - a + 1, b - a)
         if b - a < 3 or xb <= xa or yb <= ya:
             return left, right
-        ii = maps.inside  # (an integral image: one pixel each is four of its corners)
+        ii = maps.inside  # (an integral image: each pixel from four of its sums)
         inside = (ii[a + 1 : b + 1, 1:] - ii[a:b, 1:] - ii[a + 1 : b + 1, :-1] + ii[a:b, :-1]).astype(np.uint8)
         n, pieces, stats, _ = cv2.connectedComponentsWithStats(cv2.morphologyEx(inside, cv2.MORPH_CLOSE, self._close), connectivity=8)
         counts = np.bincount(pieces[ya:yb, xa:xb].ravel(), minlength=n)
