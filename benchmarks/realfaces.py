@@ -1161,8 +1161,10 @@ def _summary_of(variant: str, records: Sequence[dict]) -> tuple[list[str], dict[
     return [variant, f"{every['clicks']}/{n}", f"{every['auto']}/{n}", "  ".join(fails)], passes
 
 
-STRESS_VALUES = ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye", "r_brow")
-"""The values :func:`stress_records` keeps beside each clip-mode's misses."""
+STRESS_VALUES = ("lost_pct", "pupil_med", "pupil_p95", "roll_med", "r_open", "r_width", "r_eye", "r_brow", "mouth_off_pct")
+"""The values :func:`stress_records` keeps beside each clip-mode's misses (``mouth_off_pct``: the share of
+``ok`` frames whose mouth is not on the mouth, :data:`MOUTH_OFF`; no target, but a mouth on the nose
+or the chin reported tracked is as dishonest as eyes there)."""
 
 
 def stress_records(variant: str, results: Sequence[ClipResult]) -> list[dict]:
@@ -1175,7 +1177,7 @@ def stress_records(variant: str, results: Sequence[ClipResult]) -> list[dict]:
             rec.update(misses=["start"], values={})
         else:
             rec["misses"] = sorted(k for k, v in misses(r.metrics, auto=r.mode == "auto").items() if v and k in STRESS_SHORT)
-            vals = metric_values(r.metrics)
+            vals = {**metric_values(r.metrics), "mouth_off_pct": r.metrics.mouth_off_pct}
             rec["values"] = {k: (round(float(vals[k]), 4) if math.isfinite(vals[k]) else None) for k in STRESS_VALUES}
         out.append(rec)
     return out

@@ -289,6 +289,7 @@ def test_stress_records_and_what_changed_between_two_runs(tmp_path):
     before = rf.stress_records("half", res(good, bad))
     assert [r["misses"] for r in before] == [[], ["pupil_med", "pupil_p95"], ["start"]]
     assert before[1]["values"]["pupil_med"] == pytest.approx(30.0)
+    assert set(before[0]["values"]) == set(rf.STRESS_VALUES)  # the mouth's own honest status too (none: no peer mouth)
     after = rf.stress_records("half", res(bad, good))
     lines = rf.stress_changes(before, after)
     assert lines[0].startswith("half a clicks: now misses Pm, P95") and "pupil_med 0.00→30.00" in lines[0]
