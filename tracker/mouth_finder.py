@@ -420,8 +420,8 @@ def _parabola(a: float, b: float, c: float) -> float:
 class _Maps:
     """Per-frame buffers of :meth:`MouthFinder.prepare` for crops of one size (H, W): ``colour``
     (H+1, W+1, 3) the integral image of the colours, ``crow`` (H+1, W, 3) the running sums down each
-    column, ``inside`` (H+1, W+1) the integral image of inside-like pixels, ``lum`` (H, W) the
-    smoothed luminance."""
+    column, ``inside_px`` (H, W) the inside-like pixels (1) and ``inside`` (H+1, W+1) their integral
+    image, ``lum`` (H, W) the smoothed luminance."""
 
     def __init__(self, shape: tuple[int, int]):
         H, W = shape
@@ -430,6 +430,7 @@ class _Maps:
         self.crow = np.zeros((H + 1, W, 3), np.int32)
         self.crow_px = self.crow.reshape(-1, 3)  # the same memory, one pixel a row (flat indices y·W + x)
         self.inside = np.zeros((H + 1, W + 1), np.int32)
+        self.inside_px = np.zeros((H, W), np.uint8)
         self.lum = np.zeros((H, W), np.uint8)
 
 
@@ -639,7 +640,8 @@ class MouthFinder:
             m = self._maps = _Maps((H, W))
         m.colour = cv2.integral(crop, m.colour)
         np.subtract(m.colour[:, 1:], m.colour[:, :-1], out=m.crow)  # sums down each column
-        m.inside = cv2.integral(self.model.inside_table.take(lut_index(crop)), m.inside)
+        m.inside_px = self.model.inside_table.take(lut_index(crop))
+        m.inside = cv2.integral(m.inside_px, m.inside)
         cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
         return m
 
@@ -1207,18 +1209,26 @@ class MouthFinder:
         ya, yb = max(int(round(gap[0] + third)) - a, 0), min(int(round(gap[1] - third)) - a + 1, b - a)
         if b - a < 3 or xb <= xa or yb <= ya:
             return left, right
-        ii = maps.inside  # (an integral image: each pixel from four of its sums)
-        inside = (ii[a + 1 : b + 1, 1:] - ii[a:b, 1:] - ii[a + 1 : b + 1, :-1] + ii[a:b, :-1]).astype(np.uint8)
-        n, pieces, stats, _ = cv2.connectedComponentsWithStats(cv2.morphologyEx(inside, cv2.MORPH_CLOSE, self._close), connectivity=8)
+        ii = maps.inside
+        bias = CORNER_BIAS * self.r
+        # a corner column's pixels after the closing come from the two columns either side of it:
+        # where those hold under two inside pixels (one stays one), it cannot hold OPEN_ROWS_MIN
+        need = min(OPEN_ROWS_MIN, 2)
+        strips = [min(max(int(round(c[0] - side * bias)), 0), W - 1) for side, c in ((-1, left), (+1, right))]
+        if all(int(ii[b, min(x + 3, W)] - ii[a, min(x + 3, W)] - ii[b, max(x - 2, 0)] + ii[a, max(x - 2, 0)]) < need for x in strips):
+            return left, right
+        closed = cv2.morphologyEx(maps.inside_px[a:b], cv2.MORPH_CLOSE, self._close)
+        n, pieces = cv2.connectedComponents(closed, connectivity=8, ltype=cv2.CV_16U)
         counts = np.bincount(pieces[ya:yb, xa:xb].ravel(), minlength=n)
         counts[0] = 0
         k = int(counts.argmax())
         if counts[k] < OPEN_FILL * (yb - ya) * (xb - xa):
             return left, right
         mine = pieces == k
-        height = np.count_nonzero(mine, axis=0).tolist()  # the piece's rows on each column
-        ends = (int(stats[k, cv2.CC_STAT_LEFT]), int(stats[k, cv2.CC_STAT_LEFT] + stats[k, cv2.CC_STAT_WIDTH] - 1))
-        bias, reach = CORNER_BIAS * self.r, OPEN_REACH * self.wi
+        height = np.count_nonzero(mine, axis=0)  # the piece's rows on each column
+        cols = np.flatnonzero(height)
+        ends, height = (int(cols[0]), int(cols[-1])), height.tolist()
+        reach = OPEN_REACH * self.wi
         out = []
         for side, corner, end in ((-1, left, ends[0]), (+1, right, ends[1])):
             move = side * (end + side * bias - corner[0])
