@@ -640,7 +640,7 @@ class MouthFinder:
             m = self._maps = _Maps((H, W))
         m.colour = cv2.integral(crop, m.colour)
         np.subtract(m.colour[:, 1:], m.colour[:, :-1], out=m.crow)  # sums down each column
-        m.inside_px = self.model.inside_table.take(lut_index(crop))
+        self.model.inside_table.take(lut_index(crop), out=m.inside_px)
         m.inside = cv2.integral(m.inside_px, m.inside)
         cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
         return m
