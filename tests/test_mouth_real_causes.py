@@ -316,9 +316,9 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     # an inside that goes down more steeply than OPEN_SLOPE from the corner is a lip's edge: it stays
     edged = mf.prepare(_grin_crop(wedges=False, edge=True))
     assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1] == (49.0, 23.0)
-    monkeypatch.setattr(mfm, "OPEN_SLOPE", 10.0)
-    assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1][0] > 51.5
-    monkeypatch.setattr(mfm, "OPEN_SLOPE", 1.0)
+    with monkeypatch.context() as steep:
+        steep.setattr(mfm, "OPEN_SLOPE", 10.0)
+        assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1][0] > 51.5
     # an inside running on past OPEN_REACH is not the mouth's own (hair round it): the corners stay
     # (the finder's maps are one buffer: the grin again)
     maps = mf.prepare(_grin_crop())
