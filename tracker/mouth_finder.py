@@ -1230,15 +1230,13 @@ class MouthFinder:
         ends, height = (int(cols[0]), int(cols[-1])), height.tolist()
         reach = OPEN_REACH * self.wi
         out = []
-        for side, corner, end in ((-1, left, ends[0]), (+1, right, ends[1])):
+        for side, corner, end, col in ((-1, left, ends[0], strips[0]), (+1, right, ends[1], strips[1])):
             move = side * (end + side * bias - corner[0])
-            if move <= 0.0 or move > reach or height[min(max(int(round(corner[0] - side * bias)), 0), W - 1)] < OPEN_ROWS_MIN:
+            if move <= 0.0 or move > reach or height[col] < OPEN_ROWS_MIN:
                 out.append(corner)
                 continue
-            x = corner[0] + side * move
-            rows = np.flatnonzero(mine[:, min(max(int(round(x - side * bias)), 0), W - 1)])
-            y = a + float(rows.mean()) if len(rows) else corner[1]
-            out.append((float(x), y) if y - corner[1] <= OPEN_SLOPE * move else corner)
+            y = a + float(np.flatnonzero(mine[:, end]).mean())  # the piece's rows on its last column
+            out.append((float(end + side * bias), y) if y - corner[1] <= OPEN_SLOPE * move else corner)
         return out[0], out[1]
 
     def _one_corner_held(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], left: tuple[float, float],
