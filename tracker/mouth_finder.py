@@ -1227,7 +1227,7 @@ class MouthFinder:
         mine = pieces == k
         height = np.count_nonzero(mine, axis=0)  # the piece's rows on each column
         cols = np.flatnonzero(height)
-        ends, height = (int(cols[0]), int(cols[-1])), height.tolist()
+        ends = (int(cols[0]), int(cols[-1]))
         reach = OPEN_REACH * self.wi
         out = []
         for side, corner, end, col in ((-1, left, ends[0], strips[0]), (+1, right, ends[1], strips[1])):
