@@ -45,7 +45,6 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 
 from tracker.colour_model import TILE_SHAPE, _grid_features, chroma_gain, features, lut_index, table_to_tile
 
@@ -888,13 +887,12 @@ def lip_columns(cols: np.ndarray, need: float, skin_f: np.ndarray, run: int = 1)
     it shows the mouth — one of its three bands at least ``need`` red (r − g chroma,
     :func:`lip_red_need` over the skin's) on the mean of ``run`` columns centred on it, or teeth in
     one of them (:data:`TEETH`, against the skin's features ``skin_f`` (3,))."""
-    red = np.maximum(np.maximum(cols[:, 1], cols[:, 4]), cols[:, 7])
-    if run > 1:
-        red = uniform_filter1d(red, run, mode="nearest")
+    red = cols[:, 1::3].max(axis=1)  # the reddest of the band above, the line's rows and the band below
+    if run > 1 and len(red):  # the running mean, ends repeated (as scipy's uniform_filter1d in "nearest" mode)
+        red = cv2.blur(red.reshape(1, -1), (run, 1), borderType=cv2.BORDER_REPLICATE).reshape(-1)
     lum, sat = TEETH[0] * float(skin_f[0]), TEETH[1] * math.hypot(float(skin_f[1]), float(skin_f[2]))
-    teeth = np.zeros(len(red), bool)
-    for b in (0, 3, 6):  # the band above, the line's, the band below
-        teeth |= (cols[:, b] >= lum) & (np.hypot(cols[:, b + 1], cols[:, b + 2]) < sat)
+    sq = cols * cols
+    teeth = ((cols[:, 0::3] >= lum) & (sq[:, 1::3] + sq[:, 2::3] < sat * sat)).any(axis=1)
     return ((red >= need) | teeth).tolist()
 
 
