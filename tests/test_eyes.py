@@ -907,6 +907,44 @@ def test_spectacle_rims_across_the_skin_bands_do_not_shut_the_eyes(thick):
         _check(res, truth, lid=2.0, brow=math.inf)
 
 
+def test_the_upper_lid_is_not_looked_for_past_a_spectacle_rim():
+    """Behind glasses the lid's skin between the eye and the rim's upper bar can be shadowed (the
+    frame, the lens) and no more like the skin round the eyes than the eye is: the colour walk up
+    from the iris then runs through it, over the dark bar, to the skin above. The calibrated rim
+    stops the walk: the upper lid is read under the bar, not above it, both by colour and by the
+    dark rule, and the rim's place comes from the eye's predicted centre (the rim moves with the
+    head, not with the gaze)."""
+    frame, _ = render_face(BASE)
+    model, wi = _learn(frame=_with_glasses(frame, BASE))
+    assert all(r is not None for r in model.rims)
+    finder = EyeFinder(model, wi)
+    x0, y0, w, h = finder.rect
+    skin = np.asarray(model.skin_bgr, dtype=np.float64)
+    crop = np.empty((h, w, 3), np.uint8)
+    crop[:] = np.clip(np.round(skin), 0, 255).astype(np.uint8)
+    centres = np.array([[-0.5 * wi - x0, -y0], [0.5 * wi - x0, -y0]])
+    for i, (cx, cy) in enumerate(centres):
+        top, bottom = cy + model.rims[i][0], cy + model.rims[i][1]  # the bar's rows
+        hw = int(0.2 * wi)
+        shadow = np.clip(np.round(0.2 * skin), 0, 255).astype(np.uint8)
+        crop[int(bottom) : int(cy), int(cx) - hw : int(cx) + hw + 1] = shadow  # the lid's skin in shadow
+        crop[int(math.floor(top)) : int(bottom), int(cx) - hw - 8 : int(cx) + hw + 9] = (28, 26, 30)  # the bar
+        cv2.circle(crop, (int(cx), int(cy)), int(round(finder.radius[i])), (40, 30, 30), -1)  # the iris
+    for i, (cx, cy) in enumerate(centres):
+        at = (float(cx), float(cy))
+        under = -model.rims[i][1]  # from the iris's centre to the first row under the bar
+        for dark in (False, True):
+            up, _ = finder.lids(crop, i, at, dark=dark, centre=(cx, cy))
+            free, _ = finder.lids(crop, i, at, dark=dark)
+            assert 0.5 * finder.radius[i] < up <= under + 0.5, (i, dark, up, under)
+            assert free >= up
+        # the dark rule takes the bar for the eye's inside: without the rim the run goes on over it
+        assert finder.lids(crop, i, at, dark=True)[0] > under + 2.0
+        # the rim stays with the head: an iris looking up does not carry it up with it
+        up_gaze, _ = finder.lids(crop, i, (at[0], at[1] - 3.0), dark=True, centre=(cx, cy))
+        assert up_gaze <= under - 3.0 + 0.5
+
+
 def test_mirrored_sides_even_out_the_sides_but_keep_the_iris():
     """Beyond the radius a quarter of the mirror image comes in (a streak on one side is three
     quarters as strong there and a quarter as strong on the other); the iris's columns, its

@@ -1144,8 +1144,8 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     # the lash line and the lid gap, measured the way the finder measures them
     for i, p in enumerate(pupils):
         at = (float(p[0]), float(p[1]))
-        model.lash[i] = f.lash_line(crop, i, at)
-        up, down = f.lids(crop, i, at)
+        model.lash[i] = f.lash_line(crop, i, at, centre=at)
+        up, down = f.lids(crop, i, at, centre=at)
         model.lid_open[i] = max(up + down, 0.05 * wi)
     return model
 
@@ -1522,17 +1522,33 @@ class EyeFinder:
         t *= 1.0 / (self.skin.hi - self.skin.lo)
         return np.minimum(np.maximum(t, 0.0, out=t), 1.0, out=t).tolist()
 
-    def _lid_runs(self, e: list[float], c: int, i: int, at: tuple[float, float]) -> tuple[float, float]:
-        """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s)."""
+    def _rim_stop(self, i: int, at: tuple[float, float], centre) -> int | None:
+        """How many samples of eye ``i``'s upper walk from ``at`` lie under its calibrated spectacle
+        rim (:attr:`EyeModel.rims`, placed from the eye's predicted ``centre``: the rim moves with the
+        head, not with the gaze), or None (no rim, or no centre given). The upper lid lies under the
+        rim's bar; a walk that gets there ran past the lid (the lid's skin behind a lens, in its
+        shadow, reads as unlike the skin round the eyes), and the dark bar is no eye."""
+        rim = self.model.rims[i]
+        if rim is None or centre is None:
+            return None
+        return max(int(math.floor(round(at[1]) - (float(centre[1]) + rim[1]))) + 1, 1)
+
+    def _lid_runs(self, e: list[float], c: int, i: int, at: tuple[float, float],
+                  stop: int | None = None) -> tuple[float, float]:
+        """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s); the
+        upper run over its first ``stop`` samples (:meth:`_rim_stop`) when given."""
         dy = round(at[1]) - at[1]
-        return max(_run(e[c::-1]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+        up = e[c::-1] if stop is None else e[c::-1][:stop]
+        return max(_run(up) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
     def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float],
-                   dark: list[float] | None = None, iris: list[float] | None = None) -> tuple[float, float]:
+                   dark: list[float] | None = None, iris: list[float] | None = None,
+                   stop: int | None = None) -> tuple[float, float]:
         """``(upper, lower)`` by colour from the strip's distances from the skin ``dist`` (row ``c``
         is ``at``'s), each walk's ramp set by :func:`walk_length`; ``dark`` (the strip's interior
         with the dark rule, ``at`` on the iris) is its floor within :data:`IRIS_FLOOR` radii, and
-        ``iris`` (:meth:`_iris_likeness`) within the iris's radius."""
+        ``iris`` (:meth:`_iris_likeness`) within the iris's radius. The upper walk ends after
+        ``stop`` samples (:meth:`_rim_stop`) when given."""
         dy = round(at[1]) - at[1]
         lo, hi, k, white = self.skin.lo, self.skin.hi, self._walk_k[i], self.model.white
         fu = fd = None
@@ -1542,32 +1558,35 @@ class EyeFinder:
         if iris is not None:
             nr = int(math.floor(self.radius[i])) + 1
             fu, fd = _higher_floor(fu, iris[c::-1][:nr]), _higher_floor(fd, iris[c : c + nr])
-        up = walk_length(dist[c::-1], lo, hi, k, white, fu)
+        up = walk_length(dist[c::-1] if stop is None else dist[c::-1][:stop], lo, hi, k, white, fu)
         down = walk_length(dist[c:], lo, hi, k, white, fd, below=True)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
 
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
-             dark: bool = True) -> tuple[float, float]:
+             dark: bool = True, centre=None) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
         of the interior runs up and down the strip through ``at``, each row classified by its
         mean colour, the lash line off the upper one. With ``dark`` (the default, how the
         calibrated gap is measured) what is much darker than any skin is interior too, on the
-        calibrated ramp; without it the runs are :meth:`_lid_walks` (where the skin ends)."""
+        calibrated ramp; without it the runs are :meth:`_lid_walks` (where the skin ends). ``centre``
+        (the eye's predicted centre, crop px): where a calibrated spectacle rim is, which the upper run
+        does not cross (:meth:`_rim_stop`)."""
         col, c = self._column(crop, i, at)
+        stop = self._rim_stop(i, at, centre)
         if not dark:
-            return self._lid_walks(self.skin.distances(col, gain)[0], c, i, at)
-        return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at)
+            return self._lid_walks(self.skin.distances(col, gain)[0], c, i, at, stop=stop)
+        return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at, stop)
 
-    def lids_at(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[float, float]:
+    def lids_at(self, crop: np.ndarray, i: int, at: tuple[float, float], centre=None) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) of eye ``i`` through a point of the caller's
         choosing (where the head's pose puts an eye the finder did not see clearly): where the skin
         ends up and down the strip through ``at``, in the light the finder follows, capped as
         :meth:`find` caps them. No iris is assumed at ``at`` (the strip's dark rows are not taken for
         the eye's inside as they are through a found iris)."""
-        up, down = self.lids(crop, i, at, self._gain, dark=False)
+        up, down = self.lids(crop, i, at, self._gain, dark=False, centre=centre)
         return min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
 
-    def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None) -> list[tuple[float, float, float]]:
+    def _both_lids(self, crop: np.ndarray, ats, gain: np.ndarray | None, centres=None) -> list[tuple[float, float, float]]:
         """For both eyes (at ``ats[0]``, ``ats[1]``), their colours classified together: the
         :meth:`lids` by colour only — where the skin ends — and the gap with the dark rule,
         which says whether the eye is open: a dark iris is much darker than any skin, but so
@@ -1580,19 +1599,21 @@ class EyeFinder:
         n = len(c0)
         out = []
         for i, (a, b, k) in enumerate(((0, n, k0), (n, None, k1))):
-            up, down = self._lid_walks(dist[a:b], k, i, ats[i], ed[a:b], None if like is None else like[a:b])
-            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i])
+            stop = None if centres is None else self._rim_stop(i, ats[i], centres[i])
+            up, down = self._lid_walks(dist[a:b], k, i, ats[i], ed[a:b], None if like is None else like[a:b], stop)
+            gu, gd = self._lid_runs(ed[a:b], k, i, ats[i], stop)
             out.append((up, down, gu + gd))
         return out
 
-    def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> float:
+    def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float], centre=None) -> float:
         """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
         white above the iris: from the run's top to the strongest step from light (below) to
         dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
         step (the lashes on a dark iris cannot be told from it)."""
         strip, c = self._strip(crop, i, at)
         e = self.skin.profile(self._column(crop, i, at)[0])
-        up = _run(e[c::-1])
+        stop = self._rim_stop(i, at, centre)
+        up = _run(e[c::-1] if stop is None else e[c::-1][:stop])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
         # the step lies above the iris (on the white) and under a thin line
@@ -1874,7 +1895,7 @@ class EyeFinder:
         if min(found[0][2], found[1][2]) >= ADAPT_MIN_SCORE:  # on both irises, not a hand or a wall
             self._follow_jump(crop_bgr, [f[:2] for f in found])
         gain = self._gain
-        lids = self._both_lids(crop_bgr, found, gain)
+        lids = self._both_lids(crop_bgr, found, gain, centres)
         lo, hi = CLOSING
         pts = []
         for i in range(2):
@@ -1885,7 +1906,7 @@ class EyeFinder:
             if w < 1.0:
                 sx, sy = self._slit(crop_bgr, iris, self._eye_gain(i, gain))
                 pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
-                lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False)
+                lids[i] = self.lids(crop_bgr, i, pt, gain, dark=False, centre=centres[i])
             pts.append((pt, w))
         if brows:
             brows = self._brows(crop_grey, (pts[0][0], pts[1][0]), centres)

@@ -587,7 +587,7 @@ class FaceTracker:
                 # not seen, but the face is there (a blink blurs the iris, and the pair then disagrees
                 # with the pose): the lids where the pose and the gaze put the eye — unless that gap is
                 # a small share of the other eye's, seen (a pupil calibrated on the lid reads skin)
-                at_pose = self.eye_finder.lids_at(crop, i, (pup_f[i, 0] - ox, pup_f[i, 1] - oy))
+                at_pose = self.eye_finder.lids_at(crop, i, (pup_f[i, 0] - ox, pup_f[i, 1] - oy), self._pupils_eye_crop[i])
                 j = 1 - i
                 if not doubt[j] and sum(at_pose) < PAIR_GAP * (max(obs[j].upper, 0.0) + max(obs[j].lower, 0.0)):
                     at_pose = None
