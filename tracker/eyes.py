@@ -1522,10 +1522,11 @@ class EyeFinder:
         t *= 1.0 / (self.skin.hi - self.skin.lo)
         return np.minimum(np.maximum(t, 0.0, out=t), 1.0, out=t).tolist()
 
-    def _rim_stop(self, i: int, at: tuple[float, float], centre) -> int | None:
-        """How many samples of eye ``i``'s upper walk from ``at`` lie under its calibrated spectacle
-        rim (:attr:`EyeModel.rims`, placed from the eye's predicted ``centre``: the rim moves with the
-        head, not with the gaze), or None (no rim, or no centre given). The upper lid lies under the
+    def _rim_stop(self, i: int, at: tuple[float, float], centre: tuple[float, float] | None) -> int | None:
+        """How many samples of eye ``i``'s upper walk from ``at`` (up the strip, one per row) come
+        before its calibrated spectacle rim's upper bar (:attr:`EyeModel.rims`, placed from the eye's
+        predicted ``centre``, crop px: the rim moves with the head, not with the gaze), or None (no
+        rim, or no centre given). The upper lid lies under the
         rim's bar; a walk that gets there ran past the lid (the lid's skin behind a lens, in its
         shadow, reads as unlike the skin round the eyes), and the dark bar is no eye."""
         rim = self.model.rims[i]
@@ -1563,7 +1564,7 @@ class EyeFinder:
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
 
     def lids(self, crop: np.ndarray, i: int, at: tuple[float, float], gain: np.ndarray | None = None,
-             dark: bool = True, centre=None) -> tuple[float, float]:
+             dark: bool = True, centre: tuple[float, float] | None = None) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) from ``at`` of eye ``i``: the soft lengths
         of the interior runs up and down the strip through ``at``, each row classified by its
         mean colour, the lash line off the upper one. With ``dark`` (the default, how the
@@ -1577,12 +1578,14 @@ class EyeFinder:
             return self._lid_walks(self.skin.distances(col, gain)[0], c, i, at, stop=stop)
         return self._lid_runs(self.skin.profile(col, gain, dark), c, i, at, stop)
 
-    def lids_at(self, crop: np.ndarray, i: int, at: tuple[float, float], centre=None) -> tuple[float, float]:
+    def lids_at(self, crop: np.ndarray, i: int, at: tuple[float, float],
+                centre: tuple[float, float] | None = None) -> tuple[float, float]:
         """``(upper, lower)`` lid distances (crop px) of eye ``i`` through a point of the caller's
         choosing (where the head's pose puts an eye the finder did not see clearly): where the skin
         ends up and down the strip through ``at``, in the light the finder follows, capped as
         :meth:`find` caps them. No iris is assumed at ``at`` (the strip's dark rows are not taken for
-        the eye's inside as they are through a found iris)."""
+        the eye's inside as they are through a found iris). ``centre``: the eye's predicted centre,
+        where a calibrated spectacle rim is (see :meth:`lids`)."""
         up, down = self.lids(crop, i, at, self._gain, dark=False, centre=centre)
         return min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
 
@@ -1605,11 +1608,13 @@ class EyeFinder:
             out.append((up, down, gu + gd))
         return out
 
-    def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float], centre=None) -> float:
+    def lash_line(self, crop: np.ndarray, i: int, at: tuple[float, float],
+                  centre: tuple[float, float] | None = None) -> float:
         """Thickness (px) of the lash line the upper run from ``at`` ends on, where it lies on the
         white above the iris: from the run's top to the strongest step from light (below) to
         dark (above) within :data:`LASH_STEP` under it and above the iris; 0 without a clear
-        step (the lashes on a dark iris cannot be told from it)."""
+        step (the lashes on a dark iris cannot be told from it). The run stops under a calibrated
+        spectacle rim (``centre``: as in :meth:`lids`)."""
         strip, c = self._strip(crop, i, at)
         e = self.skin.profile(self._column(crop, i, at)[0])
         stop = self._rim_stop(i, at, centre)
