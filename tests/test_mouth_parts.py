@@ -524,6 +524,31 @@ def test_an_upper_lip_edge_not_seen_is_a_thin_lip_not_the_search_floor():
     assert abs((gap - _outer_edge(f, gap, -1, 0.04, 0.22, WI, math.nan)) - 11.0) < 1.5
 
 
+def test_an_upper_lip_edge_the_shade_hides_is_found_by_its_colour():
+    """A small, soft or noisy picture spreads the line's shade over a pale upper lip: split on all the
+    features the rows improve all the way to the gap, and the lip's edge does not stand out. Its
+    colour still ends where the lip does, so the same peak looked for on the colour alone finds it
+    (expr_d19 shrunk to 45 % of its size: no column showed the edge, the calibration took a lip of
+    0.09 eye distances where the full picture reads 0.14, and the opening followed the peer at r
+    0.77; 0.87 with this). Without a visible difference of colour the lip stays unseen."""
+    import tracker.mouth_model as mm
+
+    skin = np.array([19.0, 12.0, 10.0])
+    f = np.tile(skin, (60, 1))
+    gap = 40
+    f[gap - 12 : gap, 1:] = (13.4, 10.4)  # the upper lip, 12 rows, a little redder than the skin
+    for k, s in enumerate([8.0, 6.0, 4.5, 3.3, 2.4, 1.6, 1.0, 0.6, 0.3]):  # the line's shade
+        f[gap - 1 - k, 0] -= s
+    f[gap] = (10.0, 14.0, 10.0)
+    assert abs((gap - mm._outer_edge(f, gap, -1, 0.04, 0.22, WI, math.nan)) - 12.0) < 1.0
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(mm, "EDGE_CHROMA", False)  # the colour is what found it
+        assert math.isnan(mm._outer_edge(f, gap, -1, 0.04, 0.22, WI, math.nan))
+    faint = f.copy()
+    faint[gap - 12 : gap, 1:] = (12.5, 10.1)  # a lip no visibly redder than the skin
+    assert math.isnan(mm._outer_edge(faint, gap, -1, 0.04, 0.22, WI, math.nan))
+
+
 def test_calibration_takes_the_upper_lip_from_the_columns_that_show_its_edge(monkeypatch):
     """Calibration measures the lips on three columns and takes the median; a column whose upper
     edge it cannot see is no vote for a thin lip (the glasses, pale and half-size copies of

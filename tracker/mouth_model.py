@@ -609,6 +609,9 @@ at 80 px between the eyes all clip long: expr_d6 smeared by a hand-held camera's
 opening r .45 → .82. The dark-skinned copy of expr_d19 with ``--auto``, whose lower lip barely differs
 from the skin, followed the peer better with the thin lip it had calibrated (.89; .78 with the lip as
 thick as the other copies of the clip calibrate it)."""
+EDGE_CHROMA = True
+"""Whether an upper lip edge the split on all the features does not show is looked for on the colour
+alone (see :func:`_outer_edge`)."""
 UPPER_UNSEEN = 0.075
 """Thickness (× wi) taken for an upper lip whose outer edge the calibration frame does not show: the
 split improves all the way to the gap and no peak further out stands up (:data:`EDGE_INTERIOR`) —
@@ -633,8 +636,9 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
     — where the whole lip's mean differs most from the skin's just past it. A lip's window grows
     with the candidate, so a soft edge, a highlight on the lip or a crease in the skin do not pull
     the edge the way the steepest local change would. Sub-pixel. A split best at the thinnest lip is
-    the gap's blurred shade: a peak further out wins (:data:`EDGE_INTERIOR`). An upper lip whose edge
-    the profile does not show comes back :data:`UPPER_UNSEEN` thick, or as ``unseen`` when that is
+    the gap's blurred shade: a peak further out wins (:data:`EDGE_INTERIOR`); for an upper lip without
+    one, such a peak on the colour alone (:data:`EDGE_CHROMA`). An upper lip whose edge the profile
+    does not show either way comes back :data:`UPPER_UNSEEN` thick, or as ``unseen`` when that is
     given (NaN: no measurement, for a caller that has other columns)."""
     n = len(f)
     s_rows = max(int(round(SKIN_ROWS * wi)), 3)
@@ -646,6 +650,7 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
     first = start + direction  # the lip's first row
     es = np.arange(max(int(math.floor(lo * wi)), 2), int(math.ceil(hi * wi)) + 1)
     score = np.full(len(es), -np.inf)
+    chroma = np.full(len(es), -np.inf)
     for j, e in enumerate(es):
         edge = start + direction * e  # first skin row
         if direction < 0:
@@ -656,6 +661,7 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
             continue
         d = mean(la, lb) - mean(sa, sb)
         score[j] = float(d @ d)
+        chroma[j] = float(d[1:] @ d[1:])
     if not np.isfinite(score).any():
         return float(start + direction * 0.5 * (lo + hi) * wi)
     j = int(np.argmax(score))
@@ -663,16 +669,29 @@ def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float,
         # a lip split best at the thinnest lip allowed, better still towards the gap: that is the gap's
         # own blurred edge (rows next to the line are its shade), not the lip's outer edge; a peak
         # further out is the edge where there is one
-        peaks = [k for k in range(1, len(es) - 1) if score[k] >= score[k - 1] and score[k] >= score[k + 1]
-                 and score[k] >= EDGE_INTERIOR * score[0]]
+        peaks = _further_peaks(score)
         if peaks:
             j = max(peaks, key=lambda k: score[k])
+        elif direction < 0 and EDGE_CHROMA and (tints := _further_peaks(chroma, 1.0)):
+            # the shade is mostly the gap's darkness, the lip's own edge where its colour ends: the same
+            # peak on the colour alone (a soft, small or noisy picture spreads the gap's shade over a
+            # pale upper lip, and the split on everything peaked at the gap on all three columns); at
+            # least a just visible difference of colour (a squared feature distance of 1)
+            j = max(tints, key=lambda k: chroma[k])
+            score = chroma
         elif direction < 0:
             return float(start) - max(UPPER_UNSEEN * wi, es[0] - 0.5) if unseen is None else unseen
     y = float(start + direction * es[j]) - 0.5 * direction  # between the last lip row and the first skin row
     if 0 < j < len(es) - 1 and np.isfinite(score[j - 1]) and np.isfinite(score[j + 1]):
         y += direction * _vertex(score[j - 1], score[j], score[j + 1])
     return y
+
+
+def _further_peaks(score: np.ndarray, least: float = 0.0) -> list[int]:
+    """Indices of a split score's local peaks past its first one that reach :data:`EDGE_INTERIOR` of
+    the score at the first (thinnest) split, and ``least``."""
+    return [k for k in range(1, len(score) - 1) if score[k] >= score[k - 1] and score[k] >= score[k + 1]
+            and score[k] >= max(EDGE_INTERIOR * score[0], least)]
 
 
 def _vertex(a: float, b: float, c: float) -> float:
