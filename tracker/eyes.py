@@ -1539,8 +1539,7 @@ class EyeFinder:
         """``(upper, lower)`` from the strip's interior profile ``e`` (row ``c`` is ``at``'s); the
         upper run over its first ``stop`` samples (:meth:`_rim_stop`) when given."""
         dy = round(at[1]) - at[1]
-        up = e[c::-1] if stop is None else e[c::-1][:stop]
-        return max(_run(up) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
+        return max(_run(e[c::-1][:stop]) - self.model.lash[i] - dy, 0.0), max(_run(e[c:]) + dy, 0.0)
 
     def _lid_walks(self, dist: list[float], c: int, i: int, at: tuple[float, float],
                    dark: list[float] | None = None, iris: list[float] | None = None,
@@ -1559,7 +1558,7 @@ class EyeFinder:
         if iris is not None:
             nr = int(math.floor(self.radius[i])) + 1
             fu, fd = _higher_floor(fu, iris[c::-1][:nr]), _higher_floor(fd, iris[c : c + nr])
-        up = walk_length(dist[c::-1] if stop is None else dist[c::-1][:stop], lo, hi, k, white, fu)
+        up = walk_length(dist[c::-1][:stop], lo, hi, k, white, fu)
         down = walk_length(dist[c:], lo, hi, k, white, fd, below=True)
         return max(up - self.model.lash[i] - dy, 0.0), max(down + dy, 0.0)
 
@@ -1618,7 +1617,7 @@ class EyeFinder:
         strip, c = self._strip(crop, i, at)
         e = self.skin.profile(self._column(crop, i, at)[0])
         stop = self._rim_stop(i, at, centre)
-        up = _run(e[c::-1] if stop is None else e[c::-1][:stop])
+        up = _run(e[c::-1][:stop])
         lum = cv2.transform(np.ascontiguousarray(strip), self._luma).mean(axis=1).ravel()
         k = int(c - math.floor(up))
         # the step lies above the iris (on the white) and under a thin line
