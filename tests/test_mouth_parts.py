@@ -294,6 +294,23 @@ def test_skin_bins_survive_a_save_and_old_models_load_without_them(finder_and_cr
         MouthModel.from_dict(bad)
 
 
+def test_the_dark_share_round_the_mouth_survives_a_save_and_old_models_load_without_it(finder_and_crop):
+    """``dark_round`` (the share of the skin round the mouth far darker than the lips, 0 on the clean
+    synthetic face) is saved; a calibration older than it loads with None, which leaves the open
+    mouth's dark rule off; a share outside 0..1 is refused with a one-line error naming it."""
+    model = finder_and_crop[0].model
+    assert model.dark_round == 0.0
+    assert MouthModel.from_dict(model.to_dict()).dark_round == 0.0
+    old = model.to_dict()
+    del old["dark_round"]
+    older = MouthModel.from_dict(old)
+    assert older.dark_round is None
+    assert MouthFinder(older, WI)._open_table is older.inside_table
+    assert MouthFinder(model, WI)._open_table is not model.inside_table
+    with pytest.raises(ValueError, match="dark_round"):
+        MouthModel.from_dict({**model.to_dict(), "dark_round": 1.5})
+
+
 def test_one_side_like_its_cheek_does_not_lose_the_mouth(finder_and_crop):
     """A side whose calibrated cheek was in shadow or under hair may look like it later (its
     columns differ little from that cheek): the mouth stays sure while the other side is clear,

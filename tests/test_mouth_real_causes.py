@@ -9,8 +9,12 @@
 * at calibration a moustache over thin closed lips, darker than the line between them, is not the gap;
 * a lower lip redder than at calibration is still lip (a tongue paler than it is not);
 * an open mouth's corners that stopped inside it (a grin's dark corners above the line) go out to the
-  ends of its inside.
+  ends of its inside;
+* on a dark face a grin's shaded corners, brown and parted from the teeth by a sliver of lip, are
+  part of that inside (unless hair round the mouth at calibration was as dark).
 """
+
+import dataclasses
 
 import cv2
 import numpy as np
@@ -18,7 +22,8 @@ import pytest
 
 from tracker import face_tracker as ft
 from tracker.mouth_finder import WIDE_REF, MouthFinder
-from tracker.mouth_model import _colour_edge, _gap, _outer_edge, profile_features
+from tracker.colour_model import lut_index
+from tracker.mouth_model import DARK_ROUND, _colour_edge, _gap, _outer_edge, profile_features
 
 SKIN = np.array([120.0, 150.0, 200.0])  # BGR: a warm skin
 LIP = np.array([125.0, 125.0, 215.0])  # redder, about as bright (a lit lower lip)
@@ -324,3 +329,54 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     maps = mf.prepare(_grin_crop())
     monkeypatch.setattr(mfm, "OPEN_REACH", 0.25)
     assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
+
+
+def _dark_grin_crop(style) -> np.ndarray:
+    """A grin on a dark face at the working scale (40 px between the eyes): ``style``'s skin and
+    lips, teeth from column 26 to 50, and beside each end of the teeth, past a 3-column sliver of
+    lip, a triangle of the skin at half its light rising to a tip at (17, 17) and (59, 17) — the
+    shaded corners of a grin, as brown as the skin round them."""
+    img = np.empty((64, 76, 3), np.uint8)
+    img[:] = style.skin
+    img[14:20, 20:57] = style.lip
+    img[26:32, 22:55] = style.lip
+    img[20:26, 26:51] = style.teeth
+    shade = tuple(int(0.5 * c) for c in style.skin)
+    for tri in ([(22, 19), (22, 26), (17, 17)], [(54, 19), (54, 26), (59, 17)]):
+        cv2.fillPoly(img, [np.array(tri, np.int32)], shade)
+    return img
+
+
+def test_a_grins_shaded_corners_on_a_dark_face_are_inside_the_mouth(monkeypatch):
+    """The shaded corners of a grin on a dark face are not the inside's colours (dark and colourless,
+    or teeth), and a sliver of lip parts them from the teeth: the corners stopped at the teeth's ends
+    (the ``darkeyes`` copy of expr_d19: width r 0.58 / 0.49). Pixels far darker than the lips
+    (OPEN_DARK) and gaps up to OPEN_JOIN across closed take them to the shading's tips; without either
+    the corners stay at the teeth, and so they do where the skin round the mouth was that dark at
+    calibration (hair: DARK_ROUND)."""
+    from tests.test_mouth_finder import _calibrate
+    from tracker.synthetic import STYLES
+    import tracker.mouth_finder as mfm
+
+    style = STYLES["dark_skin"]
+    model, _ = _calibrate(style)
+    assert model.dark_round is not None and model.dark_round <= DARK_ROUND
+    crop = _dark_grin_crop(style)
+    assert not model.inside_table.take(lut_index(crop[20:23, 20:22])).any(), "the shading is no inside colour"
+    bias = mfm.CORNER_BIAS
+    corners = ((28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0))  # the corners on the teeth, the gap, the lips
+
+    def ends(m):
+        f = MouthFinder(m, m.work_ipd)
+        return f.inside_ends(f.prepare(crop), *corners)
+
+    left, right = ends(model)
+    assert abs(left[0] - (17 - bias)) <= 1.0 and abs(right[0] - (59 + bias)) <= 1.0, (left, right)
+    assert 16.0 <= left[1] <= 19.5 and 16.0 <= right[1] <= 19.5, (left, right)
+    for name, value in (("OPEN_DARK", 0.0), ("OPEN_JOIN", 0.05)):
+        with monkeypatch.context() as m:
+            m.setattr(mfm, name, value)
+            left, right = ends(model)
+            assert left[0] >= 24.0 and right[0] <= 52.0, (name, left, right)
+    left, right = ends(dataclasses.replace(model, dark_round=2 * DARK_ROUND))
+    assert left[0] >= 24.0 and right[0] <= 52.0, ("hair round the mouth", left, right)

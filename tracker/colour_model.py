@@ -131,7 +131,7 @@ def _bin_colours() -> np.ndarray:
     return _GRID_CACHE
 
 
-def _grid_features() -> np.ndarray:
+def grid_features() -> np.ndarray:
     """:func:`features` (luminance weight 1) of every bin centre, ``(64³, 3)`` float32, computed once."""
     global _GRID_FEATURES
     if _GRID_FEATURES is None:
@@ -147,7 +147,7 @@ def _grid_quad_forms(model: "Gaussians", y_weight: float) -> list[np.ndarray]:
     Cholesky factor ``L`` of the inverse covariance the distance² is ``|Lᵀ(f − μ)|²``: one
     affine ``cv2.transform`` and a row-wise dot product.
     """
-    f = _grid_features()
+    f = grid_features()
     f3 = f.reshape(-1, 1, 3)
     scale = np.array([y_weight, 1.0, 1.0])
     out = []

@@ -60,10 +60,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import chroma_gain, lut_index
+from tracker.colour_model import chroma_gain, grid_features, lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, SKIN_ROWS, MouthModel, band_columns, cheek_run, corner_search, lens_outlines,
-    line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_run, lip_sides, mouth_body, profile_features, trace_line, unlike_cheek,
+    BAND, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, OPEN_DARK, SKIN_ROWS, MouthModel, band_columns, cheek_run,
+    corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_run, lip_sides, lips_grey,
+    mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -154,6 +155,9 @@ OPEN_FILL = 0.5
 """Least share of the gap's middle (its middle third of rows across the mouth's middle half) one piece
 of the inside must fill for :meth:`MouthFinder.inside_ends` to go by it: an open mouth's teeth or dark
 inside fill it; where the split took hair over or under shut lips for the gap, lip fills it."""
+OPEN_JOIN = 0.1
+"""Widest gap (× wi, along a row) inside the mouth that :meth:`MouthFinder.inside_ends` closes: in a
+grin a sliver of lip, 0.05-0.08 wi wide, can part the upper teeth from the shaded corner beyond them."""
 OPEN_ROWS_MIN = 2
 """Least rows of the mouth's inside on a corner's column for that corner to have stopped inside it
 (:meth:`MouthFinder.inside_ends`); a crease or a shaded lip edge running on from the gap is one row."""
@@ -417,11 +421,22 @@ def _parabola(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if den > 1e-9 else 0.0
 
 
+def _open_table(model: MouthModel) -> np.ndarray:
+    """The inside table (uint8 per 64³ bin) for the ends of an open mouth: with every colour darker
+    than :data:`~tracker.mouth_model.OPEN_DARK` × the lips added, unless the skin round the mouth was
+    that dark in places at calibration (:data:`~tracker.mouth_model.DARK_ROUND`: hair), or the
+    calibration is older than that measure."""
+    if OPEN_DARK <= 0 or model.dark_round is None or model.dark_round > DARK_ROUND:
+        return model.inside_table
+    dark = grid_features()[:, 0] * np.float32(255.0) < np.float32(OPEN_DARK * lips_grey(model.classes, model.skin_level))
+    return (model.inside_table.astype(bool) | dark).view(np.uint8)
+
+
 class _Maps:
     """Per-frame buffers of :meth:`MouthFinder.prepare` for crops of one size (H, W): ``colour``
     (H+1, W+1, 3) the integral image of the colours, ``crow`` (H+1, W, 3) the running sums down each
-    column, ``inside_px`` (H, W) the inside-like pixels (1) and ``inside`` (H+1, W+1) their integral
-    image, ``lum`` (H, W) the smoothed luminance."""
+    column, ``index`` (H, W) each pixel's colour-table index, ``inside_px`` (H, W) the inside-like
+    pixels (1) and ``inside`` (H+1, W+1) their integral image, ``lum`` (H, W) the smoothed luminance."""
 
     def __init__(self, shape: tuple[int, int]):
         H, W = shape
@@ -432,6 +447,7 @@ class _Maps:
         self.inside = np.zeros((H + 1, W + 1), np.int32)
         self.inside_px = np.zeros((H, W), np.uint8)
         self.lum = np.zeros((H, W), np.uint8)
+        self.index = np.zeros((H, W), np.int32)
 
 
 class MouthFinder:
@@ -457,7 +473,6 @@ class MouthFinder:
         self.r = r = wi / 40.0
         self.near_rows = max(int(round(CORNER_NEAR * r)), 1)
         self.bend = max(CORNER_BEND * wi, 1.0)
-        self._close = np.ones((3, 3), np.uint8)
         self.width0 = model.width * k
         self.height0 = (model.lip_upper + model.lip_lower) * k
         self.line0 = model.line * k
@@ -499,6 +514,11 @@ class MouthFinder:
         self.body = mouth_body(wi)
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
         self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
+        self._open_table = _open_table(model)
+        # with the dark rule, gaps of up to OPEN_JOIN wi across are closed (a lip's sliver between the
+        # teeth and a grin's shaded corner); without it, one-pixel gaps
+        join = max(int(round(0.5 * OPEN_JOIN * wi)), 1) if self._open_table is not model.inside_table else 1
+        self._close = np.ones((3, 2 * join + 1), np.uint8)
         self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
         # a row's r − g chroma at or above which it is lip-red for the mouth line's seed (None: the lips
         # are not redder than the skin to go by), and how far the seed looks for such rows
@@ -640,7 +660,8 @@ class MouthFinder:
             m = self._maps = _Maps((H, W))
         m.colour = cv2.integral(crop, m.colour)
         np.subtract(m.colour[:, 1:], m.colour[:, :-1], out=m.crow)  # sums down each column
-        self.model.inside_table.take(lut_index(crop), out=m.inside_px)
+        m.index = lut_index(crop)
+        self.model.inside_table.take(m.index, out=m.inside_px)
         m.inside = cv2.integral(m.inside_px, m.inside)
         cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
         return m
@@ -1189,8 +1210,10 @@ class MouthFinder:
         :data:`OPEN_ENDS` wi (``gap``: the gap's top and bottom rows on the centre column), each moved
         out to the end of the mouth's inside where the corner search stopped inside it.
 
-        The inside: the inside-like pixels (the inside table: dark, or teeth) between the outer lip
-        edges ``lips`` (rows), one-pixel gaps closed, and of its connected pieces the one that fills
+        The inside: the inside-like pixels (the inside table: dark and colourless, or teeth; on a face
+        without hair round the mouth also any pixel far darker than the lips, :func:`_open_table`)
+        between the outer lip edges ``lips`` (rows), gaps closed (:data:`OPEN_JOIN` with the dark
+        pixels, else one pixel), and of its connected pieces the one that fills
         :data:`OPEN_FILL` of the gap's middle. A corner on a column that holds :data:`OPEN_ROWS_MIN` of
         its rows stopped inside it: in a grin the dark corners rise above the line's rows, and on a
         dark face the lips beside them are dark too, so the columns along the line turned to cheek
@@ -1211,13 +1234,15 @@ class MouthFinder:
             return left, right
         ii = maps.inside
         bias = CORNER_BIAS * self.r
-        # a corner column's pixels after the closing come from the two columns either side of it:
-        # where those hold under two inside pixels (one stays one), it cannot hold OPEN_ROWS_MIN
+        # a corner stopped on the inside's own colours (teeth, the dark inside): the two columns either
+        # side of its column hold at least two such pixels (the far darker pixels only carry it further;
+        # on their own, past the teeth's end, they are a lip's shade as often as a grin's corner: the
+        # stress copies of expr_d6 lost 0.02-0.05 of width r when they counted here)
         need = min(OPEN_ROWS_MIN, 2)
         strips = [min(max(int(round(c[0] - side * bias)), 0), W - 1) for side, c in ((-1, left), (+1, right))]
         if all(int(ii[b, min(x + 3, W)] - ii[a, min(x + 3, W)] - ii[b, max(x - 2, 0)] + ii[a, max(x - 2, 0)]) < need for x in strips):
             return left, right
-        closed = cv2.morphologyEx(maps.inside_px[a:b], cv2.MORPH_CLOSE, self._close)
+        closed = cv2.morphologyEx(self._open_table.take(maps.index[a:b]), cv2.MORPH_CLOSE, self._close)
         n, pieces = cv2.connectedComponents(closed, connectivity=8, ltype=cv2.CV_16U)
         counts = np.bincount(pieces[ya:yb, xa:xb].ravel(), minlength=n)
         counts[0] = 0

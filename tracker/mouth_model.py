@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import TILE_SHAPE, _grid_features, chroma_gain, features, lut_index, table_to_tile
+from tracker.colour_model import TILE_SHAPE, chroma_gain, features, grid_features, lut_index, table_to_tile
 
 FORMAT = 2
 MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
@@ -123,7 +123,7 @@ def _inside(dark: float, skin_level: float, skin_sat: float, skin_bins: np.ndarr
     ``skin_bins`` (table indices) are colours the calibration saw on the skin round the mouth: they
     and their neighbouring bins are never teeth — a lit philtrum or chin under studio light is as
     bright and as colourless as teeth, but it was there at calibration and teeth were not."""
-    f = _grid_features()
+    f = grid_features()
     lum = f[:, 0] * np.float32(255.0)
     sat = np.hypot(f[:, 1], f[:, 2])
     black = (lum < np.float32(dark)) & (sat * lum < np.float32(0.6 * skin_sat * skin_level))
@@ -156,12 +156,11 @@ SKIN_BIN_COUNT = 3
 """Pixels of one colour bin on the skin round the calibration's mouth that make it a skin colour."""
 
 
-def skin_colour_bins(crop: np.ndarray, outline: np.ndarray, centre: tuple[float, float], wi: float) -> np.ndarray:
-    """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
-    crop: an ellipse 0.75 × 0.6 wi about the mouth centre (the face, not the background or hair at
-    the crop's sides), outside the mouth outline grown by 0.1 wi; bins with at least
-    :data:`SKIN_BIN_COUNT` pixels."""
-    H, W = crop.shape[:2]
+def round_mouth(shape: tuple[int, ...], outline: np.ndarray, centre: tuple[float, float], wi: float) -> np.ndarray:
+    """The skin round the mouth in a crop of ``shape`` (bool (H, W)): an ellipse 0.75 × 0.6 wi about
+    the mouth centre (the face, not the background or hair at the crop's sides), outside the mouth
+    ``outline`` (crop px) grown by 0.1 wi."""
+    H, W = shape[:2]
     near = np.zeros((H, W), np.uint8)
     cv2.ellipse(near, (int(round(centre[0])), int(round(centre[1]))), (int(round(0.75 * wi)), int(round(0.6 * wi))),
                 0.0, 0.0, 360.0, 1, -1)
@@ -169,9 +168,31 @@ def skin_colour_bins(crop: np.ndarray, outline: np.ndarray, centre: tuple[float,
     cv2.fillPoly(mouth, [np.round(outline).astype(np.int32)], 1)
     r = max(int(round(0.1 * wi)), 1)
     mouth = cv2.dilate(mouth, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
-    idx = lut_index(crop)[(near > 0) & (mouth == 0)]
-    counts = np.bincount(idx.ravel(), minlength=1)
+    return (near > 0) & (mouth == 0)
+
+
+def skin_colour_bins(crop: np.ndarray, round_px: np.ndarray) -> np.ndarray:
+    """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
+    crop (``round_px``: :func:`round_mouth`), the bins with at least :data:`SKIN_BIN_COUNT` pixels."""
+    counts = np.bincount(lut_index(crop)[round_px].ravel(), minlength=1)
     return np.flatnonzero(counts >= SKIN_BIN_COUNT).astype(np.int32)
+
+
+OPEN_DARK = 0.75
+"""Pixels darker than this share of the calibrated lips' luminance count as an open mouth's inside
+where its corners are looked for (:meth:`~tracker.mouth_finder.MouthFinder.inside_ends`), whatever
+their colour: the shaded triangles at a grin's corners on a dark face are as brown as the skin round
+them, not the inside's colours, but far darker than the lips."""
+DARK_ROUND = 0.05
+"""Largest share of the skin round the mouth at calibration (:func:`round_mouth`) darker than
+:data:`OPEN_DARK` × the lips for that rule to apply: a beard or moustache there (0.1-0.6 of it on
+the bearded copies of the shared clips; clean faces 0-0.03, the nostrils' shadows) is as dark as a
+grin's shaded corners, and the corners ran on into the hair."""
+
+
+def lips_grey(classes: np.ndarray, skin_level: float) -> float:
+    """The darker lip's luminance in grey levels (BT.601) from a model's row ``classes``."""
+    return float(min(classes[1, 0, 0], classes[2, 0, 0])) * L_UNIT * max(skin_level, 8.0)
 
 
 # --------------------------------------------------------------------------------------------- the model
@@ -226,6 +247,7 @@ class MouthModel:
     separation: float
     cue: str
     crop_median: tuple[float, float, float] | None = None
+    dark_round: float | None = None
     skin_bins: np.ndarray | None = field(repr=False, default=None)
     inside_table: np.ndarray = field(repr=False, default=None)
 
@@ -249,6 +271,8 @@ class MouthModel:
             crop_median=None if self.crop_median is None else [float(v) for v in self.crop_median],
             tables=list(TABLE_NAMES),
         )
+        if self.dark_round is not None:
+            d["dark_round"] = float(self.dark_round)
         if self.skin_bins is not None:
             d["skin_bins"] = [int(v) for v in self.skin_bins]
         return d
@@ -280,11 +304,21 @@ class MouthModel:
                 axis_up=np.asarray(d["axis_up"], dtype=np.float64).reshape(4),
                 axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4), cue=str(d["cue"]),
                 crop_median=None if d.get("crop_median") is None else tuple(float(v) for v in d["crop_median"]),
-                skin_bins=_bins(d.get("skin_bins")),
+                skin_bins=_bins(d.get("skin_bins")), dark_round=_share(d.get("dark_round")),
                 **kw,
             )
         except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
+
+
+def _share(v) -> float | None:
+    """``dark_round`` from a file (absent in calibrations older than it: None)."""
+    if v is None:
+        return None
+    x = float(v)
+    if not 0.0 <= x <= 1.0:
+        raise ValueError(f"dark_round must be a share from 0 to 1, not {x}")
+    return x
 
 
 def _bins(v) -> np.ndarray | None:
@@ -1155,6 +1189,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
 
     if _trace is not None:
         _trace.update(gap=(top, bottom, y_min), edges=(y_top, y_bottom), left=left, right=right, sides=sides)
+    round_px = round_mouth(crop.shape, outline, centre, wi)
     return MouthModel(
         work_ipd=wi, centre=(float(centre[0]), float(centre[1])), width=float(width),
         lip_upper=float(centre[1] - y_top), lip_lower=float(y_bottom - centre[1]), area=polygon_area(outline),
@@ -1164,5 +1199,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         classes=classes,
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
-        cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(crop, outline, centre, wi),
+        cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(crop, round_px),
+        dark_round=float(np.count_nonzero(luminance(crop[round_px]) < OPEN_DARK * lips_grey(classes, skin_level)))
+        / max(int(np.count_nonzero(round_px)), 1),
     )
