@@ -188,9 +188,8 @@ RECHECK_GAP = 5  # frames at least between two second looks
 RECHECK_MOVE = 0.25  # a face the second look finds this far (× the IPD) from where we are is where the face went
 PIN_CHECK = 0.1
 """A move (× the IPD) of the head by the face picture alone (no flow) past which the eyes are looked
-for where the head was too, and the place whose eyes match better is kept: after a cut in the
-video the picture can match best at a wrong place only a little more than it matches the changed
-face (the ``darkeyes`` copy of expr_d6 went 40 % of the eye distance up for 16 frames, reported ok)."""
+for where the head was too (:meth:`FaceTracker._check_pin`): after a cut in the video the picture
+can match best at a wrong place only a little more than it matches the changed face (the ``darkeyes`` copy of expr_d6 went 40 % of the eye distance up for 16 frames, reported ok)."""
 PIN_EYES = 0.2
 """How much better (sum of the two eye scores) the eyes must match where the head was for it to stay
 there (:data:`PIN_CHECK`). From either place the eye search mostly finds the same eyes (scores within

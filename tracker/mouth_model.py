@@ -220,7 +220,9 @@ class MouthModel:
     :data:`COLOUR_SEPARATION`) or ``"contrast"``. ``skin_level`` / ``skin_sat`` are the skin's median
     luminance and chroma, ``dark`` the luminance under which a colourless pixel is the mouth's dark
     inside; they define ``inside_table`` (64³, 1 = inside-like). ``crop_median`` is the calibration
-    crop's median BGR (mostly skin), the reference each frame's light is matched to.
+    crop's median BGR (mostly skin), the reference each frame's light is matched to. ``dark_round``
+    is the share of the skin round the mouth there darker than :data:`OPEN_DARK` × the lips (hair:
+    see :data:`DARK_ROUND`; None in calibrations older than it).
     """
 
     work_ipd: float
