@@ -1526,9 +1526,9 @@ class EyeFinder:
         """How many samples of eye ``i``'s upper walk from ``at`` (up the strip, one per row) come
         before its calibrated spectacle rim's upper bar (:attr:`EyeModel.rims`, placed from the eye's
         predicted ``centre``, crop px: the rim moves with the head, not with the gaze), or None (no
-        rim, or no centre given). The upper lid lies under the
-        rim's bar; a walk that gets there ran past the lid (the lid's skin behind a lens, in its
-        shadow, reads as unlike the skin round the eyes), and the dark bar is no eye."""
+        rim, or no centre given). The upper lid lies under the rim's bar; a walk that gets there ran
+        past the lid (the lid's skin behind a lens, in its shadow, reads as unlike the skin round the
+        eyes), and the dark bar is no eye."""
         rim = self.model.rims[i]
         if rim is None or centre is None:
             return None

@@ -421,13 +421,16 @@ def _parabola(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if den > 1e-9 else 0.0
 
 
+def dark_rule(model: MouthModel) -> bool:
+    """Whether the ends of an open mouth go by darkness too (:data:`~tracker.mouth_model.OPEN_DARK`):
+    not where the skin round the mouth was that dark in places at calibration
+    (:data:`~tracker.mouth_model.DARK_ROUND`: hair), nor for a calibration older than that measure."""
+    return OPEN_DARK > 0 and model.dark_round is not None and model.dark_round <= DARK_ROUND
+
+
 def _open_table(model: MouthModel) -> np.ndarray:
-    """The inside table (uint8 per 64³ bin) for the ends of an open mouth: with every colour darker
-    than :data:`~tracker.mouth_model.OPEN_DARK` × the lips added, unless the skin round the mouth was
-    that dark in places at calibration (:data:`~tracker.mouth_model.DARK_ROUND`: hair), or the
-    calibration is older than that measure."""
-    if OPEN_DARK <= 0 or model.dark_round is None or model.dark_round > DARK_ROUND:
-        return model.inside_table
+    """The inside table (uint8 per 64³ bin) with every colour darker than
+    :data:`~tracker.mouth_model.OPEN_DARK` × the lips added (:func:`dark_rule`)."""
     dark = grid_features()[:, 0] * np.float32(255.0) < np.float32(OPEN_DARK * lips_grey(model.classes, model.skin_level))
     return (model.inside_table.astype(bool) | dark).view(np.uint8)
 
@@ -447,7 +450,7 @@ class _Maps:
         self.inside = np.zeros((H + 1, W + 1), np.int32)
         self.inside_px = np.zeros((H, W), np.uint8)
         self.lum = np.zeros((H, W), np.uint8)
-        self.index = np.zeros((H, W), np.int32)
+        self.index: np.ndarray | None = None  # made by prepare (lut_index has no output buffer)
 
 
 class MouthFinder:
@@ -514,10 +517,11 @@ class MouthFinder:
         self.body = mouth_body(wi)
         # the calibration mouth's own columns: how unlike the cheek a mouth is (for the score)
         self.lip_l = float(min(cls[1, 0, 0], cls[2, 0, 0]))
-        self._open_table = _open_table(model)
-        # with the dark rule, gaps of up to OPEN_JOIN wi across are closed (a lip's sliver between the
-        # teeth and a grin's shaded corner); without it, one-pixel gaps
-        join = max(int(round(0.5 * OPEN_JOIN * wi)), 1) if self._open_table is not model.inside_table else 1
+        # with the dark rule, its table, and gaps of up to OPEN_JOIN wi across closed (a lip's sliver
+        # between the teeth and a grin's shaded corner); without it, the inside table and one-pixel gaps
+        self._dark = dark_rule(model)
+        self._open_table = _open_table(model) if self._dark else model.inside_table
+        join = max(int(round(0.5 * OPEN_JOIN * wi)), 1) if self._dark else 1
         self._close = np.ones((3, 2 * join + 1), np.uint8)
         self.gain0 = max(0.25 * (model.half_left + model.half_right) * k, 1.0)
         # a row's r − g chroma at or above which it is lip-red for the mouth line's seed (None: the lips
@@ -1211,7 +1215,7 @@ class MouthFinder:
         out to the end of the mouth's inside where the corner search stopped inside it.
 
         The inside: the inside-like pixels (the inside table: dark and colourless, or teeth; on a face
-        without hair round the mouth also any pixel far darker than the lips, :func:`_open_table`)
+        without hair round the mouth also any pixel far darker than the lips, :func:`dark_rule`)
         between the outer lip edges ``lips`` (rows), gaps closed (:data:`OPEN_JOIN` with the dark
         pixels, else one pixel), and of its connected pieces the one that fills
         :data:`OPEN_FILL` of the gap's middle. A corner on a column that holds :data:`OPEN_ROWS_MIN` of
@@ -1242,7 +1246,8 @@ class MouthFinder:
         strips = [min(max(int(round(c[0] - side * bias)), 0), W - 1) for side, c in ((-1, left), (+1, right))]
         if all(int(ii[b, min(x + 3, W)] - ii[a, min(x + 3, W)] - ii[b, max(x - 2, 0)] + ii[a, max(x - 2, 0)]) < need for x in strips):
             return left, right
-        closed = cv2.morphologyEx(self._open_table.take(maps.index[a:b]), cv2.MORPH_CLOSE, self._close)
+        part = self._open_table.take(maps.index[a:b]) if self._dark else maps.inside_px[a:b]
+        closed = cv2.morphologyEx(part, cv2.MORPH_CLOSE, self._close)
         n, pieces = cv2.connectedComponents(closed, connectivity=8, ltype=cv2.CV_16U)
         counts = np.bincount(pieces[ya:yb, xa:xb].ravel(), minlength=n)
         counts[0] = 0

@@ -171,10 +171,11 @@ def round_mouth(shape: tuple[int, ...], outline: np.ndarray, centre: tuple[float
     return (near > 0) & (mouth == 0)
 
 
-def skin_colour_bins(crop: np.ndarray, round_px: np.ndarray) -> np.ndarray:
+def skin_colour_bins(index: np.ndarray, round_px: np.ndarray) -> np.ndarray:
     """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
-    crop (``round_px``: :func:`round_mouth`), the bins with at least :data:`SKIN_BIN_COUNT` pixels."""
-    counts = np.bincount(lut_index(crop)[round_px].ravel(), minlength=1)
+    crop (``index``: its :func:`~tracker.colour_model.lut_index`; ``round_px``: :func:`round_mouth`),
+    the bins with at least :data:`SKIN_BIN_COUNT` pixels."""
+    counts = np.bincount(index[round_px].ravel(), minlength=1)
     return np.flatnonzero(counts >= SKIN_BIN_COUNT).astype(np.int32)
 
 
@@ -1192,6 +1193,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     if _trace is not None:
         _trace.update(gap=(top, bottom, y_min), edges=(y_top, y_bottom), left=left, right=right, sides=sides)
     round_px = round_mouth(crop.shape, outline, centre, wi)
+    dark_round = float(np.count_nonzero(luminance(crop[round_px]) < OPEN_DARK * lips_grey(classes, skin_level)))
+    dark_round /= max(int(np.count_nonzero(round_px)), 1)
     return MouthModel(
         work_ipd=wi, centre=(float(centre[0]), float(centre[1])), width=float(width),
         lip_upper=float(centre[1] - y_top), lip_lower=float(y_bottom - centre[1]), area=polygon_area(outline),
@@ -1201,7 +1204,5 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         classes=classes,
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
-        cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(crop, round_px),
-        dark_round=float(np.count_nonzero(luminance(crop[round_px]) < OPEN_DARK * lips_grey(classes, skin_level)))
-        / max(int(np.count_nonzero(round_px)), 1),
+        cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(idx, round_px), dark_round=dark_round,
     )
