@@ -75,6 +75,22 @@ def run(ctx):
     import app.qt_env  # noqa: F401  (offscreen without a display)
 
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    with tempfile.TemporaryDirectory(prefix="inkface-bench-", ignore_cleanup_errors=True) as tmp:
+        saved = {k: os.environ.get(k) for k in ("INKFACE_SETTINGS", "INKFACE_DATA")}
+        os.environ["INKFACE_SETTINGS"] = os.path.join(tmp, "settings.ini")
+        os.environ["INKFACE_DATA"] = os.path.join(tmp, "data")
+        try:
+            return _measure(ctx)
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
+
+
+def _measure(ctx):
+    """The window table, with settings and data already pointed at a throw-away folder."""
     from PySide6.QtWidgets import QApplication
 
     from art_sets.library import list_bundled
@@ -82,9 +98,6 @@ def run(ctx):
 
     from app.workers import performance_calibration
 
-    tmp = tempfile.mkdtemp(prefix="inkface-bench-")
-    os.environ["INKFACE_SETTINGS"] = os.path.join(tmp, "settings.ini")
-    os.environ["INKFACE_DATA"] = os.path.join(tmp, "data")
     app = QApplication.instance() or QApplication([])
 
     bundled = list_bundled()
