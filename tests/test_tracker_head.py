@@ -549,3 +549,49 @@ def test_a_face_picture_that_matches_weakly_elsewhere_after_the_flow_failed_is_c
         assert r.params.status == OK and off < 0.03, (r.params.status, off, r.debug)
     else:
         assert r.params.status != OK or off > 0.08, "the weak match must mislead without the check (else this shows nothing)"
+
+
+@pytest.mark.parametrize("state", [BASE.replace(cx=150.0, cy=300.0), BASE.replace(cx=470.0, cy=150.0, roll_deg=5.0),
+                                   BASE.replace(cx=60.0)])
+def test_the_face_picture_is_found_anywhere_in_the_frame(cal, state):
+    """The calibrated face picture slid over the whole frame at the last size finds the face where
+    it moved to — rolled a few degrees, or half out of the frame on one side, its brows, eyes and
+    nose still in (where a face detector, wanting the whole face, does not see it yet)."""
+    from tracker.face_finder import search_face
+
+    frame, _ = render_face(state)
+    hm = HeadMotion()
+    hm.set_scale(BASE.ipd)
+    best = max((search_face(hm.grey(frame), hm.scale, BASE.ipd, r, cal.face_patch) for r in (0.0, 6.0, -6.0)),
+               key=lambda got: got[1])
+    pupils, score = best
+    truth = np.array([clicks_for(state)["left_pupil"], clicks_for(state)["right_pupil"]])
+    assert score > 0.7
+    assert np.abs(pupils + 0.5 - truth).max() < 0.1 * BASE.ipd
+
+
+def test_a_lost_face_the_detector_misses_is_found_again_by_its_picture(cal, monkeypatch):
+    """Lost, then back at a new place where neither the face detector nor the lip colour finds it:
+    the face picture searched over the frame says where, and the eyes there confirm it. Without
+    that search the face stays lost."""
+    import tracker.face_tracker as ft
+
+    monkeypatch.setattr(ft, "detect_faces", lambda *a, **k: [])
+    monkeypatch.setattr(FaceTracker, "_reacquire_by_lips", lambda self, frame: None)
+    moved = BASE.replace(cx=200.0, cy=260.0)
+    truth = np.array([clicks_for(moved)["left_pupil"], clicks_for(moved)["right_pupil"]])
+    blank = np.full((480, 640, 3), 128, np.uint8)
+    back, _ = render_face(moved)
+
+    def run() -> object:
+        tr = FaceTracker(cal)
+        frame, _ = render_face(BASE)
+        assert tr.track(frame, 0).params.status == OK
+        assert tr.track(blank, 1).params.status == LOST
+        return tr.track(back, 2)
+
+    r = run()
+    assert r.params.status == OK, r.debug
+    assert np.abs(np.asarray(r.overlay.pupils) + 0.5 - truth).max() < 0.05 * BASE.ipd
+    monkeypatch.setattr(ft, "search_face", lambda *a, **k: None)
+    assert run().params.status == LOST

@@ -267,6 +267,44 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
     return np.array([du * ax[0] + dv * ay[0], du * ax[1] + dv * ay[1]]), float(best)
 
 
+def search_face(grey: np.ndarray, scale: float, ipd_px: float, roll_deg: float,
+                reference: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """The face picture looked for over the whole frame at one size and roll: the pupils (frame
+    px, (2, 2), image-left first) of its best match and the match's correlation (as
+    :func:`locate_face` measures it), or None when the frame is smaller than the picture.
+
+    ``grey`` is the frame in grey scaled by ``scale``; ``ipd_px`` (frame px) and ``roll_deg``
+    (degrees, positive with the image-right eye higher) are the size and roll the face had when
+    last seen. Past the frame's edge the picture meets a flat grey, which matches nothing: a face
+    sliding back in is found by the part of its brows, eyes and nose that is in, before a face
+    detector, which wants the whole face, sees it."""
+    k = PATCH_IPD / max(ipd_px * scale, 1e-6)  # grey px → picture px
+    a = math.radians(roll_deg)
+    c, s = math.cos(a), -math.sin(a)  # the eye line's direction in the image (x right, y down)
+    A = np.array([[k * c, k * s], [-k * s, k * c]])  # turns the eye line onto +x, at the picture's scale
+    h, w = grey.shape[:2]
+    corners = np.array([[0.0, 0.0], [w, 0.0], [0.0, h], [w, h]]) @ A.T
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    size = (int(math.ceil(hi[0] - lo[0])), int(math.ceil(hi[1] - lo[1])))
+    rh, rw = reference.shape[:2]
+    if size[0] < rw + 2 or size[1] < rh + 2:
+        return None
+    m = np.hstack([A, -lo.reshape(2, 1)])
+    # outside the frame: a flat grey that matches nothing (normalised correlation of a constant is 0)
+    win = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=float(np.mean(grey)))
+    win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
+    r, best, (i, j) = _match(win, reference)
+    rh_, rw_ = r.shape
+    dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < rw_ - 1 else 0.0
+    dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < rh_ - 1 else 0.0
+    x0, y0 = _PATCH_PX[0], _PATCH_PX[1]
+    mid = np.array([i + dx - x0, j + dy - y0])  # the eyes' middle in the searched picture
+    pts = np.array([mid - (0.5 * PATCH_IPD, 0.0), mid + (0.5 * PATCH_IPD, 0.0)])
+    back = np.linalg.inv(A)
+    return ((pts + lo) @ back.T) / scale, float(best)
+
+
 def _vertex(a: float, b: float, c: float) -> float:
     den = float(a) - 2.0 * float(b) + float(c)
     if den >= -1e-9:

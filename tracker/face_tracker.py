@@ -40,7 +40,7 @@ from tracker.calibration import Calibration, FaceFrame, mouth_rect
 from tracker.clicks import PIXEL_CENTRE
 from tracker.eyes import IRIS_SHOWS, OPEN_GAP, EyeFinder, EyeResult
 from tracker.face_finder import (DEFAULT_EYES, detect_faces, eyes_in_box, face_patch, face_similarity, face_turn,
-                                 locate_face, patch_similarity, reference_vector)
+                                 locate_face, patch_similarity, reference_vector, search_face)
 from tracker.head_motion import LK_REACH, HeadMotion, apply, compose, similarity_from_pairs
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
@@ -175,6 +175,7 @@ ROLL_STEP = math.radians(3.0)  # the face picture is also compared this much tur
 ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's best roll
 LOOK_GROW = 0.1  # a second look that changes the head's scale by more than this needs the face picture's say
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
+PICTURE_ROLL = 6.0  # degrees: a lost face's picture is looked for upright and, on every other frame, this much rolled
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
 BOX_PICTURE = 0.3  # in a detector's box, two eyes matching their pictures well (EYE_STRONG) need the face picture only this much
@@ -896,7 +897,34 @@ class FaceTracker:
             found = self._face_in_box(frame, box)
             if found is not None:
                 return found
+        found = self._reacquire_by_picture()
+        if found is not None:
+            found = self._face_at(frame, found, FACE_PRESENT)
+            if found is not None:
+                return found
         return self._reacquire_by_lips(frame)
+
+    def _reacquire_by_picture(self) -> np.ndarray | None:
+        """Where the calibrated face picture matches best over the whole frame, at the size the face
+        had when last seen (upright, or turned by :data:`PICTURE_ROLL`): the pupils (frame px) it
+        puts there, or None. A face sliding back into the frame shows its brows, eyes and nose a
+        frame or two before the face detector finds the whole face. With no detector's box to vouch
+        for a face there, the picture must match at least :data:`FACE_UNSURE`."""
+        if self.cal.face_patch is None:
+            return None
+        ipd = float(math.hypot(*(self.anchors[1] - self.anchors[0])))
+        # one look per lost frame (half a millisecond to one): upright every other frame, and
+        # between them rolled either way (and at the last roll where that is neither) in turn
+        turned = [PICTURE_ROLL, -PICTURE_ROLL]
+        last = self.last.roll_deg
+        if math.isfinite(last) and min(abs(last - r) for r in [0.0] + turned) > 0.5 * PICTURE_ROLL:
+            turned.append(last)
+        k = self.lost_frames
+        roll = 0.0 if k % 2 else turned[(k // 2) % len(turned)]
+        got = search_face(self._grey, self.motion.scale, ipd, roll, self.cal.face_patch)
+        if got is None or got[1] < FACE_UNSURE:
+            return None
+        return got[0]
 
     def _face_in_box(self, frame: np.ndarray, box) -> np.ndarray | None:
         """The pupils (frame px) of this performer in a face detector's box, or None: both eyes sure
@@ -905,15 +933,21 @@ class FaceTracker:
         stayed lost for 17 frames under the usual 0.45) — or, a glance to the side or a wide stare
         changing the eye pictures, the eyes less sure (:data:`EYE_LOOSE`) but the face picture
         plainly this face's (:data:`FACE_SURE`): three cues agree."""
-        guess = eyes_in_box(box, self._box_eyes)
+        return self._face_at(frame, eyes_in_box(box, self._box_eyes), BOX_PICTURE)
+
+    def _face_at(self, frame: np.ndarray, guess: np.ndarray, picture: float) -> np.ndarray | None:
+        """The pupils (frame px) of this performer near the guessed ones, or None: both eyes sure and
+        the face picture at them matching at least ``picture``, or the eyes less sure
+        (:data:`EYE_LOOSE`) and the face picture where they were guessed plainly this face's
+        (:data:`FACE_SURE`) (see :meth:`_face_in_box`)."""
         pair = self._eye_pair(frame, guess, EYE_LOOSE)
         if pair is None:
             return None
         found, low = pair
-        if low >= EYE_STRONG and self._picture_allows(found, BOX_PICTURE):
+        if low >= EYE_STRONG and self._picture_allows(found, picture):
             return found
         if self.cal.face_patch is not None:
-            # the picture where the box puts the eyes (found, the irises a glance moved tilt and shift it)
+            # the picture where the eyes were guessed (at the found ones, irises a glance moved tilt and shift it)
             _, p = locate_face(self._grey, self.motion.scale, guess, self.cal.face_patch, 2 * FACE_REACH)
             if p >= FACE_SURE:
                 return found
