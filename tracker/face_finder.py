@@ -290,14 +290,13 @@ def search_face(grey: np.ndarray, scale: float, ipd_px: float, roll_deg: float,
     if size[0] < rw + 2 or size[1] < rh + 2:
         return None
     m = np.hstack([A, -lo.reshape(2, 1)])
-    # outside the frame: a flat grey that matches nothing (normalised correlation of a constant is 0)
     win = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                          borderValue=float(np.mean(grey)))
     win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
     r, best, (i, j) = _match(win, reference)
-    rh_, rw_ = r.shape
-    dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < rw_ - 1 else 0.0
-    dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < rh_ - 1 else 0.0
+    nh, nw = r.shape
+    dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < nw - 1 else 0.0
+    dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < nh - 1 else 0.0
     x0, y0 = _PATCH_PX[0], _PATCH_PX[1]
     mid = np.array([i + dx - x0, j + dy - y0])  # the eyes' middle in the searched picture
     pts = np.array([mid - (0.5 * PATCH_IPD, 0.0), mid + (0.5 * PATCH_IPD, 0.0)])
