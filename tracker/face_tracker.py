@@ -175,6 +175,9 @@ ROLL_STEP = math.radians(3.0)  # the face picture is also compared this much tur
 ROLL_PULL = 0.3  # per frame pull of the head's roll onto the face picture's best roll
 LOOK_GROW = 0.1  # a second look that changes the head's scale by more than this needs the face picture's say
 MAX_GROW, MAX_TURN = 0.04, math.radians(3.0)  # per frame change of scale and roll the eyes alone may make
+BROW_WEAK, BROW_SURE = 0.7, 0.9  # brow matches: a brow under the second follows a sure one, fully at the first
+BROW_SIDE_GAP = 0.08  # ... only a brow whose running mean match lags the other's by this much (hair over it)
+BROW_MATCH_RATE = 0.05  # per frame weight of a seen brow's match in its running mean
 PICTURE_ROLL = 6.0  # degrees: a lost face's picture is looked for upright and, on every other frame, this much rolled
 REACQUIRE_BANDS = 3  # the face detector's sizes are searched over this many lost frames in turn
 RESET_ADAPTATION = 30  # lost frames after which the eye and mouth finders go back to the calibration
@@ -207,6 +210,31 @@ in one go (a face filling a 512 × 512 clip; a 1280 × 720 webcam frame with the
 needs a quarter to a half of it)."""
 FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.55, 1.45), (-1.05, 0.85))
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
+
+
+def paired_brows(heights, matches, seen, mean_matches, calibrated) -> list[float]:
+    """Brow heights (two, face px above each eye point) with a brow that is hard to see following the
+    other one.
+
+    Brows rise and fall mostly together. Hair over one brow (a fringe, a side parting) leaves its
+    cross-section matching worse than the other's frame after frame, and its height then jumps
+    between the hair's edge and the lid's crease. Such a brow — its running mean match
+    (``mean_matches``) :data:`BROW_SIDE_GAP` under the other's — takes, where its own match this frame
+    is under :data:`BROW_SURE` and the other's at least that, the other brow's rise or fall (as a
+    share of its calibrated height, ``calibrated``) in place of its own: fully at
+    :data:`BROW_WEAK`, not at all at :data:`BROW_SURE`. Both brows must be measured this frame
+    (``seen``). A brow matching as well as the other keeps its own height, so one brow raised
+    alone still shows."""
+    out = [float(h) for h in heights]
+    for i in range(2):
+        j = 1 - i
+        if not (seen[i] and seen[j]) or mean_matches[i] is None or mean_matches[j] is None or calibrated[j] <= 0:
+            continue
+        if mean_matches[j] - mean_matches[i] < BROW_SIDE_GAP or matches[j] < BROW_SURE or matches[i] >= BROW_SURE:
+            continue
+        w = min(max((matches[i] - BROW_WEAK) / (BROW_SURE - BROW_WEAK), 0.0), 1.0)
+        out[i] = w * float(heights[i]) + (1.0 - w) * calibrated[i] * float(heights[j]) / calibrated[j]
+    return out
 
 
 class FaceTracker:
@@ -255,6 +283,7 @@ class FaceTracker:
         self.pupils = self._cal_pupils.copy()
         self.gaze = np.zeros((2, 2))  # eye point − anchor, face px, per eye
         self.jaw = np.zeros(2)  # mouth centre − its rigid place, face px
+        self._brow_matches: list[float | None] = [None, None]  # running mean of each seen brow's match
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
         self.lost_frames = 0
@@ -640,6 +669,8 @@ class FaceTracker:
                 brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
             else:
                 brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
+        seen = [not (doubt[i] or far[i]) and math.isfinite(o.brow) for i, o in enumerate(obs)]
+        brow_h = self._paired_brows(brow_h, [o.brow_match for o in obs], seen)
         (plx, ply), (prx, pry) = pup_f.tolist()
         pts = [
             pup_f,
@@ -711,6 +742,17 @@ class FaceTracker:
         debug = {"scores": scores, "closed": closed, "doubtful": doubt, "lid_up": [u / k for u in lid_up],
                  "lid_down": [d / k for d in lid_down], "flow": flow_ok, "presence": presence}
         return TrackResult(params, ov, debug)
+
+    def _paired_brows(self, heights: list[float], matches: list[float], seen: list[bool]) -> list[float]:
+        """The brow heights (face px above each eye point) with a brow its cross-section finds
+        poorly following the other brow, where that one is found surely (:func:`paired_brows`).
+        ``seen``: the brows measured this frame (not held); their matches update the running means
+        that say which brow is found less well for good (hair over it)."""
+        avg = self._brow_matches
+        for i in range(2):
+            if seen[i]:
+                avg[i] = matches[i] if avg[i] is None else avg[i] + BROW_MATCH_RATE * (matches[i] - avg[i])
+        return paired_brows(heights, matches, seen, avg, self.cal.brow_heights)
 
     def _follow(self, anchors: np.ndarray, pupils_img: np.ndarray, usable: list, found_face: np.ndarray, flow_ok: bool,
                 pinned: bool, strong: bool = False) -> None:
