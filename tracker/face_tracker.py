@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -212,7 +213,8 @@ FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.5
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
 
-def paired_brows(heights, matches, seen, mean_matches, calibrated) -> list[float]:
+def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Sequence[bool],
+                 mean_matches: Sequence[float | None], calibrated: Sequence[float]) -> list[float]:
     """Brow heights (two, face px above each eye point) with a brow that is hard to see following the
     other one.
 
