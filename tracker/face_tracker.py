@@ -651,6 +651,7 @@ class FaceTracker:
 
         k = ff.scale
         lid_up, lid_down, brow_h = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
+        brow_seen = [False, False]  # measured this frame, not held
         for i, o in enumerate(obs):
             at_pose = None
             if doubt[i] and face_there and hasattr(self.eye_finder, "lids_at"):
@@ -670,9 +671,9 @@ class FaceTracker:
             if doubt[i] or far[i]:  # not seen, or read through the eye's far corner: hold the brow
                 brow_h[i] = (self.last.brow_l if i == 0 else self.last.brow_r) * k
             else:
-                brow_h[i] = o.brow if math.isfinite(o.brow) else self.cal.brow_heights[i]
-        seen = [not (doubt[i] or far[i]) and math.isfinite(o.brow) for i, o in enumerate(obs)]
-        brow_h = self._paired_brows(brow_h, [o.brow_match for o in obs], seen)
+                brow_seen[i] = math.isfinite(o.brow)
+                brow_h[i] = o.brow if brow_seen[i] else self.cal.brow_heights[i]
+        brow_h = self._paired_brows(brow_h, [o.brow_match for o in obs], brow_seen)
         (plx, ply), (prx, pry) = pup_f.tolist()
         pts = [
             pup_f,
