@@ -380,3 +380,97 @@ def test_a_grins_shaded_corners_on_a_dark_face_are_inside_the_mouth(monkeypatch)
             assert left[0] >= 24.0 and right[0] <= 52.0, (name, left, right)
     left, right = ends(dataclasses.replace(model, dark_round=2 * DARK_ROUND))
     assert left[0] >= 24.0 and right[0] <= 52.0, ("hair round the mouth", left, right)
+
+
+TONGUE_PINK = np.array([122.0, 124.0, 208.0])  # BGR: a tongue as red as the lips, a shade paler
+DARK_INSIDE = np.array([30.0, 32.0, 45.0])
+
+
+def _yawn_runs(lower_lip: np.ndarray = LIP) -> list[tuple[np.ndarray, int]]:
+    """A yawn through the click (80 px between the eyes): skin, upper lip, the dark inside above the
+    tongue, the tongue, the dark inside in front of the lower teeth, the lower lip, skin."""
+    return [(SKIN, 20), (LIP * 0.9, 6), (DARK_INSIDE, 4), (TONGUE_PINK, 22), (DARK_INSIDE * 0.7, 8),
+            (lower_lip, 10), (SKIN, 30)]
+
+
+def test_a_yawns_gap_runs_on_past_the_tongue_to_the_lower_lip():
+    """The click on the tongue of a yawn: the darkest row near it is the band above the tongue, and the
+    gap stopped there (the tongue then was the lower lip, 0.3 wi thick: the ``late`` copy of expr_d18
+    calibrated on such a frame, and its opening followed the peer at r 0.28). Past the tongue the gap
+    reaches the second dark band, with the lower lip after it."""
+    lum, red = _rows_for_gap(_yawn_runs())
+    teeth = np.zeros(len(lum))
+    click = 36.0  # on the tongue, the band above it within the darkest row's reach and the one below not
+    top, bottom, _ = _gap(lum, teeth, click, WI, red)
+    assert (top, bottom) == (26, 29), "without the rule the gap is the band above the tongue (else this shows nothing)"
+    top, bottom, _ = _gap(lum, teeth, click, WI, red, past_tongue=True)
+    assert (top, bottom) == (26, 59)
+
+
+@pytest.mark.parametrize("case", ["shade under a thick lip", "beard", "shade across a full lip"])
+def test_past_the_tongue_the_gap_does_not_take_a_thick_lower_lip(case):
+    """Closed lips and a thick, very red lower lip (a child's pout) with the dark shade under it and a
+    paler chin after that; the lower lip with a dark beard under it; parted lips and a full lower lip
+    with a crease of shade across it, dark, but lighter than the gap (the ``late`` copy of expr_d6).
+    None is a tongue: the gap stays the line between the lips."""
+    line = LIP * 0.6
+    if case == "shade across a full lip":
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (DARK_INSIDE * 1.7, 3), (LIP, 14), (LIP * 0.41, 3), (LIP, 6), (SKIN, 30)]
+    elif case == "beard":
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (line, 2), (LIP, 12), (HAIR * 0.6, 12), (HAIR, 30)]
+    else:
+        red_lip = np.array([110.0, 100.0, 220.0])
+        chin = SKIN + (LIP - SKIN) * 0.5  # pinkish, but paler than the lip
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (line, 2), (red_lip, 22), (0.35 * SKIN, 4), (chin, 30)]
+    lum, red = _rows_for_gap(runs)
+    teeth = np.zeros(len(lum))
+    assert _gap(lum, teeth, 29.0, WI, red, past_tongue=True) == _gap(lum, teeth, 29.0, WI, red)
+
+
+def _yawn_crop() -> np.ndarray:
+    """A yawn's mouth crop at 80 px between the eyes, drawn from ellipses: the lips' ring, the dark
+    inside, a tongue filling its lower half (dark bands left above and below it)."""
+    crop = np.empty((160, 160, 3), np.uint8)
+    crop[:] = SKIN.astype(np.uint8)
+    cv2.ellipse(crop, (80, 64), (30, 28), 0, 0, 360, LIP.tolist(), -1, cv2.LINE_AA)
+    cv2.ellipse(crop, (80, 64), (25, 22), 0, 0, 360, DARK_INSIDE.tolist(), -1, cv2.LINE_AA)
+    cv2.ellipse(crop, (80, 67), (21, 11), 0, 0, 360, TONGUE_PINK.tolist(), -1, cv2.LINE_AA)
+    return cv2.GaussianBlur(crop, (0, 0), 0.8)
+
+
+def test_a_yawn_at_calibration_is_learned_as_an_open_mouth(monkeypatch):
+    """:func:`~tracker.mouth_model.learn_mouth` on a yawn, the click on the tongue: the gap spans the
+    inside (from the upper lip's inner edge to the lower lip's, 44 rows) and the lower lip is a lip's
+    thickness; looking no further than the band above the tongue, the tongue was learned as a lower
+    lip as thick as lips get (:data:`~tracker.mouth_model.LIP_MAX`)."""
+    import tracker.mouth_model as mm
+
+    crop = _yawn_crop()
+    model = mm.learn_mouth(crop, (80.0, 62.0), WI)
+    assert 38.0 <= model.gap <= 46.0, model.gap
+    assert model.thick_down <= 0.12 * WI, model.thick_down
+    monkeypatch.setattr(mm, "TONGUE", False)
+    before = mm.learn_mouth(crop, (80.0, 62.0), WI)
+    assert before.gap < 20.0 and before.thick_down >= mm.LIP_MAX[1] * WI - 0.5, (before.gap, before.thick_down)
+
+
+def test_the_rest_line_of_an_open_calibration_mouth_is_at_its_upper_lip():
+    """The mouth's rigid place: a closed or talking mouth's own line; a yawn's line (half an eye
+    distance below its upper lip's inner edge) moves up to :data:`~tracker.calibration.RIGID_OPEN`
+    wi below that edge. On the synthetic performer, whose widest mouth opens only 0.3 wi, calibrating
+    with it open still puts the rigid place within 0.03 wi of where calibrating with it closed does
+    (no harm there; the yawn it is for is the ``expr_d18-late`` case in ``test_realfaces``)."""
+    from tracker.calibration import RIGID_OPEN, calibrate, rest_height
+    from tracker.clicks import Clicks
+    from tracker.synthetic import FaceState, clicks_for, render_face
+
+    assert rest_height(100.0, 99.0, WI) == 100.0
+    assert rest_height(100.0, 100.0 - RIGID_OPEN * WI, WI) == 100.0
+    assert rest_height(100.0, 60.0, WI) == pytest.approx(60.0 + RIGID_OPEN * WI)
+    base = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+    heights = []
+    for opening in (0.0, 1.0):
+        face = base.replace(mouth_open=opening, teeth=True)
+        cal = calibrate(render_face(face)[0], Clicks.from_dict(clicks_for(face)))
+        heights.append(cal.mouth_offset[1] / cal.work_ipd)
+    assert abs(heights[1] - heights[0]) <= 0.03, heights

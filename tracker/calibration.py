@@ -66,6 +66,9 @@ the eyes only; the stress matrix 186 and 182 clip-modes of 324 meeting every tar
 (lost on 0-1.2 % of the frames, her lid gap either side of the blind-gap rule's threshold) are lost
 on none with it; expr_d6's mouth opening is the one figure that was better without the mouth's
 consensus (r 0.53 / 0.56 against 0.46 / 0.50)."""
+RIGID_OPEN = 0.1
+"""How far (× wi) below an open calibration mouth's upper inner lip edge the line of that mouth at
+rest may lie; the rigid place moves up to there (None: it stays on the open mouth's line)."""
 RIGID_STEPS = 3
 """Looks the mouth finder takes on the calibration frame for the height of the mouth's rigid place: each
 with the crop and the prediction where the last one put its line's centre, as the tracker will look on
@@ -442,6 +445,21 @@ def consensus(measures: list[list[float]]) -> int:
     return int(np.abs(m[:, None, :] - m[None, :, :]).sum(axis=(1, 2)).argmin())
 
 
+def rest_height(line_y: float, gap_top: float, wi: float) -> float:
+    """The height (px, down) of the mouth's line at rest, from the line ``line_y`` of the mouth the
+    calibration frame shows and the upper lip's inner edge ``gap_top`` above it (``wi``: px between
+    the eyes).
+
+    An open mouth's line runs through the middle of the opening, while the line of that mouth closed
+    lies about where its upper lip's inner edge is now: the upper lip hardly moves as the jaw drops.
+    So the line stands at most :data:`RIGID_OPEN` wi below that edge. A yawn on the calibration frame
+    had put the rigid place 0.3-0.4 wi below every closed mouth after it, and each was refused as the
+    philtrum (the ``late`` copy of expr_d18: mouth lost on 45 % of the frames)."""
+    if RIGID_OPEN is None:
+        return line_y
+    return min(line_y, gap_top + RIGID_OPEN * wi)
+
+
 def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     """Learn a :class:`Calibration` from one frame and the five clicks on it.
 
@@ -600,6 +618,8 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         mcy += step
         if abs(step) < 0.25:
             break
+    if found is not None and found.score >= SCORE_OK:
+        mcy = rest_height(mcy, rect[1] + found.gap_top, wi)
 
     # lips as a colour class too (the whole-frame search by lip colour after a loss): the pixels
     # inside the mouth's outline that are neither skin-like nor the dark inside

@@ -540,7 +540,7 @@ def _between_lips(red_rows: np.ndarray, ys: list[int], cy: float, wi: float, rea
 
 
 def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
-         red_rows: np.ndarray | None = None) -> tuple[int, int, int]:
+         red_rows: np.ndarray | None = None, past_tongue: bool = False) -> tuple[int, int, int]:
     """The gap on the profile through the click: ``(top, bottom, darkest)`` rows.
 
     The darkest row within −0.12…+0.15 wi of the click is in the gap between the lips or in the open
@@ -553,7 +553,14 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
     beard, where the gap ran up through the moustache) or teeth (``inside_rows``: the share of
     teeth-like pixels), across a row or two of neither (the blurred edge between them), at most
     0.35 wi each way; below, past a tongue on the lower teeth: lip-like rows followed by more teeth
-    within 0.15 wi are inside too."""
+    within 0.15 wi are inside too.
+
+    ``past_tongue``: the mouth is open round a tongue (the caller found the lip below the gap
+    thicker than any lip): the gap goes on down over the lighter rows to a second band of dark rows,
+    within :data:`OPEN_SPAN` wi of its top and at its darkest no lighter than the gap (the inside in
+    front of the lower teeth; a shade on a full lower lip is lighter than the mouth's inside), when
+    lip-red rows (``red_rows``) follow that band within :data:`LIP_MAX`, at least as red as the rows
+    between — the lower lip; without one, the gap stays."""
     H = len(lum_rows)
     ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
     y_min = ya + int(np.argmin(lum_rows[ya:yb]))
@@ -588,7 +595,28 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
         if not teeth or teeth[0] - y_min > limit:
             break
         bottom = teeth[0]
+    if past_tongue and red_rows is not None:
+        end = min(top + int(round(OPEN_SPAN * wi)), H - 1)
+        band = next((v for v in range(bottom + bridge + 2, end + 1) if skip[v]), None)
+        if band is not None:
+            far = band
+            while far + 1 <= end and skip[far + 1]:
+                far += 1
+            ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
+            need = lip_red_need(float(red_rows[ra:rb].max(initial=0.0)))
+            lip = red_rows[far + 1 : min(far + 1 + int(round(LIP_MAX[1] * wi)), H)]
+            # the lip past the band at least as red as what lay between (a tongue is no redder than
+            # the lips; where those rows are the lip, and the band the shade under it, the chin
+            # past the shade is paler than they are)
+            if (far < end and len(lip) and float(lum_rows[band : far + 1].min()) <= float(lum_rows[y_min])
+                    and float(lip.max()) >= max(need, float(np.median(red_rows[bottom + 1 : band])))):
+                bottom = far
     return top, bottom, y_min
+
+
+OPEN_SPAN = 0.6
+"""Tallest inside of an open mouth (× wi, from the upper lip's inner edge down; a yawn's is about
+half the eye distance)."""
 
 
 LIP_SEEN = 1.5
@@ -737,6 +765,8 @@ def _vertex(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if abs(den) > 1e-12 else 0.0
 
 
+TONGUE = True
+"""Whether calibration looks past a tongue for the inside's lower end (see :func:`_gap`)."""
 LIP_MAX = (0.15, 0.2)
 """Thickest upper and lower lip (× wi): a lip's red is about 0.1–0.15 of the inter-eye distance high."""
 SHUT_GAP = 0.05
@@ -1060,11 +1090,22 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         rows_bgr = cv2.GaussianBlur(crop[:, b0:b1].astype(np.float32).mean(axis=1).reshape(-1, 1, 3), (1, 0), 0.8).reshape(-1, 3)
         lum_rows = luminance(rows_bgr)
         f_rows = profile_features(rows_bgr, skin_level, chroma)
-        top, bottom, y_min = _gap(lum_rows, teeth0[:, b0:b1].mean(axis=1), y, wi, f_rows[:, 1] - skin_red)
-        e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi, math.nan), _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi)
-        # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
-        # lip: on pale lips the skin just above is as red as they are)
-        e_dn = _colour_edge(rows_bgr, bottom, +1, e_dn, skin, (0.05, 0.3), wi)
+        teeth_rows, red_rows = teeth0[:, b0:b1].mean(axis=1), f_rows[:, 1] - skin_red
+        top, bottom, y_min = _gap(lum_rows, teeth_rows, y, wi, red_rows)
+
+        def lower_edge(bottom: int) -> float:
+            # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
+            # lip: on pale lips the skin just above is as red as they are)
+            return _colour_edge(rows_bgr, bottom, +1, _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi), skin, (0.05, 0.3), wi)
+
+        e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi, math.nan), lower_edge(bottom)
+        if TONGUE and e_dn - bottom > LIP_MAX[1] * wi:
+            # a lower lip thicker than any lip: the tongue of an open mouth, between the gap and the
+            # dark inside in front of the lower teeth, taken for lip (a yawn on the calibration frame:
+            # the tracker then looked for the upper lip and the top of the inside all clip long)
+            _, deeper, _ = _gap(lum_rows, teeth_rows, y, wi, red_rows, past_tongue=True)
+            if deeper > bottom and (e2 := lower_edge(deeper)) - deeper < e_dn - bottom:
+                bottom, e_dn = deeper, e2
         return (top, bottom, y_min, e_up, e_dn, lum_rows, f_rows)
 
     # the gap through the click
