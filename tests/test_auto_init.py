@@ -212,6 +212,31 @@ def test_a_childs_smile_close_under_the_eyes_is_found_between_its_lips():
     assert abs(y - 134.5) <= 2 and abs(x - 100.0) < 1
 
 
+def test_the_mouth_point_is_at_the_teeth_under_a_pale_upper_lip(monkeypatch):
+    """Parted lips: an upper lip no redder than the skin, the upper teeth, the dark gap, a red lower
+    lip and the shade under it, darker than the gap. The lip-red rows are the lower lip and its shade,
+    so the darkest row among them was the shade — the ``late`` copy of expr_d6 with ``--auto``: the
+    point a fifth of the eye distance low, calibration learned the lower lip alone, and the clip's
+    opening followed the peer at r 0.06 (0.83 with this). Teeth over the lips' red say the mouth is
+    open there: the point is on the gap under them."""
+    import tracker.auto_init as ai
+
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey = np.full((260, 200), 170.0, np.float32)
+    red = np.full((260, 200), 145.0, np.float32)
+    for (y0, y1), g, r in (((135, 146), 150.0, 145.0), ((146, 153), 225.0, 140.0), ((153, 156), 60.0, 150.0),
+                           ((156, 170), 125.0, 170.0), ((170, 174), 45.0, 160.0)):
+        grey[y0:y1, 60:140] = g
+        red[y0:y1, 60:140] = r
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 154.5) <= 2 and abs(x - 100.0) < 1
+    no_teeth = grey.copy()
+    no_teeth[146:153, 60:140] = 150.0  # the same rows as the pale lip: as before, the shade
+    assert _mouth(no_teeth, left, right, red)[1] > 168.0
+    monkeypatch.setattr(ai, "TEETH_OVER", 0.0)
+    assert _mouth(grey, left, right, red)[1] > 168.0, "without the rule the shade is the line (else this shows nothing)"
+
+
 def test_the_mouth_line_is_not_the_nostrils():
     """Without the lips' colour the mouth is the darkest line across the face: two nostrils darken
     most of a short row's mean but a quarter of it stays bright, while a closed mouth's paler gap

@@ -63,6 +63,9 @@ mouth's lower lip has ended and the chin begins."""
 LINE_OVER = 0.06
 """How far (× the inter-pupil distance) above the lip-red rows the mouth's line may lie: an upper
 lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
+TEETH_OVER = 0.2
+"""How far (× the inter-pupil distance) above the lips' red rows the upper teeth of an open mouth may
+show (under a pale upper lip that is not in those rows; see :func:`_teeth_rows`)."""
 LINE_SHARE = 75.0
 """Percentile of each row's grey across the band the mouth's dark line is looked for on where the
 lips' colour does not say where they are: a row is dark only where three quarters of it are. The
@@ -423,6 +426,23 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | No
     return int(run[0]), int(run[-1])
 
 
+def _teeth_rows(band: np.ndarray, a: int, ipd: float) -> tuple[int, int] | None:
+    """The first and last of the rows of the mouth's ``band`` (rows down the face from
+    :data:`MOUTH_RANGE`'s start) that show teeth just above the lips' red, which begins at row ``a``
+    (within :data:`TEETH_OVER` eye distances above it, or a little into it): rows whose brightest
+    tenth is brighter than any row of the skin between the nose and there (teeth are whiter than the
+    skin round them, in the same light; the cheeks beside the mouth are no yardstick, a lamp above
+    the face leaves them darker than the philtrum); None when none are, or when the band shows less
+    than 0.1 eye distances of that skin."""
+    p90 = np.percentile(band, 90, axis=1)
+    lo, hi = max(a - int(round(TEETH_OVER * ipd)), 0), min(a + max(int(round(LINE_OVER * ipd)), 1), len(band))
+    if lo < max(int(round(0.1 * ipd)), 2):
+        return None
+    level = float(p90[:lo].max())
+    rows = [i for i in range(lo, hi) if p90[i] > level]
+    return (rows[0], rows[-1]) if rows else None
+
+
 def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndarray | None = None) -> tuple[float, float]:
     """The mouth's centre: the darkest line across the face in :data:`MOUTH_RANGE` below the eyes —
     inside the lips where their colour shows them (``lab_a``, the frame's Lab a* as float32: rows
@@ -461,6 +481,16 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
             inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
             k, valley = (min(inner, key=prof.__getitem__), prof) if inner else ((a + b) // 2, None)
+            teeth = _teeth_rows(band, a, ipd)
+            if teeth is not None:
+                # upper teeth between a pale upper lip and the red lower lip: the mouth is open there,
+                # its line at the teeth's top or bottom edge (the ``late`` copy of expr_d6 with --auto:
+                # the shade under the lower lip, darker than either, was taken for the line, and
+                # calibration learned the lower lip alone as the mouth)
+                over = max(int(round(LINE_OVER * ipd)), 1)
+                near = [i for i in range(max(teeth[0] - over, 1), min(teeth[1] + over + 1, n - 1))
+                        if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+                k, valley = (min(near, key=prof.__getitem__), prof) if near else ((teeth[0] + teeth[1]) // 2, None)
     t = float(k)
     if valley is not None and 0 < k < n - 1:  # between rows: the valley's bottom
         t += parabola_offset(valley[k - 1], valley[k], valley[k + 1])
