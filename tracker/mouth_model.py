@@ -559,8 +559,8 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
     thicker than any lip): the gap goes on down over the lighter rows to a second band of dark rows,
     within :data:`OPEN_SPAN` wi of its top and at its darkest no lighter than the gap (the inside in
     front of the lower teeth; a shade on a full lower lip is lighter than the mouth's inside), when
-    lip-red rows (``red_rows``) follow that band within :data:`LIP_MAX`, at least as red as the rows
-    between — the lower lip; without one, the gap stays."""
+    lip-red rows (``red_rows``) follow that band within :data:`LIP_MAX`, redder than any row between
+    — the lower lip; without one, the gap stays."""
     H = len(lum_rows)
     ya, yb = max(int(round(cy - 0.12 * wi)), 0), min(int(round(cy + 0.15 * wi)) + 1, H)
     y_min = ya + int(np.argmin(lum_rows[ya:yb]))
@@ -605,11 +605,11 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
             ra, rb = max(int(round(cy - 0.35 * wi)), 0), min(int(round(cy + 0.45 * wi)) + 1, H)
             need = lip_red_need(float(red_rows[ra:rb].max(initial=0.0)))
             lip = red_rows[far + 1 : min(far + 1 + int(round(LIP_MAX[1] * wi)), H)]
-            # the lip past the band at least as red as what lay between (a tongue is no redder than
-            # the lips; where those rows are the lip, and the band the shade under it, the chin
-            # past the shade is paler than they are)
+            # the lip past the band redder than anything that lay between (a tongue is no redder than
+            # the lips; where those rows are a full lower lip, and the band the shade under it, the
+            # chin past the shade is paler than the lip)
             if (far < end and len(lip) and float(lum_rows[band : far + 1].min()) <= float(lum_rows[y_min])
-                    and float(lip.max()) >= max(need, float(np.median(red_rows[bottom + 1 : band])))):
+                    and float(lip.max()) >= max(need, float(red_rows[bottom + 1 : band].max()))):
                 bottom = far
     return top, bottom, y_min
 
