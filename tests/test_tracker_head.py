@@ -446,13 +446,21 @@ def test_the_calibration_frame_has_no_jaw(expr):
     1.8 px off for "ah" and "smile" before). It used to be the corners' midpoint on the line traced through the middle
     of the gap, which in an open mouth lies below the corners: talk_b's frame 0 was
     read with the jaw 0.12 of the eye distance up, and the mouth was then allowed to rise that much
-    further from a place already too low — onto the nose, on one start of expr_d6."""
+    further from a place already too low — onto the nose, on one start of expr_d6. A mouth open
+    further than :data:`~tracker.calibration.RIGID_OPEN` wi below its upper lip's inner edge is the
+    exception: its rigid place is that far below the edge (a yawn's line is the middle of the opening,
+    and the mouth at rest is about where the upper lip is), and its jaw is down by the rest."""
+    from tracker.calibration import RIGID_OPEN
+
     state = BASE.with_expression(expr)
     img, _ = render_face(state)
     tr = FaceTracker(calibrate(img, Clicks.from_dict(clicks_for(state))))
     res = tr.track(img)
     assert res.params.status == OK
-    assert abs(tr.jaw[1]) < 0.01 * tr.wi
+    m = tr._mouth_prev[0]
+    dropped = max(m.line_centre[1] - m.gap_top - RIGID_OPEN * tr.wi, 0.0)
+    assert abs(tr.jaw[1] - dropped) < 0.01 * tr.wi
+    assert (dropped > 0.0) == (expr == "ah")
 
 
 def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
