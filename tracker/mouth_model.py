@@ -11,7 +11,8 @@ out, lips above and below it until the corners, then cheek. Lip *thickness* chan
 the gap opens and closes, and the gap is the high-contrast part. So calibration learns
 
 * the **gap** at the click: the darkest row near it and the rows around it that look like the
-  inside of a mouth (dark and colourless, or the greys of teeth; past a tongue on the lower teeth);
+  inside of a mouth (dark and colourless, or the greys of teeth; past a tongue on the lower teeth,
+  and past a tongue filling a yawn to the dark band in front of the lower teeth);
 * the **outer lip edges**: on the vertical profile through the click, the strongest change of
   colour above the gap within an upper lip's thickness, and below it within a lower lip's — the
   lower one then where the lip's own colour gives way to the skin's along a shading-free axis
@@ -1093,10 +1094,10 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         teeth_rows, red_rows = teeth0[:, b0:b1].mean(axis=1), f_rows[:, 1] - skin_red
         top, bottom, y_min = _gap(lum_rows, teeth_rows, y, wi, red_rows)
 
-        def lower_edge(bottom: int) -> float:
+        def lower_edge(gap_end: int) -> float:
             # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
             # lip: on pale lips the skin just above is as red as they are)
-            return _colour_edge(rows_bgr, bottom, +1, _outer_edge(f_rows, bottom, +1, 0.05, 0.3, wi), skin, (0.05, 0.3), wi)
+            return _colour_edge(rows_bgr, gap_end, +1, _outer_edge(f_rows, gap_end, +1, 0.05, 0.3, wi), skin, (0.05, 0.3), wi)
 
         e_up, e_dn = _outer_edge(f_rows, top, -1, 0.04, 0.22, wi, math.nan), lower_edge(bottom)
         if TONGUE and e_dn - bottom > LIP_MAX[1] * wi:
