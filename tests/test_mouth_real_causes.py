@@ -405,6 +405,11 @@ def test_a_yawns_gap_runs_on_past_the_tongue_to_the_lower_lip():
     assert (top, bottom) == (26, 29), "without the rule the gap is the band above the tongue (else this shows nothing)"
     top, bottom, _ = _gap(lum, teeth, click, WI, red, past_tongue=True)
     assert (top, bottom) == (26, 59)
+    # a dark band that runs on past the tallest opening (OPEN_SPAN) is no inside in front of teeth
+    runs = _yawn_runs()
+    runs[4] = (DARK_INSIDE * 0.7, 40)
+    lum, red = _rows_for_gap(runs)
+    assert _gap(lum, np.zeros(len(lum)), click, WI, red, past_tongue=True)[:2] == (26, 29)
 
 
 @pytest.mark.parametrize("case", ["shade under a thick lip", "beard", "shade across a full lip"])
