@@ -15,10 +15,13 @@
 """
 
 import dataclasses
+import warnings
 
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tracker import face_tracker as ft
 from tracker.mouth_finder import WIDE_REF, MouthFinder
@@ -479,3 +482,28 @@ def test_the_rest_line_of_an_open_calibration_mouth_is_at_its_upper_lip():
         cal = calibrate(render_face(face)[0], Clicks.from_dict(clicks_for(face)))
         heights.append(cal.mouth_offset[1] / cal.work_ipd)
     assert abs(heights[1] - heights[0]) <= 0.03, heights
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255), st.integers(1, 30)),
+                min_size=2, max_size=12),
+       st.floats(5.0, 155.0), st.floats(5.0, 155.0))
+def test_calibration_of_any_banded_mouth_crop_gives_a_finite_mouth(runs, click_x, click_y):
+    """Crops of horizontal bands of any colours and heights (lips, teeth, tongues, shadows, beards in
+    any order, as the tongue and gap rules see them) with the click anywhere in the crop: a model
+    every time, its sizes, colours and lip axes finite. A lip or skin band past the crop's edge once
+    gave an empty sample, and a lip axis of NaNs."""
+    import tracker.mouth_model as mm
+
+    rows = np.concatenate([np.repeat(np.array([[b, g, r]], np.uint8), k, axis=0) for b, g, r, k in runs])
+    rows = np.resize(rows, (160, 3))
+    crop = np.ascontiguousarray(np.repeat(rows[:, None, :], 160, axis=1))
+    crop = cv2.GaussianBlur(crop, (0, 0), 0.8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no mean of an empty sample on the way
+        model = mm.learn_mouth(crop, (float(click_x), float(click_y)), WI)
+    for v in (model.gap, model.thick_up, model.thick_down, model.width, model.lip_upper, model.lip_lower):
+        assert np.isfinite(v)
+    assert np.isfinite(model.axis_up).all() and np.isfinite(model.axis_down).all()
+    assert np.isfinite(model.classes).all() and np.isfinite(model.separation)
+    assert model.gap >= 0.0 and model.thick_up > 0.0 and model.thick_down > 0.0 and model.width > 0.0

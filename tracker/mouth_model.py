@@ -1127,8 +1127,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     fit = {name: cheek_skin_distance(t[3], skin_f) for name, t in traced.items()}
     # the lips' lead in red over the skin on the click's column: where they are clearly redder, a
     # corner lies no further than LIP_END past the last column along the line that shows them
-    lips_red = [float(np.median(f_click[int(math.ceil(a)) : int(b) + 1, 1])) for a, b in ((y_top, top), (bottom, y_bottom))
-                if math.isfinite(a) and int(b) >= int(math.ceil(a))]
+    lips_red = [float(np.median(rows)) for a, b in ((y_top, top), (bottom, y_bottom)) if math.isfinite(a)
+                and len(rows := f_click[max(int(math.ceil(a)), 0) : int(b) + 1, 1])]
     lead = min(lips_red) - skin_red if lips_red else 0.0
     need = skin_red + lip_red_need(lead) if lead >= LIP_LEAD else None
     skin_mid = np.median(skin_f, axis=0)
@@ -1214,10 +1214,13 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     # lip colour: each lip's pixels (between its inner and outer edge, the middle 60 % of the mouth)
     # against the skin just beyond its outer edge
     xa, xb = int(round(centre[0] - 0.3 * width)), int(round(centre[0] + 0.3 * width)) + 1
-    xa, xb = max(xa, 0), min(max(xb, xa + 1), W)
+    xa = min(max(xa, 0), W - 1)
+    xb = min(max(xb, xa + 1), W)
+
     def rows_px(y0, y1):
         y0, y1 = int(round(min(y0, y1))), int(round(max(y0, y1)))
-        y0, y1 = max(y0, 0), min(max(y1, y0 + 1), H)
+        y0 = min(max(y0, 0), H - 1)  # a lip or skin past the crop's edge: its last row stands in
+        y1 = min(max(y1, y0 + 1), H)
         blk = crop[y0:y1, xa:xb]
         keep = inside0[y0:y1, xa:xb] == 0
         return blk[keep] if keep.sum() >= 12 else blk.reshape(-1, 3)
