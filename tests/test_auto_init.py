@@ -196,18 +196,25 @@ def test_the_mouth_point_is_on_the_lips_not_on_a_pinker_chin():
     assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
 
 
+def _mouth_bands(bands) -> tuple[np.ndarray, np.ndarray]:
+    """Grey and Lab a* images of a lower face (eyes at rows 40, 100 px apart) on skin of grey 170 and
+    a* 145, with ``bands`` ((row0, row1), grey, a*) across the mouth, columns 60-140."""
+    grey = np.full((260, 200), 170.0, np.float32)
+    red = np.full((260, 200), 145.0, np.float32)
+    for (y0, y1), g, r in bands:
+        grey[y0:y1, 60:140] = g
+        red[y0:y1, 60:140] = r
+    return grey, red
+
+
 def test_a_childs_smile_close_under_the_eyes_is_found_between_its_lips():
     """A young child's mouth sits about 0.95 eye distances below the eyes (an adult's 1.05-1.2). A
     wide smile: the upper lip, the upper teeth, the gap, the lower teeth, a redder lower lip. The
     search once began at 0.9: the upper lip fell outside it, the lower lip's red alone was the
     lips, and the point went to the lower lip (the ``child`` copy of talk_b: 0.34 eye distances low)."""
     left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
-    grey = np.full((260, 200), 170.0, np.float32)
-    red = np.full((260, 200), 145.0, np.float32)
-    for (y0, y1), g, r in (((116, 127), 120.0, 165.0), ((127, 133), 225.0, 138.0), ((133, 136), 30.0, 150.0),
-                           ((136, 141), 225.0, 138.0), ((141, 153), 125.0, 175.0)):
-        grey[y0:y1, 60:140] = g
-        red[y0:y1, 60:140] = r
+    grey, red = _mouth_bands([((116, 127), 120.0, 165.0), ((127, 133), 225.0, 138.0), ((133, 136), 30.0, 150.0),
+                              ((136, 141), 225.0, 138.0), ((141, 153), 125.0, 175.0)])
     x, y = _mouth(grey, left, right, red)
     assert abs(y - 134.5) <= 2 and abs(x - 100.0) < 1
 
@@ -222,12 +229,8 @@ def test_the_mouth_point_is_at_the_teeth_under_a_pale_upper_lip(monkeypatch):
     import tracker.auto_init as ai
 
     left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
-    grey = np.full((260, 200), 170.0, np.float32)
-    red = np.full((260, 200), 145.0, np.float32)
-    for (y0, y1), g, r in (((135, 146), 150.0, 145.0), ((146, 153), 225.0, 140.0), ((153, 156), 60.0, 150.0),
-                           ((156, 170), 125.0, 170.0), ((170, 174), 45.0, 160.0)):
-        grey[y0:y1, 60:140] = g
-        red[y0:y1, 60:140] = r
+    grey, red = _mouth_bands([((135, 146), 150.0, 145.0), ((146, 153), 225.0, 140.0), ((153, 156), 60.0, 150.0),
+                              ((156, 170), 125.0, 170.0), ((170, 174), 45.0, 160.0)])
     x, y = _mouth(grey, left, right, red)
     assert abs(y - 154.5) <= 2 and abs(x - 100.0) < 1
     no_teeth = grey.copy()

@@ -256,15 +256,22 @@ def locate_face(grey: np.ndarray, scale: float, pupils: np.ndarray, reference: n
     margin = max(int(math.ceil(reach * PATCH_IPD)), 1)
     m, size, ax, ay = _patch_warp(scale, pupils, margin)
     win = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
     if win.shape[0] < reference.shape[0] or win.shape[1] < reference.shape[1]:
         return np.zeros(2), 0.0
+    x, y, best = _peak(win, reference)
+    du, dv = x - margin, y - margin
+    return np.array([du * ax[0] + dv * ay[0], du * ax[1] + dv * ay[1]]), best
+
+
+def _peak(window: np.ndarray, reference: np.ndarray) -> tuple[float, float, float]:
+    """The face picture's best match in ``window`` (grey, at the picture's scale; blurred here as the
+    picture was): its top-left corner (x, y, sub-pixel) and the correlation there (:func:`_match`)."""
+    win = cv2.GaussianBlur(window.astype(np.float32), (0, 0), 1.0)
     r, best, (i, j) = _match(win, reference)
     h, w = r.shape
     dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < w - 1 else 0.0
     dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < h - 1 else 0.0
-    du, dv = i + dx - margin, j + dy - margin
-    return np.array([du * ax[0] + dv * ay[0], du * ax[1] + dv * ay[1]]), float(best)
+    return i + dx, j + dy, float(best)
 
 
 def search_face(grey: np.ndarray, scale: float, ipd_px: float, roll_deg: float,
@@ -292,16 +299,10 @@ def search_face(grey: np.ndarray, scale: float, ipd_px: float, roll_deg: float,
     m = np.hstack([A, -lo.reshape(2, 1)])
     win = cv2.warpAffine(grey, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                          borderValue=float(np.mean(grey)))
-    win = cv2.GaussianBlur(win.astype(np.float32), (0, 0), 1.0)
-    r, best, (i, j) = _match(win, reference)
-    nh, nw = r.shape
-    dx = _vertex(r[j, i - 1], r[j, i], r[j, i + 1]) if 0 < i < nw - 1 else 0.0
-    dy = _vertex(r[j - 1, i], r[j, i], r[j + 1, i]) if 0 < j < nh - 1 else 0.0
-    x0, y0 = _PATCH_PX[0], _PATCH_PX[1]
-    mid = np.array([i + dx - x0, j + dy - y0])  # the eyes' middle in the searched picture
+    x, y, best = _peak(win, reference)
+    mid = np.array([x - _PATCH_PX[0], y - _PATCH_PX[1]])  # the eyes' middle in the searched picture
     pts = np.array([mid - (0.5 * PATCH_IPD, 0.0), mid + (0.5 * PATCH_IPD, 0.0)])
-    back = np.linalg.inv(A)
-    return ((pts + lo) @ back.T) / scale, float(best)
+    return ((pts + lo) @ np.linalg.inv(A).T) / scale, best
 
 
 def _vertex(a: float, b: float, c: float) -> float:
