@@ -66,7 +66,7 @@ from tracker.calibration import CalibrationError, calibrate
 from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, PARAM_NAMES, FaceParams, params_array
-from tracker.track_cli import TrackCliError, _auto, _frame_at, _Video
+from tracker.track_cli import TrackCliError, _auto, _clicked, _Video
 
 if TYPE_CHECKING:
     from benchmarks.harness import Table
@@ -240,10 +240,7 @@ def start_tracker(video: Path, clicks: str | os.PathLike | None = None, auto: bo
     if auto:
         found, cal_frame = _auto(video)
     else:
-        found = Clicks.load(clicks)
-        cal_frame = _frame_at(video, found.frame)
-        h, w = cal_frame.shape[:2]
-        found.check_inside((w, h), where=str(clicks))
+        found, cal_frame = _clicked(video, Clicks.load(clicks), str(clicks))
     if shift != (0.0, 0.0):
         found = found.moved(*shift)
     return FaceTracker(calibrate(cal_frame, found))

@@ -436,6 +436,23 @@ def test_auto_start_looks_past_a_first_frame_with_shut_eyes(clip, monkeypatch, s
         assert seen == list(range(0, tc.AUTO_LOOK[0], tc.AUTO_LOOK[1]))
 
 
+def test_clicks_on_a_blink_calibrate_on_the_frame_the_head_carries_them_to(clip, monkeypatch):
+    """``--init`` clicks on a frame whose eyes look shut are carried with the head's motion to the first
+    frame within :data:`~tracker.open_eyes.LOOK` whose eyes show (tracker.open_eyes; its own tests
+    cover the carrying), and calibration reads that frame."""
+    import tracker.open_eyes as oe
+    import tracker.track_cli as tc
+
+    video, clicks_path, perf = clip
+    monkeypatch.setattr(oe, "eyes_shown", lambda img, c: 5.0 if c.frame == 6 else 0.5)
+    got, img = tc._clicked(video, Clicks.load(clicks_path), "clicks")
+    assert got.frame == 6
+    assert np.array_equal(img, perf.frame(6))  # a lossless clip: the very frame
+    mid = 0.5 * (np.asarray(got.left_pupil) + got.right_pupil)
+    truth = perf.truth(6)
+    assert np.hypot(mid[0] - truth.mid_x, mid[1] - truth.mid_y) < 0.5
+
+
 def _cli(*argv):
     import argparse
 

@@ -172,11 +172,12 @@ class HeadMotion:
         k = 1.0 / self.scale
         return (x0 - LK_REACH) * k, (y0 - LK_REACH) * k, (x1 + LK_REACH) * k, (y1 + LK_REACH) * k
 
-    def set_scale(self, ipd_px: float) -> None:
+    def set_scale(self, ipd_px: float, flow_ipd: float = FLOW_IPD) -> None:
         """Choose the working scale for a face with this inter-pupil distance (frame px):
-        1, 1/2, 1/4 … so the face's pupils end up between 0.7 and 1.4 × :data:`FLOW_IPD` apart."""
+        1, 1/2, 1/4 … so the face's pupils end up between 0.7 and 1.4 × ``flow_ipd`` apart
+        (:data:`FLOW_IPD` per frame; more for a motion followed over many frames in one go)."""
         s = 1.0
-        while ipd_px * s > 1.4 * FLOW_IPD and s > 1 / 16:
+        while ipd_px * s > 1.4 * flow_ipd and s > 1 / 16:
             s *= 0.5
         if abs(s - self.scale) > 1e-6:
             self.scale = s

@@ -24,6 +24,7 @@ from tracker.auto_init import EYES_SHOWN, AutoInitError, auto_clicks, eyes_shown
 from tracker.calibration import CalibrationError, calibrate, calibration_hints
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
+from tracker.open_eyes import carry_clicks
 from tracker.outputs import OutputError, calibration_files, check_outputs
 from tracker.params import TrackCsvWriter
 
@@ -106,6 +107,28 @@ def _frame_at(path: Path, index: int) -> np.ndarray:
         v.close()
 
 
+def _clicked(path: Path, clicks: Clicks, where: str) -> tuple[Clicks, np.ndarray]:
+    """The clicks and the frame to calibrate on: the clicked frame, or where the clicks carried
+    with the head find the eyes open when that frame caught a blink
+    (:func:`~tracker.open_eyes.carry_clicks`). Raises :class:`TrackCliError` for a frame past the
+    video's end, :class:`~tracker.clicks.ClicksError` for a click outside the frame."""
+    v = _Video(path)
+    try:
+        frames = v.frames()
+        n = 0
+        for i, img in frames:
+            n = i + 1
+            if i == clicks.frame:
+                h, w = img.shape[:2]
+                clicks.check_inside((w, h), where=where)
+                return carry_clicks(img, clicks, frames)
+        if n == 0:
+            raise TrackCliError(f"{path}: no frames could be read")
+        raise TrackCliError(f"{path}: calibration frame {clicks.frame} is past the end of the video ({n} frames)")
+    finally:
+        v.close()
+
+
 def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
     v = _Video(path)
     last: Exception | None = None
@@ -177,10 +200,7 @@ def _run(args: argparse.Namespace) -> int:
         clicks, cal_frame = _auto(video)
         where = "found automatically"
     else:
-        clicks = Clicks.load(args.init)
-        cal_frame = _frame_at(video, clicks.frame)
-        h, w = cal_frame.shape[:2]
-        clicks.check_inside((w, h), where=str(args.init))
+        clicks, cal_frame = _clicked(video, Clicks.load(args.init), str(args.init))
         where = f"clicks {args.init}"
     cal = _calibrate(video, cal_frame, clicks, where)
     if not args.quiet:
