@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -99,3 +100,35 @@ def test_one_brow_raised_alone_still_shows_when_both_are_seen(cal):
     (l0, r0), (l1, r1) = got[4], got[-1]
     assert l1 > 1.1 * l0
     assert r1 == pytest.approx(r0, rel=0.05)
+
+
+@pytest.fixture(scope="module")
+def finder():
+    cal = calibrate(render_face(BASE)[0], Clicks.from_dict(clicks_for(BASE)))
+    return FaceTracker(cal).eye_finder
+
+
+def _two_peaks(f, i: int, py: float, top: int, above: float, lead: float):
+    """A brow strip's correlations with a peak at the calibrated height and another ``above`` wi higher,
+    ``lead`` better (a forehead's crease or a fringe of hair as like the brow's cross-section)."""
+    base = py - top - f.model.brow_centres[i]
+    k_cal = int(round(base - f.model.brow_heights[i]))
+    k_up = int(round(k_cal - above * f.wi))
+    score = np.zeros(k_cal + 8, np.float32)
+    score[k_cal], score[k_up] = 0.8, 0.8 + lead
+    return score, base
+
+
+@pytest.mark.parametrize("lead, want_calibrated", [(0.1, True), (0.3, False)])
+def test_the_first_brow_after_a_fresh_start_is_looked_for_near_calibration(finder, lead, want_calibrated):
+    """With no last frame's brow (the first frame, or after the face was lost) a brow is looked for near
+    its calibrated height: a crease above it that matches a little better does not take it, and the
+    brow's steadiness then holds it there (the ``late`` copy of expr_d19, calibrated a blink later
+    than its first frame: the right brow read on the forehead, three times its height, for the 15
+    frames before). One that matches clearly better still wins."""
+    i, py, top = 1, 120.0, 60
+    finder.forget()
+    score, base = _two_peaks(finder, i, py, top, 0.2, lead)
+    h, match = finder._brow_peak(score, top, py, i)
+    assert (abs(h - finder.model.brow_heights[i]) < 1.0) == want_calibrated, (h, finder.model.brow_heights[i])
+    finder.forget()

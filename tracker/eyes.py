@@ -1718,19 +1718,20 @@ class EyeFinder:
         kept as a row of the crop, which follows the head: the eye point under it moves with the
         gaze and goes down to the slit in a blink, and a brow held at its height above that point
         was pulled down onto the lid's crease (talk_a with ``--auto``, after a blink: the left brow
-        20 px low for ten frames)."""
+        20 px low for ten frames). With no last brow (the first frame, a fresh start after the face
+        was lost) the calibrated height stands in for it: on a first frame that differs from the
+        calibration's (clicks carried past a blink, :mod:`tracker.open_eyes`) a crease on the
+        forehead matched a little better than the brow, and its steadiness then held the brow there
+        (the ``late`` copy of expr_d19: three times its height for the 15 frames before)."""
         base = py - top - self.model.brow_centres[i]  # height at offset 0; offset k is base − k
         last = self._brow_last[i]
+        last = py - last if math.isfinite(last) else self.model.brow_heights[i]  # as a height above the eye point
         n = len(score)
-        if math.isfinite(last):
-            last = py - last  # the last brow's row as a height above this frame's eye point
-            offsets = self._offsets.get(n)
-            if offsets is None:
-                offsets = self._offsets[n] = np.arange(n, dtype=np.float32)
-            pick = score - np.abs(base - offsets - last) * (BROW_STEADY / self.wi)
-            k = int(pick.argmax())
-        else:
-            k = int(score.argmax())
+        offsets = self._offsets.get(n)
+        if offsets is None:
+            offsets = self._offsets[n] = np.arange(n, dtype=np.float32)
+        pick = score - np.abs(base - offsets - last) * (BROW_STEADY / self.wi)
+        k = int(pick.argmax())
         if 0 < k < n - 1:
             a, b, c = score[k - 1 : k + 2].tolist()
             d = parabola_offset(a, b, c)
