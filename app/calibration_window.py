@@ -311,7 +311,6 @@ class CalibrationWindow(QDialog):
 
         self._auto_note = ""  # why Auto placed nothing, kept while the user places the points
         self._auto_found = False  # the points on screen are Auto's (its caution is shown with the masks)
-        self._auto_shut = False  # ... and the eyes looked shut where Auto put the pupils
         self.view = ClickView(self.frame)
         self.view.changed.connect(self._on_changed)
         self.prompt = QLabel("")
@@ -431,7 +430,7 @@ class CalibrationWindow(QDialog):
         (``training.constellation``): when the points are not shaped like a face, none are
         placed (points the user already placed stay) and the window says why."""
         try:
-            from tracker.auto_init import EYES_SHOWN, auto_clicks, eyes_shown
+            from tracker.auto_init import auto_clicks
         except ImportError:
             self._auto_note = "Automatic start is not available in this build: please click the points."
             self._on_changed()
@@ -452,10 +451,6 @@ class CalibrationWindow(QDialog):
             self._on_changed()
             return False
         self._auto_note, self._auto_found = "", True
-        try:
-            self._auto_shut = eyes_shown(self.frame, c) < EYES_SHOWN
-        except Exception:  # (a caution only: never a reason to refuse Auto's points)
-            self._auto_shut = False
         from tracker.clicks import PIXEL_CENTRE
 
         self.set_points(c.moved(-PIXEL_CENTRE, -PIXEL_CENTRE).points())  # the view's points: pixel centres at whole numbers
@@ -527,9 +522,9 @@ class CalibrationWindow(QDialog):
         ipd = getattr(self.calibration, "ipd", None)
         note = ("Found automatically — Auto can be wrong, so check each point (pupil centres, brow middles, "
                 "mouth centre) and drag any that is off, then accept. ") if self._auto_found else ""
-        if self._auto_found and self._auto_shut:
+        if self._eyes_look_shut():
             note += ("The eyes look shut on this frame: the tracker learns the eyes from it, so freeze a frame "
-                     "with the eyes open and press Auto again. ")
+                     "with the eyes open and " + ("press Auto again. " if self._auto_found else "place the points there. "))
         advice = "".join(h[0].upper() + h[1:] + ". " for h in hints)
         self.info.setText(
             warn + note + advice
@@ -539,6 +534,17 @@ class CalibrationWindow(QDialog):
             "should light up, little else. The tracker also uses shape and motion, so a loose mask is "
             "not fatal — but a mask that misses the lips or the eyes means: click again."
         )
+
+    def _eyes_look_shut(self) -> bool:
+        """Whether the eyes look shut at the placed pupils (``tracker.auto_init.eyes_shown``): a blink
+        caught on the frozen frame, whose eyes the tracker would learn as shut. A caution only: never
+        a reason to refuse the points."""
+        try:
+            from tracker.auto_init import EYES_SHOWN, eyes_shown
+
+            return eyes_shown(self.frame, self.clicks()) < EYES_SHOWN
+        except Exception:
+            return False
 
     def _set_mask_views(self, names: list[str]) -> None:
         if [m.caption for m in self.mask_views] == [f"{n} colour" for n in names]:

@@ -123,6 +123,22 @@ def test_auto_on_a_frame_with_shut_eyes_says_so_and_still_places_the_points(qtbo
     assert "look shut" in dlg.info.text() and "Found automatically" in dlg.info.text()
 
 
+@pytest.mark.parametrize("shown, warned", [(0.5, True), (6.0, False)])
+def test_points_placed_by_hand_on_shut_eyes_ask_for_a_frame_with_the_eyes_open(qtbot, performance, monkeypatch,
+                                                                                shown, warned):
+    """A blink caught on the frozen frame: the points are calibrated as usual, and the window asks for a
+    frame with the eyes open (the tracker learns the eyes from this one), as it does for Auto's points."""
+    from tracker import auto_init
+
+    monkeypatch.setattr(auto_init, "eyes_shown", lambda frame, clicks: shown)
+    truth = _truth(performance, 0)
+    dlg = _dialog(qtbot, performance.frame(0))
+    dlg.set_points({k: truth[k] for k in POINTS})
+    assert dlg.calibration is not None and dlg.accept_btn.isEnabled()
+    assert ("look shut" in dlg.info.text()) == warned
+    assert ("place the points there" in dlg.info.text()) == warned and "Auto again" not in dlg.info.text()
+
+
 def test_masks_say_why_when_the_tracker_learns_nothing_from_five_points(qtbot, performance):
     frame = performance.frame(320)
     dlg = _dialog(qtbot, frame, frame_index=320)
