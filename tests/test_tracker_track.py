@@ -453,6 +453,17 @@ def test_clicks_on_a_blink_calibrate_on_the_frame_the_head_carries_them_to(clip,
     assert np.hypot(mid[0] - truth.mid_x, mid[1] - truth.mid_y) < 0.5
 
 
+def test_the_command_says_where_it_calibrated_when_the_clicked_frame_caught_a_blink(clip, tmp_path, monkeypatch, capsys):
+    import tracker.open_eyes as oe
+
+    video, clicks_path, perf = clip
+    monkeypatch.setattr(oe, "eyes_shown", lambda img, c: 5.0 if c.frame == 4 else 0.5)
+    assert _cli(video, "--init", clicks_path, "--csv", tmp_path / "out.csv") == 0
+    err = capsys.readouterr().err
+    assert "eyes look shut on frame 0" in err and "calibrated on frame 4" in err
+    assert len(read_csv(tmp_path / "out.csv")) == len(perf)  # every frame tracked, from the first
+
+
 def _cli(*argv):
     import argparse
 

@@ -92,21 +92,6 @@ class _Video:
         self.cap.release()
 
 
-def _frame_at(path: Path, index: int) -> np.ndarray:
-    v = _Video(path)
-    try:
-        n = 0
-        for i, img in v.frames():
-            if i == index:
-                return img
-            n = i + 1
-        if n == 0:
-            raise TrackCliError(f"{path}: no frames could be read")
-        raise TrackCliError(f"{path}: calibration frame {index} is past the end of the video ({n} frames)")
-    finally:
-        v.close()
-
-
 def _clicked(path: Path, clicks: Clicks, where: str) -> tuple[Clicks, np.ndarray]:
     """The clicks and the frame to calibrate on: the clicked frame, or where the clicks carried
     with the head find the eyes open when that frame caught a blink
@@ -200,8 +185,12 @@ def _run(args: argparse.Namespace) -> int:
         clicks, cal_frame = _auto(video)
         where = "found automatically"
     else:
-        clicks, cal_frame = _clicked(video, Clicks.load(args.init), str(args.init))
+        given = Clicks.load(args.init)
+        clicks, cal_frame = _clicked(video, given, str(args.init))
         where = f"clicks {args.init}"
+        if clicks.frame != given.frame and not args.quiet:
+            print(f"inkface: note: the eyes look shut on frame {given.frame} ({where}): calibrated on frame "
+                  f"{clicks.frame}, the clicks carried there with the head", file=sys.stderr)
     cal = _calibrate(video, cal_frame, clicks, where)
     if not args.quiet:
         for hint in calibration_hints(cal):
