@@ -701,17 +701,21 @@ def test_pupils_found_wherever_the_prediction_lands(finder, dx, dy, gaze):
 
 
 def test_brow_stays_on_the_brow_when_a_crease_below_looks_as_much_like_it(finder):
-    """Two equally good places for the brow's cross-section: the first frame takes the better,
-    the next frames stay where the brow was unless the other is much better."""
-    n, top, py = 40, 0, 50.0
+    """Two equally good places for the brow's cross-section: the first frame takes the one near the
+    calibrated brow, the next frames stay where the brow was unless the other is much better."""
+    top, py = 0, 80.0
     base = py - top - finder.model.brow_centres[0]
-    score = np.zeros(n, np.float32)
-    brow_k, crease_k = 10, 25  # the crease lies 15 px lower (a smaller height)
+    brow_k = int(round(base - finder.model.brow_heights[0]))  # at the calibrated height
+    crease_k = brow_k + 15  # the crease lies 15 px lower (a smaller height)
+    score = np.zeros(crease_k + 10, np.float32)
     score[brow_k - 1 : brow_k + 2] = (0.7, 0.9, 0.7)
     score[crease_k - 1 : crease_k + 2] = (0.72, 0.93, 0.72)
     finder.forget()
     h, m = finder._brow_peak(score, top, py, 0)
-    assert h == pytest.approx(base - crease_k) and m == pytest.approx(0.93)  # no history: the best
+    assert h == pytest.approx(base - brow_k) and m == pytest.approx(0.9)  # no history: calibration's place
+    finder._brow_last[0] = py - (base - crease_k)  # had the brow been on the crease, it would stay there
+    h, _ = finder._brow_peak(score, top, py, 0)
+    assert h == pytest.approx(base - crease_k)
     finder._brow_last[0] = py - (base - brow_k)  # the brow's row
     h, _ = finder._brow_peak(score, top, py, 0)
     assert h == pytest.approx(base - brow_k)  # the brow was here: it stays
