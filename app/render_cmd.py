@@ -111,6 +111,14 @@ class _Video:
         self.cap.release()
 
 
+def _frames_after(video: _Video, index: int):
+    """``(i, frame)`` for the frames after ``index``, read on from where the video stands."""
+    i = index + 1
+    while (frame := video.frame(i)) is not None:
+        yield i, frame
+        i += 1
+
+
 def _calibration(video: _Video, init: str | None, need: bool):
     """Calibration from the clicks (given, beside the video, or automatic); None if not ``need``ed
     and none is available."""
@@ -127,6 +135,13 @@ def _calibration(video: _Video, init: str | None, need: bool):
             raise RenderError(f"{clicks_path}: frame {clicks.frame} is not in {video.path}")
         h, w = frame.shape[:2]
         clicks.check_inside((w, h), where=str(clicks_path))
+        from tracker.open_eyes import carry_clicks
+
+        given = clicks.frame
+        clicks, frame = carry_clicks(frame, clicks, _frames_after(video, given))  # past a blink, as `track` does
+        if clicks.frame != given:
+            print(f"inkface: note: the eyes look shut on frame {given} (clicks {clicks_path}): calibrated on frame "
+                  f"{clicks.frame}, the clicks carried there with the head", file=sys.stderr)
         try:
             return calibrate(frame, clicks)
         except CalibrationError as e:

@@ -157,3 +157,19 @@ def test_params_bad_track_file_is_a_one_line_error(art, tmp_path, capsys):
         rc = cli(["render", "--params", str(path), "--art", art, "--out", str(tmp_path / "x.mp4")])
         err = capsys.readouterr().err.strip()
         assert rc == 2 and err.startswith("inkface: ") and "\n" not in err and path.name in err, err
+
+
+def test_render_calibrates_past_a_blink_on_the_clicked_frame_and_still_renders_every_frame(clip, art, tmp_path, capsys,
+                                                                                           monkeypatch):
+    """``render`` reads its clicks as ``track --init`` does: on a clicked frame whose eyes look shut they
+    are carried with the head to a frame whose eyes show (tracker.open_eyes), and the whole clip, from
+    its first frame, is still rendered."""
+    import tracker.open_eyes as oe
+
+    video, _ = clip
+    monkeypatch.setattr(oe, "eyes_shown", lambda img, c: 5.0 if c.frame == 4 else 0.5)
+    out = tmp_path / "r.mp4"
+    assert cli(["render", "--video", str(video), "--art", art, "--out", str(out)]) == 0
+    assert len(_frames(out)) == N
+    err = capsys.readouterr().err
+    assert "eyes look shut on frame 0" in err and "calibrated on frame 4" in err
