@@ -106,7 +106,10 @@ def test_face_polygon_covers_the_clicked_face():
     x1, y1 = poly.max(axis=0)
     for x, y in c.points().values():
         assert x0 < x < x1 and y0 < y < y1
-    assert x1 - x0 == pytest.approx(2.0 * open_eyes.FACE_BOX[0] * c.ipd(), rel=1e-6)
+    from tracker.face_tracker import FACE_OUTLINE
+
+    span = np.ptp(np.array(FACE_OUTLINE), axis=0)  # the tracker's own region for its flow, in eye distances
+    assert (x1 - x0, y1 - y0) == pytest.approx(tuple(span * c.ipd()), rel=1e-6)
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -213,6 +213,18 @@ FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.5
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
 
+def face_outline(left, right, outline: np.ndarray = np.array(FACE_OUTLINE)) -> np.ndarray:
+    """:data:`FACE_OUTLINE` (or ``outline``, face coordinates in inter-pupil distances) as a polygon
+    (frame px) about the pupils ``left`` and ``right`` (frame px, image-left first)."""
+    left, right = np.asarray(left, dtype=np.float64), np.asarray(right, dtype=np.float64)
+    u = right - left
+    ipd = max(math.hypot(u[0], u[1]), 1e-6)
+    u = u / ipd
+    d = np.array([-u[1], u[0]])
+    mid = 0.5 * (left + right)
+    return mid + ipd * (outline[:, :1] * u + outline[:, 1:] * d)
+
+
 def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Sequence[bool],
                  mean_matches: Sequence[float | None], calibrated: Sequence[float]) -> list[float]:
     """Brow heights (two, face px above each eye point) with a brow that is hard to see following the
@@ -333,13 +345,7 @@ class FaceTracker:
     def face_outline(self, anchors: np.ndarray | None = None) -> np.ndarray:
         """The region (frame px polygon) the flow picks corners in, for these eye anchors."""
         a = self.anchors if anchors is None else anchors
-        left, right = a[0], a[1]
-        u = right - left
-        ipd = max(math.hypot(u[0], u[1]), 1e-6)
-        u = u / ipd
-        d = np.array([-u[1], u[0]])
-        mid = 0.5 * (left + right)
-        return mid + ipd * (self._outline[:, :1] * u + self._outline[:, 1:] * d)
+        return face_outline(a[0], a[1], self._outline)
 
     def _grey_box(self, shape: tuple[int, ...]) -> tuple[float, float, float, float] | None:
         """The part of the frame (x0, y0, x1, y1, frame px) whose grey copy this frame needs while

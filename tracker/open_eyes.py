@@ -24,6 +24,7 @@ import numpy as np
 
 from tracker.auto_init import EYES_SHOWN, eyes_shown
 from tracker.clicks import PIXEL_CENTRE, POINT_KEYS, Clicks
+from tracker.face_tracker import face_outline
 from tracker.head_motion import FLOW_IPD, HeadMotion, apply, compose
 
 LOOK = (30, 2)
@@ -35,24 +36,12 @@ CARRY_IPD = 2.0 * FLOW_IPD
 :data:`~tracker.head_motion.FLOW_IPD`, and the finders put it right on every frame): the motions of a
 second's frames add up, and at the tracker's scale their small errors in the head's turn had the
 synthetic performer's brow clicks 2.5 px off after eight frames (0.3 px at this one)."""
-FACE_BOX = (1.0, 0.9, 0.5)
-"""The region whose corners the flow follows, from the clicks: half its width (× the clicked
-inter-pupil distance, about the pupils' midpoint), how far above the brows' clicks and how far
-below the mouth click it reaches — the face, not the background or the hair round it."""
 
 
 def face_polygon(clicks: Clicks) -> np.ndarray:
-    """A box (4, 2) about the clicked face (tracker px) whose corners :class:`HeadMotion` may follow."""
-    pts = {k: np.asarray(p, dtype=np.float64) - PIXEL_CENTRE for k, p in clicks.points().items()}
-    ipd = max(clicks.ipd(), 1.0)
-    u = (pts["right_pupil"] - pts["left_pupil"]) / ipd  # along the eyes
-    d = np.array([-u[1], u[0]])  # down the face
-    mid = 0.5 * (pts["left_pupil"] + pts["right_pupil"])
-    half, above, below = FACE_BOX
-    top = min(float((pts[k] - mid) @ d) for k in ("left_brow", "right_brow")) - above * ipd
-    bottom = float((pts["mouth"] - mid) @ d) + below * ipd
-    w = half * ipd
-    return np.array([mid - w * u + top * d, mid + w * u + top * d, mid + w * u + bottom * d, mid - w * u + bottom * d])
+    """The region (polygon, tracker px) whose corners the flow follows: the tracker's own
+    (:func:`~tracker.face_tracker.face_outline`) about the clicked pupils."""
+    return face_outline(np.asarray(clicks.left_pupil) - PIXEL_CENTRE, np.asarray(clicks.right_pupil) - PIXEL_CENTRE)
 
 
 def moved_clicks(clicks: Clicks, matrix: np.ndarray, frame: int) -> Clicks:
