@@ -135,13 +135,12 @@ def _calibration(video: _Video, init: str | None, need: bool):
             raise RenderError(f"{clicks_path}: frame {clicks.frame} is not in {video.path}")
         h, w = frame.shape[:2]
         clicks.check_inside((w, h), where=str(clicks_path))
-        from tracker.open_eyes import carry_clicks
+        from tracker.open_eyes import carried_note, carry_clicks
 
-        given = clicks.frame
-        clicks, frame = carry_clicks(frame, clicks, _frames_after(video, given))  # past a blink, as `track` does
-        if clicks.frame != given:
-            print(f"inkface: note: the eyes look shut on frame {given} (clicks {clicks_path}): calibrated on frame "
-                  f"{clicks.frame}, the clicks carried there with the head", file=sys.stderr)
+        given = clicks
+        clicks, frame = carry_clicks(frame, given, _frames_after(video, given.frame))  # past a blink, as `track` does
+        if note := carried_note(given, clicks, f"clicks {clicks_path}"):
+            print(f"inkface: note: {note}", file=sys.stderr)
         try:
             return calibrate(frame, clicks)
         except CalibrationError as e:

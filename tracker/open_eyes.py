@@ -86,3 +86,12 @@ def carry_clicks(frame_bgr: np.ndarray, clicks: Clicks, later: Iterable[tuple[in
         if eyes_shown(img, moved) >= EYES_SHOWN:
             return moved, img
     return clicks, frame_bgr
+
+
+def carried_note(given: Clicks, used: Clicks, where: str) -> str | None:
+    """The one-line note a command prints when :func:`carry_clicks` moved ``given`` (from ``where``,
+    e.g. the clicks file) to ``used``; None when it did not."""
+    if used.frame == given.frame:
+        return None
+    return (f"the eyes look shut on frame {given.frame} ({where}): calibrated on frame {used.frame}, "
+            "the clicks carried there with the head")

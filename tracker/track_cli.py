@@ -24,7 +24,7 @@ from tracker.auto_init import EYES_SHOWN, AutoInitError, auto_clicks, eyes_shown
 from tracker.calibration import CalibrationError, calibrate, calibration_hints
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
-from tracker.open_eyes import carry_clicks
+from tracker.open_eyes import carried_note, carry_clicks
 from tracker.outputs import OutputError, calibration_files, check_outputs
 from tracker.params import TrackCsvWriter
 
@@ -188,9 +188,9 @@ def _run(args: argparse.Namespace) -> int:
         given = Clicks.load(args.init)
         clicks, cal_frame = _clicked(video, given, str(args.init))
         where = f"clicks {args.init}"
-        if clicks.frame != given.frame and not args.quiet:
-            print(f"inkface: note: the eyes look shut on frame {given.frame} ({where}): calibrated on frame "
-                  f"{clicks.frame}, the clicks carried there with the head", file=sys.stderr)
+        note = carried_note(given, clicks, where)
+        if note and not args.quiet:
+            print(f"inkface: note: {note}", file=sys.stderr)
     cal = _calibrate(video, cal_frame, clicks, where)
     if not args.quiet:
         for hint in calibration_hints(cal):
