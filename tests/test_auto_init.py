@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import EYE_WI, IRIS_RADIUS, _lip_span, _mouth, _upright, centre_votes, find_brows, find_pupils, iris_contrast, rim_bars
+from tracker.auto_init import EYE_WI, IRIS_RADIUS, TEETH_LEAD, _lip_span, _mouth, _upright, centre_votes, find_brows, find_pupils, iris_contrast, rim_bars
 from tracker.brows import brow_centre, column_profile
 from tracker.face_finder import DEFAULT_EYES
 
@@ -326,3 +326,44 @@ def test_the_brow_point_is_on_the_brow_not_on_a_childs_lid(brow):
             assert brow[0] * ipd < y - b[1] < brow[1] * ipd + 2
         else:
             assert 0.19 * ipd < y - b[1] < 0.26 * ipd
+
+
+def test_skin_a_little_brighter_than_under_the_nose_is_no_teeth():
+    """A shut mouth with the skin over the upper lip a little better lit (6 % brighter) than the rows
+    under the nose: no teeth show there, and the point is on the line between the lips. Before,
+    any row brighter than those rows passed for teeth, and the point went up onto that skin (the
+    child, pale, deep and glasses copies of expr_d0: 17 % of the eye distance high)."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    lit = 170.0 * (1.0 + 0.6 * TEETH_LEAD)
+    grey, red = _mouth_bands([((138, 144), lit, 145.0), ((144, 154), 150.0, 145.0), ((154, 156), 70.0, 150.0),
+                              ((156, 168), 125.0, 168.0)])
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
+    teeth = grey.copy()
+    teeth[146:153, 60:140] = 225.0  # the same mouth with its upper teeth showing: the gap under them
+    assert abs(_mouth(teeth, left, right, red)[1] - 154.5) <= 2
+
+
+def test_bright_skin_over_a_red_upper_lip_is_no_teeth():
+    """Red upper and lower lips round an open mouth's dark inside, under a brightly lit philtrum
+    (25 % brighter than the skin under the nose): teeth cannot show above a red upper lip, so the
+    point is in the mouth, not on the philtrum (the third-size copy of talk_a: a fifth of the eye
+    distance high)."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey, red = _mouth_bands([((150, 162), 212.0, 141.0), ((162, 170), 110.0, 170.0), ((170, 178), 35.0, 146.0),
+                              ((178, 190), 115.0, 172.0)])
+    x, y = _mouth(grey, left, right, red)
+    assert 169.0 <= y <= 179.0 and abs(x - 100.0) < 1
+
+
+def test_the_mouth_point_is_on_a_thin_line_under_a_dark_moustache():
+    """A dark moustache over the upper lip, a one-row line between the lips right under it, and only
+    the lower lip red: smoothed, the grey only rises from the moustache down and shows no valley in
+    the lips' rows; the rows' own means still have the line. Before, the point fell on the lower
+    lip's middle (a painted beard round expr_d18: 7 % of the eye distance low)."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    moustache = [((r, r + 1), 40.0 + 2.0 * (r - 126), 138.0) for r in range(126, 152)]  # thinning downwards
+    grey, red = _mouth_bands(moustache + [((152, 154), 94.0, 145.0), ((154, 155), 91.0, 146.0), ((155, 156), 100.0, 160.0),
+                                          ((156, 170), 135.0, 168.0)])
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 154.5) <= 1.5 and abs(x - 100.0) < 1

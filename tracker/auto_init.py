@@ -66,6 +66,12 @@ lip less red than half the lips' lead is not in them (see :func:`_mouth`)."""
 TEETH_OVER = 0.2
 """How far (× the inter-pupil distance) above the lips' red rows the upper teeth of an open mouth may
 show (under a pale upper lip that is not in those rows; see :func:`_teeth_rows`)."""
+TEETH_LEAD = 0.1
+"""How much brighter (× the skin's brightest row between the nose and the lips) a row's brightest
+tenth must be to show teeth (:func:`_teeth_rows`). The ``late`` copy of expr_d6's teeth: 0.25 over
+it; on shut mouths, a row of skin a little better lit than the rows under the nose was up to 0.06
+over it (expr_d0's child, pale, deep and glasses copies, expr_d6's deep one), and the mouth point
+went up onto the philtrum, 17-22 % of the eye distance high."""
 LINE_SHARE = 75.0
 """Percentile of each row's grey across the band the mouth's dark line is looked for on where the
 lips' colour does not say where they are: a row is dark only where three quarters of it are. The
@@ -426,19 +432,29 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | No
     return int(run[0]), int(run[-1])
 
 
+def _two_red_lips(red: np.ndarray, span: tuple[int, int], skin_red: float) -> bool:
+    """Whether the lips' rows ``span`` (:func:`_lip_span` of the Lab a* profile ``red``) are two red
+    runs with rows under half the span's lead over the skin between them: the upper lip is red itself,
+    so no teeth show above the span (a lit philtrum over a red upper lip is as bright as teeth: the
+    third-size copy of talk_a put the mouth point on it, a fifth of the eye distance high)."""
+    a, b = span
+    inner = red[a : b + 1]
+    return bool(np.any(inner < skin_red + 0.5 * (float(inner.max()) - skin_red)))
+
+
 def _teeth_rows(band: np.ndarray, a: int, ipd: float) -> tuple[int, int] | None:
     """The first and last of the rows of the mouth's ``band`` (rows down the face from
     :data:`MOUTH_RANGE`'s start) that show teeth just above the lips' red, which begins at row ``a``
     (within :data:`TEETH_OVER` eye distances above it, or a little into it): rows whose brightest
-    tenth is brighter than any row of the skin between the nose and there (teeth are whiter than the
-    skin round them, in the same light; the cheeks beside the mouth are no yardstick, a lamp above
-    the face leaves them darker than the philtrum); None when none are, or when the band shows less
-    than 0.1 eye distances of that skin."""
+    tenth is brighter, by :data:`TEETH_LEAD`, than any row of the skin between the nose and there
+    (teeth are whiter than the skin round them, in the same light; the cheeks beside the mouth are
+    no yardstick, a lamp above the face leaves them darker than the philtrum); None when none are,
+    or when the band shows less than 0.1 eye distances of that skin."""
     p90 = np.percentile(band, 90, axis=1)
     lo, hi = max(a - int(round(TEETH_OVER * ipd)), 0), min(a + max(int(round(LINE_OVER * ipd)), 1), len(band))
     if lo < max(int(round(0.1 * ipd)), 2):
         return None
-    level = float(p90[:lo].max())
+    level = (1.0 + TEETH_LEAD) * float(p90[:lo].max())
     rows = [i for i in range(lo, hi) if p90[i] > level]
     return (rows[0], rows[-1]) if rows else None
 
@@ -471,17 +487,24 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
         red = smooth(_strip(lab_a, start, down, u, n, half))
         cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
                   for s in (-1.0, 1.0)]
-        span = _lip_span(red, float(np.median(np.concatenate(cheeks))), ipd,
-                         max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
+        skin_red = float(np.median(np.concatenate(cheeks)))
+        span = _lip_span(red, skin_red, ipd, max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
         if span is not None:
             a, b = span
-            prof = smooth(band.mean(axis=1))
             # the line may also lie just over the span: an upper lip darker than it is red (in
-            # shade, on a darker face) falls short of the span while the lower lip holds it
+            # shade, on a darker face) falls short of the span while the lower lip holds it. A thin
+            # line between closed lips right under a dark moustache leaves no valley once smoothed
+            # (the grey only rises from the moustache down): then the rows' own means say where it is
+            # (a painted beard round expr_d18: the point on the lower lip's middle, 7 % of the eye
+            # distance low, and calibration learned the moustache for the upper lip)
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
-            inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
-            k, valley = (min(inner, key=prof.__getitem__), prof) if inner else ((a + b) // 2, None)
-            teeth = _teeth_rows(band, a, ipd)
+            k, valley = (a + b) // 2, None
+            for prof in (smooth(band.mean(axis=1)), band.mean(axis=1)):
+                inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+                if inner:
+                    k, valley = min(inner, key=prof.__getitem__), prof
+                    break
+            teeth = None if _two_red_lips(red, span, skin_red) else _teeth_rows(band, a, ipd)
             if teeth is not None:
                 # upper teeth between a pale upper lip and the red lower lip: the mouth is open there,
                 # its line at the teeth's top or bottom edge (the ``late`` copy of expr_d6 with --auto:
