@@ -69,12 +69,13 @@ def tracker_at_rest(glancing_cal):
     return FaceTracker(cal)
 
 
-def _judge(tr: FaceTracker, moves, scores=(0.8, 0.8)):
+def _judge(tr: FaceTracker, moves, scores=(0.8, 0.8), eyes_win=None):
     """:meth:`FaceTracker._judge_eyes` for both eyes moved by ``moves`` (× wi, (2, 2)) from their
-    calibrated places in the face frame (the flow following, the face picture there)."""
+    calibrated places in the face frame (the flow following, the face picture there; ``eyes_win``:
+    whether the face picture matches better at the eyes than at the pose, None: not asked)."""
     found = tr._pupils_face + np.asarray(moves, dtype=np.float64) * tr.wi
     res = EyeResult((_eye(*found[0], score=scores[0]), _eye(*found[1], score=scores[1])))
-    return tr._judge_eyes(res, found, True, True)
+    return tr._judge_eyes(res, found, True, True, eyes_win)
 
 
 def test_one_gaze_of_two_clear_eyes_may_reach_further_than_one_eye(tracker_at_rest):
@@ -97,3 +98,37 @@ def test_what_is_not_one_gaze_keeps_one_eyes_reach(tracker_at_rest, moves, score
     doubt, strong, _ = _judge(tracker_at_rest, moves, scores)
     far_eyes = [i for i in range(2) if abs(moves[i][0]) > face_tracker.GAZE_X]
     assert not strong and all(doubt[i] for i in far_eyes)
+
+
+@pytest.mark.parametrize("side", [0, 1])
+def test_one_iris_moved_out_alone_is_doubted(tracker_at_rest, side):
+    """Eyes turn in together, not out: an iris that moved away from the other eye by more than
+    :data:`~tracker.face_tracker.DIVERGE` while the other stayed is on something else (a copy of
+    expr_d6 darkened to a deep brown: the image-right iris on the eye's outer corner, 35 % of the eye
+    distance off, reported ok for two seconds). It is doubted, whichever side, and the other eye is not."""
+    tr = tracker_at_rest
+    moves = [[0.0, 0.0], [0.0, 0.0]]
+    moves[side][0] = -0.16 if side == 0 else 0.16  # away from the other eye, within one eye's reach
+    # the face picture is fooled too (raised brows look like a nearer face): the eye distance alone
+    # would let the pair pass
+    doubt, strong, _ = _judge(tr, moves, scores=(0.7, 0.7), eyes_win=lambda: True)
+    assert doubt[side] and not doubt[1 - side] and not strong
+
+
+def test_without_the_parting_rule_the_moved_out_iris_passes(tracker_at_rest, monkeypatch):
+    """The control: with no bound on the parting, the same pair is taken (and turns the pose)."""
+    monkeypatch.setattr(face_tracker, "DIVERGE", 1.0)
+    doubt, strong, _ = _judge(tracker_at_rest, [[0.0, 0.0], [0.16, 0.0]], scores=(0.7, 0.7), eyes_win=lambda: True)
+    assert doubt == [False, False] and strong
+
+
+@pytest.mark.parametrize("moves,scores", [
+    ([[-0.07, 0.0], [0.07, 0.0]], (0.7, 0.7)),    # both out alike: the face came nearer, the pose lags
+    ([[0.1, 0.0], [0.1, 0.0]], (0.7, 0.7)),       # one gaze aside
+    ([[0.08, 0.0], [-0.08, 0.0]], (0.7, 0.7)),    # crossed eyes: they turn in
+    ([[0.0, 0.0], [0.16, 0.0]], (0.85, 0.85)),    # both clearly irises
+    ([[0.0, 0.0], [0.1, 0.0]], (0.7, 0.7)),       # within the parting one eye may show
+])
+def test_eyes_that_did_not_part_by_one_eye_are_not_doubted(tracker_at_rest, moves, scores):
+    doubt, _, _ = _judge(tracker_at_rest, moves, scores, eyes_win=lambda: True)
+    assert doubt == [False, False]

@@ -156,6 +156,8 @@ class TrackResult:
 # Sizes and rates, as fractions of the working inter-pupil distance unless said.
 GAZE_X, GAZE_Y = 0.22, 0.12  # farthest an iris may sit from its eye's rigid centre (aside, up/down)
 GAZE_X_PAIR = 0.35  # ... for two clear open eyes moved alike (one gaze): a calibration frame that caught the eyes at one side leaves a glance to the other twice as far
+DIVERGE = 0.12  # most (× wi) the two irises may move apart from their calibrated places by one eye: eyes do not turn out
+PARTED_ONE = 0.25  # ... "by one eye": the other eye's share of the parting is under this
 PAIR_AGREE = 0.06  # most the two irises' moves from their calibrated places may differ (x and y) to count as one gaze
 PAIR_GAP = 0.3  # least share of the seen eye's lid gap a doubted eye's gap measured at the pose may be (else held)
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
@@ -573,6 +575,16 @@ class FaceTracker:
             if not doubt[i] and not strong and not within(moves[i], reach):
                 doubt[i] = True
         far = [not (doubt[i] or near) and not within(moves[i], GAZE_X) for i in range(2)]
+        out = (-moves[0][0], moves[1][0])  # each iris's move away from the other eye
+        if (not any(doubt) and obs[0].open and obs[1].open and out[0] + out[1] > DIVERGE
+                and min(out) < PARTED_ONE * (out[0] + out[1]) and min(o.score for o in obs) < EYE_CLEAR):
+            # the eyes parted, one of them alone: eyes turn in together, not out, so the one that
+            # moved out is on something else (an eye's outer corner, a lid or an eyeliner's wing,
+            # where in a dark face the iris picture matches at 0.5-0.7) — unless both are clearly
+            # irises. Both moving out alike is the face coming towards the camera faster than the
+            # pose follows (a copy of expr_d6: the eye distance up 14 % in a frame)
+            doubt[0 if out[0] > out[1] else 1] = True
+            strong = False
         if not any(doubt) and obs[0].open and obs[1].open:
             d = (f[1][0] - f[0][0], f[1][1] - f[0][1])
             ratio = math.hypot(*d) / wi
