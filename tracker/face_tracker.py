@@ -551,7 +551,9 @@ class FaceTracker:
         twice as far (a stress copy of expr_d0 joined mid-glance: both eyes doubted for being 0.25 wi
         aside, held where the gaze last was, and the pupils drifted onto the calibrated corner, 30 %
         of the eye distance off, reported ok). An eye let through that way is read through the eye's
-        far corner, where the brow's calibrated cross-section does not fit. Two open eyes whose
+        far corner, where the brow's calibrated cross-section does not fit. Two open eyes that parted
+        by one eye's move (:data:`DIVERGE`, :data:`PARTED_ONE`) doubt the one that moved out, unless
+        both match clearly: eyes turn in together, not out. Two open eyes whose
         distance or tilt disagree with the head's pose doubt the less sure one — unless
         ``eyes_win()`` says the face picture matches better at the eyes than at the pose: then the
         pose has drifted (the flow's scale and roll do), and the eyes stay to set it right (blaming
