@@ -682,3 +682,38 @@ def test_of_two_sure_mouths_from_this_frames_line_and_the_last_ones_the_wider_is
     kept = "held" if held_wider else "seeded"
     assert (res.right[0] - res.left[0]) * s == pytest.approx(widths[kept], abs=0.01)
     assert res.line_centre[1] == pytest.approx(((held_row if held_wider else far) + 0.5) / s - 0.5, abs=0.01)
+
+
+@pytest.mark.parametrize("rise", [0.4, 0.1])
+def test_a_wider_mouth_whose_upper_lip_jumped_up_loses_to_the_held_line(calibrated, monkeypatch, rise):
+    """Of two sure mouths the wider is kept — unless its upper lip's outer edge rose further from the
+    last sure frame's than an upper lip moves in a frame (:data:`~tracker.mouth_finder.UPPER_RISE`)
+    while the other's did not: a line traced along a moustache's lower edge runs on past the corners
+    too, and the mouth it makes has the nostrils' shadow for its upper lip (a painted beard round
+    expr_d6: the mouth on the nostrils, ``ok``, for twenty frames). A small rise keeps the rule as it was."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    finder = MouthFinder(model, WI)
+    before = finder.find(crop, tuple(centre - origin))
+    s = WORK_IPD / WI
+    held_row = (before.line_centre[1] + 0.5) * s - 0.5
+    far = held_row - 2.0 * mouth_finder.HOLD_LINE * WORK_IPD  # seeded above: the moustache's edge
+    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
+    real = finder._from_seed
+
+    def traced(maps, px, py, seed, previous):
+        """Full marks both; the seeded one 4 px wider, its upper lip ``rise`` wi higher."""
+        r = real(maps, px, py, held_row, previous)
+        if seed == far:
+            r = mouth_finder._moved(r, left=(r.left[0] - 2.0, r.left[1]), right=(r.right[0] + 2.0, r.right[1]),
+                                    lip_upper=r.lip_upper + rise * WORK_IPD)
+        return mouth_finder._moved(r, score=1.0, line_ends=((0.0, seed), (1.0, seed)))
+
+    monkeypatch.setattr(finder, "_from_seed", traced)
+    at = lambda row: (row + 0.5) / s - 0.5
+    res = finder.find(crop, tuple(centre - origin), before)
+    assert res.line_centre[1] == pytest.approx(at(held_row if rise > 0.3 else far), abs=0.01)
+    monkeypatch.setattr(mouth_finder, "UPPER_RISE", 1.0)  # the control: no bound on the rise, the wider wins
+    assert finder.find(crop, tuple(centre - origin), before).line_centre[1] == pytest.approx(at(far), abs=0.01)

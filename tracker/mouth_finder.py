@@ -131,6 +131,10 @@ HOLD_LINE = 0.2
 """How far (× wi) the seed row may lie from the last sure frame's mouth line before the line is also
 traced from that frame's row and the better-scoring mouth kept — the wider one when both score the
 same (0: never)."""
+UPPER_RISE = 0.25
+"""Farthest (× wi) the upper lip's outer edge rises from one sure frame to the next (it is fixed to
+the skull; the head's motion is taken out by the crop): on the shared clips the peer's rises at most
+0.23 in a frame. Used to choose between two lines that both score fully (see :meth:`MouthFinder._find`)."""
 WIDE_REF = 0.65
 """Least width (× wi) the "too wide" check measures a mouth against: a performer who pouted or
 pursed the lips at calibration (a mouth 0.4–0.5 wi wide) still smiles and grins 1.2 wi wide."""
@@ -1145,8 +1149,14 @@ class MouthFinder:
                 # line traced off the mouth's middle (the shadow under the lower lip, the teeth's lower
                 # edge, a lower lip darker than the skin) ends where that shadow, edge or lip ends,
                 # short of the corners; the line between the lips runs on to them (a grin in a dark
-                # face was read as its teeth and lower lip, 0.6-0.8 of its width)
-                if alt.score > res.score or (alt.score == res.score and alt.right[0] - alt.left[0] > res.right[0] - res.left[0]):
+                # face was read as its teeth and lower lip, 0.6-0.8 of its width) — unless the wider
+                # one's upper lip rose further than an upper lip moves in a frame while the other's did
+                # not: a line along a moustache's edge runs on past the corners too, and the mouth went
+                # up onto the nostrils (a painted beard round expr_d6)
+                top0 = previous.centre[1] - previous.lip_upper
+                rose = [top0 - (r.centre[1] - r.lip_upper) > UPPER_RISE * self.wi for r in (res, alt)]
+                wider = alt.right[0] - alt.left[0] > res.right[0] - res.left[0]
+                if alt.score > res.score or (alt.score == res.score and (rose[0] and not rose[1] or wider and not rose[1])):
                     res = alt
         return res
 
