@@ -648,23 +648,34 @@ def test_a_seed_in_the_hair_under_the_lip_is_checked_against_the_last_line(calib
     assert finder.find(crop, tuple(centre - origin), before).line_centre[1] - t["mouth"][1] > 12.0
 
 
+def _two_lines(calibrated, monkeypatch, side: float):
+    """A sure mouth on the neutral frame, then the next frame's line seeded twice
+    :data:`~tracker.mouth_finder.HOLD_LINE` away from its row (``side`` +1 below, −1 above), so the
+    line is also traced from the held row: the finder, the crop, the predicted centre (crop px), the
+    sure mouth, the held row and the seeded row (working px)."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    finder = MouthFinder(model, WI)
+    at = tuple(centre - origin)
+    before = finder.find(crop, at)
+    assert before.score >= SCORE_OK
+    s = WORK_IPD / WI
+    held_row = (before.line_centre[1] + 0.5) * s - 0.5
+    far = held_row + side * 2.0 * mouth_finder.HOLD_LINE * WORK_IPD
+    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
+    return finder, crop, at, before, held_row, far
+
+
 @pytest.mark.parametrize("held_wider", [True, False])
 def test_of_two_sure_mouths_from_this_frames_line_and_the_last_ones_the_wider_is_kept(calibrated, monkeypatch, held_wider):
     """The line seeded far from the last sure frame's line is also traced from that line; when both
     mouths score the same (full marks, as most real mouths do), the wider one is kept: a line traced
     off the mouth's middle (the teeth's lower edge, a dark lower lip) ends where that edge ends, short
     of the corners (a grin in a dark face read as its teeth, 0.6-0.8 of its width)."""
-    model, centre = calibrated
-    img, _ = render_face(BASE)
-    ff = _frame_of(BASE)
-    crop, origin = _crop(img, ff, centre)
-    finder = MouthFinder(model, WI)
-    before = finder.find(crop, tuple(centre - origin))
-    assert before.score >= SCORE_OK
+    finder, crop, at, before, held_row, far = _two_lines(calibrated, monkeypatch, +1.0)
     s = WORK_IPD / WI
-    held_row = (before.line_centre[1] + 0.5) * s - 0.5
-    far = held_row + 2.0 * mouth_finder.HOLD_LINE * WORK_IPD
-    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
     real = finder._from_seed
     widths = {}
 
@@ -677,7 +688,7 @@ def test_of_two_sure_mouths_from_this_frames_line_and_the_last_ones_the_wider_is
         return mouth_finder._moved(r, score=1.0, line_ends=((0.0, seed), (1.0, seed)))
 
     monkeypatch.setattr(finder, "_from_seed", traced)
-    res = finder.find(crop, tuple(centre - origin), before)
+    res = finder.find(crop, at, before)
     assert set(widths) == {"held", "seeded"} and widths["held"] != widths["seeded"]
     kept = "held" if held_wider else "seeded"
     assert (res.right[0] - res.left[0]) * s == pytest.approx(widths[kept], abs=0.01)
@@ -691,16 +702,8 @@ def test_a_wider_mouth_whose_upper_lip_jumped_up_loses_to_the_held_line(calibrat
     while the other's did not: a line traced along a moustache's lower edge runs on past the corners
     too, and the mouth it makes has the nostrils' shadow for its upper lip (a painted beard round
     expr_d6: the mouth on the nostrils, ``ok``, for twenty frames). A small rise keeps the rule as it was."""
-    model, centre = calibrated
-    img, _ = render_face(BASE)
-    ff = _frame_of(BASE)
-    crop, origin = _crop(img, ff, centre)
-    finder = MouthFinder(model, WI)
-    before = finder.find(crop, tuple(centre - origin))
+    finder, crop, at, before, held_row, far = _two_lines(calibrated, monkeypatch, -1.0)  # seeded above: the moustache's edge
     s = WORK_IPD / WI
-    held_row = (before.line_centre[1] + 0.5) * s - 0.5
-    far = held_row - 2.0 * mouth_finder.HOLD_LINE * WORK_IPD  # seeded above: the moustache's edge
-    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
     real = finder._from_seed
 
     def traced(maps, px, py, seed, previous):
@@ -712,8 +715,8 @@ def test_a_wider_mouth_whose_upper_lip_jumped_up_loses_to_the_held_line(calibrat
         return mouth_finder._moved(r, score=1.0, line_ends=((0.0, seed), (1.0, seed)))
 
     monkeypatch.setattr(finder, "_from_seed", traced)
-    at = lambda row: (row + 0.5) / s - 0.5
-    res = finder.find(crop, tuple(centre - origin), before)
-    assert res.line_centre[1] == pytest.approx(at(held_row if rise > 0.3 else far), abs=0.01)
+    row = lambda r: (r + 0.5) / s - 0.5
+    res = finder.find(crop, at, before)
+    assert res.line_centre[1] == pytest.approx(row(held_row if rise > 0.3 else far), abs=0.01)
     monkeypatch.setattr(mouth_finder, "UPPER_RISE", 1.0)  # the control: no bound on the rise, the wider wins
-    assert finder.find(crop, tuple(centre - origin), before).line_centre[1] == pytest.approx(at(far), abs=0.01)
+    assert finder.find(crop, at, before).line_centre[1] == pytest.approx(row(far), abs=0.01)
