@@ -499,7 +499,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
             # distance low, and calibration learned the moustache for the upper lip)
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
             k, valley = (a + b) // 2, None
-            for prof in (smooth(band.mean(axis=1)), band.mean(axis=1)):
+            means = band.mean(axis=1)
+            for prof in (smooth(means), means):
                 inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
                 if inner:
                     k, valley = min(inner, key=prof.__getitem__), prof

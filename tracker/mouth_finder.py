@@ -1153,10 +1153,12 @@ class MouthFinder:
                 # one's upper lip rose further than an upper lip moves in a frame while the other's did
                 # not: a line along a moustache's edge runs on past the corners too, and the mouth went
                 # up onto the nostrils (a painted beard round expr_d6)
-                top0 = previous.centre[1] - previous.lip_upper
-                rose = [top0 - (r.centre[1] - r.lip_upper) > UPPER_RISE * self.wi for r in (res, alt)]
-                wider = alt.right[0] - alt.left[0] > res.right[0] - res.left[0]
-                if alt.score > res.score or (alt.score == res.score and (rose[0] and not rose[1] or wider and not rose[1])):
+                if alt.score == res.score:
+                    top0 = previous.centre[1] - previous.lip_upper
+                    res_rose, alt_rose = (top0 - (r.centre[1] - r.lip_upper) > UPPER_RISE * self.wi for r in (res, alt))
+                    if not alt_rose and (res_rose or alt.right[0] - alt.left[0] > res.right[0] - res.left[0]):
+                        res = alt
+                elif alt.score > res.score:
                     res = alt
         return res
 
