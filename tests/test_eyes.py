@@ -17,6 +17,7 @@ from tracker.eyes import (
     EyeModel,
     IRIS_FLOOR,
     LID_SHOW,
+    LIMBUS_DARK,
     EyeModelError,
     GAP_BLIND,
     SkinModel,
@@ -234,6 +235,51 @@ def test_light_irises_in_a_dark_face_are_found_not_the_lashes():
         for off in ((0.0, 0.0), (0.04, -0.05)):
             res, truth, _, _ = _find(f, BASE.with_expression(expr), LIGHT_EYES_DARK_SKIN, offset=off)
             _check(res, truth, pupil=1.0, lid=2.0)
+
+
+def _light_eyes(f: EyeFinder, centres, opening: float, skin: float = 70.0) -> np.ndarray:
+    """A grey eye crop (``f.rect``) of dark skin with two light irises (grey 150, ``f``'s radii) at
+    ``centres`` in white almonds ``2 × opening`` px tall, lids over the irises' tops and bottoms when
+    the opening is under the radius, and a lash line along each upper lid."""
+    x0, y0, w, h = f.rect
+    img = np.full((h, w), skin, np.float32)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    for (cx, cy), r in zip(centres, f.radius):
+        a = 2.6 * r
+        almond = ((xx - cx) / a) ** 2 + ((yy - cy) / opening) ** 2 <= 1.0
+        img[almond] = 215.0
+        img[almond & (np.hypot(xx - cx, yy - cy) <= r)] = 150.0
+        top = cy - opening * np.sqrt(np.clip(1.0 - ((xx - cx) / a) ** 2, 0.0, 1.0))
+        img[(yy < top) & (yy >= top - 0.35 * r) & (np.abs(xx - cx) < 0.95 * a)] = 25.0
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+@pytest.mark.parametrize("opening", [0.8, 1.0, 1.6])
+@pytest.mark.parametrize("off", [(0.0, -4.0), (3.0, -3.0), (-4.0, 2.0)])
+def test_a_light_iris_found_off_its_centre_is_moved_onto_its_limbus(opening, off):
+    """An iris no darker than the face round it: the search has only its picture, which can match
+    with its top on the lid (real light eyes in a dark face: 9 % of the eye distance high). Each
+    find is moved to the circle of the calibrated radius on the iris's rim — whether the lids
+    cover its top and bottom (0.8, 1.0 radii open: arcs reaching 40° below, as the calibration's
+    snap uses, rose 0.7-0.9 px off the lower lid) or the eye is wide open."""
+    model, wi = _learn(style=LIGHT_EYES_DARK_SKIN)
+    f = EyeFinder(model, wi)
+    assert f.dark_power < LIMBUS_DARK
+    x0, y0, _, _ = f.rect
+    centres = [(-0.5 * wi - x0 + 1.3, -y0 - 0.6), (0.5 * wi - x0 - 0.8, -y0 + 0.4)]
+    grey = _light_eyes(f, centres, opening * f.radius[0])
+    out = f._on_limbus(grey, [(cx + off[0], cy + off[1], 0.5) for cx, cy in centres])
+    for (x, y, match), (cx, cy) in zip(out, centres):
+        assert math.hypot(x - cx, y - cy) < 0.3 and match == 0.5
+    flat = np.full_like(grey, 70.0)  # no rim anywhere: the finds stay
+    found = [(cx + off[0], cy + off[1], 0.5) for cx, cy in centres]
+    assert f._on_limbus(flat, found) == found
+
+
+def test_a_dark_iris_keeps_the_searchs_place(finder):
+    """Where the iris is darker than the eye round it, the darkness places it and no limbus fit
+    is made (its side arcs pin the height more loosely than a dark disc)."""
+    assert finder.dark_power >= LIMBUS_DARK and finder._limbus is None
 
 
 def test_an_iris_the_gap_rule_cannot_see_is_judged_open_or_shut_by_its_picture():

@@ -93,6 +93,24 @@ brown face is darker than its eye picture (0.8 of it) but hardly darker than tha
 where a light face gives 0.4-0.8): the term then finds the darkest disc in a window of equally dark
 skin, the lash line or the eye's dark corner, whenever the gaze takes the white from one side of
 the iris."""
+LIMBUS_DARK = 0.1
+"""Darkness power (:func:`dark_power`) under which each iris the search finds is moved onto its
+limbus (:meth:`EyeFinder._on_limbus`). An iris no darker than the eye round it — a grey or light
+brown iris in a dark face — leaves the search with the iris picture alone, and that picture holds
+the lids as they were at calibration: when the eye opened wider or glanced aside, it matched best
+with its top on the upper lid and the lashes (the grey-eyed ``deep`` copies of the shared clips:
+expr_d6's pupils 9 % of the eye distance high in median, 1.6 % on the limbus). The limbus's sides
+do not move with the lids. A darker iris keeps the darkness's place: the limbus's side arcs pin
+the height more loosely than a dark disc, and the brows, measured from the eye point, followed
+that looseness (tried on expr_d19's copies, darkness 0.25-0.5: brows 0.78 → 0.60)."""
+
+LIGHT_IRIS_ARC = (25.0, 25.0)
+"""Degrees above and below the horizontal that the limbus arcs of :data:`LIMBUS_DARK`'s fit span (see
+:data:`LIMBUS_ARC`): as far below as above. An iris lighter than the skin round it meets the lids
+in a step that falls going out, and arcs reaching 40° below ran onto the lower lid; the fit
+rose away from it (on a synthetic light-eyed dark face, 0.7 px high at 80 px between the eyes
+where these arcs give 0.3; the ``deep`` copy of expr_d6: median pupil error 2.3 → 1.6 % of the eye
+distance)."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 LID_RANGE = 0.3
@@ -1215,6 +1233,17 @@ class EyeFinder:
         v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
         self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
         self._maps = np.empty((2,) + self._prior.shape, np.float32)  # both eyes' coarse maps, reused
+        # an iris no darker than its eye: the search's find moved onto the limbus, the calibrated
+        # radius give or take RADIUS_SLACK steps (see _on_limbus)
+        # (each eye's circles: every other centre first, then the centres next to the best of those)
+        self._limbus: list[tuple[_LimbusGrid, _LimbusGrid]] | None = None
+        if self.dark_power < LIMBUS_DARK:
+            step = REFINE_STEP * wi / REFINE_WI
+            radii = [r + step * np.arange(-RADIUS_SLACK, RADIUS_SLACK + 1) for r in self.radius]
+            self._limbus = [(_LimbusGrid(wi, rr, LIGHT_IRIS_ARC, step=2.0 * step),
+                             _LimbusGrid(wi, rr, LIGHT_IRIS_ARC, step=step, reach=2.0 * step)) for rr in radii]
+            self._limbus_edge = LIMBUS_MIN_EDGE * REFINE_WI / wi
+            self._limbus_blur = wi / REFINE_WI
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
@@ -1460,7 +1489,30 @@ class EyeFinder:
         for m, (ox, oy) in zip(maps, origins):
             _, _, _, (kx, ky) = cv2.minMaxLoc(m[ya : jy + sy + 1, xa : jx + sx + 1])
             peaks.append((int(round(ox + 2 * (kx + xa))), int(round(oy + 2 * (ky + ya)))))
-        return self._fine(grey, peaks)
+        found = self._fine(grey, peaks)
+        return found if self._limbus is None else self._on_limbus(grey, found)
+
+    def _on_limbus(self, grey: np.ndarray, found: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+        """Each iris ``found`` (crop px and picture correlation) moved to the centre of the circle of
+        its calibrated radius whose sides the grey rises across most steeply going out
+        (:func:`limbus_centre`, within :data:`REFINE_REACH`), where there is such a rim
+        (:data:`LIMBUS_MIN_EDGE`, and more change across its arcs than along them); see
+        :data:`LIMBUS_DARK`. The gradients are taken on a small window round each iris only; the
+        circles every other centre apart first, then those next to the best of them."""
+        out = []
+        for (x, y, match), (coarse, fine) in zip(found, self._limbus):
+            h = int(math.ceil(coarse.reach + fine.offs[-1])) + 3
+            x0, y0 = int(round(x)) - h, int(round(y)) - h
+            win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), (0, 0), self._limbus_blur)
+            gx = cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
+            gy = cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+            cx, cy, _, _ = limbus_centre((gx, gy), (x - x0, y - y0), grid=coarse)
+            lx, ly, r, edge = limbus_centre((gx, gy), (cx, cy), grid=fine)
+            if edge >= self._limbus_edge and fine.across(gx, gy, lx, ly, r) >= 0.0:
+                out.append((lx + x0, ly + y0, match))
+            else:
+                out.append((x, y, match))
+        return out
 
     # ------------------------------------------------------------------ lids
     def _strip(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
@@ -2024,17 +2076,20 @@ RADIUS_SLACK = 2
 
 
 class _LimbusGrid:
-    """The sample offsets of every circle :func:`refine_pupils` tries around an eye, at
-    :data:`REFINE_WI`: centres on a grid within :data:`REFINE_REACH`, radii in
-    :data:`LIMBUS_RADII`, points on the arc without its top (made once, reused)."""
+    """The sample offsets of every circle :func:`refine_pupils` tries around an eye, in a picture
+    with ``wi`` px between the eyes (:data:`REFINE_WI` unless given): centres every ``step`` px
+    (:data:`REFINE_STEP` at :data:`REFINE_WI`) within ``reach`` px (:data:`REFINE_REACH`), radii
+    ``radii`` (px; :data:`LIMBUS_RADII`), points on ``arc`` (:data:`LIMBUS_ARC`; the arc without
+    its top). Made once, reused."""
 
-    def __init__(self) -> None:
-        wi, step = REFINE_WI, REFINE_STEP
-        n = int(math.floor(REFINE_REACH * wi / step))
+    def __init__(self, wi: float = REFINE_WI, radii: np.ndarray | None = None, arc: tuple[float, float] = LIMBUS_ARC,
+                 step: float | None = None, reach: float | None = None) -> None:
+        self.step = step = REFINE_STEP * wi / REFINE_WI if step is None else float(step)
+        n = int(math.floor((REFINE_REACH * wi if reach is None else reach) / step + 1e-9))
         self.offs = np.arange(-n, n + 1) * step
-        self.radii = np.arange(LIMBUS_RADII[0] * wi, LIMBUS_RADII[1] * wi + 1e-6, step)
+        self.radii = np.arange(LIMBUS_RADII[0] * wi, LIMBUS_RADII[1] * wi + 1e-6, step) if radii is None else np.asarray(radii, np.float64)
         # image y is down: the right side's arc runs from −above to +below, the left side's mirrors it
-        side = np.radians(np.linspace(-LIMBUS_ARC[0], LIMBUS_ARC[1], LIMBUS_POINTS))
+        side = np.radians(np.linspace(-arc[0], arc[1], LIMBUS_POINTS))
         th = np.concatenate([side, math.pi - side])
         self.cos, self.sin = np.cos(th).astype(np.float32), np.sin(th).astype(np.float32)
         X = self.offs[None, :, None, None] + self.radii[:, None, None, None] * self.cos
@@ -2099,7 +2154,8 @@ def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) 
 
 
 def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
-                  scores: np.ndarray | None = None, radii: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
+                  scores: np.ndarray | None = None, radii: tuple[int, int] | None = None,
+                  grid: _LimbusGrid | None = None) -> tuple[float, float, float, float]:
     """The iris centre near ``at`` in a face-frame picture at :data:`REFINE_WI` (its x and y
     grey gradients ``grad``, per px): the circle whose sides (:data:`LIMBUS_ARC`) the grey rises
     across most steeply going outwards — the limbus, where the dark iris meets the white. The
@@ -2107,11 +2163,12 @@ def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
     :data:`REFINE_PRIOR` around ``at``, then the steepest place near it is taken without that
     weight (it would pull the centre a fraction of the way back to ``at``). ``scores``: the
     :func:`limbus_scores` at ``at`` when already made; ``radii``: the range ``[lo, hi)`` of
-    radius indices (of :data:`LIMBUS_RADII` in :data:`REFINE_STEP` steps) allowed. Returns
+    radius indices (of :data:`LIMBUS_RADII` in :data:`REFINE_STEP` steps) allowed; ``grid``: the
+    circles tried (:func:`limbus_grid` unless given; ``scores`` must then be its). Returns
     ``(x, y, radius, edge)``: picture px, and the mean outward step there (grey levels per px).
     """
-    S = limbus_scores(grad, at) if scores is None else scores
-    g = limbus_grid()
+    g = limbus_grid() if grid is None else grid
+    S = g.scores(grad[0], grad[1], at[0], at[1]) if scores is None else scores
     nr, n = S.shape[0], S.shape[1]
     r0, r1 = (0, nr) if radii is None else (max(radii[0], 0), min(radii[1], nr))
     P = np.maximum(S[r0:r1], 0.0) * g.prior
@@ -2128,8 +2185,7 @@ def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
     best = float(S[k, i, j])
     dx = parabola_offset(S[k, i - 1, j], S[k, i, j], S[k, i + 1, j]) if 0 < i < n - 1 else 0.0
     dy = parabola_offset(S[k, i, j - 1], S[k, i, j], S[k, i, j + 1]) if 0 < j < n - 1 else 0.0
-    step = REFINE_STEP
-    return at[0] + g.offs[i] + dx * step, at[1] + g.offs[j] + dy * step, float(g.radii[k]), best
+    return at[0] + g.offs[i] + dx * g.step, at[1] + g.offs[j] + dy * g.step, float(g.radii[k]), best
 
 
 def common_radius(scores: tuple[np.ndarray, np.ndarray]) -> tuple[int, int]:
