@@ -99,18 +99,17 @@ limbus (:meth:`EyeFinder._on_limbus`). An iris no darker than the eye round it �
 brown iris in a dark face — leaves the search with the iris picture alone, and that picture holds
 the lids as they were at calibration: when the eye opened wider or glanced aside, it matched best
 with its top on the upper lid and the lashes (the grey-eyed ``deep`` copies of the shared clips:
-expr_d6's pupils 9 % of the eye distance high in median, 1.6 % on the limbus). The limbus's sides
+expr_d6's pupils 9 % of the eye distance high in median, 1.4 % on the limbus). The limbus's sides
 do not move with the lids. A darker iris keeps the darkness's place: the limbus's side arcs pin
 the height more loosely than a dark disc, and the brows, measured from the eye point, followed
 that looseness (tried on expr_d19's copies, darkness 0.25-0.5: brows 0.78 → 0.60)."""
-
 LIGHT_IRIS_ARC = (25.0, 25.0)
 """Degrees above and below the horizontal that the limbus arcs of :data:`LIMBUS_DARK`'s fit span (see
 :data:`LIMBUS_ARC`): as far below as above. An iris lighter than the skin round it meets the lids
 in a step that falls going out, and arcs reaching 40° below ran onto the lower lid; the fit
 rose away from it (on a synthetic light-eyed dark face, 0.7 px high at 80 px between the eyes
 where these arcs give 0.3; the ``deep`` copy of expr_d6: median pupil error 2.3 → 1.6 % of the eye
-distance)."""
+distance, every centre tried)."""
 RING_POINTS = 12
 """Sample points on the ring the radial votes are gathered from."""
 LID_RANGE = 0.3
@@ -1233,9 +1232,9 @@ class EyeFinder:
         v = np.arange(-(self.sy // 2), self.sy // 2 + 1) * (2.0 / (prior[1] * wi))
         self._prior = np.exp(-0.5 * (v[:, None] ** 2 + u[None, :] ** 2)).astype(np.float32)
         self._maps = np.empty((2,) + self._prior.shape, np.float32)  # both eyes' coarse maps, reused
-        # an iris no darker than its eye: the search's find moved onto the limbus, the calibrated
-        # radius give or take RADIUS_SLACK steps (see _on_limbus)
-        # (each eye's circles: every other centre first, then the centres next to the best of those)
+        # an iris no darker than its eye: the search's find moved onto the limbus (see _on_limbus);
+        # each eye's circles of its calibrated radius give or take RADIUS_SLACK steps, every other
+        # centre first, then the centres next to the best of those
         self._limbus: list[tuple[_LimbusGrid, _LimbusGrid]] | None = None
         if self.dark_power < LIMBUS_DARK:
             step = REFINE_STEP * wi / REFINE_WI
@@ -2156,8 +2155,8 @@ def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) 
 def limbus_centre(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float],
                   scores: np.ndarray | None = None, radii: tuple[int, int] | None = None,
                   grid: _LimbusGrid | None = None) -> tuple[float, float, float, float]:
-    """The iris centre near ``at`` in a face-frame picture at :data:`REFINE_WI` (its x and y
-    grey gradients ``grad``, per px): the circle whose sides (:data:`LIMBUS_ARC`) the grey rises
+    """The iris centre near ``at`` in a face-frame picture at :data:`REFINE_WI` (or ``grid``'s scale;
+    its x and y grey gradients ``grad``, per px): the circle whose sides (:data:`LIMBUS_ARC`) the grey rises
     across most steeply going outwards — the limbus, where the dark iris meets the white. The
     rim is chosen among the circles within :data:`REFINE_REACH` weighted by
     :data:`REFINE_PRIOR` around ``at``, then the steepest place near it is taken without that
