@@ -215,16 +215,19 @@ FACE_OUTLINE = ((-1.05, -0.75), (1.05, -0.75), (1.05, 0.85), (0.55, 1.45), (-0.5
 """Where the flow may pick corners: face coordinates in inter-pupil distances (y down)."""
 
 
-def face_outline(left, right, outline: np.ndarray = np.array(FACE_OUTLINE)) -> np.ndarray:
-    """:data:`FACE_OUTLINE` (or ``outline``, face coordinates in inter-pupil distances) as a polygon
-    (frame px) about the pupils ``left`` and ``right`` (frame px, image-left first)."""
+_OUTLINE = np.array(FACE_OUTLINE, dtype=np.float64)
+
+
+def face_outline(left, right) -> np.ndarray:
+    """:data:`FACE_OUTLINE` as a polygon (frame px) about the pupils ``left`` and ``right`` (frame px,
+    image-left first)."""
     left, right = np.asarray(left, dtype=np.float64), np.asarray(right, dtype=np.float64)
     u = right - left
     ipd = max(math.hypot(u[0], u[1]), 1e-6)
     u = u / ipd
     d = np.array([-u[1], u[0]])
     mid = 0.5 * (left + right)
-    return mid + ipd * (outline[:, :1] * u + outline[:, 1:] * d)
+    return mid + ipd * (_OUTLINE[:, :1] * u + _OUTLINE[:, 1:] * d)
 
 
 def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Sequence[bool],
@@ -282,8 +285,7 @@ class FaceTracker:
         # the rigid mouth centre on the calibration frame (px), from the measured mouth offset
         ff0 = FaceFrame.from_pupils(tuple(self._cal_pupils[0]), tuple(self._cal_pupils[1]), wi)
         self._cal_mouth = ff0.to_image(np.array([cal.mouth_offset]))[0]
-        self._outline = np.array(FACE_OUTLINE, dtype=np.float64)
-        self._outline_span = tuple(np.ptp(self._outline, axis=0).tolist())  # its width and height (× ipd)
+        self._outline_span = tuple(np.ptp(_OUTLINE, axis=0).tolist())  # the face outline's width and height (× ipd)
         self._box_eyes = cal.face_box_eyes or DEFAULT_EYES
         self._face_ref = None if cal.face_patch is None else reference_vector(cal.face_patch)
         self.motion = HeadMotion()
@@ -347,7 +349,7 @@ class FaceTracker:
     def face_outline(self, anchors: np.ndarray | None = None) -> np.ndarray:
         """The region (frame px polygon) the flow picks corners in, for these eye anchors."""
         a = self.anchors if anchors is None else anchors
-        return face_outline(a[0], a[1], self._outline)
+        return face_outline(a[0], a[1])
 
     def _grey_box(self, shape: tuple[int, ...]) -> tuple[float, float, float, float] | None:
         """The part of the frame (x0, y0, x1, y1, frame px) whose grey copy this frame needs while
