@@ -18,6 +18,8 @@ from tracker.eyes import (
     IRIS_FLOOR,
     LID_SHOW,
     LIMBUS_DARK,
+    ARC_DEGREES,
+    LIMBUS_INNER,
     EyeModelError,
     GAP_BLIND,
     SkinModel,
@@ -29,7 +31,9 @@ from tracker.eyes import (
     mirrored_sides,
     iris_radius,
     learn_eyes,
+    limbus_below,
     limbus_centre,
+    limbus_sides,
     spectacle_rims,
     thin_dark,
     refine_pupils,
@@ -1217,3 +1221,90 @@ def test_an_eye_model_with_a_number_past_float_range_is_refused_in_one_line(key,
         EyeModel.from_dict(d, model.images())
     assert "\n" not in str(e.value) and "finite" in str(e.value)
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_limbus_below_is_how_far_down_the_edge_shows_on_both_sides():
+    """Pure cases of :func:`limbus_below`: on each side the last angle before the edge on the circle
+    is under the level or under :data:`LIMBUS_INNER` of a step inside it; the two sides' mean."""
+    n = len(ARC_DEGREES)
+    at = {a: k for k, a in enumerate(ARC_DEGREES.tolist())}
+    ring, inner = np.full((2, n), 10.0), np.zeros((2, n))
+    assert limbus_below(ring, inner, 5.0) == 90.0  # seen all the way down
+    ring[0, at[35.0]:] = 2.0  # right side hidden from 35° down
+    assert limbus_below(ring, inner, 5.0) == pytest.approx(0.5 * (30.0 + 90.0))
+    inner[1, at[60.0]:] = 10.0 / LIMBUS_INNER + 1.0  # left side: a stronger edge inside the circle from 60°
+    assert limbus_below(ring, inner, 5.0) == pytest.approx(0.5 * (30.0 + 55.0))
+    ring[:, at[0.0]] = 0.0  # nothing at the pupil's row: nothing seen below it
+    assert limbus_below(ring, inner, 5.0) == 0.0
+    ring[:] = 10.0
+    ring[:, at[-10.0]] = 0.0  # above the pupil's row does not count
+    assert limbus_below(ring, np.zeros((2, n)), 5.0) == 90.0
+    assert limbus_sides(np.full((2, n), 7.0)) == 7.0
+
+
+def _lower_lidded_eyes(f: EyeFinder, centres, lid: float, iris: float = 90.0, skin: float = 170.0) -> np.ndarray:
+    """A grey eye crop (``f.rect``): skin, two white almonds with irises (``f``'s radii, grey ``iris``)
+    at ``centres``, each almond's lower edge — the lower lid, skin lighter than the iris — ``lid`` px
+    below its iris's centre; the upper lid high above the iris."""
+    x0, y0, w, h = f.rect
+    img = np.full((h, w), skin, np.float32)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    for (cx, cy), r in zip(centres, f.radius):
+        eye = (np.abs(xx - cx) < 2.6 * r) & (yy > cy - 1.6 * r) & (yy < cy + lid)
+        img[eye] = 215.0
+        img[eye & (np.hypot(xx - cx, yy - cy) <= r)] = iris
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+def _edge_calibrated(f: EyeFinder, centres, **look) -> EyeFinder:
+    """``f``'s model with its irises' edge strength measured on drawn wide-open eyes
+    (:func:`_lower_lidded_eyes` with ``look``), as calibration measures it on the clicked frame."""
+    grey = _lower_lidded_eyes(f, centres, 1.8 * f.radius[0], **look)
+    limbus = [limbus_sides(f.limbus_steps(grey, c, r)[0]) for c, r in zip(centres, f.radius)]
+    return EyeFinder(dataclasses.replace(f.model, limbus=limbus), f.wi)
+
+
+@pytest.mark.parametrize("share", [0.3, 0.5, 0.7, 1.3, 1.8])
+@pytest.mark.parametrize("light_lid", [False, True])
+def test_the_lower_lid_lies_at_least_as_low_as_the_iris_edge_shows(finder, share, light_lid):
+    """The lower lid hides the iris's edge from where it crosses the circle down: the floor is the
+    radius times the sine of how far down the edge shows — under the lid, never more than a pixel past
+    it, whether the lid crosses the iris or runs below it (then the floor is the radius). A lid lit
+    brighter than the white, over a dark iris: its margin's step, blurred, reaches the circle from
+    inside it, and only the stronger step inside (:data:`LIMBUS_INNER`) keeps the floor within a
+    quarter of the radius past the lid (without it: the whole radius for a lid at 0.7 of it)."""
+    x0, y0, _, _ = finder.rect
+    wi = finder.wi
+    centres = [(-0.5 * wi - x0 + 0.4, -y0 - 0.3), (0.5 * wi - x0 - 0.2, -y0 + 0.2)]
+    look = dict(iris=60.0, skin=230.0) if light_lid else {}
+    f = _edge_calibrated(finder, centres, **look)
+    r = f.radius[0]
+    grey = _lower_lidded_eyes(f, centres, share * r, **look)
+    for i, c in enumerate(centres):
+        floor = f._lower_floor(grey, i, c)
+        if share < 1.0:
+            past = 0.25 * r if light_lid else 1.0
+            assert share * r - 0.3 * r <= floor <= share * r + past, (share, floor)
+        else:
+            assert floor == pytest.approx(r, abs=0.05), (share, floor)
+
+
+def test_a_lit_iris_as_pale_as_the_lid_still_has_its_lower_lid_found(finder):
+    """An iris as light as the lid's skin: no step where the lid covers it, so the edge shows only
+    against the white — the floor still follows the lid; and a shut eye (skin with a lash line, no
+    iris) and a face without a calibrated edge have none."""
+    x0, y0, _, _ = finder.rect
+    wi = finder.wi
+    centres = [(-0.5 * wi - x0, -y0), (0.5 * wi - x0, -y0)]
+    look = dict(iris=150.0, skin=150.0)
+    f = _edge_calibrated(finder, centres, **look)
+    r = f.radius[0]
+    grey = _lower_lidded_eyes(f, centres, 0.6 * r, **look)
+    assert 0.3 * r <= f._lower_floor(grey, 0, centres[0]) <= 0.6 * r + 1.0
+    shut = np.full_like(grey, 150.0)
+    for cx, cy in centres:
+        shut[int(cy) - 1 : int(cy) + 2, int(cx - 2 * r) : int(cx + 2 * r)] = 40.0
+    shut = cv2.GaussianBlur(shut, (0, 0), 1.0)
+    assert f._lower_floor(shut, 0, centres[0]) == 0.0
+    model = dataclasses.replace(f.model, limbus=None)
+    assert EyeFinder(model, wi)._lower_floor(grey, 0, centres[0]) == 0.0

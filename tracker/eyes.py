@@ -30,7 +30,11 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   shadowed crease are as dark, so the rule says that the iris shows, not where the lids are.
   A light iris (grey, green, hazel) is not much darker than the skin, so that rule is off for
   it; within its radius a row counts as interior as far as it looks more like the calibrated
-  iris than the skin (:meth:`EyeFinder._iris_likeness`).
+  iris than the skin (:meth:`EyeFinder._iris_likeness`). A lit brown iris can sit as near the
+  skin's colour as the lower lid does, and the walk down then ends inside it; but its edge against
+  the white is plain in grey, and the lower lid hides that edge from where it crosses the iris's
+  circle down. So on an open eye the lower lid lies at least as far down as the edge is seen on both
+  sides of the iris (:meth:`EyeFinder._lower_floor`).
 * **closed eyes** — as the lid gap falls through :data:`CLOSING` of the calibrated one,
   the eye point moves from the iris to the middle of what is visible of the eye (the slit
   between the lids), where a landmark tracker puts a closing eye's pupil; the lids and the
@@ -138,6 +142,15 @@ both walks then end at the pupil and the eye reads shut while it is open. Nearer
 radius: a narrowed eye's lash line lies on the iris's rim, and blur spreads it inwards. Where the
 dark rule is off (a light iris) the floor within the whole radius is the iris's likeness instead
 (:meth:`EyeFinder._iris_likeness`)."""
+LIMBUS_SEEN = 0.6
+"""Share of the calibrated iris sides' edge (:attr:`EyeModel.limbus`) at and above which the iris's
+edge is seen at a place on its circle (:func:`limbus_below`)."""
+LIMBUS_INNER = 0.8
+"""Least share of the strongest outward step nearer the iris's centre (half to 0.8 of its radius) that
+the step on its circle must be for the edge there to be the iris's own: a lower lid that covers the
+iris's bottom is lighter than a brown iris, and its margin, a pixel or two inside the circle, shows
+as a step on the circle too once blurred (a shared clip's lower lids at 0.6-0.85 radii read as a
+whole iris seen without this)."""
 OPEN_SHARE = 0.25
 """Share of the way through :data:`CLOSING` at and above which the eye counts as open (0.25: a
 lid gap of 40 % of the calibrated one): a squint is an open eye, and a landmark tracker calls an
@@ -718,7 +731,9 @@ class EyeModel:
     rings round the pupils) as a Gaussian in YCrCb, ``(mean (3,), cov (3, 3))`` grey levels with
     :data:`SKIN_FLOOR` in it (None: a model saved before it was; see :meth:`EyeFinder._iris_likeness`);
     ``glance`` which way the eyes looked on the calibration frame (:func:`side_glance`, read before the
-    iris pictures' sides were evened out; None: a model saved before it was, read from its pictures).
+    iris pictures' sides were evened out; None: a model saved before it was, read from its pictures);
+    ``limbus`` per eye, how steeply the grey rises going out across the iris's edge beside the pupil
+    (:func:`limbus_sides`; None: a model saved before it was, and the lower lids then have no floor).
     """
 
     work_ipd: float
@@ -738,6 +753,7 @@ class EyeModel:
     search_dark: float | None = None
     iris_colour: tuple[np.ndarray, np.ndarray] | None = None
     glance: int | None = None
+    limbus: list[float] | None = None
 
     IMAGE_NAMES = ("iris_l", "iris_r", "eye_l", "eye_r")
     """Keys of :meth:`images`: the grey pictures, to be saved as 8-bit PNGs."""
@@ -764,6 +780,7 @@ class EyeModel:
             **({} if all(r is None for r in self.rims) else {"rims": [None if r is None else [float(v) for v in r] for r in self.rims]}),
             **({} if self.search_dark is None else {"search_dark": round(float(self.search_dark), 4)}),
             **({} if self.glance is None else {"glance": int(self.glance)}),
+            **({} if self.limbus is None else {"limbus": [round(float(v), 4) for v in self.limbus]}),
             **({} if self.iris_colour is None else {"iris_colour": {
                 "mean": np.asarray(self.iris_colour[0], dtype=float).round(4).tolist(),
                 "cov": np.asarray(self.iris_colour[1], dtype=float).round(4).tolist()}}),
@@ -803,6 +820,7 @@ class EyeModel:
                     rims=[None if r is None else (float(r[0]), float(r[1])) for r in d.get("rims", [None, None])],
                     search_dark=None if d.get("search_dark") is None else float(d["search_dark"]),
                     glance=d.get("glance"),
+                    limbus=None if d.get("limbus") is None else [float(v) for v in d["limbus"]],
                     iris_colour=None if d.get("iris_colour") is None else (
                         np.asarray(d["iris_colour"]["mean"], dtype=np.float64).reshape(3),
                         np.asarray(d["iris_colour"]["cov"], dtype=np.float64).reshape(3, 3)),
@@ -826,6 +844,8 @@ class EyeModel:
             raise EyeModelError("eye model: a spectacle rim's rows must be finite and rising")
         if m.glance is not None and (type(m.glance) is not int or m.glance not in (-1, 0, 1)):
             raise EyeModelError(f"eye model: glance must be -1, 0 or 1, not {m.glance!r}")
+        if m.limbus is not None and (len(m.limbus) != 2 or not all(math.isfinite(v) for v in m.limbus)):
+            raise EyeModelError("eye model: the irises' edge strengths must be two finite numbers")
         if m.search_dark is not None and not math.isfinite(m.search_dark):
             raise EyeModelError("eye model: the irises' search darkness must be a finite number")
         if m.iris_colour is not None:
@@ -1156,6 +1176,7 @@ def learn_eyes(crop_bgr: np.ndarray, crop_grey: np.ndarray, pupils_crop, brows_c
     )
     f = EyeFinder(model, wi)
     model.search_dark = f.search_darkness(grey, pupils)
+    model.limbus = [limbus_sides(f.limbus_steps(grey, (float(p[0]), float(p[1])), r)[0]) for p, r in zip(pupils, radius)]
     ref = f.skin_colour(crop, pupils)
     model.skin_bgr = ref if ref is not None else np.median(groups["below the eyes"], axis=0).astype(np.float64)
     # the lash line and the lid gap, measured the way the finder measures them
@@ -1247,6 +1268,13 @@ class EyeFinder:
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self._walk_k = [max(int(round(r)), 2) for r in self.radius]  # samples of a walk's interior level
+        # the iris's edge read below the pupil's row on both sides (the lower lids' floor)
+        th = np.radians(ARC_DEGREES)
+        self._arc_blur = wi / REFINE_WI
+        self._arc_cos = np.stack([np.cos(th), -np.cos(th)]).astype(np.float32)  # (side, angle): right, left
+        self._arc_sin = np.stack([np.sin(th), np.sin(th)]).astype(np.float32)
+        self._arc_radii = np.asarray(ARC_RADII, np.float32)[:, None, None]
+        self._arc_level = None if model.limbus is None else [LIMBUS_SEEN * v for v in model.limbus]
         self.skin = model.skin
         self._iris_M = self._iris_transform()
         self._iris_gain: tuple[np.ndarray | None, np.ndarray | None] = (None, self._iris_M)
@@ -1512,6 +1540,46 @@ class EyeFinder:
             else:
                 out.append((x, y, match))
         return out
+
+    def limbus_steps(self, grey: np.ndarray, centre: tuple[float, float], radius: float) -> tuple[np.ndarray, np.ndarray]:
+        """The outward grey steps (grey levels per px; positive where the grey rises going out, a darker
+        iris against its white) round ``centre`` (crop px) at the angles :data:`ARC_DEGREES` on the
+        right side (row 0) and the left (row 1): ``(ring, inner)``, the largest on the iris's circle
+        (:data:`ARC_RADII` about ``radius``) and the largest inside it. Gradients on a small window
+        round the iris only."""
+        s = self._arc_blur
+        h = int(math.ceil(ARC_RADII[-1] * radius + s)) + 3
+        x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - h
+        win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), (0, 0), s)
+        gx = cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
+        gy = cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+        rr = np.float32(radius) * self._arc_radii
+        px = (np.float32(centre[0] - x0) + rr * self._arc_cos).reshape(1, -1)
+        py = (np.float32(centre[1] - y0) + rr * self._arc_sin).reshape(1, -1)
+        n = len(ARC_RADII)
+        GX = cv2.remap(gx, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(n, 2, -1)
+        GY = cv2.remap(gy, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(n, 2, -1)
+        step = GX * self._arc_cos + GY * self._arc_sin
+        return step[n - _RING :].max(axis=0), step[: n - _RING].max(axis=0)
+
+    def _lower_floor(self, grey: np.ndarray, i: int, iris: tuple[float, float]) -> float:
+        """The least distance (crop px) of eye ``i``'s lower lid below its iris centre ``iris``: the lid
+        hides the iris's edge from where it crosses the circle down, so where the edge is seen on both
+        sides down to an angle ``a`` (:func:`limbus_below`, at :data:`LIMBUS_SEEN` of its calibrated
+        strength), the lid lies at least radius · sin ``a`` below the centre. The walk down by colour
+        ends early where a lit iris is as near the skin's colour as the lid (a brown iris in warm
+        light); its edge against the white is plain in grey. The level follows the light the finder
+        follows (:meth:`measure_gain`: its gain takes this frame's colours to the calibration's). 0
+        without a calibrated edge."""
+        if self._arc_level is None:
+            return 0.0
+        level = self._arc_level[i]
+        if self._gain is not None:  # the grey's steps shrink with the light: the level with them
+            b, g, r_ = np.ravel(self._gain).tolist()
+            level /= max(float(_YCC[0, 0]) * b + float(_YCC[0, 1]) * g + float(_YCC[0, 2]) * r_, 1e-3)
+        r = self.radius[i]
+        a = limbus_below(*self.limbus_steps(grey, iris, r), level)
+        return r * math.sin(math.radians(a))
 
     # ------------------------------------------------------------------ lids
     def _strip(self, crop: np.ndarray, i: int, at: tuple[float, float]) -> tuple[np.ndarray, int]:
@@ -1971,8 +2039,10 @@ class EyeFinder:
         eyes = []
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]
-            up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
             shows = match >= IRIS_SHOWS if self._gap_blind[i] else w >= OPEN_SHARE
+            if shows:
+                down = max(down, self._lower_floor(crop_grey, i, (x, y)) - (pt[1] - y))
+            up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
             eyes.append(EyeObservation(
                 x=float(pt[0]), y=float(pt[1]), score=math.sqrt(self._eye_match(crop_grey, pt, i) * max(match, 0.0)),
                 open=shows, upper=float(up), lower=float(down), brow=brow, iris=(float(x), float(y)),
@@ -2141,6 +2211,39 @@ def limbus_grid() -> _LimbusGrid:
     if _LIMBUS is None:
         _LIMBUS = _LimbusGrid()
     return _LIMBUS
+
+
+ARC_DEGREES = np.arange(-10.0, 90.1, 5.0)
+"""Angles (degrees below the horizontal, image y down) at which :meth:`EyeFinder.limbus_steps` reads the
+iris's edge on each side: from just above the pupil's row down to the bottom of the iris."""
+ARC_RADII = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1)
+"""Radii (× the calibrated iris radius) :meth:`EyeFinder.limbus_steps` reads: the last three are the
+iris's circle (its radius is good to about a tenth), the others the iris inside it, past the pupil."""
+_RING = 3
+_SIDE_ROWS = int(np.count_nonzero(np.abs(ARC_DEGREES) <= 10.0))
+"""The first angles of :data:`ARC_DEGREES` (within 10° of the horizontal), where a lid rarely covers the
+iris's edge: :func:`limbus_sides`."""
+
+
+def limbus_sides(ring: np.ndarray) -> float:
+    """How plainly an iris's edge shows beside the pupil: the median outward grey step on its circle
+    (``ring``, :meth:`EyeFinder.limbus_steps`) within 10° of the horizontal on both sides."""
+    return float(np.median(ring[:, :_SIDE_ROWS]))
+
+
+def limbus_below(ring: np.ndarray, inner: np.ndarray, level: float) -> float:
+    """How far down (degrees below the horizontal, 0..90) the iris's edge is seen on both sides, from
+    :meth:`EyeFinder.limbus_steps`' ``ring`` and ``inner`` steps: on each side the last angle from the
+    horizontal down before the first where the step on the circle is under ``level`` or under
+    :data:`LIMBUS_INNER` of the step inside it; the mean of the two sides. The lower lid hides the
+    edge from where it crosses the circle down, so the lid lies at least that far down the circle."""
+    start = int(np.count_nonzero(ARC_DEGREES < 0.0))
+    seen = (ring >= level) & (ring >= LIMBUS_INNER * inner)
+    out = 0.0
+    for row in seen[:, start:].tolist():
+        k = row.index(False) if False in row else len(row)
+        out += float(ARC_DEGREES[start + k - 1]) if k > 0 else 0.0
+    return 0.5 * out
 
 
 def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> np.ndarray:
