@@ -1551,16 +1551,13 @@ class EyeFinder:
         h = int(math.ceil(ARC_RADII[-1] * radius + s)) + 3
         x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - h
         win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), (0, 0), s)
-        gx = cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
-        gy = cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+        grad = cv2.merge((cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)))
         rr = np.float32(radius) * self._arc_radii
         px = (np.float32(centre[0] - x0) + rr * self._arc_cos).reshape(1, -1)
         py = (np.float32(centre[1] - y0) + rr * self._arc_sin).reshape(1, -1)
-        n = len(ARC_RADII)
-        GX = cv2.remap(gx, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(n, 2, -1)
-        GY = cv2.remap(gy, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(n, 2, -1)
-        step = GX * self._arc_cos + GY * self._arc_sin
-        return step[n - _RING :].max(axis=0), step[: n - _RING].max(axis=0)
+        g = cv2.remap(grad, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(len(ARC_RADII), 2, -1, 2)
+        step = g[..., 0] * self._arc_cos + g[..., 1] * self._arc_sin
+        return step[-_RING:].max(axis=0), step[:-_RING].max(axis=0)
 
     def _lower_floor(self, grey: np.ndarray, i: int, iris: tuple[float, float]) -> float:
         """The least distance (crop px) of eye ``i``'s lower lid below its iris centre ``iris``: the lid
@@ -2040,7 +2037,7 @@ class EyeFinder:
         for i, ((pt, w), (up, down, *_), (brow, brow_match)) in enumerate(zip(pts, lids, brows)):
             x, y, match = found[i]
             shows = match >= IRIS_SHOWS if self._gap_blind[i] else w >= OPEN_SHARE
-            if shows:
+            if shows and down < self.radius[i] - (pt[1] - y):  # (the floor is at most the radius)
                 down = max(down, self._lower_floor(crop_grey, i, (x, y)) - (pt[1] - y))
             up, down = min(up, self._lid_most[i][0]), min(down, self._lid_most[i][1])
             eyes.append(EyeObservation(
