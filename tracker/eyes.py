@@ -1274,6 +1274,8 @@ class EyeFinder:
         self._arc_cos = np.stack([np.cos(th), -np.cos(th)]).astype(np.float32)  # (side, angle): right, left
         self._arc_sin = np.stack([np.sin(th), np.sin(th)]).astype(np.float32)
         self._arc_radii = np.asarray(ARC_RADII, np.float32)[:, None, None]
+        self._arc_offsets: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # the points' offsets, by radius
+        self._arc_rise = max(-math.sin(float(th.min())), 0.0)  # how far above the centre the highest angle reads
         self._arc_level = None if model.limbus is None else [LIMBUS_SEEN * v for v in model.limbus]
         self.skin = model.skin
         self._iris_M = self._iris_transform()
@@ -1546,15 +1548,17 @@ class EyeFinder:
         iris against its white) round ``centre`` (crop px) at the angles :data:`ARC_DEGREES` on the
         right side (row 0) and the left (row 1): ``(ring, inner)``, the largest on the iris's circle
         (:data:`ARC_RADII` about ``radius``) and the largest inside it. Gradients on a small window
-        round the iris only."""
+        round the iris only, from just above the highest of those points down."""
         s = self._arc_blur
         h = int(math.ceil(ARC_RADII[-1] * radius + s)) + 3
-        x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - h
-        win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), (0, 0), s)
+        up = int(math.ceil(ARC_RADII[-1] * radius * self._arc_rise + s)) + 3
+        x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - up
+        win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, h + up + 1), (0, 0), s)
         grad = cv2.merge((cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)))
-        rr = np.float32(radius) * self._arc_radii
-        px = (np.float32(centre[0] - x0) + rr * self._arc_cos).reshape(1, -1)
-        py = (np.float32(centre[1] - y0) + rr * self._arc_sin).reshape(1, -1)
+        ox, oy = self._arc_offsets.get(radius) or self._arc_offsets.setdefault(radius, (
+            (np.float32(radius) * self._arc_radii * self._arc_cos).reshape(1, -1),
+            (np.float32(radius) * self._arc_radii * self._arc_sin).reshape(1, -1)))
+        px, py = ox + np.float32(centre[0] - x0), oy + np.float32(centre[1] - y0)
         g = cv2.remap(grad, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(len(ARC_RADII), 2, -1, 2)
         step = g[..., 0] * self._arc_cos + g[..., 1] * self._arc_sin
         return step[-_RING:].max(axis=0), step[:-_RING].max(axis=0)
