@@ -1555,10 +1555,11 @@ class EyeFinder:
         x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - up
         win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, h + up + 1), (0, 0), s)
         grad = cv2.merge((cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)))
-        ox, oy = self._arc_offsets.get(radius) or self._arc_offsets.setdefault(radius, (
-            (np.float32(radius) * self._arc_radii * self._arc_cos).reshape(1, -1),
-            (np.float32(radius) * self._arc_radii * self._arc_sin).reshape(1, -1)))
-        px, py = ox + np.float32(centre[0] - x0), oy + np.float32(centre[1] - y0)
+        offsets = self._arc_offsets.get(radius)
+        if offsets is None:
+            rr = np.float32(radius) * self._arc_radii
+            offsets = self._arc_offsets[radius] = ((rr * self._arc_cos).reshape(1, -1), (rr * self._arc_sin).reshape(1, -1))
+        px, py = offsets[0] + np.float32(centre[0] - x0), offsets[1] + np.float32(centre[1] - y0)
         g = cv2.remap(grad, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(len(ARC_RADII), 2, -1, 2)
         step = g[..., 0] * self._arc_cos + g[..., 1] * self._arc_sin
         return step[-_RING:].max(axis=0), step[:-_RING].max(axis=0)
@@ -1576,8 +1577,8 @@ class EyeFinder:
             return 0.0
         level = self._arc_level[i]
         if self._gain is not None:  # the grey's steps shrink with the light: the level with them
-            b, g, r_ = np.ravel(self._gain).tolist()
-            level /= max(float(_YCC[0, 0]) * b + float(_YCC[0, 1]) * g + float(_YCC[0, 2]) * r_, 1e-3)
+            gb, gg, gr = np.ravel(self._gain).tolist()
+            level /= max(float(_YCC[0, 0]) * gb + float(_YCC[0, 1]) * gg + float(_YCC[0, 2]) * gr, 1e-3)
         r = self.radius[i]
         a = limbus_below(*self.limbus_steps(grey, iris, r), level)
         return r * math.sin(math.radians(a))
@@ -2220,7 +2221,7 @@ iris's edge on each side: from just above the pupil's row down to the bottom of 
 ARC_RADII = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1)
 """Radii (× the calibrated iris radius) :meth:`EyeFinder.limbus_steps` reads: the last three are the
 iris's circle (its radius is good to about a tenth), the others the iris inside it, past the pupil."""
-_RING = 3
+_RING = 3  # the last three of ARC_RADII: the circle
 _SIDE_ROWS = int(np.count_nonzero(np.abs(ARC_DEGREES) <= 10.0))
 """The first angles of :data:`ARC_DEGREES` (within 10° of the horizontal), where a lid rarely covers the
 iris's edge: :func:`limbus_sides`."""
