@@ -368,6 +368,7 @@ def test_model_round_trips_through_json(finder):
     f2 = EyeFinder(m2, m2.work_ipd)
     assert f2.rect == finder.rect
     assert m2.search_dark == pytest.approx(m.search_dark, abs=1e-4) and f2.dark_power == pytest.approx(finder.dark_power, abs=1e-3)
+    assert m.limbus is not None and m2.limbus == pytest.approx(m.limbus, abs=1e-3)
     res1, _, _, _ = _find(finder, BASE.with_expression("smile"))
     res2, _, _, _ = _find(f2, BASE.with_expression("smile"))
     for a, b in zip(res1.eyes, res2.eyes):
@@ -392,6 +393,9 @@ def test_model_round_trips_through_json(finder):
         lambda d, i: d.update(glance=2),
         lambda d, i: d.update(glance=True),
         lambda d, i: d.update(glance="left"),
+        lambda d, i: d.update(limbus=[20.0]),
+        lambda d, i: d.update(limbus=[20.0, float("nan")]),
+        lambda d, i: d.update(limbus="strong"),
     ],
 )
 def test_malformed_models_give_one_line_errors(finder, change):
