@@ -33,7 +33,7 @@ import numpy as np
 
 from tracker.brows import brow_centre
 from tracker.clicks import PIXEL_CENTRE, Clicks
-from tracker.eyes import REFINE_WI, fill_rows, limbus_grid, limbus_scores, refine_pupils, spectacle_rims, thin_dark
+from tracker.eyes import REFINE_WI, fill_rows, limbus_gradients, limbus_grid, limbus_scores, refine_pupils, spectacle_rims, thin_dark
 from tracker.face_finder import detect_faces, eyes_in_box, face_cascade
 from tracker.pupils import parabola_offset
 
@@ -238,13 +238,6 @@ def rim_bars(band: np.ndarray) -> np.ndarray:
     return cv2.dilate(out, np.ones((3, 3), np.uint8)).astype(bool)
 
 
-def _gradients(band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The x and y grey gradients (per px) of ``band``, smoothed by a pixel first, as the limbus
-    circles read them (:func:`tracker.eyes.limbus_scores`)."""
-    smooth = cv2.GaussianBlur(band, (0, 0), 1.0)
-    return cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
-
-
 def _rim_circle(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> tuple[float, float, float, float]:
     """The limbus's strength at ``p`` (band px): the best mean outward grey step on the sides of an
     iris-sized circle centred within 2 px of it (see :func:`tracker.eyes.limbus_centre`), and that
@@ -304,7 +297,7 @@ def pupil_pair(grey: np.ndarray, box: tuple[float, float, float, float]) -> tupl
     # a heavy lash line can pass for a bar, and leaving it out must not change the eyes' weights)
     bars = rim_bars(band)
     keep = ~bars if bars.any() else None
-    grad = _gradients(band)
+    grad = limbus_gradients(band)
     eyes = []
     for cx in (0.5 * w - 0.5 * EYE_WI, 0.5 * w + 0.5 * EYE_WI):
         cy = 0.5 * h
@@ -551,7 +544,7 @@ def eyes_shown(frame_bgr: np.ndarray, clicks: Clicks) -> float:
     left = np.asarray(clicks.left_pupil, np.float64) - PIXEL_CENTRE
     right = np.asarray(clicks.right_pupil, np.float64) - PIXEL_CENTRE
     band, m = _upright(grey, left, right)
-    gx, gy = _gradients(band)
+    gx, gy = limbus_gradients(band)
     level = max(float(np.median(cv2.magnitude(gx, gy))), 1e-3)
     out = []
     for p in (left, right):

@@ -1256,6 +1256,7 @@ class EyeFinder:
         # an iris no darker than its eye: the search's find moved onto the limbus (see _on_limbus);
         # each eye's circles of its calibrated radius give or take RADIUS_SLACK steps, every other
         # centre first, then the centres next to the best of those
+        self._edge_blur = wi / REFINE_WI  # the limbus circles' smoothing (1 px at REFINE_WI)
         self._limbus: list[tuple[_LimbusGrid, _LimbusGrid]] | None = None
         if self.dark_power < LIMBUS_DARK:
             step = REFINE_STEP * wi / REFINE_WI
@@ -1263,14 +1264,12 @@ class EyeFinder:
             self._limbus = [(_LimbusGrid(wi, rr, LIGHT_IRIS_ARC, step=2.0 * step),
                              _LimbusGrid(wi, rr, LIGHT_IRIS_ARC, step=step, reach=2.0 * step)) for rr in radii]
             self._limbus_edge = LIMBUS_MIN_EDGE * REFINE_WI / wi
-            self._limbus_blur = wi / REFINE_WI
         # lids, brows, score, light
         self.lid_range = int(math.ceil(LID_RANGE * wi))
         self.lid_hw = [max(1, int(round(LID_HW * r))) for r in self.radius]
         self._walk_k = [max(int(round(r)), 2) for r in self.radius]  # samples of a walk's interior level
         # the iris's edge read below the pupil's row on both sides (the lower lids' floor)
         th = np.radians(ARC_DEGREES)
-        self._arc_blur = wi / REFINE_WI
         self._arc_cos = np.stack([np.cos(th), -np.cos(th)]).astype(np.float32)  # (side, angle): right, left
         self._arc_sin = np.stack([np.sin(th), np.sin(th)]).astype(np.float32)
         self._arc_radii = np.asarray(ARC_RADII, np.float32)[:, None, None]
@@ -1532,9 +1531,7 @@ class EyeFinder:
         for (x, y, match), (coarse, fine) in zip(found, self._limbus):
             h = int(math.ceil(coarse.reach + fine.offs[-1])) + 3
             x0, y0 = int(round(x)) - h, int(round(y)) - h
-            win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), (0, 0), self._limbus_blur)
-            gx = cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
-            gy = cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+            gx, gy = limbus_gradients(cut(grey, x0, y0, 2 * h + 1, 2 * h + 1), self._edge_blur)
             cx, cy, _, _ = limbus_centre((gx, gy), (x - x0, y - y0), grid=coarse)
             lx, ly, r, edge = limbus_centre((gx, gy), (cx, cy), grid=fine)
             if edge >= self._limbus_edge and fine.across(gx, gy, lx, ly, r) >= 0.0:
@@ -1549,12 +1546,11 @@ class EyeFinder:
         right side (row 0) and the left (row 1): ``(ring, inner)``, the largest on the iris's circle
         (:data:`ARC_RADII` about ``radius``) and the largest inside it. Gradients on a small window
         round the iris only, from just above the highest of those points down."""
-        s = self._arc_blur
+        s = self._edge_blur
         h = int(math.ceil(ARC_RADII[-1] * radius + s)) + 3
         up = int(math.ceil(ARC_RADII[-1] * radius * self._arc_rise + s)) + 3
         x0, y0 = int(round(centre[0])) - h, int(round(centre[1])) - up
-        win = cv2.GaussianBlur(cut(grey, x0, y0, 2 * h + 1, h + up + 1), (0, 0), s)
-        grad = cv2.merge((cv2.Scharr(win, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(win, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)))
+        grad = cv2.merge(limbus_gradients(cut(grey, x0, y0, 2 * h + 1, h + up + 1), s))
         offsets = self._arc_offsets.get(radius)
         if offsets is None:
             rr = np.float32(radius) * self._arc_radii
@@ -1577,8 +1573,7 @@ class EyeFinder:
             return 0.0
         level = self._arc_level[i]
         if self._gain is not None:  # the grey's steps shrink with the light: the level with them
-            gb, gg, gr = np.ravel(self._gain).tolist()
-            level /= max(float(_YCC[0, 0]) * gb + float(_YCC[0, 1]) * gg + float(_YCC[0, 2]) * gr, 1e-3)
+            level /= max(float(_YCC[0] @ np.ravel(self._gain)), 1e-3)
         r = self.radius[i]
         a = limbus_below(*self.limbus_steps(grey, iris, r), level)
         return r * math.sin(math.radians(a))
@@ -2222,6 +2217,8 @@ ARC_RADII = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1)
 """Radii (× the calibrated iris radius) :meth:`EyeFinder.limbus_steps` reads: the last three are the
 iris's circle (its radius is good to about a tenth), the others the iris inside it, past the pupil."""
 _RING = 3  # the last three of ARC_RADII: the circle
+_BELOW = int(np.count_nonzero(ARC_DEGREES < 0.0))  # the first angle at or below the pupil's row
+_BELOW_DEGREES = ARC_DEGREES[_BELOW:].tolist()
 _SIDE_ROWS = int(np.count_nonzero(np.abs(ARC_DEGREES) <= 10.0))
 """The first angles of :data:`ARC_DEGREES` (within 10° of the horizontal), where a lid rarely covers the
 iris's edge: :func:`limbus_sides`."""
@@ -2239,13 +2236,19 @@ def limbus_below(ring: np.ndarray, inner: np.ndarray, level: float) -> float:
     horizontal down before the first where the step on the circle is under ``level`` or under
     :data:`LIMBUS_INNER` of the step inside it; the mean of the two sides. The lower lid hides the
     edge from where it crosses the circle down, so the lid lies at least that far down the circle."""
-    start = int(np.count_nonzero(ARC_DEGREES < 0.0))
     seen = (ring >= level) & (ring >= LIMBUS_INNER * inner)
     out = 0.0
-    for row in seen[:, start:].tolist():
+    for row in seen[:, _BELOW:].tolist():
         k = row.index(False) if False in row else len(row)
-        out += float(ARC_DEGREES[start + k - 1]) if k > 0 else 0.0
+        out += _BELOW_DEGREES[k - 1] if k > 0 else 0.0
     return 0.5 * out
+
+
+def limbus_gradients(img: np.ndarray, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The x and y grey gradients (grey levels per px, float32) of ``img`` smoothed by ``sigma`` px
+    first: what the limbus circles read (:func:`limbus_scores`, :meth:`EyeFinder.limbus_steps`)."""
+    smooth = cv2.GaussianBlur(img, (0, 0), sigma)
+    return cv2.Scharr(smooth, cv2.CV_32F, 1, 0, scale=1.0 / 32.0), cv2.Scharr(smooth, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
 
 
 def limbus_scores(grad: tuple[np.ndarray, np.ndarray], at: tuple[float, float]) -> np.ndarray:
@@ -2344,9 +2347,7 @@ def refine_pupils(
     src = grey.astype(np.float32)
     if ff.scale < 0.7:  # a large face shrunk: smooth first so the resampling does not alias
         src = cv2.GaussianBlur(src, (0, 0), 0.4 / ff.scale)
-    crop = cv2.GaussianBlur(ff.crop(src, rect), (0, 0), 1.0)
-    gx = cv2.Scharr(crop, cv2.CV_32F, 1, 0, scale=1.0 / 32.0)
-    gy = cv2.Scharr(crop, cv2.CV_32F, 0, 1, scale=1.0 / 32.0)
+    gx, gy = limbus_gradients(ff.crop(src, rect))
     found = []  # face coordinates: the clicks are at (∓wi/2, 0)
     ats = [(sx - x0, -y0) for sx in (-0.5 * wi, 0.5 * wi)]
     scores = [limbus_scores((gx, gy), at) for at in ats]
