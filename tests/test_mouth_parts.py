@@ -649,3 +649,77 @@ def test_the_gap_between_lips_in_a_beard_does_not_run_on_into_the_moustache():
     red[38:44] = red[56:64] = 8.0
     top, bottom, _ = _gap(lum, np.zeros(90), 50.0, 80.0, red)
     assert (top, bottom) == (44, 55)
+
+
+def test_lip_rows_need_two_neighbouring_red_rows():
+    """Pure cases of :func:`~tracker.mouth_model.lip_rows`: a column shows the lips where two rows next
+    to each other across the line are lip-red; one red row (a hair, a crease) or two apart do not."""
+    from tracker.mouth_model import lip_rows
+
+    red = np.zeros((5, 8))
+    red[0, 3:5] = 12.0  # two neighbouring rows
+    red[1, 3] = 12.0  # one row
+    red[2, [1, 5]] = 12.0  # two rows apart
+    red[3, 6:8] = 11.9  # just under the need
+    red[4, :] = 15.0
+    assert lip_rows(red, 12.0).tolist() == [True, False, False, False, True]
+    assert lip_rows(np.array([[13.0], [5.0]]), 12.0).tolist() == [True, False]  # one row across the line
+
+
+def test_the_lips_off_the_lines_bands_still_bound_a_corner_in_hair(finder_and_crop):
+    """With hair round the mouth the line can run along a moustache's lower edge, the lips' lens below
+    it and thinning towards the corners: its red rows lie past the line's bands, no column showed the
+    lips, their end bound no corner and the corners ran on through the hair to the beard's edge (the
+    bearded copy of expr_d18: mouth width r 0.43 with the peer). The rows across the line
+    (:data:`~tracker.mouth_model.LIP_ROWS`) see them, two neighbouring rows at a time."""
+    from tracker.mouth_model import lip_columns
+
+    finder = finder_and_crop[0]
+    need = finder.lips_red
+    assert need is not None
+    skin, hair, lip = (150, 170, 210), (60, 72, 84), (110, 100, 190)
+    reds = profile_features(np.array([skin, hair, lip], np.float32), finder.model.skin_level, finder._chroma)[:, 1]
+    assert reds[2] >= need > max(reds[0], reds[1])
+    crop = np.empty((40, 64, 3), np.uint8)
+    crop[:] = skin
+    y = 15
+    crop[y - 6 : y + 1] = hair  # a moustache down to the line
+    crop[y + 5 : y + 7, 10:30] = lip  # the lens: two rows, past the band below the line
+    crop[y + 5, 36:46] = lip  # one red row
+    crop[y + 9 : y + 11, 50:60] = lip  # two rows out of reach
+    maps = finder.prepare(crop)
+    xs = np.arange(2, 62)
+    ys = np.full(len(xs), float(y))
+    got = finder._red_rows(maps, xs, ys)
+    want = (xs >= 10) & (xs < 30)
+    inner = (xs >= 11) & (xs < 29)  # the columns whose run of columns is all lens
+    assert got[inner].all() and not got[~want].any()
+    bands = lip_columns(finder._line_columns(maps, xs, ys), need, finder._skin_f, finder._lip_run)
+    assert not any(bands)  # the bands alone miss the lens
+
+
+def test_a_moustache_under_the_nostrils_is_not_an_open_mouth(finder_and_crop):
+    """Hair round the mouth (:func:`~tracker.mouth_finder.hair_round`): a moustache is darker than the
+    lips, and rows darker than the lips were the mouth's inside wherever they were. With the nostrils'
+    red shadow over the moustache, the split took that shadow for the upper lip and the moustache and
+    the upper lip for an open mouth's gap (the bearded copy of expr_d3: opening r 0.99 → 0.83). Dark
+    rows that look like the skin calibrated above the lips (the hair there) are no inside now."""
+    from tracker.mouth_finder import hair_round
+
+    finder = finder_and_crop[0]
+    model = finder.model
+    cls = np.asarray(model.classes, dtype=np.float64).copy()
+    cls[0, 0] = [0.5 * min(cls[1, 0, 0], cls[2, 0, 0]), cls[4, 0, 1] - 2.0, cls[4, 0, 2]]  # hair above the lips
+    bearded = MouthModel.from_dict({**model.to_dict(), "classes": cls.tolist(), "dark_round": 0.3})
+    assert hair_round(bearded) and not hair_round(model)
+    f2 = MouthFinder(bearded, WI)
+    tu, td = int(round(f2.t_up)), int(round(f2.t_dn))
+    hair = cls[0, 0] + np.array([-2.5, 0.0, 0.0])  # a moustache a little darker than calibrated
+    rows = [model.classes[0][0]] * 8 + [cls[1, 0]] * tu + [hair] * 10 + [cls[1, 0]] * tu + [cls[2, 0]] * td + [cls[3, 0]] * 20
+    f = np.array(rows, np.float32)
+    line = 8 + tu + 10 + tu
+    gap_top, gap_bottom, top, bottom, _, _ = f2.vertical(f, np.zeros(len(f), np.float32), line)
+    assert gap_bottom - gap_top < 1.0 and abs(top - (line - tu - 0.5)) <= 1.0 and abs(bottom - (line + td - 0.5)) <= 1.0
+    f2._hair = False  # the rule as it was: the moustache is an open mouth's inside
+    gap_top, _, top, _, _, _ = f2.vertical(f, np.zeros(len(f), np.float32), line)
+    assert gap_top < line - tu - 5 and top < 8 + tu

@@ -62,8 +62,9 @@ import numpy as np
 
 from tracker.colour_model import chroma_gain, grid_features, lut_index
 from tracker.mouth_model import (
-    BAND, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, N_RAYS, OPEN_DARK, SKIN_ROWS, MouthModel, band_columns, cheek_run,
-    corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_run, lip_sides, lips_grey,
+    BAND, C_UNIT, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, LIP_ROWS, N_RAYS, OPEN_DARK, SKIN_ROWS, MouthModel, band_columns,
+    cheek_run, corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_rows, lip_run, lip_sides,
+    lips_grey,
     mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
@@ -425,6 +426,12 @@ def _parabola(a: float, b: float, c: float) -> float:
     return min(max(0.5 * (a - c) / den, -0.5), 0.5) if den > 1e-9 else 0.0
 
 
+def hair_round(model: MouthModel) -> bool:
+    """Whether the calibration saw hair round the mouth (:data:`~tracker.mouth_model.DARK_ROUND`: a
+    beard, a moustache); False for a calibration older than that measure."""
+    return model.dark_round is not None and model.dark_round > DARK_ROUND
+
+
 def dark_rule(model: MouthModel) -> bool:
     """Whether the ends of an open mouth go by darkness too (:data:`~tracker.mouth_model.OPEN_DARK`):
     not where the skin round the mouth was that dark in places at calibration
@@ -443,7 +450,9 @@ class _Maps:
     """Per-frame buffers of :meth:`MouthFinder.prepare` for crops of one size (H, W): ``colour``
     (H+1, W+1, 3) the integral image of the colours, ``crow`` (H+1, W, 3) the running sums down each
     column, ``index`` (H, W) each pixel's colour-table index, ``inside_px`` (H, W) the inside-like
-    pixels (1) and ``inside`` (H+1, W+1) their integral image, ``lum`` (H, W) the smoothed luminance."""
+    pixels (1) and ``inside`` (H+1, W+1) their integral image, ``lum`` (H, W) the smoothed luminance,
+    ``crop`` the light-matched crop itself and ``red`` (H, W) its lip-red map or None (made on demand,
+    :meth:`MouthFinder._red_map`)."""
 
     def __init__(self, shape: tuple[int, int]):
         H, W = shape
@@ -455,6 +464,8 @@ class _Maps:
         self.inside_px = np.zeros((H, W), np.uint8)
         self.lum = np.zeros((H, W), np.uint8)
         self.index: np.ndarray | None = None  # made by prepare (lut_index has no output buffer)
+        self.crop: np.ndarray | None = None  # this frame's light-matched crop (prepare)
+        self.red: np.ndarray | None = None  # its lip-red map, made when first asked for (MouthFinder._red_map)
 
 
 class MouthFinder:
@@ -524,6 +535,7 @@ class MouthFinder:
         # with the dark rule, its table, and gaps of up to OPEN_JOIN wi across closed (a lip's sliver
         # between the teeth and a grin's shaded corner); without it, the inside table and one-pixel gaps
         self._dark = dark_rule(model)
+        self._hair = hair_round(model)
         self._open_table = _open_table(model) if self._dark else model.inside_table
         join = max(int(round(0.5 * OPEN_JOIN * wi)), 1) if self._dark else 1
         self._close = np.ones((3, 2 * join + 1), np.uint8)
@@ -538,6 +550,7 @@ class MouthFinder:
         self.lips_red = self.seed_red if self.seed_red is not None and lead >= LIP_LEAD and LIP_END > 0 else None
         self._skin_f = cls[4, 0].copy()
         self._lip_run = lip_run(wi)
+        self._lip_rows = np.arange(-int(round(LIP_ROWS[0] * wi)), int(round(LIP_ROWS[1] * wi)) + 1)[None, :]
         self._axis_seed = (model.axis_down[:3], model.axis_down[3])  # the lower lip's value: w·bgr + c
 
     def _set_thickness(self, t_up: float, t_dn: float) -> None:
@@ -672,6 +685,7 @@ class MouthFinder:
         self.model.inside_table.take(m.index, out=m.inside_px)
         m.inside = cv2.integral(m.inside_px, m.inside)
         cv2.GaussianBlur(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY), (0, 0), self.sigma_line, dst=m.lum)
+        m.crop, m.red = crop, None
         return m
 
     def _darker_than_lips(self, f: np.ndarray) -> np.ndarray:
@@ -682,15 +696,14 @@ class MouthFinder:
 
     def profile(self, maps: "_Maps", x: float) -> tuple[np.ndarray, np.ndarray]:
         """The vertical profile through column ``x``: features (H, 3) of each row's mean over the
-        band, and how much each row looks like the inside of a mouth (H,) 0..1 (the table's share of
-        the band's pixels, or darker than both lips by a third)."""
+        band, and how much each row looks like the inside of a mouth by its colour (H,) 0..1 (the
+        table's share of the band's pixels; :meth:`vertical` adds the rows darker than both lips)."""
         x0, x1 = band_columns(x, self.half, maps.shape[1])
         inv = np.float32(1.0 / (x1 - x0))
         c = maps.colour[:, x1] - maps.colour[:, x0]  # (H+1, 3): sums over the band of the rows above
         f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level, self._chroma)
         i = maps.inside[:, x1] - maps.inside[:, x0]
-        inside = (i[1:] - i[:-1]).astype(np.float32) * inv
-        return f, np.maximum(inside, self._darker_than_lips(f), out=inside)
+        return f, (i[1:] - i[:-1]).astype(np.float32) * inv
 
     def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
         """The row the mouth line is traced from: of the dark valleys (smoothed luminance, band through
@@ -819,9 +832,20 @@ class MouthFinder:
         # the full price; anything else (a tongue, the red back of a wide-open mouth) is free in an
         # open mouth — a gap with rows of the dark inside or teeth in it — but lip-like rows are
         # not a gap between closed lips (lips pressed together, one lip tucked under the other)
-        out = 1.0 - inside
         skin_like = np.minimum(e[0], e[3])
         lip_like = np.minimum(e[1], e[2])
+        # a row darker than both lips is the inside too — with hair round the mouth, only where it does
+        # not look like the skin calibrated above or below the lips (the hair there): a moustache or
+        # beard is darker than lips, and the moustache over shut lips was taken for an open mouth's
+        # inside (without hair those classes are skin, or on a calibration frame caught with an open
+        # mouth, its shaded inside)
+        dark = self._darker_than_lips(f)
+        if self._hair:
+            dark_in = dark * _clip((skin_like - SKIN_CLEAR) * np.float32(1.0 / (SKIN_UNLIKE - SKIN_CLEAR)), 0.0, 1.0)
+            inside = np.maximum(inside, dark_in)
+        else:
+            inside = np.maximum(inside, dark)
+        out = 1.0 - inside
         k = GAP_PRICE / SKIN_UNLIKE
         rows[4] = (OPEN_SKIN / SKIN_UNLIKE) * out * _clip(SKIN_UNLIKE - skin_like, 0.0, SKIN_UNLIKE)
         if OPEN_LIP > 0:
@@ -830,7 +854,6 @@ class MouthFinder:
         rows[6] = inside > 0.5
         # lip-coloured rows past the skin below the lower lip: the lower lip goes on further
         rows[7] = OUTSIDE_PRICE * _clip(skin_like - lip_like - 1.0, 0.0, ROW_CAP)
-        dark = self._darker_than_lips(f)
         e[1:3] += np.float32(DARK_IN_LIP) * dark
         np.cumsum(sums, axis=1, out=sums)
         # candidate boundaries: b2 = first row of the gap (below the upper lip), b3 = first row of
@@ -934,6 +957,8 @@ class MouthFinder:
             xs = np.concatenate([np.arange(x0, x0 + step * len(ys), step) for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
             unlike = unlike_cheek(cols, self._cheek_rows(tuple(0 if ys is None else len(ys) for ys in traced)))
+            if self.lips_red is not None:
+                lips_near = self._red_rows(maps, xs, np.concatenate([ys for _, ys in live])) if self._hair else None
         out, strength, halves, seen, at = [], [], [], [], 0
         for step, ys, prev in zip((-1, +1), traced, last):
             if ys is None:
@@ -946,8 +971,7 @@ class MouthFinder:
             at += len(ys)
             half, g, cheek_seen = corner_search(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
             if self.lips_red is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
-                lips = lip_columns(cols[at - len(ys) : at], self.lips_red, self._skin_f, self._lip_run)
-                half = lip_end(lips, half, LIP_END * self.wi, self.body)
+                half = lip_end(self._lips_along(cols, lips_near, at - len(ys), at), half, LIP_END * self.wi, self.body)
             out.append(self._corner_at(x0, step, ys, half))
             strength.append(g)
             halves.append(half)
@@ -956,13 +980,49 @@ class MouthFinder:
             # hair all round the mouth (a full beard): the lips' own red ends at both corners
             ends, at = [], 0
             for (step, ys), half in zip(live, halves):
-                lips = lip_columns(cols[at : at + len(ys)], self.lips_red, self._skin_f, self._lip_run)
+                lips = self._lips_along(cols, lips_near, at, at + len(ys))
                 at += len(ys)
                 ends.append(lip_gap(lips, half, LIP_END * self.wi, self.body, self.run))
             if all(e is not None and e < h - 1.0 for e, h in zip(ends, halves)):
                 out = [self._corner_at(x0, step, ys, half) for (step, ys), half in zip(live, ends)]
                 halves, seen = ends, [True, True]
         return out[0], out[1], strength, halves, seen
+
+    def _red_map(self, maps: "_Maps") -> np.ndarray:
+        """The crop's lip-red map (H, W) float32: each pixel's r − g chroma (:func:`~tracker.mouth_model.profile_features`'
+        second feature), and at most that of the mean of :func:`lip_run` columns centred on it — a
+        hair as red as lips averages away with the hair beside it, and a column past the lips' end
+        does not take their red from its neighbour; made once a frame."""
+        if maps.red is None:
+            px = maps.crop.astype(np.float32)
+            k = np.float32(self._chroma / C_UNIT)
+            reds = []
+            for img in (px, cv2.blur(px, (self._lip_run, 1), borderType=cv2.BORDER_REPLICATE)):
+                b, g, r = cv2.split(img)
+                den = b + g
+                den += r
+                den += np.float32(24.0)
+                r -= g
+                r *= k
+                reds.append(r / den)
+            maps.red = np.minimum(reds[0], reds[1], out=reds[0])
+        return maps.red
+
+    def _red_rows(self, maps: "_Maps", xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Per column ``xs`` along the line rows ``ys``: whether it shows the lips on the rows across the
+        line (:data:`~tracker.mouth_model.LIP_ROWS`, :func:`~tracker.mouth_model.lip_rows` on
+        :meth:`_red_map`)."""
+        H, W = maps.shape
+        y = np.clip(ys.astype(np.intp)[:, None] + self._lip_rows, 0, H - 1)
+        red = self._red_map(maps).take(y * W + np.clip(xs, 0, W - 1)[:, None])
+        return lip_rows(red, self.lips_red)
+
+    def _lips_along(self, cols: np.ndarray, near: np.ndarray, a: int, b: int) -> list[bool]:
+        """Whether each column ``a..b`` of :meth:`_search`'s columns shows the lips: on its bands
+        (:func:`~tracker.mouth_model.lip_columns`) or on the rows across the line (``near``,
+        :meth:`_red_rows`)."""
+        bands = lip_columns(cols[a:b], self.lips_red, self._skin_f, self._lip_run)
+        return bands if near is None else [p or bool(q) for p, q in zip(bands, near[a:b].tolist())]
 
     def _corner_at(self, x0: int, step: int, ys: np.ndarray, half: float) -> tuple[float, float]:
         """The corner ``half`` columns (sub-pixel) from ``x0`` along one side's traced rows ``ys``

@@ -983,6 +983,24 @@ def lip_columns(cols: np.ndarray, need: float, skin_f: np.ndarray, run: int = 1)
     return ((red >= need) | teeth).tolist()
 
 
+LIP_ROWS = (0.12, 0.15)
+"""Rows (× wi) above and below the line through which :func:`lip_rows` looks for the lips, about the
+thickest upper and lower lip at a corner's columns (calibrated lips: 0.04-0.14 wi above, 0.11-0.2 wi
+below, thinning towards the corners). Where the line runs along a moustache's lower edge, or the lips
+have thinned towards a corner, the lips lie off :func:`lip_columns`' bands and the lips' end went
+unseen: the corners ran on through the hair to the beard's edge (the bearded copy of expr_d18: corners
+9 % of the eye distance out)."""
+
+
+def lip_rows(red: np.ndarray, need: float) -> np.ndarray:
+    """Per column (rows of ``red``, (n, m): the r − g chroma of each of the ``m`` rows across the line,
+    :data:`LIP_ROWS`, each a mean of a few columns), whether two rows next to each other are lip-red
+    (at least ``need``): one row is as often a hair's or a crease's colour."""
+    if red.shape[1] < 2:
+        return red.max(axis=1, initial=-np.inf) >= need
+    return np.minimum(red[:, 1:], red[:, :-1]).max(axis=1) >= need
+
+
 LIP_BODY = 0.5
 """Least share of the lips' body columns (:func:`mouth_body`) that must show the lips for their end to
 bound a corner: a hand or a scarf over the mouth shows none, and a speck of red on it is no lip."""
