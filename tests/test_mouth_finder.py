@@ -539,6 +539,51 @@ def test_a_full_beard_leaves_no_cheek_and_the_lips_end_the_corners(expr):
     assert ew < 8.0 and eu < 3.0 and el < 3.0, (expr, round(ew, 2), round(eu, 2), round(el, 2))
 
 
+def _red_strands(img: np.ndarray, state: FaceState, bgr, first: float = 9.0, every: float = 8.0, width: int = 4) -> np.ndarray:
+    """``img`` bearded (:func:`_bearded`) with strands of lip red in the hair across the mouth line on
+    both sides, from ``first`` px past each corner, every ``every`` px, ``width`` px wide."""
+    out = _bearded(img, state)
+    lm = face_landmarks(state)
+    (lx, ly), (rx, ry) = lm["mouth_left"], lm["mouth_right"]
+    y = int(round(0.5 * (ly + ry)))
+    for side, x0 in ((-1, lx), (1, rx)):
+        for k in range(6):
+            x = int(round(x0 + side * (first + k * every)))
+            a, b = (x - width + 1, x + 1) if side < 0 else (x, x + width)
+            out[y - 6 : y + 7, a:b] = bgr
+    return out
+
+
+@pytest.mark.parametrize("expr", ["neutral", "smile", "ah", "oo", "grin"])
+def test_red_strands_in_a_beard_do_not_carry_the_corners_out(expr):
+    """Strongly red lips in a beard whose hair has strands as red as the lips past the corners (lit
+    hairs, a red beard): each corner was bounded by the last column along the line that showed the
+    lips' red, which was the farthest strand — 26-46 px too wide (IPD 80; the bearded copy of talk_b:
+    width r 0.52 with the peer). Where the lips are at least twice :data:`LIP_LEAD` redder than the
+    skin, the lips end at the first columns in a row without their red (:func:`lip_gap`), as they do
+    where no cheek is seen past the hair."""
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    lm = face_landmarks(BASE)
+    click = ff.to_face(lm["mouth"][None])[0]
+    crop, origin = _crop(_bearded(img, BASE), ff, click)
+    model = learn_mouth(crop, tuple(click - origin), WI)
+    centre = np.array(model.centre) + origin
+    lip = img[int(round(0.5 * (lm["mouth"][1] + lm["lip_lower"][1]))), int(round(lm["mouth"][0]))]
+    state = BASE.with_expression(expr)
+    img, _ = render_face(state)
+    ff = _frame_of(state)
+    crop, origin = _crop(_red_strands(img, state, lip), ff, centre)
+    t = _truth_in_crop(state, ff, origin)
+    finder = MouthFinder(model, WI)
+    assert finder._strong_red
+    res = finder.find(crop, tuple(centre - origin))
+    assert res is not None and res.score >= SCORE_OK
+    assert _errors(res, t)[0] < 9.0
+    finder._strong_red = False  # the lips' last red column bounds the corner, as before
+    assert _errors(finder.find(crop, tuple(centre - origin)), t)[0] > 20.0
+
+
 def test_lip_gap_ends_the_lips_at_their_first_gap():
     """Pure cases of :func:`lip_gap`: the lips end ``reach`` past the last lip column before the first
     ``run`` columns without them, whatever lies further out (bright skin past a beard passing for

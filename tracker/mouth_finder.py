@@ -548,6 +548,10 @@ class MouthFinder:
         # the red at which a column along the line shows the lips, where they are red enough for their end to
         # bound a corner (None: not)
         self.lips_red = self.seed_red if self.seed_red is not None and lead >= LIP_LEAD and LIP_END > 0 else None
+        # lips this much redder than the skin end at their first columns without that red (lip_gap): a
+        # red strand in the hair past them (lit hairs, a red beard) no longer carries a corner out to it;
+        # paler lips stretched thin in a smile lose their red here and there, and end at their last red
+        self._strong_red = self.lips_red is not None and lead >= 2.0 * LIP_LEAD
         self._skin_f = cls[4, 0].copy()
         self._lip_run = lip_run(wi)
         self._lip_rows = np.arange(-int(round(LIP_ROWS[0] * wi)), int(round(LIP_ROWS[1] * wi)) + 1)[None, :]
@@ -947,7 +951,10 @@ class MouthFinder:
         (:func:`~tracker.mouth_model.corner_search`). Also whether each side saw the cheek past its
         corner. Where neither did but the lips' red ends on both sides (a full beard round the
         mouth), the corners go to the lips' ends (:func:`~tracker.mouth_model.lip_gap`) and count as
-        seen: on the bearded copies of the shared clips, expr_d18's lost frames 9.7 % → 2.3 %."""
+        seen: on the bearded copies of the shared clips, expr_d18's lost frames 9.7 % → 2.3 %. Where
+        the cheek is seen, the lips' end bounds each corner: their first gap for strongly red lips,
+        else their last red column (:func:`~tracker.mouth_model.lip_end`); with hair round the mouth
+        the lips' red is read on the rows across the line too (:meth:`_red_rows`)."""
         last = (None, None)
         if previous is not None and previous.score >= SCORE_OK:
             bias = CORNER_BIAS * self.r
@@ -971,7 +978,11 @@ class MouthFinder:
             at += len(ys)
             half, g, cheek_seen = corner_search(d, 0.15 * self.wi, 0.9 * self.wi, self.run, self.body, prev)
             if self.lips_red is not None and cheek_seen:  # (no cheek seen: a hand, a scarf; left to the score)
-                half = lip_end(self._lips_along(cols, lips_near, at - len(ys), at), half, LIP_END * self.wi, self.body)
+                lips = self._lips_along(cols, lips_near, at - len(ys), at)
+                half = lip_end(lips, half, LIP_END * self.wi, self.body)
+                gap = lip_gap(lips, half, LIP_END * self.wi, self.body, self.run) if self._strong_red else None
+                if gap is not None:  # (never further out than the last red: a narrow mouth ends inside the body's columns)
+                    half = min(half, gap)
             out.append(self._corner_at(x0, step, ys, half))
             strength.append(g)
             halves.append(half)
