@@ -446,6 +446,10 @@ def _open_table(model: MouthModel) -> np.ndarray:
     return (model.inside_table.astype(bool) | dark).view(np.uint8)
 
 
+_RED_MIX = np.array([[0.0, 1.0], [-1.0, 1.0], [1.0, 1.0]], np.float32)
+"""BGR → (r − g, b + g + r), the numerator and the sum of the lip-red chroma (:meth:`MouthFinder._red_map`)."""
+
+
 class _Maps:
     """Per-frame buffers of :meth:`MouthFinder.prepare` for crops of one size (H, W): ``colour``
     (H+1, W+1, 3) the integral image of the colours, ``crow`` (H+1, W, 3) the running sums down each
@@ -1005,18 +1009,14 @@ class MouthFinder:
         hair as red as lips averages away with the hair beside it, and a column past the lips' end
         does not take their red from its neighbour; made once a frame."""
         if maps.red is None:
-            px = maps.crop.astype(np.float32)
-            k = np.float32(self._chroma / C_UNIT)
-            reds = []
-            for img in (px, cv2.blur(px, (self._lip_run, 1), borderType=cv2.BORDER_REPLICATE)):
-                b, g, r = cv2.split(img)
-                den = b + g
-                den += r
-                den += np.float32(24.0)
-                r -= g
-                r *= k
-                reds.append(r / den)
-            maps.red = np.minimum(reds[0], reds[1], out=reds[0])
+            H, W = maps.shape
+            c = (maps.crop.reshape(-1, 3).astype(np.float32) @ _RED_MIX).reshape(H, W, 2)  # r − g, b + g + r
+            c[..., 1] += np.float32(24.0)
+            run = cv2.boxFilter(c, -1, (self._lip_run, 1), normalize=False, borderType=cv2.BORDER_REPLICATE)
+            own = c[..., 0] / c[..., 1]
+            np.minimum(own, run[..., 0] / run[..., 1], out=own)
+            own *= np.float32(self._chroma / C_UNIT)
+            maps.red = own
         return maps.red
 
     def _red_rows(self, maps: "_Maps", xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
