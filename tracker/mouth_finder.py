@@ -121,6 +121,12 @@ SEED_UNIT = 0.05
 SEED_LIP = 2.0
 """Darkness units that the lower lip's colour all along under a dark valley is worth (see
 :meth:`MouthFinder.line_seed`)."""
+STRONG_LEAD = 2.0 * LIP_LEAD
+"""Least lead (r − g chroma units) of the lips' red over the skin's for the lips to end at their first
+columns without it (:func:`~tracker.mouth_model.lip_gap`) rather than at their last red column: red
+hairs past the corners then no longer carry them out (the bearded copy of talk_b, lead 8.7: width r
+0.52 → 0.87); paler lips stretched in a smile lose their red here and there (the bearded copy of
+expr_d19 with --auto, lead 5.0: 0.76 → 0.11 under the first-gap rule)."""
 SEED_REACH_LIPS = 0.5
 """Rows (× wi) above and below a dark valley within which lip-red rows (redder than the skin by
 :data:`~tracker.mouth_model.GAP_RED` of the calibrated lips' lead) lie when it is between the lips
@@ -555,7 +561,7 @@ class MouthFinder:
         # lips this much redder than the skin end at their first columns without that red (lip_gap): a
         # red strand in the hair past them (lit hairs, a red beard) no longer carries a corner out to it;
         # paler lips stretched thin in a smile lose their red here and there, and end at their last red
-        self._strong_red = self.lips_red is not None and lead >= 2.0 * LIP_LEAD
+        self._strong_red = self.lips_red is not None and lead >= STRONG_LEAD
         self._skin_f = cls[4, 0].copy()
         self._lip_run = lip_run(wi)
         self._lip_rows = np.arange(-int(round(LIP_ROWS[0] * wi)), int(round(LIP_ROWS[1] * wi)) + 1)[None, :]
@@ -959,7 +965,7 @@ class MouthFinder:
         the cheek is seen, the lips' end bounds each corner: their first gap for strongly red lips,
         else their last red column (:func:`~tracker.mouth_model.lip_end`); with hair round the mouth
         the lips' red is read on the rows across the line too (:meth:`_red_rows`)."""
-        last = (None, None)
+        last, lips_near = (None, None), None
         if previous is not None and previous.score >= SCORE_OK:
             bias = CORNER_BIAS * self.r
             last = (x0 - previous.left[0] - bias, previous.right[0] - x0 - bias)
@@ -968,8 +974,8 @@ class MouthFinder:
             xs = np.concatenate([np.arange(x0, x0 + step * len(ys), step) for step, ys in live])
             cols = self._line_columns(maps, xs, np.concatenate([ys for _, ys in live]))
             unlike = unlike_cheek(cols, self._cheek_rows(tuple(0 if ys is None else len(ys) for ys in traced)))
-            if self.lips_red is not None:
-                lips_near = self._red_rows(maps, xs, np.concatenate([ys for _, ys in live])) if self._hair else None
+            if self.lips_red is not None and self._hair:
+                lips_near = self._red_rows(maps, xs, np.concatenate([ys for _, ys in live]))
         out, strength, halves, seen, at = [], [], [], [], 0
         for step, ys, prev in zip((-1, +1), traced, last):
             if ys is None:
@@ -1028,7 +1034,7 @@ class MouthFinder:
         red = self._red_map(maps).take(y * W + np.clip(xs, 0, W - 1)[:, None])
         return lip_rows(red, self.lips_red)
 
-    def _lips_along(self, cols: np.ndarray, near: np.ndarray, a: int, b: int) -> list[bool]:
+    def _lips_along(self, cols: np.ndarray, near: np.ndarray | None, a: int, b: int) -> list[bool]:
         """Whether each column ``a..b`` of :meth:`_search`'s columns shows the lips: on its bands
         (:func:`~tracker.mouth_model.lip_columns`) or on the rows across the line (``near``,
         :meth:`_red_rows`)."""

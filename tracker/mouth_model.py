@@ -994,8 +994,8 @@ unseen: the corners ran on through the hair to the beard's edge (the bearded cop
 
 def lip_rows(red: np.ndarray, need: float) -> np.ndarray:
     """Per column (rows of ``red``, (n, m): the r − g chroma of each of the ``m`` rows across the line,
-    :data:`LIP_ROWS`, each a mean of a few columns), whether two rows next to each other are lip-red
-    (at least ``need``): one row is as often a hair's or a crease's colour."""
+    :data:`LIP_ROWS`), whether two rows next to each other are lip-red (at least ``need``): one row is
+    as often a hair's or a crease's colour."""
     if red.shape[1] < 2:
         return red.max(axis=1, initial=-np.inf) >= need
     return np.minimum(red[:, 1:], red[:, :-1]).max(axis=1) >= need
