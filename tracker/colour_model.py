@@ -22,16 +22,21 @@ _SHIFT = 8 - BITS
 _N = 1 << BITS
 
 
+CHROMA_PAD = 24.0
+"""Added to ``b + g + r`` (grey levels) under the chroma ratios (:func:`features`,
+:func:`tracker.mouth_model.profile_features`): it keeps near-black pixels from getting wild chroma
+from sensor noise."""
+
+
 def features(bgr: np.ndarray, y_weight: float) -> np.ndarray:
     """Colour features ``(n, 3)`` of ``(n, 3)`` BGR values (any float or int dtype).
 
     Luminance ``Y/255`` scaled by ``y_weight`` and two chroma ratios that do not change
-    when the light gets brighter or dimmer. The ``+24`` keeps near-black pixels from
-    getting wild chroma from sensor noise.
+    when the light gets brighter or dimmer (over ``b + g + r`` plus :data:`CHROMA_PAD`).
     """
     c = np.asarray(bgr, dtype=np.float64).reshape(-1, 3)
     b, g, r = c[:, 0], c[:, 1], c[:, 2]
-    s = b + g + r + 24.0
+    s = b + g + r + CHROMA_PAD
     y = 0.114 * b + 0.587 * g + 0.299 * r
     return np.stack([y / 255.0 * y_weight, (r - g) / s, (r + g - 2.0 * b) / (2.0 * s)], axis=1)
 

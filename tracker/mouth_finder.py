@@ -60,12 +60,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import chroma_gain, grid_features, lut_index
+from tracker.colour_model import CHROMA_PAD, chroma_gain, grid_features, lut_index
 from tracker.mouth_model import (
-    BAND, C_UNIT, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, LIP_ROWS, N_RAYS, OPEN_DARK, SKIN_ROWS, MouthModel, band_columns,
-    cheek_run, corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_rows, lip_run, lip_sides,
-    lips_grey,
-    mouth_body, profile_features, trace_line, unlike_cheek,
+    BAND, C_UNIT, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, LIP_ROWS, N_RAYS, OPEN_DARK, RED_PARTS, SKIN_ROWS, MouthModel,
+    band_columns, cheek_run, corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_rows,
+    lip_run, lip_sides, lips_grey, mouth_body, profile_features, trace_line, unlike_cheek,
 )
 
 SCORE_OK = 0.5
@@ -450,10 +449,6 @@ def _open_table(model: MouthModel) -> np.ndarray:
     :data:`~tracker.mouth_model.OPEN_DARK` × the lips added (:func:`dark_rule`)."""
     dark = grid_features()[:, 0] * np.float32(255.0) < np.float32(OPEN_DARK * lips_grey(model.classes, model.skin_level))
     return (model.inside_table.astype(bool) | dark).view(np.uint8)
-
-
-_RED_MIX = np.array([[0.0, 1.0], [-1.0, 1.0], [1.0, 1.0]], np.float32)
-"""BGR → (r − g, b + g + r), the numerator and the sum of the lip-red chroma (:meth:`MouthFinder._red_map`)."""
 
 
 class _Maps:
@@ -1016,8 +1011,8 @@ class MouthFinder:
         does not take their red from its neighbour; made once a frame."""
         if maps.red is None:
             H, W = maps.shape
-            c = (maps.crop.reshape(-1, 3).astype(np.float32) @ _RED_MIX).reshape(H, W, 2)  # r − g, b + g + r
-            c[..., 1] += np.float32(24.0)
+            c = (maps.crop.reshape(-1, 3).astype(np.float32) @ RED_PARTS).reshape(H, W, 2)  # r − g, b + g + r
+            c[..., 1] += np.float32(CHROMA_PAD)
             run = cv2.boxFilter(c, -1, (self._lip_run, 1), normalize=False, borderType=cv2.BORDER_REPLICATE)
             own = c[..., 0] / c[..., 1]
             np.minimum(own, run[..., 0] / run[..., 1], out=own)

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from tracker.colour_model import TILE_SHAPE, chroma_gain, features, grid_features, lut_index, table_to_tile
+from tracker.colour_model import CHROMA_PAD, TILE_SHAPE, chroma_gain, features, grid_features, lut_index, table_to_tile
 
 FORMAT = 2
 MOUTH_RECT = (-0.95, -0.6, 1.9, 1.6)
@@ -71,6 +71,9 @@ L_UNIT, C_UNIT = 0.05, 0.012
 _FEATURE_MIX = np.array([[0.114, 0.0, -1.0, 1.0], [0.587, -1.0, 0.5, 1.0], [0.299, 1.0, 0.5, 1.0]], np.float32)
 """BGR → (luminance, r − g, (r + g − 2b) / 2, b + g + r), the numerators of :func:`profile_features`
 and the sum its chroma ratios are taken over."""
+RED_PARTS = np.ascontiguousarray(_FEATURE_MIX[:, 1::2])
+"""BGR → (r − g, b + g + r): the lip-red chroma's numerator and its sum, the second feature of
+:func:`profile_features` taken apart (the finder's per-pixel lip-red map)."""
 
 
 # --------------------------------------------------------------------------------------------- features
@@ -94,7 +97,7 @@ def profile_features(bgr: np.ndarray, skin_level: float, chroma: float = 1.0) ->
     else:  # one product for all rows (a stack of matrices is one BLAS call per matrix)
         out = (c.reshape(-1, 3) @ _FEATURE_MIX).reshape(c.shape[:-1] + (4,))
     den = out[..., 3:]
-    den += np.float32(24.0)
+    den += np.float32(CHROMA_PAD)
     np.divide(out[..., 1:3], den, out=out[..., 1:3])
     out[..., 0] *= np.float32(1.0 / (L_UNIT * max(skin_level, 8.0)))
     out[..., 1:3] *= np.float32(chroma / C_UNIT)
