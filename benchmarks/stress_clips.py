@@ -52,6 +52,11 @@ child    a young child's proportions: each eye 25 % larger about its pupil, and 
 late     the clip from 40 % of its length on, with the clicks put on the peer's points there (a
          performance joined in the middle: the first frame, which calibration and ``--auto`` look
          at, shows whatever the face was doing — a grimace, a word, a blink)
+cheap    half the resolution, the light at 60 %, sensor noise σ 5 and JPEG quality 50 all at once (a
+         cheap laptop webcam in a dim room: each alone is ``half``, ``dim``, ``noisy``; together the
+         lips and the skin under the nose blur into one another)
+choppy   every other frame dropped, at half the frame rate (a webcam that falls to 12-15 frames a
+         second on a slow machine or a busy link: each step of the head twice as long)
 ======== ==================================================================================
 
 In ``leave`` and ``covered`` the peer's points that are out of the frame or under the hand are
@@ -89,7 +94,7 @@ POINTS = (
 )
 VARIANTS = ("half", "third", "small", "shake", "jolt", "tilt", "lean", "noisy", "dim", "step", "side", "shade", "pale",
             "washed", "lowlight", "warm", "blur", "mirror", "leave", "covered", "beard", "glasses", "deep",
-            "darkeyes", "child", "late")
+            "darkeyes", "child", "late", "cheap", "choppy")
 LATE = 0.4
 """Where in the clip (share of its frames) the ``late`` variant starts."""
 STEP_LIGHT = 0.55
@@ -103,6 +108,9 @@ WARM_BGR = (0.72, 0.95, 1.15)
 """The ``warm`` variant's cast: each channel's factor (B, G, R), a tungsten lamp's."""
 SIDE_LIGHT = 0.4
 """The light on the frame's right edge in ``side`` (× the clip's; the left edge keeps all of it)."""
+CHEAP = (0.5, 0.6, 5.0, 50)
+"""The ``cheap`` variant: its scale, the light's share, the sensor noise (σ, grey levels, after the
+light falls) and the JPEG quality."""
 EXPOSURE = (0.5, 8)
 """The ``jolt`` variant's exposure (share of the frame time, ending at the frame) and the warped
 copies averaged over it."""
@@ -133,8 +141,8 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
     w, h = size
     rng = np.random.default_rng(seed)
     eye = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    if kind in ("half", "third"):
-        s = 0.5 if kind == "half" else 1.0 / 3.0
+    if kind in ("half", "third", "cheap"):
+        s = {"half": 0.5, "third": 1.0 / 3.0, "cheap": CHEAP[0]}[kind]
         m = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5]])
         return [m] * n, (int(round(w * s)), int(round(h * s)))
     if kind == "mirror":
@@ -449,6 +457,14 @@ def _photometric(kind: str, n: int, seed: int,
             ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, 40])
             return cv2.imdecode(buf, cv2.IMREAD_COLOR)
         return noisy
+    if kind == "cheap":
+        _, light, sigma, quality = CHEAP
+
+        def cheap(img: np.ndarray, i: int) -> np.ndarray:
+            out = img.astype(np.float32) * np.float32(light) + rng.normal(0.0, sigma, img.shape).astype(np.float32)
+            ok, buf = cv2.imencode(".jpg", np.clip(out + 0.5, 0, 255).astype(np.uint8), [cv2.IMWRITE_JPEG_QUALITY, quality])
+            return cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        return cheap
     if kind == "dim":
         def dim(img: np.ndarray, i: int) -> np.ndarray:
             t = i / max(n - 1, 1)
@@ -673,6 +689,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     if kind == "late":
         start = int(LATE * len(frames))
         frames, points = frames[start:], {p: q[start:] for p, q in points.items()}
+    if kind == "choppy":
+        frames, points, fps = frames[::2], {p: q[::2] for p, q in points.items()}, 0.5 * fps
     n = len(frames)
     h, w = frames[0].shape[:2]
     seed = seed + sum(map(ord, name)) + sum(map(ord, kind))
@@ -697,8 +715,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     for i, img in enumerate(frames):
         m = maps[i]
         if kind != "mirror" and not np.allclose(m, [[1, 0, 0], [0, 1, 0]]):
-            interp = cv2.INTER_AREA if kind in ("half", "third") else cv2.INTER_LINEAR
-            if kind in ("half", "third"):
+            interp = cv2.INTER_AREA if kind in ("half", "third", "cheap") else cv2.INTER_LINEAR
+            if kind in ("half", "third", "cheap"):
                 img = cv2.resize(img, (W, H), interpolation=interp)
             elif smear is not None:
                 acc = np.zeros((H, W, 3), np.float32)
@@ -751,6 +769,12 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
         (out / f"{name}.clicks.json").write_text(json.dumps(_clicks_from_points(moved, 0)))
         return out / f"{name}.mp4"
     clicks = json.loads((src / f"{name}.clicks.json").read_text())
+    if kind == "choppy" and int(clicks.get("frame", 0)) % 2:
+        # the clicked frame was dropped: clicks on the peer's points of the kept frame before it
+        (out / f"{name}.clicks.json").write_text(json.dumps(_clicks_from_points(moved, int(clicks["frame"]) // 2)))
+        return out / f"{name}.mp4"
+    if kind == "choppy":
+        clicks["frame"] = int(clicks.get("frame", 0)) // 2
     m0 = maps[int(clicks.get("frame", 0))]
     new = {"frame": clicks.get("frame", 0)}
     for k in ("left_pupil", "right_pupil", "left_brow", "right_brow", "mouth"):

@@ -405,3 +405,42 @@ def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
     assert clicks["mouth"] == pytest.approx([32 + start, 35.5], abs=0.06)
     with open(out / "c.mp.csv", newline="") as f:
         assert [r["frame"] for r in csv.DictReader(f)] == [str(i) for i in range(10 - start)]
+
+
+def test_choppy_keeps_every_other_frame_at_half_the_rate_with_the_peers_rows_alike(tmp_path):
+    """``choppy``: frames 0, 2, 4 … of the clip at half its frame rate, the peer's rows the same ones
+    renumbered from 0, and the clicks (made on frame 0) where they were."""
+    src, out = tmp_path / "src", tmp_path / "choppy"
+    src.mkdir()
+    _write_clip(src, n=10, w=160, h=120)
+    with open(src / "c.points.csv", newline="") as f:  # frame i's points i px right
+        rows = list(csv.DictReader(f))
+    for i, r in enumerate(rows):
+        for k in r:
+            if k.endswith("_x"):
+                r[k] = str(float(r[k]) + i)
+    with open(src / "c.points.csv", "w", newline="") as f:
+        wr = csv.DictWriter(f, fieldnames=list(rows[0]))
+        wr.writeheader()
+        wr.writerows(rows)
+    frames, fps = sc.read_frames(src / "c.mp4")
+    sc.make_variant(src, "c", "choppy", out)
+    got, got_fps = sc.read_frames(out / "c.mp4")
+    assert len(got) == 5 and got_fps == pytest.approx(0.5 * fps)
+    assert np.abs(got[1].astype(int) - frames[2].astype(int)).mean() < 12  # the codec's loss only
+    peer = rf.load_peer(out, "c")
+    assert peer.points["left_pupil"][:, 0] == pytest.approx([20, 22, 24, 26, 28], abs=0.01)
+    clicks = json.loads((out / "c.clicks.json").read_text())
+    assert clicks["frame"] == 0 and clicks["left_pupil"] == pytest.approx([20, 15], abs=0.06)
+
+
+def test_cheap_halves_the_picture_dims_it_and_adds_noise():
+    """``cheap``: the picture at half size (points halved, as ``half``), its light at 60 % and grainy —
+    a flat grey frame comes back darker, with a spread of grey levels it did not have."""
+    maps, size = sc._affine_frames(3, "cheap", (160, 120), 0)
+    assert size == (80, 60) and maps[0] == pytest.approx(np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25]]))
+    f = sc._photometric("cheap", 3, 0)
+    flat = np.full((60, 80, 3), 200, np.uint8)
+    out = f(flat, 0).astype(np.float64)
+    assert out.mean() == pytest.approx(200 * sc.CHEAP[1], abs=3)
+    assert 0.5 < out.std() < sc.CHEAP[2]  # the grain, partly smoothed away by the JPEG step
