@@ -492,6 +492,51 @@ def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
     assert plausible(0.6, 0.0) and not plausible(0.6, -0.1)  # after a yawn: back to the rigid place, not past it
 
 
+def test_the_frame_interval_sets_how_far_the_mouth_may_move_between_frames():
+    """At 25 frames a second or faster the mouth's per-frame allowances hold as they are; frames further
+    apart (a webcam falling to 12.5 frames a second) let it move proportionally further, up to
+    ``MAX_STEPS`` frames' worth, and times that do not move on (none given, a repeated time) count as
+    one frame. The place check then takes a mouth 0.4 wi to the side of the prediction at 12.5 frames
+    a second, not at 25."""
+    from types import SimpleNamespace
+
+    from tracker import face_tracker as ft
+
+    img, _ = render_face(BASE)
+    tr = FaceTracker(calibrate(img, Clicks.from_dict(clicks_for(BASE))))
+    assert tr._frame_steps(0.0) == 1.0  # no last frame
+    assert tr._frame_steps(1 / 30) == 1.0 and tr._frame_steps(1 / 30 + 0.04) == pytest.approx(1.0)
+    t = 1 / 30 + 0.04 + 0.08
+    assert tr._frame_steps(t) == pytest.approx(2.0)
+    assert tr._frame_steps(t) == 1.0  # the same time again
+    assert tr._frame_steps(t + 5.0) == ft.MAX_STEPS  # a long gap
+    wi, w = tr.wi, tr.cal.mouth_width
+    aside = SimpleNamespace(width=w, level_rise=0.0, line_centre=(200.0 + 0.4 * wi, 300.0))
+    tr._steps = 1.0
+    assert not tr._plausible_mouth(aside, (200.0, 300.0), (0.0, 0.0))
+    tr._steps = 2.0
+    assert tr._plausible_mouth(aside, (200.0, 300.0), (0.0, 0.0))
+
+
+def test_frames_further_apart_let_the_mouth_move_further_in_the_finder_score():
+    """The mouth finder's score: a mouth 0.35 wi from the last frame's loses part of its score at one
+    frame's time since it, and none at two frames' time."""
+    from types import SimpleNamespace
+
+    state = BASE.with_expression("ah")
+    img, _ = render_face(state)
+    tr = FaceTracker(calibrate(img, Clicks.from_dict(clicks_for(state))))
+    mf = tr.mouth_finder
+    prev = SimpleNamespace(score=1.0, centre=(100.0, 100.0))
+    args = lambda: (mf.width0, 0.3 * mf.wi, (100.0 + 0.35 * mf.wi, 100.0), (100.0 + 0.35 * mf.wi, 100.0),
+                    (100.0 + 0.35 * mf.wi, 100.0), (1.0, 1.0), (1.0 * mf.gain0, 1.0 * mf.gain0), prev)
+    mf._steps = 1.0
+    one = mf._score(*args())
+    mf._steps = 2.0
+    two = mf._score(*args())
+    assert one < 0.7 and two == pytest.approx(1.0)
+
+
 def _two_motions(img: np.ndarray, split_x: float, m: np.ndarray, shift: tuple[float, float]) -> np.ndarray:
     """``img`` moved by ``m`` left of column ``split_x`` and shifted by ``shift`` right of it."""
     h, w = img.shape[:2]

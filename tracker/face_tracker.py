@@ -193,6 +193,16 @@ BLIND_FRAMES = 2  # ... and the picture under FACE_UNSURE, this many frames in a
 RECHECK_EVERY = 10  # unsure frames (not ok, or not both eyes seen; a sure frame takes one back) after which the face finder takes a second look
 RECHECK_GAP = 5  # frames at least between two second looks
 RECHECK_MOVE = 0.25  # a face the second look finds this far (× the IPD) from where we are is where the face went
+FRAME_STEP = 0.04
+"""The time (s) between frames that the mouth's per-frame allowances (how far it may move between two
+frames, :meth:`FaceTracker._plausible_mouth` and the mouth finder's score) are set for: 25 frames a
+second, and they hold as they are for any faster camera. A slower one's frames lie further apart and
+the face moves further between them: a webcam that falls to 12-15 frames a second in a dim room or on
+a slow machine — at half the frame rate a pulled face's mouth moved 0.35-0.43 wi between frames, past
+the allowance, and 1.4 % of expr_d6's frames came out ``mouth_lost`` (the ``choppy`` stress copies).
+There the allowances grow with the time since the last frame, up to :data:`MAX_STEPS` frames' worth."""
+MAX_STEPS = 3.0
+"""Most frames' worth of motion the allowances grow to (a long gap in the frames says nothing more)."""
 PIN_CHECK = 0.1
 """A move (× the IPD) of the head by the face picture alone (no flow) past which the eyes are looked
 for where the head was too (:meth:`FaceTracker._check_pin`): after a cut in the video the picture
@@ -307,6 +317,8 @@ class FaceTracker:
         self.lost_frames = 0
         self.unsure_frames = 0
         self._since_look = 0
+        self._time: float | None = None  # the last frame's time (s)
+        self._steps = 1.0  # frames' worth of motion since the last frame (see FRAME_STEP)
         self._blind = 0
         self.motion.reset()
         self._reset_adaptation()
@@ -413,13 +425,22 @@ class FaceTracker:
             return None
         return patch_similarity(face_patch(self._grey, self.motion.scale, anchors), ref)
 
+    def _frame_steps(self, time: float) -> float:
+        """How many :data:`FRAME_STEP` intervals (1 to :data:`MAX_STEPS`) passed since the last frame's
+        ``time`` (s); 1 when the times do not say (no last frame, a time that did not move on)."""
+        last, self._time = self._time, time
+        if last is None or not (time > last) or not math.isfinite(time - last):
+            return 1.0
+        return min(max((time - last) / FRAME_STEP, 1.0), MAX_STEPS)
+
     def _plausible_mouth(self, m, predicted: tuple[float, float], origin: tuple[float, float],
                          rigid: tuple[float, float] | None = None) -> bool:
         """A mouth of about the calibrated size, its line tilted by under 0.45 of its width (a pulled,
         lopsided mouth: 0.4 seen on real faces), near where the head puts it: near the
         prediction (the rigid place moved by the last jaw), or — a jaw closing fast after a yawn —
         back up to its rigid place (``rigid``, face px) but not above it; and never higher above the
-        rigid place than the jaw goes (:data:`JAW_MIN`)."""
+        rigid place than the jaw goes (:data:`JAW_MIN`). The distances from the prediction grow with
+        the time since the last frame (:data:`FRAME_STEP`)."""
         w = self.cal.mouth_width
         rise = m.level_rise
         if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.45 * m.width):
@@ -427,13 +448,14 @@ class FaceTracker:
         c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]
         dy = c[1] + origin[1] - predicted[1]
-        lo = -0.25 * self.wi
+        k = self._steps
+        lo = -0.25 * self.wi * k
         if rigid is not None:
             # back up to the rigid place at once, but never above the highest the jaw goes: a mouth
             # found there is the philtrum or the nostrils, and a jaw that followed it would let the
             # next one rise further still
             lo = max(min(lo, rigid[1] - predicted[1]), rigid[1] + self._jaw_min[1] - predicted[1])
-        return abs(dx) <= 0.3 * self.wi and lo <= dy <= 0.45 * self.wi
+        return abs(dx) <= 0.3 * self.wi * k and lo <= dy <= 0.45 * self.wi * k
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
@@ -441,6 +463,7 @@ class FaceTracker:
         if frame_bgr.ndim != 3 or frame_bgr.shape[2] != 3 or frame_bgr.dtype != np.uint8:
             raise ValueError("frames must be uint8 (H, W, 3) BGR")
         flow = None
+        self._steps = self._frame_steps(float(time))
         second = not self.lost and self.unsure_frames >= RECHECK_EVERY and self._since_look >= RECHECK_GAP
         self._grey = self.motion.grey(frame_bgr, None if self.lost or second else self._grey_box(frame_bgr.shape))
         reacquired = self.lost
@@ -870,7 +893,8 @@ class FaceTracker:
         if prev is not None and hasattr(self.mouth_finder, "shifted"):
             # the last frame's mouth, moved into this crop's pixels (both crops are in face px)
             prev = self.mouth_finder.shifted(prev[0], prev[1][0] - rect[0], prev[1][1] - rect[1])
-            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]), previous=prev)
+            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]), previous=prev,
+                                         steps=self._steps)
         else:
             res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
         if res is not None and res.score < MOUTH_SCORE_OK:

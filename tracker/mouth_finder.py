@@ -482,6 +482,7 @@ class MouthFinder:
 
     def __init__(self, model: MouthModel, work_ipd: float):
         self.model = model
+        self._steps = 1.0  # frames' worth of time since the last frame (see find)
         self._chroma = chroma_gain(model.skin_sat)
         self.wi_crop = float(work_ipd)
         # everything runs on the crop shrunk to WORK_IPD px between the eyes (lips are several px
@@ -1162,14 +1163,16 @@ class MouthFinder:
 
     # ------------------------------------------------------------------ the whole
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
-             previous: MouthResult | None = None) -> MouthResult | None:
+             previous: MouthResult | None = None, steps: float = 1.0) -> MouthResult | None:
         """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth
         centre, the calibrated mouth centre under the head's motion), or None when nothing there can be
         a mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
         moves with the head; :meth:`shifted`): a mouth's gap cannot jump from one frame to the next,
         so a result far from it scores lower, and a line seeded far from its line (:data:`HOLD_LINE`)
-        is traced from its line too. Works on the crop shrunk to :data:`WORK_IPD`; the
-        result is in the given crop's pixels."""
+        is traced from its line too. ``steps``: frames' worth of time since that frame (1 at 25 frames a
+        second or faster; see :data:`tracker.face_tracker.FRAME_STEP`), by which the mouth's move from it
+        may grow. Works on the crop shrunk to :data:`WORK_IPD`; the result is in the given crop's pixels."""
+        self._steps = float(steps)
         s = self.s
         if s >= 1.0:
             return self._find(crop_bgr, predicted_centre_crop, previous)
@@ -1432,7 +1435,8 @@ class MouthFinder:
         plausibility of the width (0.5–1.8× the calibrated mouth's) and height (under 1.1 wi), the
         place of the centre on the traced line (``on_line``) against the prediction (full within ~0.3
         wi) and, with a previous result, how far the centre between the corners (``centre``) moved
-        (full within 0.25 wi, none past 0.5 wi: a pulled face moves its mouth that far in a frame)."""
+        (full within 0.25 wi, none past 0.5 wi: a pulled face moves its mouth that far in a frame; per
+        :meth:`find`'s ``steps`` of time between the frames)."""
         wi = self.wi
         ramp = lambda v, a, b: min(max((v - a) / (b - a), 0.0), 1.0)
         s_fit = ramp(-max(fit), -6.0, -3.0)
@@ -1448,6 +1452,6 @@ class MouthFinder:
         if previous is not None and previous.score >= SCORE_OK:
             # the mouth's place cannot jump; its opening can change fast (speech), which the split
             # of the profile already weighs against the last frame's gap
-            jump = math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1])
+            jump = math.hypot(centre[0] - previous.centre[0], centre[1] - previous.centre[1]) / self._steps
             s_prev = ramp(-jump, -0.5 * wi, -0.25 * wi)
         return float(s_fit * s_corner * s_size * s_place * s_prev)
