@@ -444,6 +444,43 @@ def test_refine_pupils_snaps_to_a_childs_larger_iris(iris, monkeypatch):
     assert np.hypot(*(np.array(r) - lm["right_pupil"])) < 0.02 * BASE.ipd
 
 
+def test_refine_pupils_keeps_the_clicks_where_snapping_again_moves_on(monkeypatch):
+    """A snap stands where snapping the snapped pair again keeps it within ``SNAP_HOLD`` of the eye
+    distance: a sharp eye's rim holds it (the performer's clicks, moved 3 px, snap onto the irises
+    and stay); one that moves on is followed until it holds, and one that swings back and forth — a
+    dim, blurred eye where the best circle depends on where the search starts — leaves the clicks as
+    they were."""
+    import tracker.eyes as eyes
+
+    frame, _ = render_face(BASE)
+    lm = face_landmarks(BASE)
+    clicks = (tuple(lm["left_pupil"] + (3, -2)), tuple(lm["right_pupil"] + (-2, 3)))
+    real = eyes._snap_pupils
+    calls = []
+
+    def drifting(grey, lp, rp, ipd):
+        calls.append((lp, rp))
+        k = 0.03 * ipd  # every snap moves the pair on by 3 % of the eye distance: nothing holds it
+        return (lp[0] + k, lp[1] + k), (rp[0] + k, rp[1] + k)
+
+    monkeypatch.setattr(eyes, "_snap_pupils", drifting)
+    assert eyes.refine_pupils(frame, *clicks) == tuple(tuple(map(float, c)) for c in clicks)
+    assert len(calls) == 1 + eyes.SNAP_TRIES
+
+    def settling(grey, lp, rp, ipd):  # a second step of 3 %, then it holds: the second place stands
+        calls.append((lp, rp))
+        k = 0.03 * ipd if len(calls) <= 2 else 0.0
+        return (lp[0] + k, lp[1]), (rp[0] - k, rp[1])
+
+    calls.clear()
+    monkeypatch.setattr(eyes, "_snap_pupils", settling)
+    l, r = eyes.refine_pupils(frame, *clicks)
+    assert l[0] == pytest.approx(clicks[0][0] + 0.06 * BASE.ipd, rel=0.02) and len(calls) == 3
+    monkeypatch.setattr(eyes, "_snap_pupils", real)
+    l, r = eyes.refine_pupils(frame, *clicks)
+    assert np.hypot(*(np.array(l) - lm["left_pupil"])) < 0.5 and np.hypot(*(np.array(r) - lm["right_pupil"])) < 0.5
+
+
 def test_refine_pupils_keeps_clicks_on_a_face_without_eyes():
     flat = np.full((200, 300, 3), 140, np.uint8)
     assert refine_pupils(flat, (100.0, 100.0), (180.0, 100.0)) == ((100.0, 100.0), (180.0, 100.0))
