@@ -196,6 +196,24 @@ def test_the_mouth_point_is_on_the_lips_not_on_a_pinker_chin():
     assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
 
 
+def test_the_mouth_point_is_on_the_lips_not_on_reddened_nostrils():
+    """A cheap dim webcam (half size, noise, JPEG): the lips are only a little redder than the skin,
+    and the skin under the nose, reddened round the nostrils at the very start of the range looked
+    in, is over half as red as they are; the runs were joined into one span of lips, and the
+    nostrils' shadow, a little darker than the gap between the lips, took the mouth point half an
+    eye distance up (the ``cheap`` copy of expr_d0 with --auto: mouth opening r 0.50, 0.75 with
+    this). A red run that starts at the range's start without the reddest row in it is no lip."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey, red = _lower_face(beard=False)
+    red[red > 150.0] = 152.0  # weakly red lips (rows 144-167)
+    top = 40 + int(round(0.8 * 100))
+    red[top - 10 : top + 7, 72:128] = 150.0  # the skin under the nose, reddened, from above the range into it
+    grey[top + 2 : top + 7, 81:98] = 10.0  # the nostrils: their rows darker on the whole than the gap's
+    grey[top + 2 : top + 7, 102:119] = 10.0
+    x, y = _mouth(grey, left, right, red)
+    assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
+
+
 def _mouth_bands(bands) -> tuple[np.ndarray, np.ndarray]:
     """Grey and Lab a* images of a lower face (eyes at rows 40, 100 px apart) on skin of grey 170 and
     a* 145, with ``bands`` ((row0, row1), grey, a*) across the mouth, columns 60-140."""

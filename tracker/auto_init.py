@@ -425,6 +425,21 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | No
     return int(run[0]), int(run[-1])
 
 
+def _nose_red(red: np.ndarray, skin_red: float, ipd: float) -> int:
+    """Where the lips' rows (:func:`_lip_span`) begin at the range's very start but the reddest row lies
+    in a later run of red rows: the row after that first run, which is the skin under the nose,
+    reddened round the nostrils (the nostrils' shadow is a dark valley at the top of it), and no lip:
+    a lip lies below :data:`MOUTH_RANGE`'s start. 1 (the first row a valley can be on) where the
+    first run holds the reddest row — then it is lips."""
+    j = int(np.argmax(red[: max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1)]))
+    lead = float(red[j]) - skin_red
+    reds = red >= skin_red + 0.5 * lead
+    end = 0
+    while end < len(reds) and reds[end]:
+        end += 1
+    return 1 if j < end else end + 1
+
+
 def _two_red_lips(red: np.ndarray, span: tuple[int, int], skin_red: float) -> bool:
     """Whether the lips' rows ``span`` (:func:`_lip_span` of the Lab a* profile ``red``) are two red
     runs with rows under half the span's lead over the skin between them: the upper lip is red itself,
@@ -491,6 +506,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
             # (a painted beard round expr_d18: the point on the lower lip's middle, 7 % of the eye
             # distance low, and calibration learned the moustache for the upper lip)
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
+            if a == 0:
+                top = max(top, _nose_red(red, skin_red, ipd))
             k, valley = (a + b) // 2, None
             means = band.mean(axis=1)
             for prof in (smooth(means), means):
