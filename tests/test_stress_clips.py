@@ -372,15 +372,13 @@ def test_child_moves_the_points_with_the_pixels(roll):
     assert np.allclose(point(pupil + 0.5, 0) - 0.5, pupil)
 
 
-def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
-    """``late``: the clip from :data:`~benchmarks.stress_clips.LATE` of its frames on, the peer's rows
-    renumbered from 0, and the clicks put where the shared clips' clicks are put on their frame 0
-    (pupils and brows on the peer's, the mouth at the midpoint of its corners) — on the new frame 0,
-    whatever the face is doing there."""
-    src, out = tmp_path / "src", tmp_path / "late"
+def _moving_variant(tmp_path, kind):
+    """Variant ``kind`` of a 10-frame 160×120 clip whose peer's face moves (frame i's points i px right
+    of frame 0's): the source's frames and frame rate, and the variant's folder."""
+    src, out = tmp_path / "src", tmp_path / kind
     src.mkdir()
     _write_clip(src, n=10, w=160, h=120)
-    with open(src / "c.points.csv", newline="") as f:  # a face that moves: frame i's points i px right
+    with open(src / "c.points.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     for i, r in enumerate(rows):
         for k in r:
@@ -390,8 +388,17 @@ def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
         wr = csv.DictWriter(f, fieldnames=list(rows[0]))
         wr.writeheader()
         wr.writerows(rows)
-    frames, _ = sc.read_frames(src / "c.mp4")
-    sc.make_variant(src, "c", "late", out)
+    frames, fps = sc.read_frames(src / "c.mp4")
+    sc.make_variant(src, "c", kind, out)
+    return frames, fps, out
+
+
+def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
+    """``late``: the clip from :data:`~benchmarks.stress_clips.LATE` of its frames on, the peer's rows
+    renumbered from 0, and the clicks put where the shared clips' clicks are put on their frame 0
+    (pupils and brows on the peer's, the mouth at the midpoint of its corners) — on the new frame 0,
+    whatever the face is doing there."""
+    frames, _, out = _moving_variant(tmp_path, "late")
     start = int(sc.LATE * 10)
     got, _ = sc.read_frames(out / "c.mp4")
     assert len(got) == 10 - start
@@ -410,21 +417,7 @@ def test_late_starts_mid_clip_with_clicks_on_the_peers_points_there(tmp_path):
 def test_choppy_keeps_every_other_frame_at_half_the_rate_with_the_peers_rows_alike(tmp_path):
     """``choppy``: frames 0, 2, 4 … of the clip at half its frame rate, the peer's rows the same ones
     renumbered from 0, and the clicks (made on frame 0) where they were."""
-    src, out = tmp_path / "src", tmp_path / "choppy"
-    src.mkdir()
-    _write_clip(src, n=10, w=160, h=120)
-    with open(src / "c.points.csv", newline="") as f:  # frame i's points i px right
-        rows = list(csv.DictReader(f))
-    for i, r in enumerate(rows):
-        for k in r:
-            if k.endswith("_x"):
-                r[k] = str(float(r[k]) + i)
-    with open(src / "c.points.csv", "w", newline="") as f:
-        wr = csv.DictWriter(f, fieldnames=list(rows[0]))
-        wr.writeheader()
-        wr.writerows(rows)
-    frames, fps = sc.read_frames(src / "c.mp4")
-    sc.make_variant(src, "c", "choppy", out)
+    frames, fps, out = _moving_variant(tmp_path, "choppy")
     got, got_fps = sc.read_frames(out / "c.mp4")
     assert len(got) == 5 and got_fps == pytest.approx(0.5 * fps)
     assert np.abs(got[1].astype(int) - frames[2].astype(int)).mean() < 12  # the codec's loss only
