@@ -425,13 +425,13 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | No
     return int(run[0]), int(run[-1])
 
 
-def _nose_red(red: np.ndarray, skin_red: float, ipd: float) -> int:
+def _nose_red(red: np.ndarray, skin_red: float, reddest_in: int) -> int:
     """Where the lips' rows (:func:`_lip_span`) begin at the range's very start but the reddest row lies
     in a later run of red rows: the row after that first run, which is the skin under the nose,
     reddened round the nostrils (the nostrils' shadow is a dark valley at the top of it), and no lip:
     a lip lies below :data:`MOUTH_RANGE`'s start. 1 (the first row a valley can be on) where the
-    first run holds the reddest row — then it is lips."""
-    j = int(np.argmax(red[: max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1)]))
+    first run holds the reddest row — then it is lips. ``reddest_in`` as for :func:`_lip_span`."""
+    j = int(np.argmax(red[:reddest_in]))
     lead = float(red[j]) - skin_red
     reds = red >= skin_red + 0.5 * lead
     end = 0
@@ -496,7 +496,8 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
         cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
                   for s in (-1.0, 1.0)]
         skin_red = float(np.median(np.concatenate(cheeks)))
-        span = _lip_span(red, skin_red, ipd, max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1))
+        reddest_in = max(int(round((LIPS_ABOVE - MOUTH_RANGE[0]) * ipd)), 1)
+        span = _lip_span(red, skin_red, ipd, reddest_in)
         if span is not None:
             a, b = span
             # the line may also lie just over the span: an upper lip darker than it is red (in
@@ -507,7 +508,7 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
             # distance low, and calibration learned the moustache for the upper lip)
             top = max(a - max(int(round(LINE_OVER * ipd)), 1), 1)
             if a == 0:
-                top = max(top, _nose_red(red, skin_red, ipd))
+                top = max(top, _nose_red(red, skin_red, reddest_in))
             k, valley = (a + b) // 2, None
             means = band.mean(axis=1)
             for prof in (smooth(means), means):
