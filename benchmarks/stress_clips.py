@@ -111,6 +111,8 @@ SIDE_LIGHT = 0.4
 CHEAP = (0.5, 0.6, 5.0, 50)
 """The ``cheap`` variant: its scale, the light's share, the sensor noise (σ, grey levels, after the
 light falls) and the JPEG quality."""
+SHRUNK = {"half": 0.5, "third": 1.0 / 3.0, "cheap": CHEAP[0]}
+"""The variants whose whole picture is shrunk (area-averaged), and by how much."""
 EXPOSURE = (0.5, 8)
 """The ``jolt`` variant's exposure (share of the frame time, ending at the frame) and the warped
 copies averaged over it."""
@@ -141,8 +143,8 @@ def _affine_frames(n: int, kind: str, size: tuple[int, int], seed: int) -> tuple
     w, h = size
     rng = np.random.default_rng(seed)
     eye = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    if kind in ("half", "third", "cheap"):
-        s = {"half": 0.5, "third": 1.0 / 3.0, "cheap": CHEAP[0]}[kind]
+    if kind in SHRUNK:
+        s = SHRUNK[kind]
         m = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5]])
         return [m] * n, (int(round(w * s)), int(round(h * s)))
     if kind == "mirror":
@@ -715,8 +717,8 @@ def make_variant(src: Path, name: str, kind: str, out: Path, seed: int = 0) -> P
     for i, img in enumerate(frames):
         m = maps[i]
         if kind != "mirror" and not np.allclose(m, [[1, 0, 0], [0, 1, 0]]):
-            interp = cv2.INTER_AREA if kind in ("half", "third", "cheap") else cv2.INTER_LINEAR
-            if kind in ("half", "third", "cheap"):
+            interp = cv2.INTER_AREA if kind in SHRUNK else cv2.INTER_LINEAR
+            if kind in SHRUNK:
                 img = cv2.resize(img, (W, H), interpolation=interp)
             elif smear is not None:
                 acc = np.zeros((H, W, 3), np.float32)

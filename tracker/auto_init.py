@@ -408,6 +408,14 @@ def find_brows(grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> list[tu
     return [_brow(grey, tuple(p), ipd, up, r) for p, r in zip((left, right), rims)]
 
 
+def _lip_reds(red: np.ndarray, skin_red: float, reddest_in: int | None) -> tuple[int, float, np.ndarray]:
+    """The reddest row of a Lab a* profile ``red`` among its first ``reddest_in`` rows, its lead over
+    the skin (``skin_red``), and which rows are redder than the skin by half that lead."""
+    j = int(np.argmax(red[:reddest_in]))
+    lead = float(red[j]) - skin_red
+    return j, lead, red >= skin_red + 0.5 * lead
+
+
 def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | None = None) -> tuple[int, int] | None:
     """The rows of a profile of Lab a* (``red``, rows down the face) that hold the lips: the run of
     rows redder than the skin (``skin_red``) by half the reddest row's lead, round the reddest row,
@@ -415,11 +423,10 @@ def _lip_span(red: np.ndarray, skin_red: float, ipd: float, reddest_in: int | No
     None when no row is :data:`LIP_RED` redder than the skin (pale lips, a colourless camera).
     ``reddest_in``: the reddest row is looked for in the first rows only (a chin pinker than
     brownish lips is not where they are)."""
-    j = int(np.argmax(red[:reddest_in]))
-    lead = float(red[j]) - skin_red
+    j, lead, reds = _lip_reds(red, skin_red, reddest_in)
     if lead < LIP_RED:
         return None
-    reds = np.flatnonzero(red >= skin_red + 0.5 * lead)  # holds j
+    reds = np.flatnonzero(reds)  # holds j
     runs = np.split(reds, np.flatnonzero(np.diff(reds) > max(int(round(LIP_GAP * ipd)), 1)) + 1)
     run = next(r for r in runs if r[0] <= j <= r[-1])
     return int(run[0]), int(run[-1])
@@ -431,9 +438,7 @@ def _nose_red(red: np.ndarray, skin_red: float, reddest_in: int) -> int:
     reddened round the nostrils (the nostrils' shadow is a dark valley at the top of it), and no lip:
     a lip lies below :data:`MOUTH_RANGE`'s start. 1 (the first row a valley can be on) where the
     first run holds the reddest row — then it is lips. ``reddest_in`` as for :func:`_lip_span`."""
-    j = int(np.argmax(red[:reddest_in]))
-    lead = float(red[j]) - skin_red
-    reds = red >= skin_red + 0.5 * lead
+    j, _, reds = _lip_reds(red, skin_red, reddest_in)
     end = 0
     while end < len(reds) and reds[end]:
         end += 1

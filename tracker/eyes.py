@@ -2339,11 +2339,12 @@ def refine_pupils(
     ipd = math.hypot(rp[0] - lp[0], rp[1] - lp[1])
     if ipd < 8:
         return lp, rp
-    pair = _snap_pupils(grey, lp, rp, ipd)
+    src = grey.astype(np.float32)
+    pair = _snap_pupils(src, lp, rp, ipd)
+    if pair == (lp, rp):
+        return pair
     for _ in range(SNAP_TRIES):
-        if pair == (lp, rp):
-            return pair
-        again = _snap_pupils(grey, pair[0], pair[1], ipd)
+        again = _snap_pupils(src, pair[0], pair[1], ipd)
         if max(math.dist(again[0], pair[0]), math.dist(again[1], pair[1])) <= SNAP_HOLD * ipd:
             return pair
         pair = again
@@ -2363,10 +2364,10 @@ SNAP_TRIES = 2
 """Snaps followed past the first before a pair that keeps moving is given up (the clicks stay)."""
 
 
-def _snap_pupils(grey: np.ndarray, lp: tuple[float, float], rp: tuple[float, float],
+def _snap_pupils(src: np.ndarray, lp: tuple[float, float], rp: tuple[float, float],
                  ipd: float) -> tuple[tuple[float, float], tuple[float, float]]:
-    """One snap of :func:`refine_pupils` (grey frame, pupils ``lp``, ``rp`` frame px, ``ipd`` their
-    distance): the pair moved to its limbus circles, or as it was."""
+    """One snap of :func:`refine_pupils` (``src`` the grey frame as float32, pupils ``lp``, ``rp`` frame
+    px, ``ipd`` their distance): the pair moved to its limbus circles, or as it was."""
     from tracker.calibration import FaceFrame
 
     grid = limbus_grid()
@@ -2374,7 +2375,6 @@ def _snap_pupils(grey: np.ndarray, lp: tuple[float, float], rp: tuple[float, flo
     ff = FaceFrame.from_pupils(lp, rp, wi)
     x0, y0 = int(math.floor(-0.5 * wi - reach)), int(math.floor(-reach))
     rect = (x0, y0, int(math.ceil(wi + 2 * reach)) + 1, int(math.ceil(2 * reach)) + 1)
-    src = grey.astype(np.float32)
     if ff.scale < 0.7:  # a large face shrunk: smooth first so the resampling does not alias
         src = cv2.GaussianBlur(src, (0, 0), 0.4 / ff.scale)
     gx, gy = limbus_gradients(ff.crop(src, rect))
