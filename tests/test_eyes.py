@@ -155,6 +155,24 @@ def test_gaze_moves_the_iris_inside_the_eye(finder):
     _check(res, truth, lid=2.5)
 
 
+def test_an_iris_that_plainly_shows_keeps_the_eye_point_whatever_the_gap_reads(finder, monkeypatch):
+    """A lid gap read short by one frame's noise (a glance aside under make-up) moved the eye point
+    toward the slit's middle although the iris picture matched at 0.96: a clear iris keeps it."""
+    import tracker.eyes as E
+
+    state = dataclasses.replace(BASE, gaze_x=0.03)
+    res, truth, *_ = _find(finder, state)
+    assert all(e.iris_match >= E.CLEAR_IRIS[1] for e in res.eyes)
+    short = E.EyeFinder._both_lids
+    monkeypatch.setattr(E.EyeFinder, "_both_lids", lambda self, *a, **k: [(u, d, 0.45 * g) for u, d, g in short(self, *a, **k)])
+    res2, *_ = _find(finder, state)
+    for e, e0 in zip(res2.eyes, res.eyes):
+        assert math.hypot(e.x - e0.x, e.y - e0.y) < 1e-6
+    monkeypatch.setattr(E, "CLEAR_IRIS", (1.5, 2.0))  # no picture could clear it: the gap moves the point
+    res3, *_ = _find(finder, state)
+    assert max(math.hypot(e.x - e0.x, e.y - e0.y) for e, e0 in zip(res3.eyes, res.eyes)) > 0.5
+
+
 def test_closed_eyes_put_the_eye_point_on_the_slit(finder):
     res, truth, _, _ = _find(finder, BASE.with_expression("eyes_closed"))
     for e, side in zip(res.eyes, ("left", "right")):
