@@ -334,6 +334,31 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
 
 
+def test_the_corners_move_out_to_the_inside_more_the_more_the_lips_part():
+    """Lips parted about OPEN_ENDS: the corners move part of the way towards the inside's ends, more
+    the wider the gap, so the width follows the gap without a step (a still face whose gap read 3.9
+    and 4.1 rows about a threshold of 4 had its corner jump 2.3 px and back frame after frame)."""
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    mf = MouthFinder(model, model.work_ipd)
+    maps = mf.prepare(_grin_crop())
+    unit = mfm.OPEN_ENDS * mf.wi
+    lo, hi = mfm.OPEN_ENDS_RAMP
+    xs = []
+    for k in (lo - 0.05, lo + 0.25 * (hi - lo), lo + 0.5 * (hi - lo), lo + 0.75 * (hi - lo), hi, hi + 0.5):
+        gap = (23.0 - 0.5 * k * unit, 23.0 + 0.5 * k * unit)
+        left, right = mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), gap, (14.0, 31.0))
+        xs.append((left[0], right[0]))
+    assert xs[0] == (28.0, 48.0)  # under the ramp: not at all
+    full = xs[-1]
+    assert xs[-2] == pytest.approx(full)  # past it: all of the way
+    for (l0, r0), (l1, r1) in zip(xs, xs[1:]):
+        assert l1 <= l0 and r1 >= r0  # out, step by step
+    assert xs[2][0] == pytest.approx(28.0 + 0.5 * (full[0] - 28.0)) and xs[2][1] == pytest.approx(48.0 + 0.5 * (full[1] - 48.0))
+
+
 def _dark_grin_crop(style) -> np.ndarray:
     """A grin on a dark face at the working scale (40 px between the eyes): ``style``'s skin and
     lips, teeth from column 26 to 50, and beside each end of the teeth, past a 3-column sliver of

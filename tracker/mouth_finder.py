@@ -159,8 +159,13 @@ CORNER_UNLIKE = 1.5
 """Least row cost as skin (see :meth:`MouthFinder.row_costs`) near the line that shows the mouth's
 body on a corner's column."""
 OPEN_ENDS = 0.1
-"""Least gap (× wi) between the lips on the centre column for the corners to be brought out to the ends
-of the mouth's inside (:meth:`MouthFinder.inside_ends`)."""
+"""Gap (× wi) between the lips on the centre column about which the corners are brought out to the ends
+of the mouth's inside (:meth:`MouthFinder.inside_ends`; gradually, see :data:`OPEN_ENDS_RAMP`)."""
+OPEN_ENDS_RAMP = (0.75, 1.25)
+"""Gaps (× :data:`OPEN_ENDS`) over which :meth:`MouthFinder.inside_ends` moves the corners from none to
+all of the way to the inside's ends. A gap measured on one threshold made the width a step function
+of it: on a still copy of talk_b's frame 100, lips parted by 3.9-4.1 rows (the threshold: 4), the
+left corner jumped 2.3 px and back from frame to frame (the width by 8 % of the eye distance)."""
 OPEN_FILL = 0.5
 """Least share of the gap's middle (its middle third of rows across the mouth's middle half) one piece
 of the inside must fill for :meth:`MouthFinder.inside_ends` to go by it: an open mouth's teeth or dark
@@ -1297,9 +1302,11 @@ class MouthFinder:
 
     def inside_ends(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float],
                     gap: tuple[float, float], lips: tuple[float, float]) -> tuple[tuple[float, float], tuple[float, float]]:
-        """The corners ``left``, ``right`` (working-scale crop px) of a mouth open by at least
-        :data:`OPEN_ENDS` wi (``gap``: the gap's top and bottom rows on the centre column), each moved
-        out to the end of the mouth's inside where the corner search stopped inside it.
+        """The corners ``left``, ``right`` (working-scale crop px) of an open mouth (``gap``: the gap's top
+        and bottom rows on the centre column), each moved out towards the end of the mouth's inside
+        where the corner search stopped inside it: from none of the way at a gap of
+        ``OPEN_ENDS_RAMP[0]`` × :data:`OPEN_ENDS` wi to all of it at ``OPEN_ENDS_RAMP[1]`` × (see
+        :data:`OPEN_ENDS_RAMP`).
 
         The inside: the inside-like pixels (the inside table: dark and colourless, or teeth; on a face
         without hair round the mouth also any pixel far darker than the lips, :func:`dark_rule`)
@@ -1314,8 +1321,11 @@ class MouthFinder:
         rows there. A corner already past the thick of the inside (on a crease or a lip's shaded edge
         running on from the gap) stays, and so does one the piece runs on from by more than
         :data:`OPEN_REACH` wi, or whose place there lies lower than :data:`OPEN_SLOPE` allows."""
-        if gap[1] - gap[0] < OPEN_ENDS * self.wi:
+        # how far they go: none up to a gap of OPEN_ENDS_RAMP[0] × OPEN_ENDS, all of the way from [1] ×
+        t = ((gap[1] - gap[0]) / (OPEN_ENDS * self.wi) - OPEN_ENDS_RAMP[0]) / (OPEN_ENDS_RAMP[1] - OPEN_ENDS_RAMP[0])
+        if t <= 0.0:
             return left, right
+        t = min(t, 1.0)
         H, W = maps.shape
         a, b = max(int(math.floor(lips[0])), 0), min(int(math.ceil(lips[1])) + 1, H)
         third = (gap[1] - gap[0]) / 3.0
@@ -1353,7 +1363,11 @@ class MouthFinder:
                 out.append(corner)
                 continue
             y = a + float(np.flatnonzero(mine[:, end]).mean())  # the piece's rows on its last column
-            out.append((float(end + side * bias), y) if y - corner[1] <= OPEN_SLOPE * move else corner)
+            if y - corner[1] > OPEN_SLOPE * move:
+                out.append(corner)
+                continue
+            x = float(end + side * bias)
+            out.append((corner[0] + t * (x - corner[0]), corner[1] + t * (y - corner[1])))
         return out[0], out[1]
 
     def _one_corner_held(self, maps: "_Maps", x0: int, traced: list[np.ndarray | None], left: tuple[float, float],
