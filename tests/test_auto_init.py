@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tracker.auto_init import EYE_WI, IRIS_RADIUS, TEETH_LEAD, _lip_span, _mouth, _upright, centre_votes, find_brows, find_pupils, iris_contrast, rim_bars
+from tracker.auto_init import EYE_WI, IRIS_RADIUS, TEETH_LEAD, _lip_span, _mirror, _mouth, _upright, centre_votes, find_brows, find_pupils, iris_contrast, rim_bars
 from tracker.brows import brow_centre, column_profile
 from tracker.face_finder import DEFAULT_EYES
 
@@ -385,3 +385,34 @@ def test_the_mouth_point_is_on_a_thin_line_under_a_dark_moustache():
                                           ((156, 170), 135.0, 168.0)])
     x, y = _mouth(grey, left, right, red)
     assert abs(y - 154.5) <= 1.5 and abs(x - 100.0) < 1
+
+
+def _eye_band(shift: float, corners: bool = False) -> tuple[np.ndarray, list[tuple[float, float]]]:
+    """An upright band at EYE_WI with two almond eyes, their irises ``shift`` (× the eye's half width)
+    to the image's right in both (a glance aside), and with ``corners`` dark outer corners (shadow,
+    make-up). Returns the band and the iris centres."""
+    band = np.full((60, int(2 * EYE_WI)), 150, np.uint8)
+    half, r = 0.22 * EYE_WI, IRIS_RADIUS * EYE_WI
+    irises = []
+    for cx in (0.5 * EYE_WI, 1.5 * EYE_WI):
+        cv2.ellipse(band, (int(cx), 30), (int(half), int(0.4 * half)), 0, 0, 360, 235, -1, cv2.LINE_AA)
+        ix = cx + shift * half
+        cv2.circle(band, (int(round(ix)), 30), int(round(r)), 45, -1, cv2.LINE_AA)
+        irises.append((ix, 30.0))
+        if corners:
+            side = -1 if cx < EYE_WI else 1
+            tip = int(cx + side * half)
+            cv2.fillPoly(band, [np.array([(tip, 30), (tip - side * 9, 25), (tip - side * 9, 35)], np.int32)], 40)
+    return cv2.GaussianBlur(band, (0, 0), 1.0).astype(np.float32), irises
+
+
+def test_eyes_glancing_aside_are_a_pair_and_two_dark_outer_corners_are_not_a_better_one():
+    """Both irises to one side: the eyes are copies of each other, not mirror images; the pair's
+    likeness takes either. Two dark outer corners are mirror images of each other, and mirroring
+    alone scored them above the glancing irises (expr_d0's frame 19: a pupil on a corner)."""
+    band, (a, b) = _eye_band(0.55, corners=True)
+    glance = _mirror(band, a, b)
+    outer = _mirror(band, (0.5 * EYE_WI - 0.22 * EYE_WI + 4, 30.0), (1.5 * EYE_WI + 0.22 * EYE_WI - 4, 30.0))
+    assert glance > 0.9 and glance > outer
+    straight, (a0, b0) = _eye_band(0.0)
+    assert _mirror(straight, a0, b0) > 0.9

@@ -251,9 +251,11 @@ def _rim_circle(grad: tuple[np.ndarray, np.ndarray], p: tuple[float, float]) -> 
 
 
 def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) -> float:
-    """Normalised correlation of the eye round ``a`` with the mirrored eye round ``b`` (both
-    cut upright along the line a→b): two real eyes are mirror images; an iris and a lid
-    crease, or a brow, are not."""
+    """Normalised correlation of the eye round ``a`` with the eye round ``b`` (both cut upright along
+    the line a→b), mirrored or as it is, whichever is higher: two real eyes are mirror images, and
+    glancing aside, both irises to one side, copies of each other; an iris and a lid crease, or a
+    brow, are neither. Mirroring alone took two dark outer corners for the pair of an eye glancing
+    aside (expr_d0's frame 19: a pupil 40 % of the eye distance off, on the corner)."""
     ang = math.atan2(b[1] - a[1], b[0] - a[0])
     pw, ph = int(round(0.44 * EYE_WI)), int(round(0.24 * EYE_WI))
     c, s = math.cos(ang), math.sin(ang)
@@ -261,7 +263,7 @@ def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) ->
     for p in (a, b):
         m = np.array([[c, s, 0.5 * pw - (c * p[0] + s * p[1])], [-s, c, 0.5 * ph - (-s * p[0] + c * p[1])]])
         cuts.append(cv2.warpAffine(band, m, (pw, ph), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
-    return float(cv2.matchTemplate(cuts[0], cv2.flip(cuts[1], 1), cv2.TM_CCOEFF_NORMED)[0, 0])
+    return max(float(cv2.matchTemplate(cuts[0], c, cv2.TM_CCOEFF_NORMED)[0, 0]) for c in (cv2.flip(cuts[1], 1), cuts[1]))
 
 
 def find_pupils(grey: np.ndarray, box: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
