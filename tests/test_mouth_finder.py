@@ -765,15 +765,3 @@ def test_a_wider_mouth_whose_upper_lip_jumped_up_loses_to_the_held_line(calibrat
     assert res.line_centre[1] == pytest.approx(row(held_row if rise > 0.3 else far), abs=0.01)
     monkeypatch.setattr(mouth_finder, "UPPER_RISE", 1.0)  # the control: no bound on the rise, the wider wins
     assert finder.find(crop, at, before).line_centre[1] == pytest.approx(row(far), abs=0.01)
-
-
-def test_corner_heights_use_the_runs_that_are_one_body():
-    """The runs by a corner: one on the column next to it that does not overlap the next inner one
-    (the lower lip below a grin's dark corner) is not the same body and is dropped; runs that overlap
-    all stay."""
-    from tracker.mouth_finder import _one_body
-
-    assert _one_body([28.0, 20.8, 21.0], [7.9, 3.3, 4.5]) == ([20.8, 21.0], [3.3, 4.5])
-    assert _one_body([24.0, 24.0, 24.5], [1.3, 5.5, 6.4]) == ([24.0, 24.0, 24.5], [1.3, 5.5, 6.4])
-    assert _one_body([30.0, 20.0, 21.0], [2.0, 3.0, 3.0]) == ([20.0, 21.0], [3.0, 3.0])
-    assert _one_body([21.0], [3.0]) == ([21.0], [3.0])

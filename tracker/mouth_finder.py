@@ -421,17 +421,6 @@ def _edge_shift(f: np.ndarray, row: int, out: int, lip: np.ndarray, skin: np.nda
     return min(max(shift, -0.5), 0.5)
 
 
-def _one_body(ms: list[float], hs: list[float]) -> tuple[list[float], list[float]]:
-    """The mouth runs (middles ``ms``, heights ``hs``; the column nearest the corner first) that are one
-    body with the innermost column's: from it outwards while each run overlaps the next inner one. A
-    run on the column by the corner that does not (a grin's lower lip or the shadow under it, where
-    the next columns' runs are the dark corner above) read the corner 7 rows low."""
-    k = len(ms) - 1
-    while k > 0 and abs(ms[k - 1] - ms[k]) <= 0.5 * (hs[k - 1] + hs[k]):
-        k -= 1
-    return ms[k:], hs[k:]
-
-
 def _intercept(xs: list[float], ys: list[float]) -> float:
     """Where the least-squares line through the points ``(xs, ys)`` crosses ``x = 0``."""
     n = len(xs)
@@ -1140,9 +1129,7 @@ class MouthFinder:
                 continue
             # the middle moves from the corner in proportion to the body's height, whatever the
             # lips' curve: carried on to no height, and inside the body on the nearest column (the
-            # lips close towards the corner) — over the columns whose runs are one body with the
-            # innermost's
-            ms, hs = _one_body(ms, hs)
+            # lips close towards the corner)
             at0 = ms[0] if len(ms) == 1 or max(hs) - min(hs) < 0.5 else _intercept(hs, ms)
             at0 = min(max(at0, ms[0] - 0.5 * hs[0]), ms[0] + 0.5 * hs[0])
             out.append(min(max(at0 - corner[1], -CORNER_SHIFT * self.wi), CORNER_SHIFT * self.wi))
