@@ -440,16 +440,20 @@ def compare(ours: Sequence[FaceParams], peer: PeerTrack, mouth: np.ndarray | Non
     return m
 
 
-def misses(m: Metrics, times_ms: np.ndarray | None = None, auto: bool = False) -> dict[str, bool]:
-    """Target name → whether this clip misses it (nan counts as a miss)."""
-    vals = metric_values(m, times_ms)
+def target_misses(vals: dict[str, float], targets: dict[str, tuple[str, float]]) -> dict[str, bool]:
+    """Target name → whether ``vals`` misses it ("max" targets are upper bounds, "min" lower ones; a
+    missing or nan value misses)."""
     out = {}
-    for k, (kind, bound) in (AUTO_TARGETS if auto else TARGETS).items():
+    for k, (kind, bound) in targets.items():
         v = vals.get(k, math.nan)
-        if k.startswith("ms") and times_ms is None:
-            continue
         out[k] = not (v <= bound if kind == "max" else v >= bound)
     return out
+
+
+def misses(m: Metrics, times_ms: np.ndarray | None = None, auto: bool = False) -> dict[str, bool]:
+    """Target name → whether this clip misses it (nan counts as a miss; no speed targets without times)."""
+    targets = {k: t for k, t in (AUTO_TARGETS if auto else TARGETS).items() if times_ms is not None or not k.startswith("ms")}
+    return target_misses(metric_values(m, times_ms), targets)
 
 
 def metric_values(m: Metrics, times_ms: np.ndarray | None = None) -> dict[str, float]:

@@ -44,6 +44,7 @@ if __name__ == "__main__":  # before numpy loads: one thread per process
         os.environ.setdefault(_v, "1")
 
 import argparse
+import json
 import math
 import sys
 import tempfile
@@ -159,7 +160,8 @@ def write_still_clip(path: Path, still: np.ndarray, frames: int = FRAMES, fps: f
 
 @dataclass
 class Still:
-    """One still: its picture (square BGR), where it came from, and — from a shared clip — the peer's
+    """One still: its picture (square BGR), where it came from, its size (``face_px``: a photo's face box
+    width in the photo, a real frame's inter-pupil distance), and — from a shared clip — the peer's
     points on it (name → (2,) px) and the clicks a careful person would make."""
 
     name: str
@@ -206,9 +208,9 @@ def clip_stills(folder: Path, names: Sequence[str] | None = None, shares: Sequen
     for name in names or rf.clip_names(folder):
         peer = rf.load_peer(folder, name)
         want = sorted({min(int(round(s * (len(peer) - 1))), len(peer) - 1) for s in shares})
-        v = _Video(folder / f"{name}.mp4", threads=1)
+        video = _Video(folder / f"{name}.mp4", threads=1)
         try:
-            for i, img in v.frames():
+            for i, img in video.frames():
                 if i > want[-1]:
                     break
                 if i not in want or not peer.visible[i]:
@@ -221,11 +223,11 @@ def clip_stills(folder: Path, names: Sequence[str] | None = None, shares: Sequen
                 else:
                     off = np.zeros(2)
                 pts = {k: peer.points[k][i] - off for k in POINTS if k in peer.points}
-                clicks = _clicks_from_points({k: v_[None, :] for k, v_ in pts.items()}, 0)
+                clicks = _clicks_from_points({k: p[None, :] for k, p in pts.items()}, 0)
                 out.append(Still(f"{name}@{i}", "clip", img.copy(), face_px=float(peer.ipd[i]),
                                  truth=pts, clicks=clicks))
         finally:
-            v.close()
+            video.close()
     return out
 
 
@@ -332,11 +334,7 @@ def still_metrics(run: StillRun, mats: np.ndarray, truth: dict[str, np.ndarray] 
 
 def still_misses(m: dict[str, float]) -> dict[str, bool]:
     """Target name → whether the figures miss it (nan misses)."""
-    out = {}
-    for k, (kind, bound) in STILL_TARGETS.items():
-        v = m.get(k, math.nan)
-        out[k] = not (math.isfinite(v) and (v >= bound if kind == "min" else v <= bound))
-    return out
+    return rf.target_misses(m, STILL_TARGETS)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -409,8 +407,6 @@ def measure_still(still: Still, auto: bool, frames: int = FRAMES, sheets: bool =
                   out_dir: Path = OUT_DIR) -> StillResult:
     """Make the still's clip in a temporary folder, track it (``auto`` or with the still's clicks),
     measure it and (``sheets``) write its contact sheet."""
-    import json
-
     mode = "auto" if auto else "clicks"
     with tempfile.TemporaryDirectory(prefix="inkface-still-") as tmp:
         video = Path(tmp) / "still.mp4"
@@ -441,18 +437,13 @@ def measure_stills(stills: Sequence[Still], modes: Sequence[bool] = (True,), fra
     return rf._map(measure_still, jobs, workers)
 
 
-def _c(v: float, fmt: str, miss: bool) -> str:
-    s = "—" if not math.isfinite(v) else format(v, fmt)
-    return f"**{s}**" if miss else s
-
-
 def stills_table(results: Sequence[StillResult], note: str = "") -> "Table":
-    """One row per still and mode; misses of :data:`STILL_TARGETS` in bold; a last line per mode
+    """One row per still and mode; misses of :data:`STILL_TARGETS` starred; a last line per mode
     counts the stills meeting every target."""
     from benchmarks.harness import Table
 
     t = Table("Still faces under a known camera motion (no face movement: every figure should stay put)",
-              ["still", "mode", "face px", "ok %", "pupil drift p95/max %IPD", "mouth drift p95",
+              ["still", "mode", "box / ipd px", "ok %", "pupil drift p95/max %IPD", "mouth drift p95",
                "sd open/width/eye/brow %IPD", "jumps", "vs peer: pupil/mouth %IPD"])
     t.add("target", "", "", f"≥ {STILL_TARGETS['ok_pct'][1]:.0f}", f"≤ {STILL_TARGETS['pupil_drift_p95'][1]}",
           f"≤ {STILL_TARGETS['mouth_drift_p95'][1]}", f"each ≤ {STILL_TARGETS['sd_open'][1]}", "0", "")
@@ -465,10 +456,10 @@ def stills_table(results: Sequence[StillResult], note: str = "") -> "Table":
             continue
         m, x = r.metrics, still_misses(r.metrics)
         c[0] += not any(x.values())
-        sds = "/".join(_c(m[f"sd_{k}"], ".2f", x[f"sd_{k}"]) for k in SHAPES)
-        t.add(r.name, r.mode, f"{r.face_px:.0f}", _c(m["ok_pct"], ".0f", x["ok_pct"]),
-              f"{_c(m['pupil_drift_p95'], '.2f', x['pupil_drift_p95'])}/{m['pupil_drift_max']:.2f}",
-              _c(m["mouth_drift_p95"], ".1f", x["mouth_drift_p95"]), sds, _c(m["jumps"], ".0f", x["jumps"]),
+        sds = "/".join(rf._c(m[f"sd_{k}"], ".2f", x[f"sd_{k}"]) for k in SHAPES)
+        t.add(r.name, r.mode, f"{r.face_px:.0f}", rf._c(m["ok_pct"], ".0f", x["ok_pct"]),
+              f"{rf._c(m['pupil_drift_p95'], '.2f', x['pupil_drift_p95'])}/{m['pupil_drift_max']:.2f}",
+              rf._c(m["mouth_drift_p95"], ".1f", x["mouth_drift_p95"]), sds, rf._c(m["jumps"], ".0f", x["jumps"]),
               "" if not math.isfinite(m.get("pupil_err", math.nan)) else f"{m['pupil_err']:.1f}/{m['mouth_err']:.1f}")
     summary = "; ".join(f"{mode}: {a}/{b} stills meet every target" for mode, (a, b) in counts.items())
     t.note = "\n".join(x for x in (summary, note) if x)

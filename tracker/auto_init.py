@@ -263,7 +263,7 @@ def _mirror(band: np.ndarray, a: tuple[float, float], b: tuple[float, float]) ->
     for p in (a, b):
         m = np.array([[c, s, 0.5 * pw - (c * p[0] + s * p[1])], [-s, c, 0.5 * ph - (-s * p[0] + c * p[1])]])
         cuts.append(cv2.warpAffine(band, m, (pw, ph), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
-    return max(float(cv2.matchTemplate(cuts[0], c, cv2.TM_CCOEFF_NORMED)[0, 0]) for c in (cv2.flip(cuts[1], 1), cuts[1]))
+    return max(float(cv2.matchTemplate(cuts[0], other, cv2.TM_CCOEFF_NORMED)[0, 0]) for other in (cv2.flip(cuts[1], 1), cuts[1]))
 
 
 def find_pupils(grey: np.ndarray, box: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
