@@ -416,3 +416,21 @@ def test_eyes_glancing_aside_are_a_pair_and_two_dark_outer_corners_are_not_a_bet
     assert glance > 0.9 and glance > outer
     straight, (a0, b0) = _eye_band(0.0)
     assert _mirror(straight, a0, b0) > 0.9
+
+
+@pytest.mark.parametrize("hat", [0.55, 0.62, 0.68])
+def test_a_hat_or_fringe_reaching_into_the_brow_search_is_not_taken_for_the_brows(hat):
+    """Hair, a fringe or a hat's band from the top of the picture down to ``hat`` eye distances above the
+    pupils, as dark as the brows: it is dark from its lower edge up past the search's top, with no
+    forehead above it as a brow has, and the brows are found under the forehead below it (an old
+    naval portrait's cap band was taken for the brows, 0.73 eye distances up, held there)."""
+    from tracker.synthetic import FaceState, face_landmarks, render_face
+
+    state = FaceState(cx=320.0, cy=240.0, ipd=80.0)
+    img, _ = render_face(state)
+    lm = face_landmarks(state)
+    left, right = lm["left_pupil"], lm["right_pupil"]
+    img[: int(round(left[1] - hat * 80.0)), :] = (40, 40, 60)
+    grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    for found, true in zip(find_brows(grey, left, right), (lm["left_brow"], lm["right_brow"])):
+        assert abs(found[1] - true[1]) < 0.05 * 80.0, (hat, found, true)

@@ -380,6 +380,16 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
         raise AutoInitError("the face is too small to find its eyebrows")
     # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
     k = lo + int(np.argmin(seg))
+    span = float(seg.max()) - float(prof[k])
+    if k - lo >= 3 and float(prof[k : hi + 1].max()) <= float(prof[k]) + BROW_BAND * span:
+        # dark from the darkest row up to the range's top: hair, a fringe or a hat's band reaching
+        # down into the range, not a brow (a brow has the forehead above it); the brow is the darkest
+        # row under the forehead between them (the top of the rise going down from the darkness)
+        j = k
+        while j - 1 >= lo and prof[j - 1] >= prof[j]:
+            j -= 1
+        if j - lo >= 2 and float(prof[lo + int(np.argmin(prof[lo:j]))]) < float(prof[j]) - BROW_BAND * (float(prof[j]) - float(prof[k])):
+            k = lo + int(np.argmin(prof[lo:j]))
     if prof[k - 1] < prof[k]:
         # darkest at the range's start and darker still below it: a low brow that begins under the
         # range (expr_d18's, 0.15 eye distances over the pupils), or a child's larger eye whose lid
