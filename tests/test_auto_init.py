@@ -434,3 +434,20 @@ def test_a_hat_or_fringe_reaching_into_the_brow_search_is_not_taken_for_the_brow
     grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
     for found, true in zip(find_brows(grey, left, right), (lm["left_brow"], lm["right_brow"])):
         assert abs(found[1] - true[1]) < 0.05 * 80.0, (hat, found, true)
+
+
+def test_a_brow_raised_high_is_still_the_brow():
+    """A dark band at 0.6-0.7 eye distances over the pupils, darker than the brow below it, with the
+    forehead above it (a brow raised high, the performer's hairline 0.76 up): the forehead over it says
+    it is a brow, not hair."""
+    from tracker.synthetic import FaceState, face_landmarks, render_face
+
+    state = FaceState(cx=320.0, cy=240.0, ipd=80.0)
+    img, _ = render_face(state)
+    lm = face_landmarks(state)
+    left, right = lm["left_pupil"], lm["right_pupil"]
+    y0, y1 = int(round(left[1] - 0.7 * 80.0)), int(round(left[1] - 0.6 * 80.0))
+    img[y0:y1, int(left[0]) - 20 : int(right[0]) + 21] = (20, 20, 30)
+    grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    for found in find_brows(grey, left, right):
+        assert y0 - 2 <= found[1] <= y1 + 2, (found, y0, y1)

@@ -41,6 +41,10 @@ IRIS_RADIUS = 0.09
 """Iris radius as a fraction of the inter-pupil distance (about 5.8 mm of 63 mm)."""
 BROW_RANGE = (0.2, 0.75)
 """Where brows are looked for above the pupils, in inter-pupil distances."""
+HAIR_PAST = 0.1
+"""How far (× the inter-pupil distance) past the brows' range the grey is read: a darkest row that
+stays dark that far up is hair, a fringe or a hat's band, not a brow raised to the range's top (see
+:func:`_brow`)."""
 BROW_BAND = 0.25
 """How much darker than the skin on its darker side (× the range's spread of grey) a band above the
 range's dark start must be to be taken for the brow (see :func:`_brow`)."""
@@ -369,7 +373,7 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
     0.08 eye distances of the point, took the lid's crease; a person clicks higher, the brow's
     middle. ``rim``: the distances (px along ``up``) of a spectacle rim's upper bar, filled in
     first (it is darker than many brows)."""
-    n = int(round(BROW_RANGE[1] * ipd)) + 2
+    n = int(round((BROW_RANGE[1] + HAIR_PAST) * ipd)) + 2
     side = np.array([-up[1], up[0]])
     prof = _strip(grey, np.asarray(pupil, dtype=np.float64), up, side, n, max(int(0.12 * ipd), 1))
     if rim is not None:
@@ -381,10 +385,11 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
     # the upper lid and its lashes are dark too, but lie below the range; keep the centre in it
     k = lo + int(np.argmin(seg))
     span = float(seg.max()) - float(prof[k])
-    if k - lo >= 3 and float(prof[k : hi + 1].max()) <= float(prof[k]) + BROW_BAND * span:
-        # dark from the darkest row up to the range's top: hair, a fringe or a hat's band reaching
-        # down into the range, not a brow (a brow has the forehead above it); the brow is the darkest
-        # row under the forehead between them (the top of the rise going down from the darkness)
+    if k - lo >= 3 and float(prof[k:].max()) <= float(prof[k]) + BROW_BAND * span:
+        # dark from the darkest row up past the range's top: hair, a fringe or a hat's band reaching
+        # down into the range, not a brow (a brow has the forehead above it, a raised one just past the
+        # range); the brow is the darkest row under the forehead between them (the top of the rise
+        # going down from the darkness)
         j = k
         while j - 1 >= lo and prof[j - 1] >= prof[j]:
             j -= 1
