@@ -214,7 +214,8 @@ class ClipRun:
 
     ``error`` is the one-line reason when calibration or start-up failed (no frames then);
     ``overlays`` maps a kept frame index to the frame with our overlay drawn on it;
-    ``calibrate_ms`` the time to calibrate (and, with ``--auto``, to find the face first).
+    ``calibrate_ms`` the time to calibrate (and, with ``--auto``, to find the face first);
+    ``mouth_centres`` (n, 2) and ``pupils`` (n, 2, 2) our overlay's points per frame, in the files' pixels.
     """
 
     name: str
@@ -226,6 +227,7 @@ class ClipRun:
     error: str | None = None
     overlays: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
     mouth_centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+    pupils: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)), repr=False)
 
     @property
     def statuses(self) -> list[str]:
@@ -272,7 +274,7 @@ def run_clip(
     run.calibrate_ms = (time.perf_counter() - t0) * 1000.0
     keep = set(int(k) for k in keep)
     v = _Video(video, threads=1)  # no decoding in the background while a frame is timed
-    times, cpu, mouths = [], [], []
+    times, cpu, mouths, pupils = [], [], [], []
     try:
         for i, img in v.frames():
             if max_frames is not None and i >= max_frames:
@@ -284,6 +286,7 @@ def run_clip(
             cpu.append((time.process_time() - c) * 1000.0)
             run.params.append(res.params)
             mouths.append(res.overlay.mouth_centre)
+            pupils.append(res.overlay.pupils)
             if i in keep:
                 run.overlays[i] = res.overlay.draw(img)
     finally:
@@ -291,6 +294,7 @@ def run_clip(
     run.times_ms, run.cpu_ms = np.array(times), np.array(cpu)
     # the overlay's points are in the tracker's own pixel convention; the peer's, like the params', in the files'
     run.mouth_centres = np.array(mouths, dtype=np.float64).reshape(-1, 2) + PIXEL_CENTRE
+    run.pupils = np.array(pupils, dtype=np.float64).reshape(-1, 2, 2) + PIXEL_CENTRE
     return run
 
 

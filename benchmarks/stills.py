@@ -56,9 +56,6 @@ import cv2
 import numpy as np
 
 from benchmarks import realfaces as rf
-from tracker.auto_init import AutoInitError
-from tracker.calibration import CalibrationError
-from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.face_finder import detect_faces
 from tracker.params import OK, PARAM_NAMES
 from tracker.track_cli import TrackCliError, _Video
@@ -252,28 +249,12 @@ class StillRun:
 
 def track_still(video: Path, clicks: Path | None, name: str, keep: Sequence[int] = ()) -> StillRun:
     """Track a still clip from frame 0, with ``clicks`` or (None) ``--auto``, keeping the overlay of
-    the frames ``keep``."""
-    run = StillRun(name, "auto" if clicks is None else "clicks")
-    try:
-        tracker = rf.start_tracker(video, clicks, auto=clicks is None)
-    except (TrackCliError, ClicksError, CalibrationError, AutoInitError) as e:
-        run.error = str(e)
-        return run
-    v = _Video(video, threads=1)
-    pupils, mouths, vals = [], [], []
-    try:
-        for i, img in v.frames():
-            res = tracker.track(img, index=i, time=i / v.fps)
-            run.statuses.append(res.params.status)
-            pupils.append(np.asarray(res.overlay.pupils, dtype=np.float64).reshape(2, 2) + PIXEL_CENTRE)
-            mouths.append(np.asarray(res.overlay.mouth_centre, dtype=np.float64).reshape(2) + PIXEL_CENTRE)
-            vals.append(res.params.values())
-            if i in keep:
-                run.overlays[i] = res.overlay.draw(img)
-    finally:
-        v.close()
-    run.pupils, run.mouths = np.array(pupils).reshape(-1, 2, 2), np.array(mouths).reshape(-1, 2)
-    run.values = np.array(vals, dtype=np.float64).reshape(-1, len(PARAM_NAMES))
+    the frames ``keep`` (:func:`benchmarks.realfaces.run_clip`)."""
+    clip = rf.run_clip(video, clicks, auto=clicks is None, keep=keep, name=name)
+    run = StillRun(name, clip.mode, error=clip.error)
+    if clip.error is None:
+        run.statuses, run.pupils, run.mouths, run.overlays = clip.statuses, clip.pupils, clip.mouth_centres, clip.overlays
+        run.values = np.array([p.values() for p in clip.params], dtype=np.float64).reshape(-1, len(PARAM_NAMES))
     return run
 
 

@@ -393,8 +393,10 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
         j = k
         while j - 1 >= lo and prof[j - 1] >= prof[j]:
             j -= 1
-        if j - lo >= 2 and float(prof[lo + int(np.argmin(prof[lo:j]))]) < float(prof[j]) - BROW_BAND * (float(prof[j]) - float(prof[k])):
-            k = lo + int(np.argmin(prof[lo:j]))
+        if j - lo >= 2:
+            b = lo + int(np.argmin(prof[lo:j]))
+            if float(prof[b]) < float(prof[j]) - BROW_BAND * (float(prof[j]) - float(prof[k])):
+                k = b
     if prof[k - 1] < prof[k]:
         # darkest at the range's start and darker still below it: a low brow that begins under the
         # range (expr_d18's, 0.15 eye distances over the pupils), or a child's larger eye whose lid
