@@ -235,6 +235,30 @@ def test_face_detector_boxes_hold_the_eyes():
     assert np.abs(eyes - truth).max() < 0.15 * 80
 
 
+def test_face_detector_orders_boxes_of_one_size_the_same_on_every_run(monkeypatch):
+    """The cascade lists its boxes in whatever order its threads finish, and its sizes are steps, so
+    two faces often come out one size. Largest first, then the one nearer the frame's middle: the
+    same face on every run, whatever the cascade's order."""
+    import tracker.face_finder as ff
+
+    boxes = [(40, 60, 100, 100), (400, 60, 100, 100), (250, 200, 60, 60), (260, 10, 100, 100)]
+
+    class Shuffled:
+        def __init__(self, seed):
+            self.rng = np.random.default_rng(seed)
+
+        def detectMultiScale(self, *a, **k):
+            return np.array([boxes[i] for i in self.rng.permutation(len(boxes))])
+
+    frame = np.zeros((160, 640, 3), np.uint8)  # searched at full size: boxes are frame px
+    got = []
+    for seed in range(8):
+        monkeypatch.setattr(ff, "face_cascade", lambda seed=seed: Shuffled(seed))
+        got.append(detect_faces(frame, None))
+    assert all(g == got[0] for g in got)
+    assert [b[:2] for b in got[0]] == [(260, 10), (400, 60), (40, 60), (250, 200)]
+
+
 @pytest.mark.parametrize("expected_ipd", [64.0, 80.0, 100.0])
 def test_face_detector_bands_together_cover_the_full_search(expected_ipd):
     """A lost face is looked for one band of sizes per frame: the bands in turn find it, from

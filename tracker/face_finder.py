@@ -104,7 +104,16 @@ def _detect(casc, frame_bgr: np.ndarray, s: float, ipd_px: float | None, spread:
     else:
         boxes = casc.detectMultiScale(grey, 1.1, neighbours, minSize=(20, 20))
     out = [(x / s, y / s, bw / s, bh / s) for x, y, bw, bh in (tuple(float(v) for v in b) for b in boxes)]
-    return sorted(out, key=lambda b: -b[2] * b[3])
+    return sorted(out, key=lambda b: _rank(b, w, h))
+
+
+def _rank(box: tuple[float, float, float, float], w: int, h: int) -> tuple[float, float, float, float]:
+    """Largest first; between boxes of one size (the cascade's sizes are steps, so ties are common)
+    the one nearest the frame's middle, then the upper, then the left one. The cascade's own order
+    depends on how its threads happened to finish, so without a full order the same frame could give
+    a different face on each run."""
+    x, y, bw, bh = box
+    return (-bw * bh, math.hypot(x + 0.5 * bw - 0.5 * w, y + 0.5 * bh - 0.5 * h), y, x)
 
 
 def eyes_in_box(box: tuple[float, float, float, float], rel: tuple[tuple[float, float], tuple[float, float]] = DEFAULT_EYES) -> np.ndarray:
