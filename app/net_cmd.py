@@ -212,19 +212,23 @@ def _tracked_frames(args):
         it = iter(src)
         cal = None
         first = 0 if clicks is None else clicks.frame
-        for fr in it:
-            if fr.index < first:
-                continue
-            if clicks is None:
-                from tracker.auto_init import auto_clicks
+        if clicks is None:  # the first frame with a face, however late it comes (a camera: when someone sits down)
+            from tracker.auto_init import AutoInitError, auto_start
 
-                clicks = auto_clicks(fr.image)
             try:
-                cal = calibrate(fr.image, clicks)
+                clicks, image = auto_start(((fr.index, fr.image) for fr in it), src.fps or 30.0)
+            except AutoInitError as e:
+                raise _Fail(f"{args.video or 'camera'}: {e}") from None
+            pairs = [(clicks.frame, image)]
+        else:
+            pairs = ((fr.index, fr.image) for fr in it if fr.index >= first)
+        for index, image in pairs:
+            try:
+                cal = calibrate(image, clicks)
             except CalibrationError as e:
                 from app.render_cmd import calibration_message
 
-                raise _Fail(f"{args.video or 'camera'}: {calibration_message(e)} (frame {fr.index})") from None
+                raise _Fail(f"{args.video or 'camera'}: {calibration_message(e)} (frame {index})") from None
             break
         if cal is None:
             raise _Fail(f"{args.video or 'camera'}: no frame {first} to calibrate on")

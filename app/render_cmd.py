@@ -145,17 +145,18 @@ def _calibration(video: _Video, init: str | None, need: bool):
             return calibrate(frame, clicks)
         except CalibrationError as e:
             raise RenderError(f"{video.path}: {calibration_message(e)} (clicks {clicks_path}, frame {clicks.frame})") from None
-    frame = video.frame(0)
-    if frame is None:
+    if video.frame(0) is None:
         raise RenderError(f"{video.path}: the video has no frames")
     try:
-        from tracker.auto_init import auto_clicks
+        from tracker.auto_init import auto_start
     except ImportError:
         if need:
             raise RenderError(f"{video.path}: no clicks file {clicks_path.name} beside it; pass --init CLICKS.json") from None
         return None
     try:
-        return calibrate(frame, auto_clicks(frame))
+        video.rewind()
+        clicks, frame = auto_start(_frames_after(video, -1), video.fps)  # the first frame with a face, however late
+        return calibrate(frame, clicks)
     except Exception as e:
         if need:
             raise RenderError(f"{video.path}: could not find the face automatically ({_one_line(e)}); pass --init CLICKS.json") from None

@@ -435,6 +435,29 @@ def test_send_video_through_the_tracker(tmp_path):
     assert abs(f.mid_x - truth.mid_x) < 3 and abs(f.mid_y - truth.mid_y) < 3
 
 
+def test_send_auto_starts_where_a_late_face_comes(tmp_path):
+    """``--auto`` on a clip that opens on an empty wall: the start is where the face first shows, and
+    the whole clip is sent from its first frame."""
+    pytest.importorskip("tracker.face_tracker")
+    import cv2
+
+    from tracker.synthetic import Performance
+
+    perf = Performance(seconds=0.5, seed=3)
+    video = tmp_path / "late.avi"
+    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 30.0, perf.frame_size)
+    for _ in range(20):
+        w.write(np.full((perf.frame_size[1], perf.frame_size[0], 3), (150, 160, 170), np.uint8))
+    for i in range(len(perf)):
+        w.write(perf.frame(i))
+    w.release()
+    rc, got, rx = _send_in_process(["--video", str(video), "--auto", "--fps", "200"], 0)
+    assert rc == 0 and len(got) >= 20 + len(perf) - 2
+    truth = perf.truth(10)
+    f = next(g for g in got if g.frame == 30)
+    assert abs(f.mid_x - truth.mid_x) < 3 and abs(f.mid_y - truth.mid_y) < 3
+
+
 def test_unmeasured_values_travel_as_the_last_value_sent():
     with UdpReceiver(0) as rx, Sender(("127.0.0.1", rx.address[1]), FRAME, IPD, neutral=NEUTRAL) as tx:
         rows = track(3)

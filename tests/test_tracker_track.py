@@ -418,6 +418,7 @@ def test_auto_start_looks_past_a_first_frame_with_shut_eyes(clip, monkeypatch, s
     blink or a squeeze: an eye model learned there misreads the whole clip); then the frame within
     :data:`~tracker.track_cli.AUTO_LOOK` whose eyes show most. (The measure itself is judged on real
     clips: the synthetic performer's shut lids are crisp lines that look like an eye's ring to it.)"""
+    import tracker.auto_init as ai
     import tracker.track_cli as tc
 
     video, _, _ = clip
@@ -427,13 +428,67 @@ def test_auto_start_looks_past_a_first_frame_with_shut_eyes(clip, monkeypatch, s
         seen.append(found.frame)
         return shown.get(found.frame, 0.5)
 
-    monkeypatch.setattr(tc, "eyes_shown", fake)
+    monkeypatch.setattr(ai, "eyes_shown", fake)
     found, img = tc._auto(video)
     assert found.frame == want and img.shape[2] == 3
-    if shown[0] >= tc.EYES_SHOWN:
+    if shown[0] >= ai.EYES_SHOWN:
         assert seen == [0]
     else:
-        assert seen == list(range(0, tc.AUTO_LOOK[0], tc.AUTO_LOOK[1]))
+        assert seen == list(range(0, ai.AUTO_LOOK[0], ai.AUTO_LOOK[1]))
+
+
+def _late_face_clip(path, empty: int, faces: int = 12, fps: int = 25):
+    """A lossless clip that opens on ``empty`` frames of an empty wall, then the synthetic performer."""
+    perf = Performance(seconds=1.0, seed=4)
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, perf.frame_size)
+    assert w.isOpened()
+    wall = np.full((perf.frame_size[1], perf.frame_size[0], 3), (150, 160, 170), np.uint8)
+    for _ in range(empty):
+        w.write(wall)
+    for i in range(faces):
+        w.write(perf.frame(i))
+    w.release()
+    return perf
+
+
+@pytest.mark.parametrize("empty", [3, 47])
+def test_auto_start_waits_for_a_face_that_comes_late(tmp_path, empty):
+    """A recording that opens on an empty room (or a camera started before the performer sits down)
+    starts where the face first shows — one frame at a time at first, then one every
+    :data:`~tracker.auto_init.AUTO_EVERY` s — and tracking from frame 0 reports ``lost`` until then."""
+    import tracker.auto_init as ai
+
+    video = tmp_path / "late.avi"
+    perf = _late_face_clip(video, empty)
+    from tracker.track_cli import _Video
+
+    v = _Video(video)
+    try:
+        found, img = ai.auto_start(v.frames(), 25.0)
+    finally:
+        v.close()
+    stride = max(int(round(ai.AUTO_EVERY * 25.0)), 1)
+    assert empty <= found.frame < empty + stride
+    assert np.array_equal(img, perf.frame(found.frame - empty))
+    want = Clicks.from_dict(clicks_for(perf.state(found.frame - empty)))
+    assert np.hypot(*np.subtract(found.left_pupil, want.left_pupil)) < 0.1 * perf.state(0).ipd
+    out = tmp_path / "late.csv"
+    assert _cli(video, "--auto", "--csv", out, "--quiet") == 0
+    rows = read_csv(out)
+    assert len(rows) == empty + 12
+    assert [r.status for r in rows[:empty]] == [LOST] * empty
+    assert all(r.status == "ok" for r in rows[found.frame + 1 :])
+
+
+def test_auto_start_says_when_no_frame_holds_a_face(tmp_path, capsys):
+    video = tmp_path / "wall.avi"
+    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 25, (320, 240))
+    for _ in range(40):
+        w.write(np.full((240, 320, 3), 128, np.uint8))
+    w.release()
+    assert _cli(video, "--auto", "--csv", tmp_path / "o.csv", "--quiet") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "wall.avi: no face found in any frame" in err[0]
 
 
 def test_clicks_on_a_blink_calibrate_on_the_frame_the_head_carries_them_to(clip, monkeypatch):

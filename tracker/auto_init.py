@@ -20,6 +20,9 @@ from. Steps, each using only what every face has:
    cheeks, the darkest line between them (a beard or a moustache is darker than the gap, but
    not red; :func:`_lip_span`).
 
+On a video (:func:`auto_start`) the first frame with a face is used, however late it comes,
+unless its eyes look shut: then the frame soon after whose eyes show most.
+
 The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 (``cv2.data.haarcascades``); nothing is downloaded.
 """
@@ -27,6 +30,7 @@ The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 import cv2
 import numpy as np
@@ -641,3 +645,55 @@ def _clicks_in(frame_bgr: np.ndarray, grey: np.ndarray, left: np.ndarray, right:
     mouth = _mouth(grey, left, right, lab_a)
     return {"left_pupil": (float(left[0]), float(left[1])), "right_pupil": (float(right[0]), float(right[1])),
             "left_brow": tuple(brows[0]), "right_brow": tuple(brows[1]), "mouth": tuple(mouth)}
+
+
+AUTO_TRIES = 10
+"""How many of a video's first frames :func:`auto_start` tries one by one."""
+AUTO_EVERY = 0.2
+"""After :data:`AUTO_TRIES` frames without a face, :func:`auto_start` tries one frame in this many
+seconds, to the end of the video: a recording that opens on an empty room or a title, or a camera
+started before the performer sits down, still starts where the face comes."""
+AUTO_LOOK = (30, 2)
+"""Where the first face found has its eyes shut (:func:`eyes_shown`), :func:`auto_start` looks on
+this many frames past it, every so many frames, and takes the frame whose eyes show most: a blink
+lasts 3-5 frames, and an eye model learned from shut eyes misreads the whole clip."""
+
+
+def auto_start(frames: Iterable[tuple[int, np.ndarray]], fps: float = 30.0) -> tuple[Clicks, np.ndarray]:
+    """The clicks (:func:`auto_clicks`) and the frame to calibrate on, from ``frames`` (``(index, BGR
+    image)`` in order: a video file or a camera): the first frame with a face whose eyes show
+    (:data:`EYES_SHOWN`), or — where they look shut — the one within :data:`AUTO_LOOK` of it whose eyes
+    show most. Frames are tried one by one at first, then one every :data:`AUTO_EVERY` s. Raises
+    :class:`AutoInitError` (one line) when no frame holds a face."""
+    stride = max(int(round(AUTO_EVERY * fps)), 1)
+    last: AutoInitError | None = None
+    best: tuple[float, Clicks, np.ndarray] | None = None  # eyes shown, points, frame
+    first = 0  # the first frame with a face
+    tried = 0
+    for i, img in frames:
+        if best is not None:
+            if i - first >= AUTO_LOOK[0]:
+                break
+            if (i - first) % AUTO_LOOK[1]:
+                continue
+        elif tried >= AUTO_TRIES and (i - AUTO_TRIES) % stride:
+            continue
+        tried += 1
+        try:
+            found = auto_clicks(img, frame_index=i)
+        except AutoInitError as e:
+            last = e
+            continue
+        shown = eyes_shown(img, found)
+        if best is None and shown >= EYES_SHOWN:
+            return found, img
+        if best is None:
+            first = i
+        if best is None or shown > best[0]:
+            best = (shown, found, img)
+    if best is not None:
+        return best[1], best[2]
+    if last is None:
+        raise AutoInitError("no frames to look for a face in")
+    msg = str(last)
+    raise AutoInitError(msg.replace("no face found", "no face found in any frame", 1) if tried > 1 else msg)

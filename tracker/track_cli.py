@@ -20,21 +20,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tracker.auto_init import EYES_SHOWN, AutoInitError, auto_clicks, eyes_shown
+from tracker.auto_init import AutoInitError, auto_start
 from tracker.calibration import CalibrationError, calibrate, calibration_hints
 from tracker.clicks import Clicks, ClicksError
 from tracker.face_tracker import FaceTracker
 from tracker.open_eyes import carried_note, carry_clicks
 from tracker.outputs import OutputError, calibration_files, check_outputs
 from tracker.params import TrackCsvWriter
-
-AUTO_TRIES = 10
-"""How many of the first frames ``--auto`` tries before giving up."""
-AUTO_LOOK = (30, 2)
-"""Where the first face found has its eyes shut (:func:`~tracker.auto_init.eyes_shown`), ``--auto``
-looks on up to this frame, every so many frames, and calibrates on the frame whose eyes show most:
-a blink lasts 3-5 frames, and an eye model learned from shut eyes misreads the whole clip."""
-
 
 class TrackCliError(RuntimeError):
     """An expected problem with the command's inputs (one line)."""
@@ -115,35 +107,14 @@ def _clicked(path: Path, clicks: Clicks, where: str) -> tuple[Clicks, np.ndarray
 
 
 def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
+    """:func:`~tracker.auto_init.auto_start` on the video at ``path``."""
     v = _Video(path)
-    last: Exception | None = None
-    best: tuple[float, Clicks, np.ndarray] | None = None  # eyes shown, points, frame
-    first = 0  # the first frame with a face
     try:
-        for i, img in v.frames():
-            if i >= (AUTO_TRIES if best is None else AUTO_LOOK[0]):
-                break
-            if best is not None and (i - first) % AUTO_LOOK[1]:
-                continue
-            try:
-                found = auto_clicks(img, frame_index=i)
-            except AutoInitError as e:
-                last = e
-                continue
-            shown = eyes_shown(img, found)
-            if best is None and shown >= EYES_SHOWN:
-                return found, img
-            if best is None:
-                first = i
-            if best is None or shown > best[0]:
-                best = (shown, found, img)
+        return auto_start(v.frames(), v.fps)
+    except AutoInitError as e:
+        raise TrackCliError(f"{path}: {e}") from None
     finally:
         v.close()
-    if best is not None:
-        return best[1], best[2]
-    if last is None:
-        raise TrackCliError(f"{path}: no frames could be read")
-    raise TrackCliError(f"{path}: {last}")
 
 
 def run(args: argparse.Namespace) -> int:
