@@ -439,18 +439,11 @@ def test_send_auto_starts_where_a_late_face_comes(tmp_path):
     """``--auto`` on a clip that opens on an empty wall: the start is where the face first shows, and
     the whole clip is sent from its first frame."""
     pytest.importorskip("tracker.face_tracker")
-    import cv2
-
+    from late_face import write_late_face_clip
     from tracker.synthetic import Performance
 
-    perf = Performance(seconds=0.5, seed=3)
     video = tmp_path / "late.avi"
-    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 30.0, perf.frame_size)
-    for _ in range(20):
-        w.write(np.full((perf.frame_size[1], perf.frame_size[0], 3), (150, 160, 170), np.uint8))
-    for i in range(len(perf)):
-        w.write(perf.frame(i))
-    w.release()
+    perf = write_late_face_clip(video, 20, Performance(seconds=0.5, seed=3))
     rc, got, rx = _send_in_process(["--video", str(video), "--auto", "--fps", "200"], 0)
     assert rc == 0 and len(got) >= 20 + len(perf) - 2
     truth = perf.truth(10)

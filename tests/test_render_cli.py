@@ -123,14 +123,10 @@ def test_no_face_and_no_clicks_is_a_one_line_error(art, tmp_path, capsys):
 def test_render_starts_where_a_late_face_comes(art, tmp_path, capsys):
     """No clicks, and the clip opens on 15 frames of an empty wall: the start is found where the face
     first shows (not refused on frame 0), and every frame is rendered."""
-    perf = Performance(seconds=0.5, seed=4)
+    from late_face import write_late_face_clip
+
     video = tmp_path / "late.avi"
-    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 30.0, perf.frame_size)
-    for _ in range(15):
-        w.write(np.full((perf.frame_size[1], perf.frame_size[0], 3), (150, 160, 170), np.uint8))
-    for i in range(len(perf)):
-        w.write(perf.frame(i))
-    w.release()
+    perf = write_late_face_clip(video, 15, Performance(seconds=0.5, seed=4))
     out = tmp_path / "r.mp4"
     assert cli(["render", "--video", str(video), "--art", art, "--out", str(out)]) == 0, capsys.readouterr().err
     assert len(_frames(out)) == 15 + len(perf)

@@ -17,6 +17,8 @@ from tracker.params import CSV_COLUMNS, LOST, read_csv
 from tracker.synthetic import STYLES, FaceState, Performance, clicks_for, render_face
 from tracker.track_cli import add_arguments, run
 
+from late_face import write_late_face_clip
+
 MOUTH_PRECISION = ("issue 13 (i13-mouth): the real-face mouth finder misses the synthetic performer's lip_upper / "
                    "lip_lower (1.5-3 px) and pale-lip width precision; everything else is asserted first")
 
@@ -437,20 +439,6 @@ def test_auto_start_looks_past_a_first_frame_with_shut_eyes(clip, monkeypatch, s
         assert seen == list(range(0, ai.AUTO_LOOK[0], ai.AUTO_LOOK[1]))
 
 
-def _late_face_clip(path, empty: int, faces: int = 12, fps: int = 25):
-    """A lossless clip that opens on ``empty`` frames of an empty wall, then the synthetic performer."""
-    perf = Performance(seconds=1.0, seed=4)
-    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, perf.frame_size)
-    assert w.isOpened()
-    wall = np.full((perf.frame_size[1], perf.frame_size[0], 3), (150, 160, 170), np.uint8)
-    for _ in range(empty):
-        w.write(wall)
-    for i in range(faces):
-        w.write(perf.frame(i))
-    w.release()
-    return perf
-
-
 @pytest.mark.parametrize("empty", [3, 47])
 def test_auto_start_waits_for_a_face_that_comes_late(tmp_path, empty):
     """A recording that opens on an empty room (or a camera started before the performer sits down)
@@ -459,7 +447,7 @@ def test_auto_start_waits_for_a_face_that_comes_late(tmp_path, empty):
     import tracker.auto_init as ai
 
     video = tmp_path / "late.avi"
-    perf = _late_face_clip(video, empty)
+    perf = write_late_face_clip(video, empty, Performance(seconds=1.0, seed=4), faces=12, fps=25)
     from tracker.track_cli import _Video
 
     v = _Video(video)
