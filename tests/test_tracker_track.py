@@ -468,6 +468,27 @@ def test_auto_start_waits_for_a_face_that_comes_late(tmp_path, empty):
     assert all(r.status == "ok" for r in rows[found.frame + 1 :])
 
 
+def test_auto_start_reports_each_frame_it_tries_until_the_face(tmp_path):
+    """While no face is found, each frame tried is reported (the command line shows a progress line
+    during a long empty opening): one by one at first, then one every AUTO_EVERY s."""
+    import tracker.auto_init as ai
+    from tracker.track_cli import _Video
+
+    video = tmp_path / "late.avi"
+    write_late_face_clip(video, 30, Performance(seconds=1.0, seed=4), faces=6, fps=25)
+    seen = []
+    v = _Video(video)
+    try:
+        found, _ = ai.auto_start(v.frames(), 25.0, seen.append)
+    finally:
+        v.close()
+    stride = max(int(round(ai.AUTO_EVERY * 25.0)), 1)
+    assert seen[: ai.AUTO_TRIES] == list(range(ai.AUTO_TRIES))
+    later = seen[ai.AUTO_TRIES :]
+    assert later[0] == ai.AUTO_TRIES and all(b - a == stride for a, b in zip(later, later[1:]))
+    assert seen[-1] == found.frame >= 30
+
+
 def test_auto_start_says_when_no_frame_holds_a_face(tmp_path, capsys):
     video = tmp_path / "wall.avi"
     w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"FFV1"), 25, (320, 240))

@@ -30,7 +30,7 @@ The cascades ship inside the opencv-contrib-python-headless 4.x wheel
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import cv2
 import numpy as np
@@ -659,12 +659,14 @@ this many frames past it, every so many frames, and takes the frame whose eyes s
 lasts 3-5 frames, and an eye model learned from shut eyes misreads the whole clip."""
 
 
-def auto_start(frames: Iterable[tuple[int, np.ndarray]], fps: float = 30.0) -> tuple[Clicks, np.ndarray]:
+def auto_start(frames: Iterable[tuple[int, np.ndarray]], fps: float = 30.0,
+               progress: Callable[[int], None] | None = None) -> tuple[Clicks, np.ndarray]:
     """The clicks (:func:`auto_clicks`) and the frame to calibrate on, from ``frames`` (``(index, BGR
     image)`` in order: a video file or a camera): the first frame with a face whose eyes show
     (:data:`EYES_SHOWN`), or — where they look shut — the one within :data:`AUTO_LOOK` of it whose eyes
-    show most. Frames are tried one by one at first, then one every :data:`AUTO_EVERY` s. Raises
-    :class:`AutoInitError` (one line) when no frame holds a face."""
+    show most. Frames are tried one by one at first, then one every :data:`AUTO_EVERY` s; ``progress``
+    (optional) is called with each frame's index tried while no face has been found (a long empty
+    opening takes a while). Raises :class:`AutoInitError` (one line) when no frame holds a face."""
     stride = max(int(round(AUTO_EVERY * fps)), 1)
     last: AutoInitError | None = None
     best: tuple[float, Clicks, np.ndarray] | None = None  # eyes shown, points, frame
@@ -679,6 +681,8 @@ def auto_start(frames: Iterable[tuple[int, np.ndarray]], fps: float = 30.0) -> t
         elif tried >= AUTO_TRIES and (i - AUTO_TRIES) % stride:
             continue
         tried += 1
+        if progress is not None and best is None:
+            progress(i)
         try:
             found = auto_clicks(img, frame_index=i)
         except AutoInitError as e:

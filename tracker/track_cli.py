@@ -106,15 +106,28 @@ def _clicked(path: Path, clicks: Clicks, where: str) -> tuple[Clicks, np.ndarray
         v.close()
 
 
-def _auto(path: Path) -> tuple[Clicks, np.ndarray]:
-    """:func:`~tracker.auto_init.auto_start` on the video at ``path``."""
+def _auto(path: Path, show: bool = False) -> tuple[Clicks, np.ndarray]:
+    """:func:`~tracker.auto_init.auto_start` on the video at ``path``; with ``show``, a progress line
+    on stderr once the search has taken a second."""
     v = _Video(path)
+    t0 = last = _time.monotonic()
+
+    def progress(i: int) -> None:
+        nonlocal last
+        now = _time.monotonic()
+        if now - last > 1.0 and now - t0 > 1.0:
+            total = f" of {v.count_hint}" if v.count_hint else ""
+            print(f"\rlooking for a face in {path.name}: frame {i + 1}{total}", end="", file=sys.stderr, flush=True)
+            last = now
+
     try:
-        return auto_start(v.frames(), v.fps)
+        return auto_start(v.frames(), v.fps, progress if show else None)
     except AutoInitError as e:
         raise TrackCliError(f"{path}: {e}") from None
     finally:
         v.close()
+        if show and last != t0:
+            print(file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -153,7 +166,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     _Video(video).close()  # a bad video is reported before anything else
     if args.auto:
-        clicks, cal_frame = _auto(video)
+        clicks, cal_frame = _auto(video, show=not args.quiet)
         where = "found automatically"
     else:
         given = Clicks.load(args.init)
