@@ -210,28 +210,24 @@ def _tracked_frames(args):
     src = open_source()
     try:
         it = iter(src)
-        cal = None
-        first = 0 if clicks is None else clicks.frame
+        where = args.video or "camera"
         if clicks is None:  # the first frame with a face, however late it comes (a camera: when someone sits down)
             from tracker.auto_init import AutoInitError, auto_start
 
             try:
                 clicks, image = auto_start(((fr.index, fr.image) for fr in it), src.fps or 30.0)
             except AutoInitError as e:
-                raise _Fail(f"{args.video or 'camera'}: {e}") from None
-            pairs = [(clicks.frame, image)]
+                raise _Fail(f"{where}: {e}") from None
         else:
-            pairs = ((fr.index, fr.image) for fr in it if fr.index >= first)
-        for index, image in pairs:
-            try:
-                cal = calibrate(image, clicks)
-            except CalibrationError as e:
-                from app.render_cmd import calibration_message
+            image = next((fr.image for fr in it if fr.index >= clicks.frame), None)
+            if image is None:
+                raise _Fail(f"{where}: no frame {clicks.frame} to calibrate on")
+        try:
+            cal = calibrate(image, clicks)
+        except CalibrationError as e:
+            from app.render_cmd import calibration_message
 
-                raise _Fail(f"{args.video or 'camera'}: {calibration_message(e)} (frame {index})") from None
-            break
-        if cal is None:
-            raise _Fail(f"{args.video or 'camera'}: no frame {first} to calibrate on")
+            raise _Fail(f"{where}: {calibration_message(e)} (frame {clicks.frame})") from None
         yield src.size, cal.ipd, cal.neutral, src.fps
         tracker = FaceTracker(cal)
         if args.video:  # track the whole video from its first frame
