@@ -130,3 +130,35 @@ def test_carried_clicks_land_on_the_face_whatever_the_head_does(monkeypatch, dx,
     truth = Clicks.from_dict(clicks_for(state(at))).points()
     worst = max(float(np.hypot(*(np.asarray(p) - truth[k]))) for k, p in got.points().items())
     assert worst < 0.015 * START.ipd, (worst, got.points(), truth)
+
+
+def test_clicks_are_found_afresh_where_the_head_moves_too_fast_to_carry(frames, monkeypatch):
+    """The flow loses the head before the eyes open (a blink as the performer leans in): the five
+    points are found by machine on the frames left in the look, and the first whose eyes show is
+    calibrated on — the clicked points on shut eyes would teach calibration shut eyes. The note says
+    which happened."""
+    asked = _script(monkeypatch, {6: EYES_SHOWN + 1.0})
+    step = open_eyes.HeadMotion.step
+    monkeypatch.setattr(open_eyes.HeadMotion, "step", lambda self, img, *a, **k: None)
+    clicks = Clicks.from_dict(clicks_for(_state(0)))
+    got, img = open_eyes.carry_clicks(frames[0], clicks, _later(frames))
+    assert got.frame == 6 and img is frames[6] and asked == [0, 2, 4, 6]
+    truth = Clicks.from_dict(clicks_for(_state(6)))
+    for key in ("left_pupil", "right_pupil"):
+        assert np.hypot(*(np.asarray(got.points()[key]) - truth.points()[key])) < 0.05 * START.ipd
+    assert "found there afresh" in open_eyes.carried_note(clicks, got, "clicks c.json")
+    monkeypatch.setattr(open_eyes.HeadMotion, "step", step)
+    carried, _ = open_eyes.carry_clicks(frames[0], clicks, _later(frames))
+    assert "carried there with the head" in open_eyes.carried_note(clicks, carried, "clicks c.json")
+
+
+def test_a_face_found_afresh_elsewhere_is_not_the_clicked_one(frames, monkeypatch):
+    """Found afresh, a face further from the clicked one than a head moves in a moment (someone else
+    in the picture) is passed over: the clicked frame stays."""
+    _script(monkeypatch, {4: EYES_SHOWN + 1.0})
+    monkeypatch.setattr(open_eyes.HeadMotion, "step", lambda self, img, *a, **k: None)
+    clicks = Clicks.from_dict(clicks_for(_state(0)))
+    far = Clicks.from_dict(clicks_for(START.replace(cx=START.cx + 2.5 * START.ipd)))
+    monkeypatch.setattr(open_eyes, "auto_clicks", lambda img, frame_index=0: far.moved(0.0, 0.0))
+    got, img = open_eyes.carry_clicks(frames[0], clicks, _later(frames))
+    assert got == clicks and img is frames[0]
