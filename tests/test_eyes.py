@@ -298,6 +298,30 @@ def test_a_light_iris_found_off_its_centre_is_moved_onto_its_limbus(opening, off
     assert f._on_limbus(flat, found) == found
 
 
+@pytest.mark.parametrize("gaze", [-2.0, 0.0, 2.0])
+def test_a_light_iris_is_found_between_its_whites_when_the_prediction_sits_on_the_lashes(gaze, monkeypatch):
+    """A light iris in a dark face, the head's pose a tenth of the eye distance high (brows raised,
+    eyes widened: the flow drifts up): without a darkness term the search had the iris picture and the
+    ring, and settled on the lash line, 10 px off; the white on both sides of the iris
+    (:data:`~tracker.eyes.WHITE_SIDES`) keeps it on the iris."""
+    import tracker.eyes as eyes
+
+    model, wi = _learn(style=LIGHT_EYES_DARK_SKIN)
+    f = EyeFinder(model, wi)
+    assert f.dark_power == 0.0
+    x0, y0, _, _ = f.rect
+    centres = [(-0.5 * wi - x0 + 1.3 + gaze, -y0 - 0.6), (0.5 * wi - x0 - 0.8 + gaze, -y0 + 0.4)]
+    grey = _light_eyes(f, centres, f.radius[0])
+    high = np.array([[-0.5 * wi - x0, -y0 - 0.1 * wi], [0.5 * wi - x0, -y0 - 0.1 * wi]])
+
+    def worst() -> float:
+        return max(math.hypot(x - cx, y - cy) for (x, y, _), (cx, cy) in zip(f.locate_irises(grey, high), centres))
+
+    assert worst() < 0.5
+    monkeypatch.setattr(eyes, "WHITE_SIDES", 0.0)
+    assert worst() > 5.0  # the lash line, as before
+
+
 def test_a_dark_iris_keeps_the_searchs_place(finder):
     """Where the iris is darker than the eye round it, the darkness places it and no limbus fit
     is made (its side arcs pin the height more loosely than a dark disc)."""

@@ -66,6 +66,18 @@ from tracker.pupils import parabola_offset
 FORMAT = 1
 
 # geometry, as fractions of the work ipd unless noted
+WHITE_SIDES = 4.0
+"""Weight of the white beside an iris in the iris search, for irises the darkness term does not see
+(:func:`dark_power` under 1, in proportion): each candidate disc scores ``1 + min(WHITE_SIDES ×
+(white − disc) / level, WHITE_SIDES)``, where ``white`` is the darker of two boxes left and right of
+the disc (at 1.35 radii, where the whites of the eyes are) and ``level`` the window's brightness. A
+grey or green iris is no darker than the skin round it, and without a darkness term the search had
+only the iris picture and the ring's gradients: behind a head's pose that drifted up (eyes widening,
+brows raised) it settled on the lash line, and the pose followed it. An iris has the white on both
+sides; the lash line, a lid crease and a dark eye corner have it on one side at most. The shared
+clips: expr_d19 (grey eyes) pupil error median 1.01 → 0.70 % of the eye distance; its stress copies
+and the dark-skinned copies with light eyes, 55 → 59 of 80 clip-modes meeting every target (deep
+expr_d10 pupil p95 19.0 → 6.4 %)."""
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 """Half-size of the window the iris centre is searched in, around the predicted eye centre."""
 PRIOR = (0.2, 0.1)
@@ -1243,6 +1255,17 @@ class EyeFinder:
         rm = 0.5 * (self.radius[0] + self.radius[1])
         # disc darkness as one filter each: half resolution (both eyes), full resolution per eye
         self._disc_half = disc_kernel(disc_boxes(0.375 * rm))
+        # the white beside an iris, left and right of it (half px): a box each at 1.35 radii
+        off, bw, bh = int(round(0.675 * rm)), max(int(round(0.125 * rm)), 1), max(int(round(0.2 * rm)), 1)
+        side = np.zeros((2 * bh + 1, 2 * (off + bw) + 1), np.float32)
+        side[:, : 2 * bw + 1] = 1.0 / ((2 * bw + 1) * (2 * bh + 1))
+        self._white_left, self._white_right = side, side[:, ::-1].copy()
+        self._white_full = []  # the same at full resolution, per eye: (left, right, half-size)
+        for r in self.radius:
+            off, bw, bh = int(round(1.35 * r)), max(int(round(0.25 * r)), 1), max(int(round(0.4 * r)), 1)
+            side = np.zeros((2 * bh + 1, 2 * (off + bw) + 1), np.float32)
+            side[:, : 2 * bw + 1] = 1.0 / ((2 * bw + 1) * (2 * bh + 1))
+            self._white_full.append((side, side[:, ::-1].copy(), (bh, off + bw)))
         self._disc_neg = [-disc_kernel(disc_boxes(0.75 * r)) for r in self.radius]
         # the ring as a few sample points (offset in half px, outward direction / count / 3),
         # gathered by two sparse kernels over the x and y gradients
@@ -1402,7 +1425,8 @@ class EyeFinder:
     def _coarse_maps(self, grey: np.ndarray, centres: np.ndarray):
         """Half-resolution iris score maps of both eyes' candidate windows and the crop px of
         each map's (0, 0): disc darkness against the strip's median grey × (1 + ring votes) ×
-        (1 + correlation with the eye's iris picture) × the prior around the prediction."""
+        (1 + correlation with the eye's iris picture) × the prior around the prediction, and for an
+        iris the darkness does not see, × the white beside it (:data:`WHITE_SIDES`)."""
         p = self.pad
         cs, (half, x0, y0) = self._half_window(grey, centres)
         self._half = (half, x0, y0)  # the eye picture's score looks here too
@@ -1429,6 +1453,19 @@ class EyeFinder:
         sc = self._ring_votes(gx, gy, ph)
         sc += 1.0
         sc *= dark[ph : dark.shape[0] - ph, ph : dark.shape[1] - ph]
+        white = WHITE_SIDES * (1.0 - self.dark_power)
+        if white > 0:
+            # white on both sides of the disc, lighter than it: an iris between the whites of the eye,
+            # whatever its own shade against the skin (a grey iris in a dark face is lighter than the
+            # lids; the lash line and a dark eye corner have white on one side at most)
+            wl = cv2.filter2D(half, -1, self._white_left, borderType=cv2.BORDER_REPLICATE)
+            wr = cv2.filter2D(half, -1, self._white_right, borderType=cv2.BORDER_REPLICATE)
+            np.minimum(wl, wr, out=wl)
+            wl -= cv2.filter2D(half, -1, self._disc_half)
+            wl *= white / level
+            np.clip(wl, 0.0, white, out=wl)
+            wl += 1.0
+            sc *= wl[ph : wl.shape[0] - ph, ph : wl.shape[1] - ph]
         sxh, syh = self.sx // 2, self.sy // 2
         ws, hs = 2 * sxh + 1, 2 * syh + 1
         maps = self._maps
@@ -1473,7 +1510,8 @@ class EyeFinder:
 
     def _fine(self, grey: np.ndarray, peaks) -> list[tuple[float, float, float]]:
         """Sub-pixel iris centres near the full-res ``peaks`` ((x, y) ints, both eyes): disc
-        darkness × (1 + correlation with the iris picture) within :data:`FINE` px, a parabola
+        darkness × (1 + correlation with the iris picture) (× the white beside it, as in
+        :meth:`_coarse_maps`) within :data:`FINE` px, a parabola
         through the best; also the correlation there. Every patch of both windows is one row
         of a product with :meth:`_fine_matrices`' columns."""
         n = 2 * FINE + 1
@@ -1498,6 +1536,18 @@ class EyeFinder:
             if self.dark_power != 1.0:
                 s **= self.dark_power
             s *= IRIS_MATCH_WEIGHT * np.maximum(ncc, 0.0) + 1.0
+        white = WHITE_SIDES * (1.0 - self.dark_power)
+        if white > 0:  # the white beside the iris (see WHITE_SIDES), as in the coarse maps
+            for i, (x, y) in enumerate(peaks):
+                left, right, (bh, bw) = self._white_full[i]
+                dh, dw = self._disc_neg[i].shape[0] // 2, self._disc_neg[i].shape[1] // 2
+                mh, mw = max(bh, dh), max(bw, dw)
+                win = cut(grey, x - FINE - mw, y - FINE - mh, n + 2 * mw, n + 2 * mh)
+                wl = cv2.filter2D(win, -1, left)
+                np.minimum(wl, cv2.filter2D(win, -1, right), out=wl)
+                wl += cv2.filter2D(win, -1, self._disc_neg[i])
+                w = wl[mh : mh + n, mw : mw + n].ravel() * (white / float(level[i, 0]))
+                s[i] *= np.clip(w, 0.0, white) + 1.0
         out = []
         for i, (x, y) in enumerate(peaks):
             k = int(s[i].argmax())
