@@ -669,9 +669,10 @@ def auto_start(frames: Iterable[tuple[int, np.ndarray]], fps: float = 30.0,
     """The clicks (:func:`auto_clicks`) and the frame to calibrate on, from ``frames`` (``(index, BGR
     image)`` in order: a video file or a camera): the first frame with a face whose eyes show
     (:data:`EYES_SHOWN`), or — where they look shut — the first within :data:`AUTO_LOOK` of it whose
-    eyes show (none: the one whose eyes show most). Frames are tried one by one at first, then one every :data:`AUTO_EVERY` s; ``progress``
-    (optional) is called with each frame's index tried while no face has been found (a long empty
-    opening takes a while). Raises :class:`AutoInitError` (one line) when no frame holds a face."""
+    eyes show (none: the one whose eyes show most). Frames are tried one by one at first, then one
+    every :data:`AUTO_EVERY` s; ``progress`` (optional) is called with each frame's index tried while
+    no face has been found (a long empty opening takes a while). Raises :class:`AutoInitError` (one
+    line) when no frame holds a face."""
     stride = max(int(round(AUTO_EVERY * fps)), 1)
     last: AutoInitError | None = None
     best: tuple[float, Clicks, np.ndarray] | None = None  # eyes shown, points, frame

@@ -14,7 +14,8 @@ towards the image-right eye, y down, inter-eye distance ``work_ipd`` px). Per ey
   (darkness × correlation, parabola through the peak). The darkness term counts only as much as
   the calibrated irises were darker than both their eye picture and the search's window, which is
   mostly skin (:func:`dark_power`): in a dark face a brown iris can be barely darker than the skin,
-  and the darkest disc is then a lash line or a dark eye corner.
+  and the darkest disc is then a lash line or a dark eye corner. As far as it does not count, the
+  white on both sides of the disc counts instead (:data:`WHITE_SIDES`).
 * **lids** — the eye's *interior* is what is far from this person's skin colour (a
   Gaussian in YCrCb learned below, above and between the eyes at calibration — behind glasses
   without the thin dark lines that cross those bands, the rims among them: :func:`thin_dark`; the skin's
@@ -66,18 +67,6 @@ from tracker.pupils import parabola_offset
 FORMAT = 1
 
 # geometry, as fractions of the work ipd unless noted
-WHITE_SIDES = 4.0
-"""Weight of the white beside an iris in the iris search, for irises the darkness term does not see
-(:func:`dark_power` under 1, in proportion): each candidate disc scores ``1 + min(WHITE_SIDES ×
-(white − disc) / level, WHITE_SIDES)``, where ``white`` is the darker of two boxes left and right of
-the disc (at 1.35 radii, where the whites of the eyes are) and ``level`` the window's brightness. A
-grey or green iris is no darker than the skin round it, and without a darkness term the search had
-only the iris picture and the ring's gradients: behind a head's pose that drifted up (eyes widening,
-brows raised) it settled on the lash line, and the pose followed it. An iris has the white on both
-sides; the lash line, a lid crease and a dark eye corner have it on one side at most. The shared
-clips: expr_d19 (grey eyes) pupil error median 1.01 → 0.70 % of the eye distance; its stress copies
-and the dark-skinned copies with light eyes, 55 → 59 of 80 clip-modes meeting every target (deep
-expr_d10 pupil p95 19.0 → 6.4 %)."""
 SEARCH_X, SEARCH_Y = 0.22, 0.12
 """Half-size of the window the iris centre is searched in, around the predicted eye centre."""
 PRIOR = (0.2, 0.1)
@@ -92,6 +81,18 @@ IRIS_MATCH_WEIGHT = 3.0
 placed at full resolution (score = darkness × (1 + this × correlation)). Blur spreads dark lashes
 and make-up into the disc above the iris, so the darkest disc leans to the lash line (blurred
 clips 1–1.5 px high); the calibrated picture, lashes and all, still matches where it was cut."""
+WHITE_SIDES = 4.0
+"""Weight of the white beside an iris in the iris search, for irises the darkness term does not see
+(:func:`dark_power` under 1, in proportion): each candidate disc scores ``1 + min(WHITE_SIDES ×
+(white − disc) / level, WHITE_SIDES)``, where ``white`` is the darker of two boxes left and right of
+the disc (at 1.35 radii, where the whites of the eyes are) and ``level`` the window's brightness. A
+grey or green iris is no darker than the skin round it, and without a darkness term the search had
+only the iris picture and the ring's gradients: behind a head's pose that drifted up (eyes widening,
+brows raised) it settled on the lash line, and the pose followed it. An iris has the white on both
+sides; the lash line, a lid crease and a dark eye corner have it on one side at most. The shared
+clips: expr_d19 (grey eyes) pupil error median 1.01 → 0.70 % of the eye distance; its stress copies
+and the dark-skinned copies with light eyes, 55 → 59 of 80 clip-modes meeting every target (deep
+expr_d10 pupil p95 19.0 → 6.4 %)."""
 IRIS_DARK = (0.8, 1.0)
 """The calibrated iris's darkness against its eye (the mean grey of a disc inside it over the
 eye picture's median grey) at which the iris search counts the disc's darkness fully, and at
