@@ -1429,6 +1429,8 @@ class EyeFinder:
         level = _window_level(half)
         # 1 − disc mean / level, at least 0
         dark = cv2.filter2D(half, -1, self._disc_half * (-1.0 / level), delta=1.0)
+        white = WHITE_SIDES * (1.0 - self.dark_power)
+        disc = dark - 1.0 if white > 0 else None  # − disc mean / level, for the white beside it below
         np.maximum(dark, 0.0, out=dark)
         if self.dark_power != 1.0:
             np.power(dark, self.dark_power, out=dark)
@@ -1448,8 +1450,7 @@ class EyeFinder:
         sc = self._ring_votes(gx, gy, ph)
         sc += 1.0
         sc *= dark[ph : dark.shape[0] - ph, ph : dark.shape[1] - ph]
-        white = WHITE_SIDES * (1.0 - self.dark_power)
-        if white > 0:
+        if disc is not None:
             # white on both sides of the disc, lighter than it: an iris between the whites of the eye,
             # whatever its own shade against the skin (a grey iris in a dark face is lighter than the
             # lids; the lash line and a dark eye corner have white on one side at most)
@@ -1458,8 +1459,9 @@ class EyeFinder:
                                      0, 0, off, off, cv2.BORDER_REPLICATE)
             W = half.shape[1]
             wl = np.minimum(box[:, :W], box[:, 2 * off : 2 * off + W])
-            wl -= cv2.filter2D(half, -1, self._disc_half)
-            wl *= white / level
+            wl *= 1.0 / level
+            wl += disc
+            wl *= white
             np.clip(wl, 0.0, white, out=wl)
             wl += 1.0
             sc *= wl[ph : wl.shape[0] - ph, ph : wl.shape[1] - ph]
