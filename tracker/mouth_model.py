@@ -12,7 +12,8 @@ the gap opens and closes, and the gap is the high-contrast part. So calibration 
 
 * the **gap** at the click: the darkest row near it and the rows around it that look like the
   inside of a mouth (dark and colourless, or the greys of teeth; past a tongue on the lower teeth,
-  and past a tongue filling a yawn to the dark band in front of the lower teeth);
+  and past a tongue filling a yawn to the dark band in front of the lower teeth; where teeth end
+  the gap, over their soft edge to the first row as red as the skin, :func:`_past_teeth`);
 * the **outer lip edges**: on the vertical profile through the click, the strongest change of
   colour above the gap within an upper lip's thickness, and below it within a lower lip's — the
   lower one then where the lip's own colour gives way to the skin's along a shading-free axis
@@ -618,6 +619,26 @@ def _gap(lum_rows: np.ndarray, inside_rows: np.ndarray, cy: float, wi: float,
     return top, bottom, y_min
 
 
+TEETH_BLUR = 0.05
+"""Most rows (× wi) past the teeth's end that still belong to the gap (see :func:`_past_teeth`)."""
+
+
+def _past_teeth(red_rows: np.ndarray, end: int, direction: int, wi: float) -> int:
+    """The gap's end row ``end`` (its last row; ``direction`` −1 up, +1 down) moved past the blur
+    between teeth and a lip: rows less red than the skin (``red_rows`` < 0, the teeth's grey mixed with
+    the lip) up to the first row at least as red, within :data:`TEETH_BLUR` wi. A grin's teeth end
+    on a soft edge a few rows tall, and the lip's outer edge measured from the teeth's last clear row
+    took that edge for the whole lip (a lower lip 0.04 wi thick that the tracker then looked for)."""
+    n = len(red_rows)
+    for j in range(1, max(int(round(TEETH_BLUR * wi)), 1) + 1):
+        y = end + direction * j
+        if not 0 <= y < n:
+            break
+        if red_rows[y] >= 0.0:
+            return y - direction
+    return end
+
+
 OPEN_SPAN = 0.6
 """Tallest inside of an open mouth (× wi, from the upper lip's inner edge down; a yawn's is about
 half the eye distance)."""
@@ -1114,6 +1135,8 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         f_rows = profile_features(rows_bgr, skin_level, chroma)
         teeth_rows, red_rows = teeth0[:, b0:b1].mean(axis=1), f_rows[:, 1] - skin_red
         top, bottom, y_min = _gap(lum_rows, teeth_rows, y, wi, red_rows)
+        if TEETH_BLUR > 0 and float(teeth_rows[top : bottom + 1].max(initial=0.0)) > 0.5:
+            top, bottom = _past_teeth(red_rows, top, -1, wi), _past_teeth(red_rows, bottom, +1, wi)
 
         def lower_edge(gap_end: int) -> float:
             # the lower lip by its colour: the shadow under it is darker skin, not lip (not the upper
