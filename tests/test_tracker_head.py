@@ -487,6 +487,38 @@ def test_the_calibration_frame_has_no_jaw(expr):
     assert (dropped > 0.0) == (expr == "ah")
 
 
+def test_the_rigid_place_stays_where_the_finder_last_found_the_mouth(monkeypatch):
+    """The calibration's looks for the mouth's rigid place: when a look from the place the last one
+    pointed to finds no mouth (on a grin the shadow under the nose can be the nearer line), the place
+    goes back to where the mouth was found. It used to stay where the finder had just failed, and the
+    tracker then lost the mouth on the calibration frame itself (a grinning photo, ``--auto``)."""
+    import dataclasses
+
+    import tracker.calibration as cal_mod
+
+    state = BASE.with_expression("grin")
+    img, _ = render_face(state)
+    clicks = Clicks.from_dict(clicks_for(state))
+    honest = calibrate(img, clicks)
+    real_find = cal_mod.MouthFinder.find
+    looks = []
+
+    def find(self, crop, pred, previous=None, steps=1.0):
+        looks.append(pred)
+        if len(looks) > 1:
+            return None  # the look from where the first one pointed sees nothing
+        r = real_find(self, crop, pred, previous, steps)
+        up = 0.3 * self.wi  # the first one puts the line a third of the eye distance up (the nose's shadow)
+        return dataclasses.replace(r, line_ends=tuple((x, y - up) for x, y in r.line_ends or (r.left, r.right)))
+
+    monkeypatch.setattr(cal_mod.MouthFinder, "find", find)
+    cal = calibrate(img, clicks)
+    monkeypatch.undo()
+    assert len(looks) >= 2  # (calibration then tracks its frame once for the neutral pose)
+    assert abs(cal.mouth_offset[1] - honest.mouth_offset[1]) < 0.02 * honest.work_ipd
+    assert FaceTracker(cal).track(img).params.status == OK
+
+
 def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
     """The place check (``FaceTracker._plausible_mouth``) against the mouth's rigid place: a mouth up
     to a quarter of the eye distance above the prediction is plausible — unless that is above the

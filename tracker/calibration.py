@@ -609,11 +609,18 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     mcx = mrect[0] + mouth_model.centre[0]
     mcy = mrect[1] + mouth_model.centre[1]
     finder = MouthFinder(mouth_model, wi)
+    seen = None  # the last look that found the mouth: its place, result and crop
     for _ in range(RIGID_STEPS):  # as the tracker will look on this frame: the crop and the prediction at the place
         rect = mouth_rect((mcx, mcy), wi)
         found = finder.find(ff.crop(frame_bgr, rect), (mcx - rect[0], mcy - rect[1]))
         if found is None or found.score < SCORE_OK:
+            # the look from the new place found no mouth (on a grin, the shadow under the nose can be
+            # nearer than the lips): back to the last place that found it, where the tracker will find
+            # it again on this frame
+            if seen is not None:
+                mcy, found, rect = seen
             break
+        seen = (mcy, found, rect)
         step = rect[1] + found.line_centre[1] - mcy
         mcy += step
         if abs(step) < 0.25:
