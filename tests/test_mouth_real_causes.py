@@ -276,7 +276,267 @@ def test_a_lower_lip_redder_than_calibrated_is_still_the_lower_lip(monkeypatch):
     assert gap_err < -3.0, "without the allowance the tongue is the lower lip (else this case shows nothing)"
 
 
-def _grin_crop(lower: int, blur: float) -> tuple[np.ndarray, tuple[float, float]]:
+def _grin_crop(wedges: bool = True, line: bool = False, edge: bool = False) -> np.ndarray:
+    """A grin at the working scale (40 px between the eyes): skin, an upper lip, teeth from column 26
+    to 50, a lower lip, and (``wedges``) a near-black triangle beside each end of the teeth rising to
+    a tip at (17, 17) and (59, 17) — the dark corners of a grin, which the lips hide from the line's
+    rows on a dark face — or (``line``) a one-row dark line running on from the teeth's right end
+    (a crease), or (``edge``) a dark edge running down from it (dark lipstick's lower edge)."""
+    from tracker.synthetic import STYLES
+
+    st = STYLES["default"]
+    img = np.empty((64, 76, 3), np.uint8)
+    img[:] = st.skin
+    img[14:20, 20:57] = st.lip
+    img[26:32, 22:55] = st.lip
+    img[20:26, 26:51] = st.teeth
+    dark = (30, 25, 35)
+    if wedges:
+        for tri in ([(27, 19), (27, 26), (17, 17)], [(49, 19), (49, 26), (59, 17)]):
+            cv2.fillPoly(img, [np.array(tri, np.int32)], dark)
+    if line:
+        img[22, 51:62] = dark
+    if edge:  # the lower lip's dark outer edge, running down and out from the teeth's right end
+        cv2.line(img, (51, 24), (53, 33), dark, 2)
+    return img
+
+
+def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
+    """A grin whose corners the line search left inside the mouth (on the teeth's ends, the dark
+    corners above the line's rows): the corners move out to the ends of the mouth's inside, at its
+    rows there. A closed mouth, a corner outside the inside's thick part (a crease running on from
+    it), a lip's dark edge running down from it and an inside running on past OPEN_REACH are left
+    alone."""
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    mf = MouthFinder(model, model.work_ipd)
+    assert mf.wi == pytest.approx(40.0) and mf.r == pytest.approx(1.0)
+    bias = mfm.CORNER_BIAS
+    maps = mf.prepare(_grin_crop())
+    left, right = mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0))
+    assert abs(left[0] - (17 - bias)) <= 1.0 and abs(right[0] - (59 + bias)) <= 1.0, (left, right)
+    assert 16.0 <= left[1] <= 19.0 and 16.0 <= right[1] <= 19.0, (left, right)
+    # the lips shut: no inside to go by
+    assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (22.5, 23.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
+    # a corner already past the teeth, on a one-row crease running on from them, stays
+    creased = mf.prepare(_grin_crop(wedges=False, line=True))
+    assert mf.inside_ends(creased, (25.0, 23.0), (53.0, 22.0), (19.0, 26.0), (14.0, 31.0))[1] == (53.0, 22.0)
+    # an inside that goes down more steeply than OPEN_SLOPE from the corner is a lip's edge: it stays
+    edged = mf.prepare(_grin_crop(wedges=False, edge=True))
+    assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1] == (49.0, 23.0)
+    with monkeypatch.context() as steep:
+        steep.setattr(mfm, "OPEN_SLOPE", 10.0)
+        assert mf.inside_ends(edged, (28.0, 24.0), (49.0, 23.0), (19.0, 26.0), (14.0, 34.0))[1][0] > 51.5
+    # an inside running on past OPEN_REACH is not the mouth's own (hair round it): the corners stay
+    # (the finder's maps are one buffer: the grin again)
+    maps = mf.prepare(_grin_crop())
+    monkeypatch.setattr(mfm, "OPEN_REACH", 0.25)
+    assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
+
+
+def test_the_corners_move_out_to_the_inside_more_the_more_the_lips_part():
+    """Lips parted about OPEN_ENDS: the corners move part of the way towards the inside's ends, more
+    the wider the gap, so the width follows the gap without a step (a still face whose gap read 3.9
+    and 4.1 rows about a threshold of 4 had its corner jump 2.3 px and back frame after frame)."""
+    from tests.test_mouth_finder import _calibrate
+    import tracker.mouth_finder as mfm
+
+    model, _ = _calibrate()
+    mf = MouthFinder(model, model.work_ipd)
+    maps = mf.prepare(_grin_crop())
+    unit = mfm.OPEN_ENDS * mf.wi
+    lo, hi = mfm.OPEN_ENDS_RAMP
+    xs = []
+    for k in (lo - 0.05, lo + 0.25 * (hi - lo), lo + 0.5 * (hi - lo), lo + 0.75 * (hi - lo), hi, hi + 0.5):
+        gap = (23.0 - 0.5 * k * unit, 23.0 + 0.5 * k * unit)
+        left, right = mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), gap, (14.0, 31.0))
+        xs.append((left[0], right[0]))
+    assert xs[0] == (28.0, 48.0)  # under the ramp: not at all
+    full = xs[-1]
+    assert xs[-2] == pytest.approx(full)  # past it: all of the way
+    for (l0, r0), (l1, r1) in zip(xs, xs[1:]):
+        assert l1 <= l0 and r1 >= r0  # out, step by step
+    assert xs[2][0] == pytest.approx(28.0 + 0.5 * (full[0] - 28.0)) and xs[2][1] == pytest.approx(48.0 + 0.5 * (full[1] - 48.0))
+
+
+def _dark_grin_crop(style) -> np.ndarray:
+    """A grin on a dark face at the working scale (40 px between the eyes): ``style``'s skin and
+    lips, teeth from column 26 to 50, and beside each end of the teeth, past a 3-column sliver of
+    lip, a triangle of the skin at half its light rising to a tip at (17, 17) and (59, 17) — the
+    shaded corners of a grin, as brown as the skin round them."""
+    img = np.empty((64, 76, 3), np.uint8)
+    img[:] = style.skin
+    img[14:20, 20:57] = style.lip
+    img[26:32, 22:55] = style.lip
+    img[20:26, 26:51] = style.teeth
+    shade = tuple(int(0.5 * c) for c in style.skin)
+    for tri in ([(22, 19), (22, 26), (17, 17)], [(54, 19), (54, 26), (59, 17)]):
+        cv2.fillPoly(img, [np.array(tri, np.int32)], shade)
+    return img
+
+
+def test_a_grins_shaded_corners_on_a_dark_face_are_inside_the_mouth(monkeypatch):
+    """The shaded corners of a grin on a dark face are not the inside's colours (dark and colourless,
+    or teeth), and a sliver of lip parts them from the teeth: the corners stopped at the teeth's ends
+    (the ``darkeyes`` copy of expr_d19: width r 0.58 / 0.49). Pixels far darker than the lips
+    (OPEN_DARK) and gaps up to OPEN_JOIN across closed take them to the shading's tips; without either
+    the corners stay at the teeth, and so they do where the skin round the mouth was that dark at
+    calibration (hair: DARK_ROUND)."""
+    from tests.test_mouth_finder import _calibrate
+    from tracker.synthetic import STYLES
+    import tracker.mouth_finder as mfm
+
+    style = STYLES["dark_skin"]
+    model, _ = _calibrate(style)
+    assert model.dark_round is not None and model.dark_round <= DARK_ROUND
+    crop = _dark_grin_crop(style)
+    assert not model.inside_table.take(lut_index(crop[20:23, 20:22])).any(), "the shading is no inside colour"
+    bias = mfm.CORNER_BIAS
+    corners = ((28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0))  # the corners on the teeth, the gap, the lips
+
+    def ends(m):
+        f = MouthFinder(m, m.work_ipd)
+        return f.inside_ends(f.prepare(crop), *corners)
+
+    left, right = ends(model)
+    assert abs(left[0] - (17 - bias)) <= 1.0 and abs(right[0] - (59 + bias)) <= 1.0, (left, right)
+    assert 16.0 <= left[1] <= 19.5 and 16.0 <= right[1] <= 19.5, (left, right)
+    for name, value in (("OPEN_DARK", 0.0), ("OPEN_JOIN", 0.05)):
+        with monkeypatch.context() as m:
+            m.setattr(mfm, name, value)
+            left, right = ends(model)
+            assert left[0] >= 24.0 and right[0] <= 52.0, (name, left, right)
+    left, right = ends(dataclasses.replace(model, dark_round=2 * DARK_ROUND))
+    assert left[0] >= 24.0 and right[0] <= 52.0, ("hair round the mouth", left, right)
+
+
+TONGUE_PINK = np.array([122.0, 124.0, 208.0])  # BGR: a tongue as red as the lips, a shade paler
+DARK_INSIDE = np.array([30.0, 32.0, 45.0])
+
+
+def _yawn_runs(lower_lip: np.ndarray = LIP) -> list[tuple[np.ndarray, int]]:
+    """A yawn through the click (80 px between the eyes): skin, upper lip, the dark inside above the
+    tongue, the tongue, the dark inside in front of the lower teeth, the lower lip, skin."""
+    return [(SKIN, 20), (LIP * 0.9, 6), (DARK_INSIDE, 4), (TONGUE_PINK, 22), (DARK_INSIDE * 0.7, 8),
+            (lower_lip, 10), (SKIN, 30)]
+
+
+def test_a_yawns_gap_runs_on_past_the_tongue_to_the_lower_lip():
+    """The click on the tongue of a yawn: the darkest row near it is the band above the tongue, and the
+    gap stopped there (the tongue then was the lower lip, 0.3 wi thick: the ``late`` copy of expr_d18
+    calibrated on such a frame, and its opening followed the peer at r 0.28). Past the tongue the gap
+    reaches the second dark band, with the lower lip after it."""
+    lum, red = _rows_for_gap(_yawn_runs())
+    teeth = np.zeros(len(lum))
+    click = 36.0  # on the tongue, the band above it within the darkest row's reach and the one below not
+    top, bottom, _ = _gap(lum, teeth, click, WI, red)
+    assert (top, bottom) == (26, 29), "without the rule the gap is the band above the tongue (else this shows nothing)"
+    top, bottom, _ = _gap(lum, teeth, click, WI, red, past_tongue=True)
+    assert (top, bottom) == (26, 59)
+    # a dark band that runs on past the tallest opening (OPEN_SPAN) is no inside in front of teeth
+    runs = _yawn_runs()
+    runs[4] = (DARK_INSIDE * 0.7, 40)
+    lum, red = _rows_for_gap(runs)
+    assert _gap(lum, np.zeros(len(lum)), click, WI, red, past_tongue=True)[:2] == (26, 29)
+
+
+@pytest.mark.parametrize("case", ["shade under a thick lip", "beard", "shade across a full lip"])
+def test_past_the_tongue_the_gap_does_not_take_a_thick_lower_lip(case):
+    """Closed lips and a thick, very red lower lip (a child's pout) with the dark shade under it and a
+    paler chin after that; the lower lip with a dark beard under it; parted lips and a full lower lip
+    with a crease of shade across it, dark, but lighter than the gap (the ``late`` copy of expr_d6).
+    None is a tongue: the gap stays the line between the lips."""
+    line = LIP * 0.6
+    if case == "shade across a full lip":
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (DARK_INSIDE * 1.7, 3), (LIP, 14), (LIP * 0.41, 3), (LIP, 6), (SKIN, 30)]
+    elif case == "beard":
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (line, 2), (LIP, 12), (HAIR * 0.6, 12), (HAIR, 30)]
+    else:
+        red_lip = np.array([110.0, 100.0, 220.0])
+        chin = SKIN + (LIP - SKIN) * 0.5  # pinkish, but paler than the lip
+        runs = [(SKIN, 20), (LIP * 0.9, 8), (line, 2), (red_lip, 22), (0.35 * SKIN, 4), (chin, 30)]
+    lum, red = _rows_for_gap(runs)
+    teeth = np.zeros(len(lum))
+    assert _gap(lum, teeth, 29.0, WI, red, past_tongue=True) == _gap(lum, teeth, 29.0, WI, red)
+
+
+def _yawn_crop() -> np.ndarray:
+    """A yawn's mouth crop at 80 px between the eyes, drawn from ellipses: the lips' ring, the dark
+    inside, a tongue filling its lower half (dark bands left above and below it)."""
+    crop = np.empty((160, 160, 3), np.uint8)
+    crop[:] = SKIN.astype(np.uint8)
+    cv2.ellipse(crop, (80, 64), (30, 28), 0, 0, 360, LIP.tolist(), -1, cv2.LINE_AA)
+    cv2.ellipse(crop, (80, 64), (25, 22), 0, 0, 360, DARK_INSIDE.tolist(), -1, cv2.LINE_AA)
+    cv2.ellipse(crop, (80, 67), (21, 11), 0, 0, 360, TONGUE_PINK.tolist(), -1, cv2.LINE_AA)
+    return cv2.GaussianBlur(crop, (0, 0), 0.8)
+
+
+def test_a_yawn_at_calibration_is_learned_as_an_open_mouth(monkeypatch):
+    """:func:`~tracker.mouth_model.learn_mouth` on a yawn, the click on the tongue: the gap spans the
+    inside (from the upper lip's inner edge to the lower lip's, 44 rows) and the lower lip is a lip's
+    thickness; looking no further than the band above the tongue, the tongue was learned as a lower
+    lip as thick as lips get (:data:`~tracker.mouth_model.LIP_MAX`)."""
+    import tracker.mouth_model as mm
+
+    crop = _yawn_crop()
+    model = mm.learn_mouth(crop, (80.0, 62.0), WI)
+    assert 38.0 <= model.gap <= 46.0, model.gap
+    assert model.thick_down <= 0.12 * WI, model.thick_down
+    monkeypatch.setattr(mm, "TONGUE", False)
+    before = mm.learn_mouth(crop, (80.0, 62.0), WI)
+    assert before.gap < 20.0 and before.thick_down >= mm.LIP_MAX[1] * WI - 0.5, (before.gap, before.thick_down)
+
+
+def test_the_rest_line_of_an_open_calibration_mouth_is_at_its_upper_lip():
+    """The mouth's rigid place: a closed or talking mouth's own line; a yawn's line (half an eye
+    distance below its upper lip's inner edge) moves up to :data:`~tracker.calibration.RIGID_OPEN`
+    wi below that edge. On the synthetic performer, whose widest mouth opens only 0.3 wi, calibrating
+    with it open still puts the rigid place within 0.03 wi of where calibrating with it closed does
+    (no harm there; the yawn it is for is the ``expr_d18-late`` case in ``test_realfaces``)."""
+    from tracker.calibration import RIGID_OPEN, calibrate, rest_height
+    from tracker.clicks import Clicks
+    from tracker.synthetic import FaceState, clicks_for, render_face
+
+    assert rest_height(100.0, 99.0, WI) == 100.0
+    assert rest_height(100.0, 100.0 - RIGID_OPEN * WI, WI) == 100.0
+    assert rest_height(100.0, 60.0, WI) == pytest.approx(60.0 + RIGID_OPEN * WI)
+    base = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+    heights = []
+    for opening in (0.0, 1.0):
+        face = base.replace(mouth_open=opening, teeth=True)
+        cal = calibrate(render_face(face)[0], Clicks.from_dict(clicks_for(face)))
+        heights.append(cal.mouth_offset[1] / cal.work_ipd)
+    assert abs(heights[1] - heights[0]) <= 0.03, heights
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255), st.integers(1, 30)),
+                min_size=2, max_size=12),
+       st.floats(5.0, 155.0), st.floats(5.0, 155.0))
+def test_calibration_of_any_banded_mouth_crop_gives_a_finite_mouth(runs, click_x, click_y):
+    """Crops of horizontal bands of any colours and heights (lips, teeth, tongues, shadows, beards in
+    any order, as the tongue and gap rules see them) with the click anywhere in the crop: a model
+    every time, its sizes, colours and lip axes finite. A lip or skin band past the crop's edge once
+    gave an empty sample, and a lip axis of NaNs."""
+    import tracker.mouth_model as mm
+
+    rows = np.concatenate([np.repeat(np.array([[b, g, r]], np.uint8), k, axis=0) for b, g, r, k in runs])
+    rows = np.resize(rows, (160, 3))
+    crop = np.ascontiguousarray(np.repeat(rows[:, None, :], 160, axis=1))
+    crop = cv2.GaussianBlur(crop, (0, 0), 0.8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no mean of an empty sample on the way
+        model = mm.learn_mouth(crop, (float(click_x), float(click_y)), WI)
+    for v in (model.gap, model.thick_up, model.thick_down, model.width, model.lip_upper, model.lip_lower):
+        assert np.isfinite(v)
+    assert np.isfinite(model.axis_up).all() and np.isfinite(model.axis_down).all()
+    assert np.isfinite(model.classes).all() and np.isfinite(model.separation)
+    assert model.gap >= 0.0 and model.thick_up > 0.0 and model.thick_down > 0.0 and model.width > 0.0
+
+
+def _grin_bands(lower: int, blur: float) -> tuple[np.ndarray, tuple[float, float]]:
     """A grin's mouth crop at 80 px between the eyes, in bands: skin, a thin upper lip, the dark line
     under it, yellowish teeth, a pale lower lip ``lower`` rows thick, skin — blurred up and down by
     ``blur`` px as a camera does (the colours of expr_d0's grin). Returns the crop and the click, on
@@ -300,7 +560,7 @@ def test_a_grins_lower_lip_is_measured_past_the_teeths_soft_edge(monkeypatch, bl
     dark-skinned copies of a talking clip calibrated a lower lip 0.04 wi thick)."""
     import tracker.mouth_model as mm
 
-    crop, click = _grin_crop(16, blur)
+    crop, click = _grin_bands(16, blur)
     assert abs(mm.learn_mouth(crop, click, WI).thick_down - 16) <= 2.0
     monkeypatch.setattr(mm, "TEETH_BLUR", 0.0)
     assert mm.learn_mouth(crop, click, WI).thick_down < 6, "without the step the lip reads thin (else this case shows nothing)"
