@@ -1391,3 +1391,28 @@ def test_a_lit_iris_as_pale_as_the_lid_still_has_its_lower_lid_found(finder):
     assert f._lower_floor(shut, 0, centres[0]) == 0.0
     model = dataclasses.replace(f.model, limbus=None)
     assert EyeFinder(model, wi)._lower_floor(grey, 0, centres[0]) == 0.0
+
+
+def test_a_narrowed_eye_is_reported_partly_at_the_middle_of_what_shows(finder, monkeypatch):
+    """An open eye whose lids have narrowed (to 70 % of the calibrated gap: a frown, eyes lowered)
+    is reported halfway between the iris found and the middle of what shows between the lids
+    (``shown``, :data:`~tracker.eyes.SHOWN_CLOSING`): the lids cut the iris's disc and its search
+    rides the lash line, the visible eye's middle does not (a shared clip's lowered eyes: pupil
+    error 3.5 → 2 % of the eye distance). The eye point the tracker follows stays on the iris, and
+    an eye open as calibrated is reported there."""
+    import tracker.eyes as E
+
+    monkeypatch.setattr(E, "CLEAR_IRIS", (1.5, 2.0))  # the gap decides, whatever the picture says
+    state = dataclasses.replace(BASE, gaze_x=0.06)
+    full = E.EyeFinder._both_lids
+    res, *_ = _find(finder, state)
+    assert all(e.shown == pytest.approx((e.x, e.y)) for e in res.eyes)
+    monkeypatch.setattr(E.EyeFinder, "_both_lids", lambda self, *a, **k: [
+        (u, d, 0.7 * self.model.lid_open[i]) for i, (u, d, _) in enumerate(full(self, *a, **k))])
+    res2, _, _, (crop, _, _) = _find(finder, state)
+    for i, (e, e0) in enumerate(zip(res2.eyes, res.eyes)):
+        assert (e.x, e.y) == pytest.approx((e0.x, e0.y))  # the eye point: still the iris
+        slit = finder._slit(crop, (e.x, e.y), finder._eye_gain(i, finder._gain))
+        half = (0.5 * (e.x + slit[0]), 0.5 * (e.y + slit[1]))
+        assert math.hypot(slit[0] - e.x, slit[1] - e.y) > 1.0  # (else this case shows nothing)
+        assert math.hypot(e.shown[0] - half[0], e.shown[1] - half[1]) < 0.3

@@ -739,7 +739,11 @@ class FaceTracker:
             ]
         img_pts = ff.to_image(np.concatenate(pts, dtype=np.float64))  # every part is (k, 2)
         pupils_img = img_pts[0:2]
-        (lx, ly), (rx, ry) = pupils_img.tolist()
+        shown_f = pup_f.copy()  # the pupils reported: a narrowed eye's nearer its slit's middle (SHOWN_CLOSING)
+        for i, o in enumerate(obs):
+            if not doubt[i] and not closed[i] and o.shown is not None:
+                shown_f[i] = (found[i, 0] + o.shown[0] - o.x, found[i, 1] + o.shown[1] - o.y)
+        (lx, ly), (rx, ry) = ff.to_image(shown_f).tolist()
         roll = math.degrees(math.atan2(-(ry - ly), rx - lx))
         vals = [0.5 * (lx + rx) + PIXEL_CENTRE, 0.5 * (ly + ry) + PIXEL_CENTRE, roll, (lid_up[0] + lid_down[0]) / k, (lid_up[1] + lid_down[1]) / k, brow_h[0] / k, brow_h[1] / k]
         parts = dict(pupils=pupils_img, brows=img_pts[2:4], lids=img_pts[4:8], rois=[img_pts[8:12], img_pts[12:16]])
