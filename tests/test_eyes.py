@@ -342,6 +342,36 @@ def test_an_iris_the_gap_rule_cannot_see_is_judged_open_or_shut_by_its_picture()
         assert tuple(e.open for e in res.eyes) == want, expr
 
 
+def test_an_iris_the_gap_rule_cannot_see_keeps_its_column_while_it_shows(monkeypatch):
+    """The gap rule that cannot see an iris (:data:`~tracker.eyes.GAP_BLIND`) reads a narrow gap on
+    an open eye too, and the slit it measures runs on sideways into whatever is as dark as the eye's
+    inside: the eye point moving to the slit's middle (:data:`~tracker.eyes.CLOSING`) went 11 px to
+    the lash shadow at a grey photo's eye corner, on the calibration frame itself. While the iris
+    picture shows, the point and the pupil reported keep the iris's column; they still take the slit's
+    height (a deep-set eye's iris search rides up into the socket's shadow)."""
+    import tracker.eyes as E
+
+    style = STYLES["dark_skin"].replace(name="brown_as_skin", iris=STYLES["dark_skin"].skin)
+    model, wi = _learn(style=style)
+    f = EyeFinder(model, wi)
+    assert all(f._gap_blind)
+    monkeypatch.setattr(E, "CLEAR_IRIS", (1.5, 2.0))  # the gap decides, whatever the picture says
+    state = dataclasses.replace(BASE, gaze_x=0.06)
+    full = E.EyeFinder._both_lids
+    monkeypatch.setattr(E.EyeFinder, "_both_lids", lambda self, *a, **k: [
+        (u, d, 0.2 * self.model.lid_open[i]) for i, (u, d, _) in enumerate(full(self, *a, **k))])
+    slit = (lambda self, crop, iris, gain: (iris[0] - 6.0, iris[1] + 2.0))  # a slit off to one side, lower
+    monkeypatch.setattr(E.EyeFinder, "_slit", slit)
+    res, *_ = _find(f, state, style)
+    for e in res.eyes:
+        assert e.iris_match >= E.IRIS_SHOWS
+        assert e.x == pytest.approx(e.iris[0]) and e.shown[0] == pytest.approx(e.iris[0])
+        assert e.y > e.iris[1] + 1.0  # the slit's height is taken
+    f._gap_blind = [False, False]  # a gap rule that sees the iris: the point goes to the slit's middle
+    res2, *_ = _find(f, state, style)
+    assert all(e.x < e.iris[0] - 4.0 for e in res2.eyes)
+
+
 def test_a_small_face_and_strong_roll():
     small = BASE.replace(ipd=44.0, roll_deg=25.0)
     model, wi = _learn(small)

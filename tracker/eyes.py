@@ -139,7 +139,14 @@ LASH_CONTRAST = 25.0
 """Grey levels from the lash line to the white under it that make a lid margin."""
 CLOSING = (0.3, 0.7)
 """Lid gaps (fractions of the calibrated one) over which the eye point moves from the middle
-of the slit (closed) to the iris (open)."""
+of the slit (closed) to the iris (open). On an eye whose gap rule cannot see its iris
+(:data:`GAP_BLIND`), while its picture shows (:data:`IRIS_SHOWS`), only the slit's height is taken
+and the point keeps the iris's column: the slit there runs on into whatever is as dark as the eye's
+inside (a grey photo's smiling eye read 0.1-0.4 of its calibrated gap on the calibration frame, and
+its slit's middle lay on the lash shadow at the eye's corner: the pupil went 12 % of the eye distance
+off). Deep-set eyes are gap-blind too, and there the slit's height is what holds a point the iris
+search lifts into the socket's shadow (taking it away as well cost their copies of expr_d19 3° of
+roll)."""
 CLEAR_IRIS = (0.88, 0.95)
 """Correlations with the iris picture over which the eye point stays on the iris whatever the lid gap
 reads (a straight ramp between): the iris is plainly in view. The gap is read where the dark rows
@@ -2090,12 +2097,17 @@ class EyeFinder:
             iris = found[i][:2]
             gap = lids[i][2]
             share = gap / self.model.lid_open[i]
+            # a gap rule blind to this iris (GAP_BLIND) sees no lids across it either: while the iris
+            # shows, only the slit's height is taken (see CLOSING)
+            keep_x = self._gap_blind[i] and found[i][2] >= IRIS_SHOWS
             clear = min(max((found[i][2] - CLEAR_IRIS[0]) / (CLEAR_IRIS[1] - CLEAR_IRIS[0]), 0.0), 1.0)
             w = max(min(max((share - lo) / (hi - lo), 0.0), 1.0), clear)  # the eye point's way to the iris
             ws = max(min(max((share - SHOWN_CLOSING[0]) / (SHOWN_CLOSING[1] - SHOWN_CLOSING[0]), 0.0), 1.0), clear)
             pt = shown = iris
             if min(w, ws) < 1.0:
                 sx, sy = self._slit(crop_bgr, iris, self._eye_gain(i, gain))
+                if keep_x:
+                    sx = iris[0]
                 shown = (ws * iris[0] + (1.0 - ws) * sx, ws * iris[1] + (1.0 - ws) * sy)
                 if w < 1.0:
                     pt = (w * iris[0] + (1.0 - w) * sx, w * iris[1] + (1.0 - w) * sy)
