@@ -167,6 +167,23 @@ def test_the_mouth_point_is_between_the_lips_not_in_a_beard(open_mouth):
     assert _mouth(grey, left, right, flat) == pytest.approx(_mouth(grey, left, right))
 
 
+def test_the_mouth_point_stays_above_the_chin_the_face_detector_saw():
+    """A warm picture where the lips are no redder than the skin, and the neck's shadow under the chin,
+    inside the mouth's range, is far darker than the gap between the lips: the darkest line was the
+    neck (a laughing face in a photo: 1.5 eye distances below the eyes, the grin at 0.84). The face
+    detector's box ends at the chin, and the range ends with it (:data:`~tracker.auto_init.BOX_MOUTH`):
+    the point is on the gap. Where the box ends below the range, nothing changes."""
+    left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])
+    grey, red = _lower_face(beard=False)
+    red[:] = 145.0  # no lip colour to go by
+    grey[190:, :] = 25.0  # the neck in the chin's shadow, from 1.5 eye distances down
+    grey[196:, :] = 60.0  # a collar below the shadow: the shadow is a valley too
+    assert _mouth(grey, left, right, red)[1] > 185.0
+    x, y = _mouth(grey, left, right, red, chin=185.0)
+    assert abs(y - 155.0) <= 2 and abs(x - 100.0) < 1
+    assert _mouth(grey, left, right, red, chin=260.0) == pytest.approx(_mouth(grey, left, right, red))
+
+
 @pytest.mark.parametrize("beard", [False, True])
 def test_the_mouth_point_is_on_the_line_when_only_the_lower_lip_is_red(beard):
     """An upper lip in shade, darker than it is red (expr_d10's copy darkened to a deep brown): the

@@ -59,6 +59,14 @@ from 0.9 a child's upper lip was cut off, and a wide-open smile's red lower lip 
 for the lips (the ``child`` copy of talk_b: the mouth click 0.34 eye distances low). Above 0.8 lie
 the nostrils and, on a bearded face, the reddish skin under the nose beside the moustache."""
 
+BOX_MOUTH = 0.3
+"""The least range (× the inter-pupil distance) :func:`_mouth` keeps when the face detector's box
+ends it early (:data:`MOUTH_RANGE`): the bundled detector's box ends at the chin, and below it lie
+the shadow under the chin, the neck and a collar, as dark as any mouth and, in a warm picture, as red
+as its lips (a laughing face with no lip colour to go by: the point went to the shadow on the neck,
+1.5 eye distances below the eyes, the grin at 0.84). On the shared clips and their child-sized,
+small and tilted copies the mouth's point lies at 0.72-0.86 of the box's height, whose bottom is
+1.48-1.95 eye distances below the eyes."""
 LIP_RED = 4.0
 """Lab a* (0–255 scale) by which the reddest row below the eyes must outdo the cheeks for the lips'
 colour to say where the mouth is."""
@@ -495,20 +503,37 @@ def _teeth_rows(band: np.ndarray, a: int, ipd: float) -> tuple[int, int] | None:
     return (rows[0], rows[-1]) if rows else None
 
 
-def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndarray | None = None) -> tuple[float, float]:
+def _darkest_valley(profile: np.ndarray) -> int:
+    """The darkest row of ``profile`` that is a valley (no darker than the rows on either side of it),
+    or its darkest row when it has none. A line across the face has lighter rows on both sides; the
+    range's end does not: where the grey still falls there (the shadow under the chin, a dark collar
+    or background below it), its darkest row is only where the range was cut (a laughing face with no
+    lip colour in a warm photo: the point went to the neck, 1.56 eye distances below the eyes, the
+    grin at 0.87)."""
+    inner = [i for i in range(1, len(profile) - 1) if profile[i] <= profile[i - 1] and profile[i] <= profile[i + 1]]
+    return min(inner, key=profile.__getitem__) if inner else int(np.argmin(profile))
+
+
+def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndarray | None = None,
+           chin: float | None = None) -> tuple[float, float]:
     """The mouth's centre: the darkest line across the face in :data:`MOUTH_RANGE` below the eyes —
     inside the lips where their colour shows them (``lab_a``, the frame's Lab a* as float32: rows
     redder than the cheeks; :func:`_lip_span`): a beard, a moustache or the shadow under the lower
     lip is darker than the gap between closed lips, but not redder than the skin. There the darkest
     valley between the lips' first and last rows or just above them (a closed mouth's gap, an open
     mouth's inside; :data:`LINE_OVER`), on the rows' mean grey; without the lips' colour the line
-    must also be told from the nostrils, so on :data:`LINE_SHARE` of each row."""
+    must also be told from the nostrils, so on :data:`LINE_SHARE` of each row. ``chin`` (optional): the
+    face detector's box's bottom row (frame px); the range ends there where that comes first (see
+    :data:`BOX_MOUTH`)."""
     ipd = math.dist(left, right)
     u = (right - left) / ipd
     down = np.array([-u[1], u[0]])
     mid = 0.5 * (left + right)
     start = mid + MOUTH_RANGE[0] * ipd * down
-    n = int(round((MOUTH_RANGE[1] - MOUTH_RANGE[0]) * ipd))
+    end = MOUTH_RANGE[1]
+    if chin is not None and down[1] > 0.5:  # the box's bottom, along the face from the eyes (ipd)
+        end = min(end, max((chin - mid[1]) / (down[1] * ipd), MOUTH_RANGE[0] + BOX_MOUTH))
+    n = int(round((end - MOUTH_RANGE[0]) * ipd))
     if n < 3:
         raise AutoInitError("the face is too small to find its mouth")
     half, sigma = max(int(LINE_HALF * ipd), 1), max(0.02 * ipd, 0.5)
@@ -518,7 +543,7 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
 
     band = _band(grey, start, down, u, n, half)
     valley = smooth(np.percentile(band, LINE_SHARE, axis=1))
-    k = int(np.argmin(valley))
+    k = _darkest_valley(valley)
     if lab_a is not None:
         red = smooth(_strip(lab_a, start, down, u, n, half))
         cheeks = [_strip(lab_a, mid + 0.75 * ipd * down + s * 0.45 * ipd * u, down, u, max(int(0.15 * ipd), 2), max(int(0.08 * ipd), 1))
@@ -618,13 +643,13 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
         grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
         left, right, score = pupil_pair(grey, faces[0])
         if best is None or score > best[0] + (ROLL_MARGIN if best[1] == 0 else 0.0):
-            best = (score, angle, turn, img, grey, left, right)
+            best = (score, angle, turn, img, grey, left, right, faces[0])
         if best[0] >= ROLL_SURE:
             break
     if best is None:
         raise AutoInitError("no face found by the bundled face detector (use --init CLICKS.json instead)")
-    _, _, turn, img, grey, left, right = best
-    found = _clicks_in(img, grey, left, right)
+    _, _, turn, img, grey, left, right, box = best
+    found = _clicks_in(img, grey, left, right, box[1] + box[3])
     back = cv2.invertAffineTransform(turn)
     d = {"frame": int(frame_index)}
     for k, p in found.items():
@@ -633,16 +658,18 @@ def auto_clicks(frame_bgr: np.ndarray, frame_index: int = 0) -> Clicks:
     return Clicks.from_dict(d, where="auto init").moved(PIXEL_CENTRE, PIXEL_CENTRE)
 
 
-def _clicks_in(frame_bgr: np.ndarray, grey: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict[str, tuple[float, float]]:
+def _clicks_in(frame_bgr: np.ndarray, grey: np.ndarray, left: np.ndarray, right: np.ndarray,
+               chin: float | None = None) -> dict[str, tuple[float, float]]:
     """The five points (OpenCV px) of the face whose pupils :func:`pupil_pair` put at ``left`` and
-    ``right`` in ``frame_bgr`` (``grey``: its grey, float32): pupils, brows, mouth."""
+    ``right`` in ``frame_bgr`` (``grey``: its grey, float32): pupils, brows, mouth. ``chin``: the face
+    detector's box's bottom row (px), past which the mouth is not looked for (:func:`_mouth`)."""
     # snapped to the limbus as calibration snaps clicks, before the brows and the mouth are looked for
     # from them: the candidates' cues are sized for an adult's iris (IRIS_RADIUS), and a child's
     # larger one put them 4 % of the eye distance low, the mouth's search with them
     left, right = (np.asarray(p, dtype=np.float64) for p in refine_pupils(grey, left, right))
     brows = find_brows(grey, left, right)
     lab_a = cv2.cvtColor(frame_bgr, cv2.COLOR_BGR2LAB)[..., 1].astype(np.float32)
-    mouth = _mouth(grey, left, right, lab_a)
+    mouth = _mouth(grey, left, right, lab_a, chin)
     return {"left_pupil": (float(left[0]), float(left[1])), "right_pupil": (float(right[0]), float(right[1])),
             "left_brow": tuple(brows[0]), "right_brow": tuple(brows[1]), "mouth": tuple(mouth)}
 
