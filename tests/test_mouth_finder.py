@@ -765,3 +765,38 @@ def test_a_wider_mouth_whose_upper_lip_jumped_up_loses_to_the_held_line(calibrat
     assert res.line_centre[1] == pytest.approx(row(held_row if rise > 0.3 else far), abs=0.01)
     monkeypatch.setattr(mouth_finder, "UPPER_RISE", 1.0)  # the control: no bound on the rise, the wider wins
     assert finder.find(crop, at, before).line_centre[1] == pytest.approx(row(far), abs=0.01)
+
+
+def test_a_held_search_traces_the_last_line_alone(calibrated, monkeypatch):
+    """``held``: the line is traced from the last sure frame's row, whatever valley lies near the
+    prediction (the caller found the valley's mouth out of place: a moustache's lower edge a little
+    above the lips, nearer the last line than :data:`~tracker.mouth_finder.HOLD_LINE`, so not checked
+    against it). Nothing to hold without a sure last frame."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    t = _truth_in_crop(BASE, ff, origin)
+    finder = MouthFinder(model, WI)
+    at = tuple(centre - origin)
+    before = finder.find(crop, at)
+    assert before.score >= SCORE_OK and abs(before.line_centre[1] - t["mouth"][1]) < 3.0
+    s = WORK_IPD / WI
+    held_row = (before.line_centre[1] + 0.5) * s - 0.5
+    seen = []
+    real = finder._from_seed
+
+    def traced(maps, px, py, seed, previous):
+        seen.append(seed)
+        return real(maps, px, py, seed, previous)
+
+    monkeypatch.setattr(finder, "_from_seed", traced)
+    monkeypatch.setattr(finder, "line_seed", lambda *a: held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD)
+    finder.find(crop, at, before)
+    assert seen == [held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD]  # the valley alone
+    seen.clear()
+    res = finder.find(crop, at, before, held=True)
+    assert seen == [pytest.approx(held_row)]
+    assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    assert finder.find(crop, at, None, held=True) is None
+    assert finder.find(crop, at, mouth_finder._moved(before, score=0.2), held=True) is None

@@ -46,7 +46,7 @@ from tracker.head_motion import LK_REACH, HeadMotion, apply, compose, similarity
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
 from tracker.mouth_finder import WIDE_REF
-from tracker.mouth_finder import MouthFinder
+from tracker.mouth_finder import MouthFinder, hair_round
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
 
 
@@ -283,6 +283,7 @@ class FaceTracker:
         # the lid gap (crop px) under which an eye reads as shut: where the eye finder's own rule shuts it
         self._shut_gap = None if cal.eye_model is None else [OPEN_GAP * g for g in cal.eye_model.lid_open]
         self.mouth_finder = MouthFinder(cal.mouth_model, wi) if cal.mouth_model is not None else LegacyMouth(cal, wi)
+        self._hair = cal.mouth_model is not None and hair_round(cal.mouth_model)  # a beard or moustache round the mouth
         self.eye_rect = self.eye_finder.rect
         self._eye_corners = self._rect_corners(self.eye_rect)
         self._pupils_face = np.array([[-0.5 * wi, 0.0], [0.5 * wi, 0.0]])  # where the face frame puts the anchors
@@ -441,10 +442,16 @@ class FaceTracker:
         back up to its rigid place (``rigid``, face px) but not above it; and never higher above the
         rigid place than the jaw goes (:data:`JAW_MIN`). The distances from the prediction grow with
         the time since the last frame (:data:`FRAME_STEP`)."""
+        return self._misplaced(m, predicted, origin, rigid) is None
+
+    def _misplaced(self, m, predicted: tuple[float, float], origin: tuple[float, float],
+                   rigid: tuple[float, float] | None = None) -> str | None:
+        """Why a mouth is not plausible (:meth:`_plausible_mouth`): ``"shape"`` (its size or tilt),
+        ``"high"`` (above where it may be), ``"place"`` (elsewhere), or None."""
         w = self.cal.mouth_width
         rise = m.level_rise
         if not (0.4 * w <= m.width <= 1.9 * max(w, WIDE_REF * self.wi) and abs(rise) < 0.45 * m.width):
-            return False
+            return "shape"
         c = m.line_centre  # where calibration put the mouth's centre
         dx = c[0] + origin[0] - predicted[0]
         dy = c[1] + origin[1] - predicted[1]
@@ -455,7 +462,9 @@ class FaceTracker:
             # found there is the philtrum or the nostrils, and a jaw that followed it would let the
             # next one rise further still
             lo = max(min(lo, rigid[1] - predicted[1]), rigid[1] + self._jaw_min[1] - predicted[1])
-        return abs(dx) <= 0.3 * self.wi * k and lo <= dy <= 0.45 * self.wi * k
+        if abs(dx) > 0.3 * self.wi * k or dy > 0.45 * self.wi * k:
+            return "place"
+        return "high" if dy < lo else None
 
     # -------------------------------------------------------------- main entry
     def track(self, frame_bgr: np.ndarray, index: int = 0, time: float = 0.0) -> TrackResult:
@@ -657,7 +666,12 @@ class FaceTracker:
         rigid_mouth = ff.to_face(apply(self.pose, self._cal_mouth[None]))[0]
         predicted_mouth = rigid_mouth + self.jaw
         mouth_res, mouth_origin, mouth_rect_ = self._mouth(frame, ff, predicted_mouth, rigid_mouth)
-        if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
+        why = None if mouth_res is None else self._misplaced(mouth_res, predicted_mouth, mouth_origin, rigid_mouth)
+        if why == "high" and self._hair:  # the darkest valley's mouth is too high (a moustache's edge): the line where it was
+            mouth_res = self._mouth_held(predicted_mouth, mouth_origin)
+            if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
+                mouth_res = None
+        elif why is not None:
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
@@ -904,6 +918,25 @@ class FaceTracker:
         if res is not None and res.score < MOUTH_SCORE_OK:
             res = None
         return res, (rect[0], rect[1]), rect
+
+    def _mouth_held(self, centre: np.ndarray, origin: tuple[float, float]):
+        """The mouth traced again in this frame's crop (:meth:`_mouth`'s, at ``origin``) from the last
+        sure frame's line alone (the finder's ``held``), or None. Where the darkest valley near the
+        prediction is the lower edge of a moustache or a beard over the lip, the line traced from it
+        runs along the hair and the mouth comes out too high (:meth:`_misplaced`):
+        the painted-beard copies of the shared clips lost 2-4 % of their frames so, one or two at a
+        time, where the line the last frame found was still there. Used only where calibration saw
+        hair round the mouth: elsewhere a mouth too high is a yawn's or a tongue's new line more
+        often than a wrong one, and the last line held it half shut (a dim, late copy of expr_d6
+        opened wide: 15 frames at 0.4 of the peer's opening, its r 0.79 -> 0.67)."""
+        prev = getattr(self, "_mouth_prev", None)
+        crop = getattr(self, "_last_mouth_crop", None)
+        if prev is None or crop is None or not hasattr(self.mouth_finder, "shifted"):
+            return None
+        prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
+        res = self.mouth_finder.find(crop, (float(centre[0]) - origin[0], float(centre[1]) - origin[1]), previous=prev,
+                                     steps=self._steps, held=True)
+        return None if res is None or res.score < MOUTH_SCORE_OK else res
 
     # -------------------------------------------------------------- re-acquisition
     def _check_eyes(self, frame: np.ndarray, guess: np.ndarray) -> np.ndarray | None:

@@ -1168,7 +1168,7 @@ class MouthFinder:
 
     # ------------------------------------------------------------------ the whole
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
-             previous: MouthResult | None = None, steps: float = 1.0) -> MouthResult | None:
+             previous: MouthResult | None = None, steps: float = 1.0, held: bool = False) -> MouthResult | None:
         """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth
         centre, the calibrated mouth centre under the head's motion), or None when nothing there can be
         a mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
@@ -1176,11 +1176,13 @@ class MouthFinder:
         so a result far from it scores lower, and a line seeded far from its line (:data:`HOLD_LINE`)
         is traced from its line too. ``steps``: frames' worth of time since that frame (1 at 25 frames a
         second or faster; see :data:`tracker.face_tracker.FRAME_STEP`), by which the mouth's move from it
-        may grow. Works on the crop shrunk to :data:`WORK_IPD`; the result is in the given crop's pixels."""
+        may grow. ``held``: the line is traced from ``previous``'s line alone, not from the darkest valley
+        near the prediction (None without a sure ``previous``): the caller found the valley's mouth out
+        of place. Works on the crop shrunk to :data:`WORK_IPD`; the result is in the given crop's pixels."""
         self._steps = float(steps)
         s = self.s
         if s >= 1.0:
-            return self._find(crop_bgr, predicted_centre_crop, previous)
+            return self._find(crop_bgr, predicted_centre_crop, previous, held)
         H, W = crop_bgr.shape[:2]
         size = (max(int(round(W * s)), 8), max(int(round(H * s)), 8))
         if self._small is None or self._small.shape[:2] != (size[1], size[0]):
@@ -1194,7 +1196,7 @@ class MouthFinder:
                           gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
                           lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None,
                           line_ends=None if previous.line_ends is None else tuple(down(p) for p in previous.line_ends))
-        r = self._find(small, down(predicted_centre_crop), prev)
+        r = self._find(small, down(predicted_centre_crop), prev, held)
         if r is None:
             return None
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
@@ -1207,14 +1209,18 @@ class MouthFinder:
             gap_top=(r.gap_top + 0.5) / sy - 0.5, gap_bottom=(r.gap_bottom + 0.5) / sy - 0.5, shape=(H, W), _blob=None)
 
     def _find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
-              previous: MouthResult | None = None) -> MouthResult | None:
+              previous: MouthResult | None = None, held: bool = False) -> MouthResult | None:
         """:meth:`find` on a crop at the working scale."""
         px, py = float(predicted_centre_crop[0]), float(predicted_centre_crop[1])
+        sure = previous is not None and previous.score >= SCORE_OK
+        if held and not sure:
+            return None
         maps = self.prepare(crop_bgr)
         y_line = py + self.line0
-        sure = previous is not None and previous.score >= SCORE_OK
         if sure:
             px = 0.5 * (px + previous.centre[0])
+        if held:
+            return self._from_seed(maps, px, py, previous.line_centre[1], previous)
         # the mouth line from a dark valley near the prediction with the lower lip under it, traced out
         # to the corners; the lips on the column through the corners' midpoint
         seed = self.line_seed(maps, px, y_line)
