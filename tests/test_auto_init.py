@@ -170,7 +170,7 @@ def test_the_mouth_point_is_between_the_lips_not_in_a_beard(open_mouth):
 def test_the_mouth_point_stays_above_the_chin_the_face_detector_saw():
     """A warm picture where the lips are no redder than the skin, and the neck's shadow under the chin,
     inside the mouth's range, is far darker than the gap between the lips: the darkest line was the
-    neck (a laughing face in a photo: 1.5 eye distances below the eyes, the grin at 0.84). The face
+    neck (a laughing face in a photo: about 1.5 eye distances below the eyes, the grin at 0.85). The face
     detector's box ends at the chin, and the range ends with it (:data:`~tracker.auto_init.BOX_MOUTH`):
     the point is on the gap. Where the box ends below the range, nothing changes."""
     left, right = np.array([50.0, 40.0]), np.array([150.0, 40.0])

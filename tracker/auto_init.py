@@ -64,7 +64,7 @@ BOX_MOUTH = 0.3
 ends it early (:data:`MOUTH_RANGE`): the bundled detector's box ends at the chin, and below it lie
 the shadow under the chin, the neck and a collar, as dark as any mouth and, in a warm picture, as red
 as its lips (a laughing face with no lip colour to go by: the point went to the shadow on the neck,
-1.5 eye distances below the eyes, the grin at 0.84). On the shared clips and their child-sized,
+about 1.5 eye distances below the eyes, the grin at 0.85). On the shared clips and their child-sized,
 small and tilted copies the mouth's point lies at 0.72-0.86 of the box's height, whose bottom is
 1.48-1.95 eye distances below the eyes."""
 LIP_RED = 4.0
@@ -508,8 +508,8 @@ def _darkest_valley(profile: np.ndarray) -> int:
     or its darkest row when it has none. A line across the face has lighter rows on both sides; the
     range's end does not: where the grey still falls there (the shadow under the chin, a dark collar
     or background below it), its darkest row is only where the range was cut (a laughing face with no
-    lip colour in a warm photo: the point went to the neck, 1.56 eye distances below the eyes, the
-    grin at 0.87)."""
+    lip colour in a warm photo: the point went to the neck, about 1.5 eye distances below the eyes,
+    the grin at 0.85)."""
     inner = [i for i in range(1, len(profile) - 1) if profile[i] <= profile[i - 1] and profile[i] <= profile[i + 1]]
     return min(inner, key=profile.__getitem__) if inner else int(np.argmin(profile))
 

@@ -145,8 +145,8 @@ and the point keeps the iris's column: the slit there runs on into whatever is a
 inside (a grey photo's smiling eye read 0.1-0.4 of its calibrated gap on the calibration frame, and
 its slit's middle lay on the lash shadow at the eye's corner: the pupil went 12 % of the eye distance
 off). Deep-set eyes are gap-blind too, and there the slit's height is what holds a point the iris
-search lifts into the socket's shadow (taking it away as well cost their copies of expr_d19 3° of
-roll)."""
+search lifts into the socket's shadow (keeping the point on the iris altogether cost the deep-set
+copy of expr_d19 3° of roll)."""
 CLEAR_IRIS = (0.88, 0.95)
 """Correlations with the iris picture over which the eye point stays on the iris whatever the lid gap
 reads (a straight ramp between): the iris is plainly in view. The gap is read where the dark rows
