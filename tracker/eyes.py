@@ -2097,16 +2097,15 @@ class EyeFinder:
             iris = found[i][:2]
             gap = lids[i][2]
             share = gap / self.model.lid_open[i]
-            # a gap rule blind to this iris (GAP_BLIND) sees no lids across it either: while the iris
-            # shows, only the slit's height is taken (see CLOSING)
-            keep_x = self._gap_blind[i] and found[i][2] >= IRIS_SHOWS
             clear = min(max((found[i][2] - CLEAR_IRIS[0]) / (CLEAR_IRIS[1] - CLEAR_IRIS[0]), 0.0), 1.0)
             w = max(min(max((share - lo) / (hi - lo), 0.0), 1.0), clear)  # the eye point's way to the iris
             ws = max(min(max((share - SHOWN_CLOSING[0]) / (SHOWN_CLOSING[1] - SHOWN_CLOSING[0]), 0.0), 1.0), clear)
             pt = shown = iris
             if min(w, ws) < 1.0:
                 sx, sy = self._slit(crop_bgr, iris, self._eye_gain(i, gain))
-                if keep_x:
+                if self._gap_blind[i] and found[i][2] >= IRIS_SHOWS:
+                    # a gap rule blind to this iris sees no lids across it either: while the iris shows,
+                    # only the slit's height is taken (see CLOSING)
                     sx = iris[0]
                 shown = (ws * iris[0] + (1.0 - ws) * sx, ws * iris[1] + (1.0 - ws) * sy)
                 if w < 1.0:

@@ -907,17 +907,23 @@ class FaceTracker:
         rect = mouth_rect((float(centre[0]), cy), self.wi)
         crop = ff.crop(frame, rect, self._buffer("mouth", (rect[3], rect[2], 3)))
         self._last_mouth_crop = crop
+        return self._find_mouth(crop, centre, (rect[0], rect[1])), (rect[0], rect[1]), rect
+
+    def _find_mouth(self, crop: np.ndarray, centre: np.ndarray, origin: tuple[float, float], held: bool = False):
+        """The mouth finder on this frame's mouth crop (its corner at ``origin``, face px) round the
+        predicted centre ``centre`` (face px), with the last frame's mouth moved into the crop's pixels
+        (both crops are in face px); None when it scores under :data:`MOUTH_SCORE_OK`. ``held``: traced
+        from the last frame's line alone (:meth:`MouthFinder.find`; None without a last mouth)."""
+        at = (float(centre[0]) - origin[0], float(centre[1]) - origin[1])
         prev = getattr(self, "_mouth_prev", None)
         if prev is not None and hasattr(self.mouth_finder, "shifted"):
-            # the last frame's mouth, moved into this crop's pixels (both crops are in face px)
-            prev = self.mouth_finder.shifted(prev[0], prev[1][0] - rect[0], prev[1][1] - rect[1])
-            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]), previous=prev,
-                                         steps=self._steps)
+            prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
+            res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held)
+        elif held:
+            return None
         else:
-            res = self.mouth_finder.find(crop, (float(centre[0]) - rect[0], float(centre[1]) - rect[1]))
-        if res is not None and res.score < MOUTH_SCORE_OK:
-            res = None
-        return res, (rect[0], rect[1]), rect
+            res = self.mouth_finder.find(crop, at)
+        return None if res is None or res.score < MOUTH_SCORE_OK else res
 
     def _mouth_held(self, centre: np.ndarray, origin: tuple[float, float]):
         """The mouth traced again in this frame's crop (:meth:`_mouth`'s, at ``origin``) from the last
@@ -929,14 +935,8 @@ class FaceTracker:
         hair round the mouth: elsewhere a mouth too high is a yawn's or a tongue's new line more
         often than a wrong one, and the last line held it half shut (a dim, late copy of expr_d6
         opened wide: 15 frames at 0.4 of the peer's opening, its r 0.79 -> 0.67)."""
-        prev = getattr(self, "_mouth_prev", None)
         crop = getattr(self, "_last_mouth_crop", None)
-        if prev is None or crop is None or not hasattr(self.mouth_finder, "shifted"):
-            return None
-        prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
-        res = self.mouth_finder.find(crop, (float(centre[0]) - origin[0], float(centre[1]) - origin[1]), previous=prev,
-                                     steps=self._steps, held=True)
-        return None if res is None or res.score < MOUTH_SCORE_OK else res
+        return None if crop is None else self._find_mouth(crop, centre, origin, held=True)
 
     # -------------------------------------------------------------- re-acquisition
     def _check_eyes(self, frame: np.ndarray, guess: np.ndarray) -> np.ndarray | None:
