@@ -17,6 +17,7 @@
 """
 
 import dataclasses
+import types
 import warnings
 
 import cv2
@@ -511,6 +512,46 @@ def test_the_rest_line_of_an_open_calibration_mouth_is_at_its_upper_lip():
     assert abs(heights[1] - heights[0]) <= 0.03, heights
 
 
+def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(monkeypatch):
+    """Calibration looks for the mouth where its last look put the line, as the tracker will. A look
+    that traced the shadow under the nose on a grin puts its corners above the lips it split below
+    them (its upper lip's height from the corners' line negative): not a look that found the mouth,
+    so the rigid place stays where the last whole look had it. Without the check it followed the
+    looks up, 0.15 eye distances on this face."""
+    import tracker.calibration as cal_mod
+    from tracker.clicks import Clicks
+    from tracker.mouth_finder import MouthFinder as MF, _moved
+    from tracker.synthetic import FaceState, clicks_for, render_face
+
+    face = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+    frame = render_face(face)[0]
+    clicks = Clicks.from_dict(clicks_for(face))
+    calm = cal_mod.calibrate(frame, clicks)
+    real_find = MF.find
+    looks = []
+
+    def find(self, crop, at, *args, **kwargs):
+        r = real_find(self, crop, at, *args, **kwargs)
+        looks.append(r)
+        if r is not None and len(looks) <= 3:
+            # the first look a little low (the loop looks again from its line), the next ones on the
+            # nostrils' shadow 0.3 wi up
+            up = -0.05 * self.wi if len(looks) == 1 else 0.3 * self.wi
+            r = _moved(r, centre=(r.centre[0], r.centre[1] - up), left=(r.left[0], r.left[1] - up),
+                       right=(r.right[0], r.right[1] - up), lip_upper=r.lip_upper - up, lip_lower=r.lip_lower + up,
+                       line_ends=tuple((p[0], p[1] - up) for p in r.line_ends))
+        return r
+
+    monkeypatch.setattr(MF, "find", find)
+    moved = cal_mod.calibrate(frame, clicks)
+    assert len(looks) >= 2
+    assert abs(moved.mouth_offset[1] - calm.mouth_offset[1]) <= 0.02 * calm.work_ipd, (moved.mouth_offset, calm.mouth_offset)
+    assert not cal_mod.found_mouth(None, 80.0)
+    look = types.SimpleNamespace(score=1.0, lip_upper=-0.02 * 80.0, lip_lower=10.0)
+    assert cal_mod.found_mouth(look, 80.0)  # a corner's height read a pixel over the lips' top (a moustache's edge)
+    assert not cal_mod.found_mouth(types.SimpleNamespace(score=1.0, lip_upper=10.0, lip_lower=-0.1 * 80.0), 80.0)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255), st.integers(1, 30)),
                 min_size=2, max_size=12),
@@ -573,3 +614,15 @@ def test_past_teeth_stops_at_the_first_red_row_and_within_reach():
     assert mm._past_teeth(red, 9, +1, WI) == 11
     assert mm._past_teeth(np.full(20, -3.0), 9, +1, WI) == 9, "no lip within reach: the gap stays"
     assert mm._past_teeth(red[::-1].copy(), 4, -1, WI) == 2
+
+
+@pytest.mark.parametrize("upper,lower,want", [
+    (3.0, 5.0, (3.0, 5.0)),     # the line between the lips: as measured
+    (-2.0, 9.0, (0.0, 7.0)),    # corners over the upper lip's top: the opening all below the line
+    (6.0, -1.5, (4.5, 0.0)),    # corners under the lower lip's bottom
+    (-4.0, 1.0, (0.0, 0.0)),    # no opening left
+])
+def test_reported_lip_heights_are_never_negative_and_keep_the_opening(upper, lower, want):
+    """A corner's height misread outside the lips leaves one lip's height from the corners' line
+    negative; the cartoon gets that lip at no height and the opening whole."""
+    assert ft.lip_heights(upper, lower) == pytest.approx(want)

@@ -75,6 +75,11 @@ with the crop and the prediction where the last one put its line's centre, as th
 that frame. Only the height: an open mouth at calibration moves it, and across the face the corners'
 midpoint is as good as the finder's (moving it too left a bearded grin's corners a pixel past the
 search's reach: two of eight one-pixel moves of --auto's points lost a quarter of the frames)."""
+WHOLE_MOUTH = 0.05
+"""How far (× wi) outside its lips' outer edges the line between a calibration look's corners may lie
+for the look to have found the mouth (:func:`found_mouth`): two px at the finder's working scale,
+about how finely a corner's height is read. The painted moustache over expr_d0's lips puts a look's
+corners 0.02 wi over the lips' top."""
 
 
 class CalibrationError(ValueError):
@@ -460,6 +465,18 @@ def rest_height(line_y: float, gap_top: float, wi: float) -> float:
     return min(line_y, gap_top + RIGID_OPEN * wi)
 
 
+def found_mouth(found, wi: float) -> bool:
+    """Whether a look of the mouth finder on the calibration frame found the mouth: sure of it
+    (:data:`~tracker.mouth_finder.SCORE_OK`) and whole — the line between its corners no further
+    outside its two lips' outer edges than a corner's height is read to (:data:`WHOLE_MOUTH` × ``wi``,
+    px between the eyes). On a grin the look from the gap's middle can trace the shadow under the
+    nose, corners on the nose's wings 0.16 eye distances over the top of the lips split from the
+    teeth below: sure, but not a mouth (a smiling astronaut's photo: the rigid place went 0.26 eye
+    distances up, onto the nostrils, and the tracker followed them)."""
+    return (found is not None and found.score >= SCORE_OK
+            and min(found.lip_upper, found.lip_lower) >= -WHOLE_MOUTH * wi)
+
+
 def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     """Learn a :class:`Calibration` from one frame and the five clicks on it.
 
@@ -613,7 +630,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     for _ in range(RIGID_STEPS):  # as the tracker will look on this frame: the crop and the prediction at the place
         rect = mouth_rect((mcx, mcy), wi)
         found = finder.find(ff.crop(frame_bgr, rect), (mcx - rect[0], mcy - rect[1]))
-        if found is None or found.score < SCORE_OK:
+        if not found_mouth(found, wi):
             # the look from the new place found no mouth (on a grin, the shadow under the nose can be
             # nearer than the lips): back to the last place that found it, where the tracker will find
             # it again on this frame
@@ -625,7 +642,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         mcy += step
         if abs(step) < 0.25:
             break
-    if found is not None and found.score >= SCORE_OK:
+    if found_mouth(found, wi):
         mcy = rest_height(mcy, rect[1] + found.gap_top, wi)
 
     # lips as a colour class too (the whole-frame search by lip colour after a loss): the pixels

@@ -266,6 +266,18 @@ def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Seque
     return out
 
 
+def lip_heights(upper: float, lower: float) -> tuple[float, float]:
+    """The two lips' heights (px) from the line between the corners, as reported: each at least 0,
+    their sum (the opening) kept where it is not negative. A corner's height misread above the upper lip's outer edge (a pout's
+    corners taken at the lip's top on expr_d3, a grin's run onto the cheek's fold) leaves the line
+    outside the lips; the cartoon's lip then has no height, not a negative one."""
+    if upper < 0.0:
+        return 0.0, max(upper + lower, 0.0)
+    if lower < 0.0:
+        return max(upper + lower, 0.0), 0.0
+    return upper, lower
+
+
 class FaceTracker:
     """Track one calibrated performer frame by frame (see the module docstring).
 
@@ -766,7 +778,8 @@ class FaceTracker:
             n = len(mouth_res.polygon)
             corners = img_pts[16:18]
             width = math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1])
-            vals += [width, mouth_res.lip_upper / k, mouth_res.lip_lower / k]
+            up, down = lip_heights(mouth_res.lip_upper, mouth_res.lip_lower)
+            vals += [width, up / k, down / k]
             ov = Overlay(mouth_corners=corners, mouth_centre=img_pts[18], lip_points=img_pts[19:21],
                          lip_polygon=img_pts[21 : 21 + n], lip_raw_polygon=img_pts[21 + n : 21 + 2 * n],
                          blob_origin=(ff, (float(mo[0]), float(mo[1]))), mouth_cue=mouth_res.cue, _blob_of=mouth_res,
