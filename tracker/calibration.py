@@ -34,7 +34,7 @@ from tracker.clicks import PIXEL_CENTRE, Clicks, ClicksError
 from tracker.colour_model import TILE_SHAPE, ColourClassifier, Gaussians, features, table_to_tile, tile_to_table
 from tracker.eyes import EyeModel, EyeModelError, learn_eyes, refine_pupils, side_glance
 from tracker.eyes import calibration_crop as eye_calibration_crop
-from tracker.mouth_finder import SCORE_OK, MouthFinder
+from tracker.mouth_finder import SCORE_OK, MouthFinder, MouthResult
 from tracker.mouth_model import MOUTH_RECT, MouthModel, learn_mouth
 from tracker.params import FaceParams
 
@@ -465,7 +465,7 @@ def rest_height(line_y: float, gap_top: float, wi: float) -> float:
     return min(line_y, gap_top + RIGID_OPEN * wi)
 
 
-def found_mouth(found, wi: float) -> bool:
+def found_mouth(found: MouthResult | None, wi: float) -> bool:
     """Whether a look of the mouth finder on the calibration frame found the mouth: sure of it
     (:data:`~tracker.mouth_finder.SCORE_OK`) and whole — the line between its corners no further
     outside its two lips' outer edges than a corner's height is read to (:data:`WHOLE_MOUTH` × ``wi``,

@@ -268,9 +268,9 @@ def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Seque
 
 def lip_heights(upper: float, lower: float) -> tuple[float, float]:
     """The two lips' heights (px) from the line between the corners, as reported: each at least 0,
-    their sum (the opening) kept where it is not negative. A corner's height misread above the upper lip's outer edge (a pout's
-    corners taken at the lip's top on expr_d3, a grin's run onto the cheek's fold) leaves the line
-    outside the lips; the cartoon's lip then has no height, not a negative one."""
+    their sum (the opening) kept unless it is negative. Corners whose height was read over the upper
+    lip's outer edge (expr_d3's pout: its upper lip reported down to -17 px) or under the lower one
+    leave the line outside the lips; the cartoon's lip then has no height, not a negative one."""
     if upper < 0.0:
         return 0.0, max(upper + lower, 0.0)
     if lower < 0.0:
