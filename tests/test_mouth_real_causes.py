@@ -515,7 +515,7 @@ def test_the_rest_line_of_an_open_calibration_mouth_is_at_its_upper_lip():
 def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(monkeypatch):
     """Calibration looks for the mouth where its last look put the line, as the tracker will. A look
     that traced the shadow under the nose on a grin puts its corners above the lips it split below
-    them (its upper lip's height from the corners' line negative): not a look that found the mouth,
+    them (its upper lip's height from the corners' line -0.16 wi): not a look that found the mouth,
     so the rigid place stays where the last whole look had it. Without the check it followed the
     looks up, 0.15 eye distances on this face."""
     import tracker.calibration as cal_mod
@@ -536,9 +536,11 @@ def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(mo
         if r is not None and len(looks) <= 3:
             # the first look a little low (the loop looks again from its line), the next ones on the
             # nostrils' shadow 0.3 wi up
-            up = -0.05 * self.wi if len(looks) == 1 else 0.3 * self.wi
+            wi = calm.work_ipd  # the crop's px between the eyes (the finder's own wi is its working scale)
+            up = -0.05 * wi if len(looks) == 1 else 0.3 * wi
+            over = -0.16 * wi if len(looks) > 1 else r.lip_upper - up  # the nose's shadow: 0.16 wi over the lips
             r = _moved(r, centre=(r.centre[0], r.centre[1] - up), left=(r.left[0], r.left[1] - up),
-                       right=(r.right[0], r.right[1] - up), lip_upper=r.lip_upper - up, lip_lower=r.lip_lower + up,
+                       right=(r.right[0], r.right[1] - up), lip_upper=over, lip_lower=r.lip_lower + up,
                        line_ends=tuple((p[0], p[1] - up) for p in r.line_ends))
         return r
 
@@ -547,9 +549,10 @@ def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(mo
     assert len(looks) >= 2
     assert abs(moved.mouth_offset[1] - calm.mouth_offset[1]) <= 0.02 * calm.work_ipd, (moved.mouth_offset, calm.mouth_offset)
     assert not cal_mod.found_mouth(None, 80.0)
-    look = types.SimpleNamespace(score=1.0, lip_upper=-0.02 * 80.0, lip_lower=10.0)
-    assert cal_mod.found_mouth(look, 80.0)  # a corner's height read a pixel over the lips' top (a moustache's edge)
-    assert not cal_mod.found_mouth(types.SimpleNamespace(score=1.0, lip_upper=10.0, lip_lower=-0.1 * 80.0), 80.0)
+    look = types.SimpleNamespace(score=1.0, lip_upper=-0.07 * 80.0, lip_lower=10.0)
+    assert cal_mod.found_mouth(look, 80.0)  # along a moustache's lower edge, just over the lips' top
+    assert not cal_mod.found_mouth(types.SimpleNamespace(score=1.0, lip_upper=-0.16 * 80.0, lip_lower=30.0), 80.0)
+    assert not cal_mod.found_mouth(types.SimpleNamespace(score=1.0, lip_upper=10.0, lip_lower=-0.15 * 80.0), 80.0)
 
 
 @settings(max_examples=60, deadline=None)
