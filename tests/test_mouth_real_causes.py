@@ -618,14 +618,3 @@ def test_past_teeth_stops_at_the_first_red_row_and_within_reach():
     assert mm._past_teeth(np.full(20, -3.0), 9, +1, WI) == 9, "no lip within reach: the gap stays"
     assert mm._past_teeth(red[::-1].copy(), 4, -1, WI) == 2
 
-
-@pytest.mark.parametrize("upper,lower,want", [
-    (3.0, 5.0, (3.0, 5.0)),     # the line between the lips: as measured
-    (-2.0, 9.0, (0.0, 7.0)),    # corners over the upper lip's top: the opening all below the line
-    (6.0, -1.5, (4.5, 0.0)),    # corners under the lower lip's bottom
-    (-4.0, 1.0, (0.0, 0.0)),    # no opening left
-])
-def test_reported_lip_heights_are_never_negative_and_keep_the_opening(upper, lower, want):
-    """A corner's height misread outside the lips leaves one lip's height from the corners' line
-    negative; the cartoon gets that lip at no height and the opening whole."""
-    assert ft.lip_heights(upper, lower) == pytest.approx(want)

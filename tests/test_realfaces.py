@@ -716,20 +716,6 @@ def test_both_eyes_blink_together_on_the_shared_clips(real_results, name):
 
 
 @pytest.mark.realfaces
-def test_lip_heights_stay_inside_the_lips_on_a_pout():
-    """expr_d3's pout (frames 105-145) puts the corners' heights at the upper lip's top or over it;
-    the upper lip was reported down to -17 px. Each lip is reported at no less than 0, the opening kept."""
-    if REAL is None or "expr_d3" not in rf.clip_names(REAL):
-        pytest.skip(f"real clip expr_d3 not available (../shared/real or ${rf.REAL_DIR_ENV})")
-    run = rf.run_clip(REAL / "expr_d3.mp4", REAL / "expr_d3.clicks.json", max_frames=150)
-    assert run.error is None, run.error
-    ups = [p.lip_upper for p in run.params[100:]]
-    downs = [p.lip_lower for p in run.params[100:]]
-    assert min(ups) >= 0.0 and min(downs) >= 0.0, (min(ups), min(downs))
-    assert max(u + d for u, d in zip(ups, downs)) > 20.0  # the opening is still measured
-
-
-@pytest.mark.realfaces
 @pytest.mark.parametrize("shift", rf.JITTER)
 def test_calibration_snaps_narrow_eyes_clicks_to_the_irises_wherever_they_fall(shift):
     """expr_d18's narrow eyes, --auto's points moved as in ``--jitter``: a ring round each pupil and

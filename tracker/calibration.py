@@ -471,11 +471,12 @@ def rest_height(line_y: float, gap_top: float, wi: float) -> float:
 def found_mouth(found: MouthResult | None, wi: float) -> bool:
     """Whether a look of the mouth finder on the calibration frame found the mouth: sure of it
     (:data:`~tracker.mouth_finder.SCORE_OK`) and whole — the line between its corners no further
-    outside its two lips' outer edges than :data:`WHOLE_MOUTH` × ``wi`` (px between the eyes). On a
-    grin the look from the gap's middle can trace the shadow under the nose, corners on the nose's
-    wings 0.16 eye distances over the top of the lips split from the teeth below: sure, but not a
-    mouth (a smiling astronaut's photo: the rigid place went 0.26 eye distances up, onto the
-    nostrils, and the tracker followed them)."""
+    outside its two lips' outer edges than :data:`WHOLE_MOUTH` × ``wi`` (px between the eyes; a broad
+    smile's corners rise to about its upper lip's top, so a lip's height from them may be a little
+    under 0 on a real mouth). On a grin the look from the gap's middle can trace the shadow under the
+    nose, corners on the nose's wings 0.16 eye distances over the top of the lips split from the
+    teeth below: sure, but not a mouth (a smiling astronaut's photo: the rigid place went 0.26 eye
+    distances up, onto the nostrils, and the tracker followed them)."""
     return (found is not None and found.score >= SCORE_OK
             and min(found.lip_upper, found.lip_lower) >= -WHOLE_MOUTH * wi)
 

@@ -266,18 +266,6 @@ def paired_brows(heights: Sequence[float], matches: Sequence[float], seen: Seque
     return out
 
 
-def lip_heights(upper: float, lower: float) -> tuple[float, float]:
-    """The two lips' heights (px) from the line between the corners, as reported: each at least 0,
-    their sum (the opening) kept unless it is negative. Corners whose height was read over the upper
-    lip's outer edge (expr_d3's pout: its upper lip reported down to -17 px) or under the lower one
-    leave the line outside the lips; the cartoon's lip then has no height, not a negative one."""
-    if upper < 0.0:
-        return 0.0, max(upper + lower, 0.0)
-    if lower < 0.0:
-        return max(upper + lower, 0.0), 0.0
-    return upper, lower
-
-
 class FaceTracker:
     """Track one calibrated performer frame by frame (see the module docstring).
 
@@ -778,8 +766,7 @@ class FaceTracker:
             n = len(mouth_res.polygon)
             corners = img_pts[16:18]
             width = math.hypot(corners[1, 0] - corners[0, 0], corners[1, 1] - corners[0, 1])
-            up, down = lip_heights(mouth_res.lip_upper, mouth_res.lip_lower)
-            vals += [width, up / k, down / k]
+            vals += [width, mouth_res.lip_upper / k, mouth_res.lip_lower / k]
             ov = Overlay(mouth_corners=corners, mouth_centre=img_pts[18], lip_points=img_pts[19:21],
                          lip_polygon=img_pts[21 : 21 + n], lip_raw_polygon=img_pts[21 + n : 21 + 2 * n],
                          blob_origin=(ff, (float(mo[0]), float(mo[1]))), mouth_cue=mouth_res.cue, _blob_of=mouth_res,
