@@ -376,6 +376,12 @@ def _strip(img: np.ndarray, origin: np.ndarray, along: np.ndarray, across: np.nd
     return _band(img, origin, along, across, n, half).mean(axis=1)
 
 
+def _valleys(profile: np.ndarray, a: int, b: int) -> list[int]:
+    """The rows ``a..b-1`` of ``profile`` no darker than the rows on either side of them (``1 <= a``,
+    ``b < len(profile)``)."""
+    return [i for i in range(a, b) if profile[i] <= profile[i - 1] and profile[i] <= profile[i + 1]]
+
+
 def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarray,
           rim: tuple[float, float] | None = None) -> tuple[float, float]:
     """A point in the upper half of the darkest band above a pupil, along ``up``: halfway from its
@@ -415,8 +421,8 @@ def _brow(grey: np.ndarray, pupil: tuple[float, float], ipd: float, up: np.ndarr
         # and lashes reach into it with the brow higher up: then a band in the range, clearly darker
         # than the skin on both sides of it, is the brow
         contrast = float(seg.max() - seg.min())
-        bands = [i for i in range(lo + 1, hi - 1) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]
-                 and min(float(prof[lo:i].max()), float(prof[i:hi].max())) - float(prof[i]) >= BROW_BAND * contrast]
+        bands = [i for i in _valleys(prof, lo + 1, hi - 1)
+                 if min(float(prof[lo:i].max()), float(prof[i:hi].max())) - float(prof[i]) >= BROW_BAND * contrast]
         if bands:
             k = min(bands, key=prof.__getitem__)
     d = min(max(brow_centre(prof, k, max(int(0.05 * ipd), 2)), lo), hi)
@@ -510,7 +516,7 @@ def _darkest_valley(profile: np.ndarray) -> int:
     or background below it), its darkest row is only where the range was cut (a laughing face with no
     lip colour in a warm photo: the point went to the neck, about 1.5 eye distances below the eyes,
     the grin at 0.85)."""
-    inner = [i for i in range(1, len(profile) - 1) if profile[i] <= profile[i - 1] and profile[i] <= profile[i + 1]]
+    inner = _valleys(profile, 1, len(profile) - 1)
     return min(inner, key=profile.__getitem__) if inner else int(np.argmin(profile))
 
 
@@ -565,7 +571,7 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
             k, valley = (a + b) // 2, None
             means = band.mean(axis=1)
             for prof in (smooth(means), means):
-                inner = [i for i in range(top, b) if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+                inner = _valleys(prof, top, b)
                 if inner:
                     k, valley = min(inner, key=prof.__getitem__), prof
                     break
@@ -576,8 +582,7 @@ def _mouth(grey: np.ndarray, left: np.ndarray, right: np.ndarray, lab_a: np.ndar
                 # the shade under the lower lip, darker than either, was taken for the line, and
                 # calibration learned the lower lip alone as the mouth)
                 over = max(int(round(LINE_OVER * ipd)), 1)
-                near = [i for i in range(max(teeth[0] - over, 1), min(teeth[1] + over + 1, n - 1))
-                        if prof[i] <= prof[i - 1] and prof[i] <= prof[i + 1]]
+                near = _valleys(prof, max(teeth[0] - over, 1), min(teeth[1] + over + 1, n - 1))
                 k, valley = (min(near, key=prof.__getitem__), prof) if near else ((teeth[0] + teeth[1]) // 2, None)
     t = float(k)
     if valley is not None and 0 < k < n - 1:  # between rows: the valley's bottom
