@@ -710,7 +710,7 @@ def test_a_moustache_under_the_nostrils_is_not_an_open_mouth(finder_and_crop):
     model = finder.model
     cls = np.asarray(model.classes, dtype=np.float64).copy()
     cls[0, 0] = [0.5 * min(cls[1, 0, 0], cls[2, 0, 0]), cls[4, 0, 1] - 2.0, cls[4, 0, 2]]  # hair above the lips
-    bearded = MouthModel.from_dict({**model.to_dict(), "classes": cls.tolist(), "dark_round": 0.3})
+    bearded = MouthModel.from_dict({**model.to_dict(), "classes": cls.tolist(), "dark_round": 0.3, "dark_chin": 0.5})
     assert hair_round(bearded) and not hair_round(model)
     f2 = MouthFinder(bearded, WI)
     tu, td = int(round(f2.t_up)), int(round(f2.t_dn))

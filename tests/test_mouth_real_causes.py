@@ -409,7 +409,7 @@ def test_a_grins_shaded_corners_on_a_dark_face_are_inside_the_mouth(monkeypatch)
             m.setattr(mfm, name, value)
             left, right = ends(model)
             assert left[0] >= 24.0 and right[0] <= 52.0, (name, left, right)
-    left, right = ends(dataclasses.replace(model, dark_round=2 * DARK_ROUND))
+    left, right = ends(dataclasses.replace(model, dark_round=2 * DARK_ROUND, dark_chin=1.0))
     assert left[0] >= 24.0 and right[0] <= 52.0, ("hair round the mouth", left, right)
 
 
@@ -618,3 +618,53 @@ def test_past_teeth_stops_at_the_first_red_row_and_within_reach():
     assert mm._past_teeth(np.full(20, -3.0), 9, +1, WI) == 9, "no lip within reach: the gap stays"
     assert mm._past_teeth(red[::-1].copy(), 4, -1, WI) == 2
 
+
+
+def test_a_smiles_dark_folds_and_nostrils_are_not_hair_but_a_dark_chin_is():
+    """Hair round the mouth switches the tracker's dark rules (:func:`~tracker.mouth_finder.hair_round`).
+    A smile calibrated on has dark skin round the mouth of its own: the folds beside it and the
+    nostrils' shadow over it (0.05-0.21 of the round on seven of the fourteen still photos, none of
+    them bearded). Painted on the synthetic face's calibration crop they make ``dark_round`` pass
+    :data:`DARK_ROUND`, but the chin under the lower lip stays light, so it is no hair; a beard
+    painted on that chin too makes it hair. Older calibrations without ``dark_chin`` go by the round
+    alone; a share outside 0..1 is refused naming it."""
+    from tests.test_mouth_finder import BASE, WI as FWI, _crop, _frame_of
+    from tracker.mouth_finder import dark_rule, hair_round
+    from tracker.mouth_model import DARK_CHIN, MouthModel, chin_band, learn_mouth
+    from tracker.synthetic import face_landmarks, render_face
+
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    click = ff.to_face(face_landmarks(BASE)["mouth"][None])[0]
+    crop, origin = _crop(img, ff, click)
+    at = tuple(click - origin)
+    clean = learn_mouth(crop, at, FWI)
+    assert clean.dark_round <= DARK_ROUND and clean.dark_chin == 0.0 and not hair_round(clean)
+
+    outline = clean.outline + np.array(clean.centre)
+    y0, y1, x0, x1 = chin_band(crop.shape, outline, FWI)
+    assert y1 - y0 >= 0.2 * FWI and x1 - x0 >= 0.2 * FWI and y0 > outline[:, 1].max()
+    shadow = np.array([20, 20, 25], np.uint8)
+    smiling = crop.copy()
+    cx, cy = (int(round(v)) for v in clean.centre)
+    hw = int(round(0.5 * (outline[:, 0].max() - outline[:, 0].min())))
+    for side in (-1, 1):  # a fold down each side, past the corners, and a nostril over the lip
+        x = cx + side * (hw + int(0.12 * FWI))
+        smiling[cy - int(0.25 * FWI) : cy + int(0.3 * FWI), x - 2 : x + 3] = shadow
+        smiling[cy - int(0.4 * FWI) : cy - int(0.32 * FWI), cx + side * int(0.12 * FWI) - 3 : cx + side * int(0.12 * FWI) + 4] = shadow
+    smile = learn_mouth(smiling, at, FWI)
+    assert smile.dark_round > DARK_ROUND and smile.dark_chin < DARK_CHIN
+    assert not hair_round(smile) and dark_rule(smile)
+    assert hair_round(dataclasses.replace(smile, dark_chin=None)), "an older calibration: the round alone"
+
+    bearded = smiling.copy()
+    bearded[y0:y1, x0:x1] = shadow
+    beard = learn_mouth(bearded, at, FWI)
+    assert beard.dark_chin >= DARK_CHIN and hair_round(beard) and not dark_rule(beard)
+
+    assert MouthModel.from_dict(beard.to_dict()).dark_chin == pytest.approx(beard.dark_chin)
+    old = beard.to_dict()
+    del old["dark_chin"]
+    assert MouthModel.from_dict(old).dark_chin is None
+    with pytest.raises(ValueError, match="dark_chin"):
+        MouthModel.from_dict({**beard.to_dict(), "dark_chin": -0.2})

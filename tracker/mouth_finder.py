@@ -62,7 +62,7 @@ import numpy as np
 
 from tracker.colour_model import CHROMA_PAD, chroma_gain, grid_features, lut_index
 from tracker.mouth_model import (
-    BAND, C_UNIT, CORNER_BIAS, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, LIP_ROWS, N_RAYS, OPEN_DARK, RED_PARTS, SKIN_ROWS, MouthModel,
+    BAND, C_UNIT, CORNER_BIAS, DARK_CHIN, DARK_ROUND, GAP_RED, LIP_END, LIP_LEAD, LIP_ROWS, N_RAYS, OPEN_DARK, RED_PARTS, SKIN_ROWS, MouthModel,
     band_columns, cheek_run, corner_search, lens_outlines, line_geometry, lip_columns, lip_end, lip_gap, lip_red_need, lip_rows,
     lip_run, lip_sides, lips_grey, mouth_body, profile_features, trace_line, unlike_cheek,
 )
@@ -438,15 +438,17 @@ def _parabola(a: float, b: float, c: float) -> float:
 
 def hair_round(model: MouthModel) -> bool:
     """Whether the calibration saw hair round the mouth (:data:`~tracker.mouth_model.DARK_ROUND`: a
-    beard, a moustache); False for a calibration older than that measure."""
-    return model.dark_round is not None and model.dark_round > DARK_ROUND
+    beard) with the chin under it dark too (:data:`~tracker.mouth_model.DARK_CHIN`: not a smile's
+    folds and the nostrils' shadow); False for a calibration older than the first measure."""
+    return (model.dark_round is not None and model.dark_round > DARK_ROUND
+            and (model.dark_chin is None or model.dark_chin >= DARK_CHIN))
 
 
 def dark_rule(model: MouthModel) -> bool:
     """Whether the ends of an open mouth go by darkness too (:data:`~tracker.mouth_model.OPEN_DARK`):
     not where the skin round the mouth was that dark in places at calibration
-    (:data:`~tracker.mouth_model.DARK_ROUND`: hair), nor for a calibration older than that measure."""
-    return OPEN_DARK > 0 and model.dark_round is not None and model.dark_round <= DARK_ROUND
+    (hair: :func:`hair_round`), nor for a calibration older than that measure."""
+    return OPEN_DARK > 0 and model.dark_round is not None and not hair_round(model)
 
 
 def _open_table(model: MouthModel) -> np.ndarray:

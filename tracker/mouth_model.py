@@ -176,6 +176,19 @@ def round_mouth(shape: tuple[int, ...], outline: np.ndarray, centre: tuple[float
     return (near > 0) & (mouth == 0)
 
 
+def chin_band(shape: tuple[int, ...], outline: np.ndarray, wi: float) -> tuple[int, int, int, int]:
+    """The chin under the mouth in a crop of ``shape``: rows from 0.08 to 0.3 wi under the
+    ``outline``'s lowest point (crop px) and the middle half of its width, as ``(y0, y1, x0, x1)``
+    (clipped to the crop; empty when the mouth is at its edge). Below the lower lip's own shadow,
+    and between the smile's folds."""
+    H, W = shape[:2]
+    x_lo, x_hi = float(outline[:, 0].min()), float(outline[:, 0].max())
+    mx, hw, yb = 0.5 * (x_lo + x_hi), 0.25 * (x_hi - x_lo), float(outline[:, 1].max())
+    y0, y1 = min(max(int(round(yb + 0.08 * wi)), 0), H), min(max(int(round(yb + 0.3 * wi)), 0), H)
+    x0, x1 = min(max(int(round(mx - hw)), 0), W), min(max(int(round(mx + hw)), 0), W)
+    return y0, y1, x0, x1
+
+
 def skin_colour_bins(index: np.ndarray, round_px: np.ndarray) -> np.ndarray:
     """Table indices (sorted int32) of the colours on the skin round the mouth in the calibration
     crop (``index``: its :func:`~tracker.colour_model.lut_index`; ``round_px``: :func:`round_mouth`),
@@ -194,6 +207,13 @@ DARK_ROUND = 0.05
 :data:`OPEN_DARK` × the lips for that rule to apply: a beard or moustache there (0.1-0.6 of it on
 the bearded copies of the shared clips; clean faces 0-0.03, the nostrils' shadows) is as dark as a
 grin's shaded corners, and the corners ran on into the hair."""
+DARK_CHIN = 0.15
+"""Least share of the chin under the lower lip (:func:`chin_band`) darker than :data:`OPEN_DARK` ×
+the lips for the dark skin round the mouth to be hair (:func:`~tracker.mouth_finder.hair_round`).
+A smile calibrated on has its own dark skin round the mouth: the folds beside it and the nostrils'
+shadow over it, 0.05-0.21 of the round on seven of the fourteen still photos, none of them
+bearded, while their chins are 0-0.07 dark; the bearded copies of the shared clips whose round is
+dark have chins 0.30-0.94 dark, and the clean clips 0."""
 
 
 def lips_grey(classes: np.ndarray, skin_level: float) -> float:
@@ -228,7 +248,8 @@ class MouthModel:
     inside; they define ``inside_table`` (64³, 1 = inside-like). ``crop_median`` is the calibration
     crop's median BGR (mostly skin), the reference each frame's light is matched to. ``dark_round``
     is the share of the skin round the mouth there darker than :data:`OPEN_DARK` × the lips (hair:
-    see :data:`DARK_ROUND`; None in calibrations older than it).
+    see :data:`DARK_ROUND`; None in calibrations older than it), ``dark_chin`` that share of the chin
+    under the lower lip (:func:`chin_band`, :data:`DARK_CHIN`; None in calibrations older than it).
     """
 
     work_ipd: float
@@ -256,6 +277,7 @@ class MouthModel:
     cue: str
     crop_median: tuple[float, float, float] | None = None
     dark_round: float | None = None
+    dark_chin: float | None = None
     skin_bins: np.ndarray | None = field(repr=False, default=None)
     inside_table: np.ndarray = field(repr=False, default=None)
 
@@ -281,6 +303,8 @@ class MouthModel:
         )
         if self.dark_round is not None:
             d["dark_round"] = float(self.dark_round)
+        if self.dark_chin is not None:
+            d["dark_chin"] = float(self.dark_chin)
         if self.skin_bins is not None:
             d["skin_bins"] = [int(v) for v in self.skin_bins]
         return d
@@ -313,19 +337,20 @@ class MouthModel:
                 axis_down=np.asarray(d["axis_down"], dtype=np.float64).reshape(4), cue=str(d["cue"]),
                 crop_median=None if d.get("crop_median") is None else tuple(float(v) for v in d["crop_median"]),
                 skin_bins=_bins(d.get("skin_bins")), dark_round=_share(d.get("dark_round")),
+                dark_chin=_share(d.get("dark_chin"), "dark_chin"),
                 **kw,
             )
         except (KeyError, TypeError, IndexError, ValueError) as e:
             raise ValueError(f"malformed mouth model ({type(e).__name__}: {e})") from None
 
 
-def _share(v) -> float | None:
-    """``dark_round`` from a file (absent in calibrations older than it: None)."""
+def _share(v, name: str = "dark_round") -> float | None:
+    """A share (``dark_round``, ``dark_chin``) from a file (absent in calibrations older than it: None)."""
     if v is None:
         return None
     x = float(v)
     if not 0.0 <= x <= 1.0:
-        raise ValueError(f"dark_round must be a share from 0 to 1, not {x}")
+        raise ValueError(f"{name} must be a share from 0 to 1, not {x}")
     return x
 
 
@@ -1282,8 +1307,12 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
     if _trace is not None:
         _trace.update(gap=(top, bottom, y_min), edges=(y_top, y_bottom), left=left, right=right, sides=sides)
     round_px = round_mouth(crop.shape, outline, centre, wi)
-    dark_round = float(np.count_nonzero(luminance(crop[round_px]) < OPEN_DARK * lips_grey(classes, skin_level)))
+    dark_level = OPEN_DARK * lips_grey(classes, skin_level)
+    dark_round = float(np.count_nonzero(luminance(crop[round_px]) < dark_level))
     dark_round /= max(int(np.count_nonzero(round_px)), 1)
+    y0, y1, x0, x1 = chin_band(crop.shape, outline, wi)
+    chin = luminance(crop[y0:y1, x0:x1].reshape(-1, 3))
+    dark_chin = float(np.count_nonzero(chin < dark_level)) / len(chin) if len(chin) else None
     return MouthModel(
         work_ipd=wi, centre=(float(centre[0]), float(centre[1])), width=float(width),
         lip_upper=float(centre[1] - y_top), lip_lower=float(y_bottom - centre[1]), area=polygon_area(outline),
@@ -1294,4 +1323,5 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         cheek_left=cheeks["left"].astype(np.float32), cheek_right=cheeks["right"].astype(np.float32),
         axis_up=axis_up, axis_down=axis_dn, skin_level=skin_level, skin_sat=skin_sat, dark=dark, separation=sep,
         cue=cue, crop_median=crop_median, skin_bins=skin_colour_bins(idx, round_px), dark_round=dark_round,
+        dark_chin=dark_chin,
     )
