@@ -204,9 +204,10 @@ their colour: the shaded triangles at a grin's corners on a dark face are as bro
 them, not the inside's colours, but far darker than the lips."""
 DARK_ROUND = 0.05
 """Largest share of the skin round the mouth at calibration (:func:`round_mouth`) darker than
-:data:`OPEN_DARK` × the lips for that rule to apply: a beard or moustache there (0.1-0.6 of it on
-the bearded copies of the shared clips; clean faces 0-0.03, the nostrils' shadows) is as dark as a
-grin's shaded corners, and the corners ran on into the hair."""
+:data:`OPEN_DARK` × the lips for that rule to apply: a beard there (0.1-0.6 of it on the bearded
+copies of the shared clips; clean faces 0-0.03, the nostrils' shadows) is as dark as a grin's shaded
+corners, and the corners ran on into the hair. Hair also needs a dark chin (:data:`DARK_CHIN`), so a
+moustache with no beard under the lips is not hair to the tracker."""
 DARK_CHIN = 0.15
 """Least share of the chin under the lower lip (:func:`chin_band`) darker than :data:`OPEN_DARK` ×
 the lips for the dark skin round the mouth to be hair (:func:`~tracker.mouth_finder.hair_round`).
@@ -249,7 +250,8 @@ class MouthModel:
     crop's median BGR (mostly skin), the reference each frame's light is matched to. ``dark_round``
     is the share of the skin round the mouth there darker than :data:`OPEN_DARK` × the lips (hair:
     see :data:`DARK_ROUND`; None in calibrations older than it), ``dark_chin`` that share of the chin
-    under the lower lip (:func:`chin_band`, :data:`DARK_CHIN`; None in calibrations older than it).
+    under the lower lip (:func:`chin_band`, :data:`DARK_CHIN`; None in calibrations older than it, or
+    when the chin is outside the crop: the round alone then says hair).
     """
 
     work_ipd: float
