@@ -668,3 +668,22 @@ def test_a_smiles_dark_folds_and_nostrils_are_not_hair_but_a_dark_chin_is():
     assert MouthModel.from_dict(old).dark_chin is None
     with pytest.raises(ValueError, match="dark_chin"):
         MouthModel.from_dict({**beard.to_dict(), "dark_chin": -0.2})
+
+
+def test_the_upper_lips_thickness_keeps_most_of_the_centres_when_the_sides_lose_its_edge():
+    """Calibration measures the upper lip on three columns and takes the median, so that one column's
+    crease or highlight does not decide. On a noisy or low-contrast picture the side columns lose the
+    lip's soft top edge first (expr_d19: 12.2 / 10.6 / 11.8 px on the clip, 12.5 / 7.4 / 5.7 on its
+    noisy copy), and a lip expected 40 % too thin was laid onto the skin above it all clip long. The
+    centre's own reading now floors it (:data:`UPPER_FLOOR`); a column that saw no edge is no vote,
+    and with none seen the thickness is :data:`UPPER_UNSEEN`."""
+    from tracker.mouth_model import UPPER_FLOOR, UPPER_UNSEEN, upper_thickness
+
+    nan = float("nan")
+    assert upper_thickness([12.2, 10.6, 11.8], 80.0) == pytest.approx(11.8), "the clip: the median, untouched"
+    assert upper_thickness([12.5, 7.4, 5.7], 80.0) == pytest.approx(UPPER_FLOOR * 12.5), "its noisy copy"
+    assert 7.4 < UPPER_FLOOR * 12.5
+    assert upper_thickness([nan, 5.4, nan], 80.0) == pytest.approx(5.4), "no centre reading: the sides decide"
+    assert upper_thickness([12.0, nan, 7.0], 80.0) == pytest.approx(UPPER_FLOOR * 12.0)
+    assert upper_thickness([nan, nan, nan], 80.0) == pytest.approx(UPPER_UNSEEN * 80.0)
+    assert upper_thickness([9.0], 80.0) == pytest.approx(9.0)

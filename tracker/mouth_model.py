@@ -729,6 +729,16 @@ thick as the other copies of the clip calibrate it)."""
 EDGE_CHROMA = True
 """Whether an upper lip edge the split on all the features does not show is looked for on the colour
 alone (see :func:`_outer_edge`)."""
+UPPER_FLOOR = 0.8
+"""Least share of the centre column's upper-lip thickness the calibration keeps when the columns to
+either side measure it thinner. Their votes stop one column's crease or highlight from deciding,
+but on a noisy or low-contrast picture the side columns lose the upper lip's soft top edge first.
+expr_d19's calibration measured 12.2 / 10.6 / 11.8 px (centre, left, right) on the clip and
+12.5 / 7.4 / 5.7 on its noisy copy, and the tracker, expecting a lip 40 % thinner, laid the
+stretched upper lip of a smile onto the skin above it (the opening's r 0.73 there, 0.69 on the
+pale copy). The clip's own sides are within 0.87 of its centre, so the floor leaves it be. The
+price: a crease over the centre column's lip now carries the thickness up to this share of the
+thickness it reads there, where the sides' votes used to overrule it."""
 UPPER_UNSEEN = 0.075
 """Thickness (× wi) taken for an upper lip whose outer edge the calibration frame does not show: the
 split improves all the way to the gap and no peak further out stands up (:data:`EDGE_INTERIOR`) —
@@ -743,6 +753,18 @@ tracker still finds it so. Only when none of the three columns calibration measu
 an unseen column is no vote (the glasses, pale and half-size copies of expr_d19 had one or two of
 the three unseen, the median fell on 0.075 where the full picture reads 0.13-0.16, and the glasses
 copy's opening followed the peer at r 0.76; 0.92 with this)."""
+
+
+def upper_thickness(columns: list[float], wi: float) -> float:
+    """The calibrated upper lip's thickness (px) from its thickness on each measured column, the
+    centre column first (NaN: that column did not show the lip's outer edge, and is no vote): the
+    median of the columns that show it, at least :data:`UPPER_FLOOR` of the centre's, or
+    :data:`UPPER_UNSEEN` wi when none does."""
+    seen = [float(u) for u in columns if math.isfinite(u)]
+    if not seen:
+        return UPPER_UNSEEN * wi
+    thick = float(np.median(seen))
+    return max(thick, UPPER_FLOOR * float(columns[0])) if math.isfinite(columns[0]) else thick
 
 
 def _outer_edge(f: np.ndarray, start: int, direction: int, lo: float, hi: float, wi: float,
@@ -1246,9 +1268,7 @@ def learn_mouth(crop_bgr: np.ndarray, mouth_click_crop: tuple[float, float], wor
         top, bottom, y_min = measured[0][:3]
     else:
         measured = [(top, bottom, y_min, y_top, y_bottom)]
-    # an upper edge one column does not show is no vote for a thin lip: the others decide
-    ups = [c[0] - c[3] for c in measured if math.isfinite(c[3])]
-    thick_up = float(np.median(ups)) if ups else UPPER_UNSEEN * wi
+    thick_up = upper_thickness([c[0] - c[3] for c in measured], wi)
     thick_down = float(np.median([c[4] - c[1] for c in measured]))
     thick_up, thick_down = max(thick_up, 1.0), max(thick_down, 1.0)
     y_top, y_bottom = top - thick_up, bottom + thick_down
