@@ -619,7 +619,6 @@ def test_past_teeth_stops_at_the_first_red_row_and_within_reach():
     assert mm._past_teeth(red[::-1].copy(), 4, -1, WI) == 2
 
 
-
 def test_a_smiles_dark_folds_and_nostrils_are_not_hair_but_a_dark_chin_is():
     """Hair round the mouth switches the tracker's dark rules (:func:`~tracker.mouth_finder.hair_round`).
     A smile calibrated on has dark skin round the mouth of its own: the folds beside it and the

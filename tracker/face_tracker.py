@@ -632,7 +632,6 @@ class FaceTracker:
         return doubt, strong, far
 
     def _track(self, frame: np.ndarray, index: int, time: float, flow_ok: bool) -> TrackResult:
-        wi = self.wi
         H, W = frame.shape[:2]
         anchors = apply(self.pose, self._cal_pupils)
         (lx, ly), (rx, ry) = anchors.tolist()
