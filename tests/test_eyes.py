@@ -18,6 +18,8 @@ from tracker.eyes import (
     IRIS_FLOOR,
     LID_SHOW,
     LIMBUS_DARK,
+    RIM_HALO,
+    _colour_samples,
     ARC_DEGREES,
     LIMBUS_INNER,
     EyeModelError,
@@ -1054,6 +1056,37 @@ def test_thin_dark_marks_a_rim_and_lashes_but_not_an_iris_or_shading():
     assert lines[31, 20:180].all()
     assert not lines[80, 100] and lines[70:90, 95:105].mean() < 0.1
     assert not lines[50:60].any() and not lines[100:].any()
+
+
+def test_skin_samples_behind_glasses_hold_no_rim_and_no_rim_edge(monkeypatch):
+    """A rim's upper bar over the whole band above each eye (low brows leave it two rows) and its lower
+    bar across the band below, their edges blurred as a camera and compression blur them: the band
+    above gives no skin at all (it used to give every one of its pixels, the rim's, whenever the rim
+    covered most of it), and neither band keeps the rim's soft edge (:data:`RIM_HALO`)."""
+    import tracker.eyes as eyes
+
+    wi, skin = 80.0, (120, 140, 190)
+    crop = np.empty((110, 200, 3), np.uint8)
+    crop[:] = skin
+    pupils = np.array([[60.0, 55.0], [140.0, 55.0]])
+    for px, py in pupils:
+        cv2.circle(crop, (int(px), int(py)), 8, (40, 40, 50), -1)
+    crop[39:47] = (28, 26, 30)  # upper bars (0.1 wi) over the bands above
+    crop[74:78] = (28, 26, 30)  # lower bars across the bands below (0.15-0.3 wi under the pupils)
+    crop = cv2.GaussianBlur(crop, (0, 0), 1.0)
+    lines = thin_dark(cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY).astype(np.float32), wi)
+    grey = (0.114, 0.587, 0.299)
+    skin_grey = float(np.dot(skin, grey))
+
+    def darkest(halo: int) -> dict[str, float]:
+        monkeypatch.setattr(eyes, "RIM_HALO", halo)
+        groups = _colour_samples(crop, pupils, [8.0, 8.0], [0.2 * wi, 0.2 * wi], wi, lines, glasses=True)[0]
+        assert len(groups["above the eyes"]) == 0
+        assert len(groups["below the eyes"]) > 100 and len(groups["between the eyes"]) > 50
+        return {k: float((g.astype(np.float64) @ grey).min()) for k, g in groups.items() if len(g)}
+
+    assert darkest(0)["below the eyes"] < 0.85 * skin_grey  # the blurred edge passes the line test
+    assert min(darkest(RIM_HALO).values()) > 0.93 * skin_grey
 
 
 @pytest.mark.parametrize("thick", [0.03, 0.05, 0.08])
