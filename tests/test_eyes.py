@@ -1087,6 +1087,10 @@ def test_skin_samples_behind_glasses_hold_no_rim_and_no_rim_edge(monkeypatch):
 
     assert darkest(0)["below the eyes"] < 0.85 * skin_grey  # the blurred edge passes the line test
     assert min(darkest(RIM_HALO).values()) > 0.93 * skin_grey
+    # lines over every band leave no skin at all: then every pixel of the bands, as on a bare face
+    every = _colour_samples(crop, pupils, [8.0, 8.0], [0.2 * wi, 0.2 * wi], wi, np.ones_like(lines), glasses=True)[0]
+    bare = _colour_samples(crop, pupils, [8.0, 8.0], [0.2 * wi, 0.2 * wi], wi, None, glasses=False)[0]
+    assert all(np.array_equal(every[k], bare[k]) and len(bare[k]) for k in bare)
 
 
 @pytest.mark.parametrize("thick", [0.03, 0.05, 0.08])
