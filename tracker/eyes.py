@@ -1069,7 +1069,9 @@ def _colour_samples(crop: np.ndarray, pupils: np.ndarray, radius, brow_heights, 
         glasses = any(lines[y0:y1, x0:x1].mean() >= RIM_BAR for y0, y1, x0, x1 in bands if y1 > y0 and x1 > x0)
     if not glasses:
         lines = np.zeros((h, w), bool)
-    wide = cv2.dilate(lines.view(np.uint8), np.ones((2 * RIM_HALO + 1,) * 2, np.uint8)).view(bool) if glasses and RIM_HALO > 0 else lines
+    wide = lines  # the lines and the pixels round them (RIM_HALO), for the bands below the eyes and the bridge
+    if glasses and RIM_HALO > 0:
+        wide = cv2.dilate(lines.view(np.uint8), np.ones((2 * RIM_HALO + 1,) * 2, np.uint8)).view(bool)
 
     def skin_of(y0: int, y1: int, x0: int, x1: int, halo: bool = True) -> np.ndarray:
         """The pixels of a band without its thin dark lines (and their halo)."""
