@@ -555,6 +555,67 @@ def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(mo
     assert not cal_mod.found_mouth(types.SimpleNamespace(score=1.0, lip_upper=10.0, lip_lower=-0.15 * 80.0), 80.0)
 
 
+def test_the_rigid_place_does_not_climb_off_the_lips_calibration_measured(monkeypatch):
+    """Each calibration look starts where the last one put its line. On a grin each look can be sure
+    and whole by its own split and still lie higher than the last: the upper lip's top edge, then
+    the shadow under the nose (a grinning man's photo: three looks, 0.46 eye distances up, the rigid
+    place on the nostrils). A look whose line leaves the lips the model measured — past their outer
+    edges by more than WHOLE_MOUTH — is no look at the mouth, and the place goes back to where the last
+    whole look was made from, as for a look that is not sure or not whole; without the bound these
+    looks carry it 0.45 wi up."""
+    import tracker.calibration as cal_mod
+    from tracker.clicks import Clicks
+    from tracker.mouth_finder import MouthFinder as MF, _moved
+    from tracker.synthetic import FaceState, clicks_for, render_face
+
+    face = FaceState(cx=320.0, cy=210.0, ipd=80.0)
+    frame = render_face(face)[0]
+    clicks = Clicks.from_dict(clicks_for(face))
+    calm = cal_mod.calibrate(frame, clicks)
+    wi = calm.work_ipd
+    real_find = MF.find
+    looks = []
+
+    def find(self, crop, at, *args, **kwargs):
+        r = real_find(self, crop, at, *args, **kwargs)
+        looks.append(r)
+        if r is not None and len(looks) <= cal_mod.RIGID_STEPS:
+            up = 0.15 * wi + r.line_centre[1] - at[1]  # the line 0.15 wi over where this look started
+            r = _moved(r, centre=(r.centre[0], r.centre[1] - up), left=(r.left[0], r.left[1] - up),
+                       right=(r.right[0], r.right[1] - up), line_ends=tuple((p[0], p[1] - up) for p in r.line_ends))
+        return r
+
+    monkeypatch.setattr(MF, "find", find)
+    moved = cal_mod.calibrate(frame, clicks)
+    model = calm.mouth_model
+    rise = calm.mouth_offset[1] - moved.mouth_offset[1]
+    assert len(looks) >= 3
+    assert 0.15 * wi < model.lip_upper + cal_mod.WHOLE_MOUTH * wi < 0.3 * wi  # one look's climb stays on the lips, two do not
+    assert abs(rise) <= 0.02 * wi, rise / wi
+    monkeypatch.setattr(cal_mod, "WHOLE_MOUTH", 10.0)  # the control: no bound, the looks carry it up
+    looks.clear()
+    free = cal_mod.calibrate(frame, clicks)
+    assert calm.mouth_offset[1] - free.mouth_offset[1] > 0.4 * wi
+
+
+def test_between_lips_bounds_a_line_by_the_lips_outer_edges():
+    """A look's line (face px) lies on the measured mouth from its upper lip's outer edge less
+    WHOLE_MOUTH × wi down to its lower lip's outer edge plus as much."""
+    import types
+
+    import tracker.calibration as cal_mod
+
+    wi, top = 80.0, 100.0
+    model = types.SimpleNamespace(centre=(60.0, 50.0), lip_upper=10.0, lip_lower=12.0)
+    centre = top + 50.0
+    slack = cal_mod.WHOLE_MOUTH * wi
+    assert cal_mod.between_lips(centre, top, model, wi)
+    assert cal_mod.between_lips(centre - 10.0 - slack, top, model, wi)
+    assert not cal_mod.between_lips(centre - 10.0 - slack - 0.5, top, model, wi)
+    assert cal_mod.between_lips(centre + 12.0 + slack, top, model, wi)
+    assert not cal_mod.between_lips(centre + 12.0 + slack + 0.5, top, model, wi)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255), st.integers(1, 30)),
                 min_size=2, max_size=12),

@@ -468,6 +468,17 @@ def rest_height(line_y: float, gap_top: float, wi: float) -> float:
     return min(line_y, gap_top + RIGID_OPEN * wi)
 
 
+def between_lips(line_y: float, top: float, model: MouthModel, wi: float) -> bool:
+    """Whether a calibration look's line at height ``line_y`` (face px, down) lies on the mouth the
+    model measured in its crop (whose top is at ``top``): no further outside its lips' outer edges
+    than :data:`WHOLE_MOUTH` × ``wi``. Each look starts where the last one put its line, so without
+    this bound a grin's looks climbed from the teeth to the upper lip's top and on to the shadow under
+    the nose, each sure of a mouth there (a grinning man's photo: the rigid place 0.34 eye distances
+    over the teeth, and the tracker read the nostrils' shadow as the mouth line)."""
+    centre = top + model.centre[1]
+    return centre - model.lip_upper - WHOLE_MOUTH * wi <= line_y <= centre + model.lip_lower + WHOLE_MOUTH * wi
+
+
 def found_mouth(found: MouthResult | None, wi: float) -> bool:
     """Whether a look of the mouth finder on the calibration frame found the mouth: sure of it
     (:data:`~tracker.mouth_finder.SCORE_OK`) and whole — the line between its corners no further
@@ -634,7 +645,7 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
     for _ in range(RIGID_STEPS):  # as the tracker will look on this frame: the crop and the prediction at the place
         rect = mouth_rect((mcx, mcy), wi)
         found = finder.find(ff.crop(frame_bgr, rect), (mcx - rect[0], mcy - rect[1]))
-        if not found_mouth(found, wi):
+        if not found_mouth(found, wi) or not between_lips(rect[1] + found.line_centre[1], mrect[1], mouth_model, wi):
             # the look from the new place found no mouth (on a grin, the shadow under the nose can be
             # nearer than the lips): back to the last place that found it, where the tracker will find
             # it again on this frame
