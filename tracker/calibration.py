@@ -646,9 +646,10 @@ def calibrate(frame_bgr: np.ndarray, clicks: Clicks) -> Calibration:
         rect = mouth_rect((mcx, mcy), wi)
         found = finder.find(ff.crop(frame_bgr, rect), (mcx - rect[0], mcy - rect[1]))
         if not found_mouth(found, wi) or not between_lips(rect[1] + found.line_centre[1], mrect[1], mouth_model, wi):
-            # the look from the new place found no mouth (on a grin, the shadow under the nose can be
-            # nearer than the lips): back to the last place that found it, where the tracker will find
-            # it again on this frame
+            # the look from the new place found no mouth, or a line off the lips the model measured (on
+            # a grin, the upper lip's top and then the shadow under the nose can be nearer than the
+            # gap): back to the last place that found it, where the tracker will find it again on this
+            # frame
             if seen is not None:
                 mcy, found, rect = seen
             break
