@@ -473,7 +473,7 @@ def between_lips(line_y: float, top: float, model: MouthModel, wi: float) -> boo
     model measured in its crop (whose top is at ``top``): no further outside its lips' outer edges
     than :data:`WHOLE_MOUTH` × ``wi``. Each look starts where the last one put its line, so without
     this bound a grin's looks climbed from the teeth to the upper lip's top and on to the shadow under
-    the nose, each sure of a mouth there (a grinning man's photo: the rigid place 0.34 eye distances
+    the nose, each sure of a mouth there (a grinning man's photo: the rigid place 0.32 eye distances
     over the teeth, and the tracker read the nostrils' shadow as the mouth line)."""
     centre = top + model.centre[1]
     return centre - model.lip_upper - WHOLE_MOUTH * wi <= line_y <= centre + model.lip_lower + WHOLE_MOUTH * wi
