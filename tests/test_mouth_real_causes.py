@@ -558,11 +558,11 @@ def test_a_look_whose_corners_lie_over_its_lips_does_not_move_the_rigid_place(mo
 def test_the_rigid_place_does_not_climb_off_the_lips_calibration_measured(monkeypatch):
     """Each calibration look starts where the last one put its line. On a grin each look can be sure
     and whole by its own split and still lie higher than the last: the upper lip's top edge, then
-    the shadow under the nose (a grinning man's photo: three looks 0.46 eye distances up and the rigid
-    place, after the rest-height rule, 0.32 up on the nostrils). A look whose line leaves the lips the model measured — past their outer
-    edges by more than WHOLE_MOUTH — is no look at the mouth, and the place goes back to where the last
-    whole look was made from, as for a look that is not sure or not whole; without the bound these
-    looks carry it 0.45 wi up."""
+    the shadow under the nose (a grinning man's photo: three looks 0.46 eye distances up, and the
+    rigid place, after the rest-height rule, 0.32 up on the nostrils). A look whose line leaves the
+    lips the model measured — past their outer edges by more than WHOLE_MOUTH — is no look at the
+    mouth, and the place goes back to where the last whole look was made from, as for a look that is
+    not sure or not whole; without the bound these looks carry it 0.45 wi up."""
     import tracker.calibration as cal_mod
     from tracker.clicks import Clicks
     from tracker.mouth_finder import MouthFinder as MF, _moved
