@@ -27,7 +27,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tracker import face_tracker as ft
-from tracker.mouth_finder import WIDE_REF, MouthFinder
+from tracker.mouth_finder import WIDE_REF, MouthFinder, MouthResult
 from tracker.colour_model import lut_index
 from tracker.mouth_model import DARK_ROUND, _colour_edge, _gap, _outer_edge, profile_features
 
@@ -335,6 +335,23 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     maps = mf.prepare(_grin_crop())
     monkeypatch.setattr(mfm, "OPEN_REACH", 0.25)
     assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
+    # ... unless the last sure frame had its corners where the inside ends: a mouth does not lose a
+    # third of its width in a frame; a last frame with its corners elsewhere, or an unsure one, does not count
+    def last(left_x: float, right_x: float, score: float = 1.0) -> MouthResult:
+        return MouthResult(left=(left_x, 18.0), right=(right_x, 18.0), centre=(38.0, 18.0), lip_upper=6.0,
+                           lip_lower=8.0, polygon=np.zeros((4, 2)), raw_polygon=np.zeros((4, 2)), cue="colour", score=score)
+
+    left, right = mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0), last(16.5, 59.5))
+    assert abs(left[0] - (17 - bias)) <= 1.0 and abs(right[0] - (59 + bias)) <= 1.0, (left, right)
+    for other in (last(27.0, 49.0), last(16.5, 59.5, score=0.3)):
+        assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0), other) == ((28.0, 24.0), (48.0, 24.0))
+    # an inside running on to the crop's side (the dark beside a turned face) is not the mouth's own,
+    # however far it may reach
+    monkeypatch.setattr(mfm, "OPEN_REACH", 2.0)
+    sided = _grin_crop()
+    sided[19:26, 51:] = (30, 25, 35)
+    left, right = mf.inside_ends(mf.prepare(sided), (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0))
+    assert abs(left[0] - (17 - bias)) <= 1.0 and right == (48.0, 24.0), (left, right)
 
 
 def test_the_corners_move_out_to_the_inside_more_the_more_the_lips_part():

@@ -179,7 +179,16 @@ OPEN_ROWS_MIN = 2
 OPEN_REACH = 0.3
 """Farthest (× wi) the inside may run on past a corner for :meth:`MouthFinder.inside_ends` to move the
 corner there (a grin's dark corners on the copies of the shared clips: up to 0.28); further on it is
-not the mouth's own (hair round the mouth joined to an open mouth's dark inside)."""
+not the mouth's own (hair round the mouth joined to an open mouth's dark inside).
+
+Past it the move is still made where the inside ends within :data:`OPEN_KEEP` of the last sure
+frame's corner: a mouth does not lose a third of its width between two frames, and in a grin on a
+dark face, whose lips are nearly the skin's colour, the line's columns turn to cheek anywhere from
+0.3 to 0.4 wi short of the corner from frame to frame (the ``deep`` copy of expr_d19, frames 240-249:
+the right corner 13 columns in, the width 0.74 of the peer's)."""
+OPEN_KEEP = 0.075
+"""Farthest (× wi, per frame's worth of time) the inside's end may lie from the last sure frame's
+corner for :meth:`MouthFinder.inside_ends` to move a corner there past :data:`OPEN_REACH`."""
 OPEN_SLOPE = 1.0
 """Most a corner :meth:`MouthFinder.inside_ends` moves may drop per column it moves out: a grin's corners
 rise steeply above the line's rows, but an inside reached by going down more steeply than that is the
@@ -1287,7 +1296,7 @@ class MouthFinder:
                 yl, yr = self.corner_heights(maps, left, right)
         left, right = (left[0], yl), (right[0], yr)
         if seen[0] and seen[1]:  # (a side that saw no cheek is placed from the other one)
-            left, right = self.inside_ends(maps, left, right, (gap_top, gap_bottom), (top, bottom))
+            left, right = self.inside_ends(maps, left, right, (gap_top, gap_bottom), (top, bottom), previous)
             yl, yr = left[1], right[1]
         mx, cy = 0.5 * (left[0] + right[0]), 0.5 * (yl + yr)
         width = math.hypot(right[0] - left[0], right[1] - left[1])
@@ -1309,7 +1318,8 @@ class MouthFinder:
         )
 
     def inside_ends(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float],
-                    gap: tuple[float, float], lips: tuple[float, float]) -> tuple[tuple[float, float], tuple[float, float]]:
+                    gap: tuple[float, float], lips: tuple[float, float],
+                    previous: MouthResult | None = None) -> tuple[tuple[float, float], tuple[float, float]]:
         """The corners ``left``, ``right`` (working-scale crop px) of an open mouth (``gap``: the gap's top
         and bottom rows on the centre column), each moved out towards the end of the mouth's inside
         where the corner search stopped inside it: from none of the way at a gap of
@@ -1328,7 +1338,9 @@ class MouthFinder:
         last column on its side (plus :data:`~tracker.mouth_model.CORNER_BIAS`), at the mean of its
         rows there. A corner already past the thick of the inside (on a crease or a lip's shaded edge
         running on from the gap) stays, and so does one the piece runs on from by more than
-        :data:`OPEN_REACH` wi, or whose place there lies lower than :data:`OPEN_SLOPE` allows."""
+        :data:`OPEN_REACH` wi (unless it ends where ``previous``, the last frame's sure result in these
+        pixels, had its corner: :data:`OPEN_KEEP`) or to the crop's side (the dark beside a turned
+        face, hair), or whose place there lies lower than :data:`OPEN_SLOPE` allows."""
         # how far they go: none up to a gap of OPEN_ENDS_RAMP[0] × OPEN_ENDS, all of the way from [1] ×
         t = ((gap[1] - gap[0]) / (OPEN_ENDS * self.wi) - OPEN_ENDS_RAMP[0]) / (OPEN_ENDS_RAMP[1] - OPEN_ENDS_RAMP[0])
         if t <= 0.0:
@@ -1364,10 +1376,15 @@ class MouthFinder:
         cols = np.flatnonzero(height)
         ends = (int(cols[0]), int(cols[-1]))
         reach = OPEN_REACH * self.wi
+        last = (None, None)
+        if previous is not None and previous.score >= SCORE_OK:
+            last = (previous.left[0], previous.right[0])
+        keep = OPEN_KEEP * self.wi * self._steps
         out = []
-        for side, corner, end, col in ((-1, left, ends[0], strips[0]), (+1, right, ends[1], strips[1])):
+        for side, corner, end, col, was in ((-1, left, ends[0], strips[0], last[0]), (+1, right, ends[1], strips[1], last[1])):
             move = side * (end + side * bias - corner[0])
-            if move <= 0.0 or move > reach or height[col] < OPEN_ROWS_MIN:
+            far = move > reach and not (was is not None and abs(end + side * bias - was) <= keep)
+            if move <= 0.0 or far or height[col] < OPEN_ROWS_MIN or end in (0, W - 1):
                 out.append(corner)
                 continue
             y = a + float(np.flatnonzero(mine[:, end]).mean())  # the piece's rows on its last column
