@@ -800,3 +800,61 @@ def test_a_held_search_traces_the_last_line_alone(calibrated, monkeypatch):
     assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
     assert finder.find(crop, at, None, held=True) is None
     assert finder.find(crop, at, mouth_finder._moved(before, score=0.2), held=True) is None
+
+
+def _lens_result(gap_top: float, gap_bottom: float, t_up: float, t_dn: float, column: float = 40.0) -> mouth_finder.MouthResult:
+    """A mouth result with its corners at (20, 30) and (60, 30), split on ``column``: the gap's rows and
+    each lip's thickness as given."""
+    from tracker.mouth_model import N_RAYS, lens_outlines
+
+    left, right = (20.0, 30.0), (60.0, 30.0)
+    top, bottom = gap_top - t_up, gap_bottom + t_dn
+    poly, raw = lens_outlines(left, right, (top, gap_top), (bottom, gap_bottom), column, N_RAYS)
+    return mouth_finder.MouthResult(left=left, right=right, centre=(40.0, 30.0), lip_upper=30.0 - top, lip_lower=bottom - 30.0,
+                                    polygon=poly, raw_polygon=raw, cue="colour", score=1.0, gap_top=gap_top,
+                                    gap_bottom=gap_bottom, column=column)
+
+
+def test_steady_lips_keep_the_gap_and_steady_the_thickness():
+    """The reported lips keep this frame's gap exactly and move each lip's thickness part of the way
+    (LIP_STEADY per frame's worth of time) from the last report; the outline passes through the new
+    outer edges on the split's column. The first frame (or the first after a lost one) is reported as
+    found."""
+    from tracker.mouth_finder import LIP_STEADY, steady_lips
+
+    first = _lens_result(28.0, 32.0, 6.0, 8.0)
+    same, held = steady_lips(first, None)
+    assert same is first and held == pytest.approx((6.0, 8.0))
+    closed = _lens_result(30.0, 30.0, 10.0, 4.0, column=44.0)  # lips shut, the upper lip read thicker, the lower thinner
+    out, held = steady_lips(closed, held)
+    want = (6.0 + LIP_STEADY * 4.0, 8.0 - LIP_STEADY * 4.0)
+    assert held == pytest.approx(want)
+    assert (out.gap_top, out.gap_bottom, out.left, out.right, out.centre) == (30.0, 30.0, closed.left, closed.right, closed.centre)
+    assert out.lip_upper == pytest.approx(want[0]) and out.lip_lower == pytest.approx(want[1])
+    top_x = out.polygon[np.argmin(out.polygon[:, 1])]
+    assert top_x[1] == pytest.approx(30.0 - want[0], abs=0.05) and abs(top_x[0] - 44.0) <= 1.0
+    assert out.polygon[:, 1].max() == pytest.approx(30.0 + want[1], abs=0.05)
+    # two frames' worth of time: the new reading weighs as two frames would have
+    _, held2 = steady_lips(closed, (6.0, 8.0), steps=2.0)
+    w2 = 1.0 - (1.0 - LIP_STEADY) ** 2
+    assert held2 == pytest.approx((6.0 + w2 * 4.0, 8.0 - w2 * 4.0))
+
+
+def test_steady_lips_quiet_the_edges_not_the_gap():
+    """Lips whose outer edges jitter by a pixel while the gap opens and shuts: the reported opening
+    follows the gap frame by frame (no lag) and jitters less than the readings."""
+    from tracker.mouth_finder import steady_lips
+
+    rng = np.random.default_rng(3)
+    gaps = np.concatenate([np.zeros(10), np.linspace(0, 12, 4), np.full(10, 12.0), np.linspace(12, 0, 4), np.zeros(10)])
+    held, found, told = None, [], []
+    for g in gaps:
+        t_up, t_dn = 6.0 + rng.normal(0, 1.0), 8.0 + rng.normal(0, 1.0)
+        res = _lens_result(30.0 - 0.5 * g, 30.0 + 0.5 * g, t_up, t_dn)
+        out, held = steady_lips(res, held)
+        found.append(res.lip_upper + res.lip_lower)
+        told.append(out.lip_upper + out.lip_lower)
+        assert out.gap_bottom - out.gap_top == pytest.approx(g)
+    found, told = np.array(found), np.array(told)
+    assert np.std(np.diff(told - gaps)) < 0.7 * np.std(np.diff(found - gaps))
+    assert np.corrcoef(told, gaps)[0, 1] > np.corrcoef(found, gaps)[0, 1]

@@ -333,6 +333,35 @@ def test_the_mouth_adapts_on_ok_frames_and_forgets_after_a_long_loss(cal):
     assert (mf.t_up, mf.t_dn) == mf._thick0
 
 
+def test_the_reported_lips_start_afresh_after_a_lost_frame(cal, monkeypatch):
+    """The lips' thicknesses the tracker reports are steadied over the frames (steady_lips), but
+    never across a lost frame: the first ok frame after one reports what the finder found."""
+    import tracker.face_tracker as ftm
+
+    seen = []
+    real = ftm.steady_lips
+
+    def spy(res, held, steps=1.0):
+        seen.append(held)
+        return real(res, held, steps)
+
+    monkeypatch.setattr(ftm, "steady_lips", spy)
+    tr = FaceTracker(cal)
+    for i in range(3):
+        assert tr.track(render_face(BASE.replace(mouth_open=0.2 * i))[0], i).params.status == "ok"
+    assert seen[0] is None and all(h is not None for h in seen[1:])
+    assert tr.track(render_face(BASE.replace(visible=False))[0], 3).params.status == LOST
+    assert tr._lips_held is None
+    n = len(seen)
+    for i in range(4, 7):
+        tr.track(render_face(BASE)[0], i)
+    assert len(seen) > n and seen[n] is None
+    # a frame judged lost after its mouth was found (a hand over the eyes) forgets them too
+    assert tr._lips_held is not None
+    tr._lost_result(7, 7 / 30, "not this face")
+    assert tr._lips_held is None
+
+
 def test_overlay_draws(cal, tmp_path):
     img, _ = render_face(BASE.with_expression("grin").replace(roll_deg=-12))
     tr = FaceTracker(cal)

@@ -46,7 +46,7 @@ from tracker.head_motion import LK_REACH, HeadMotion, apply, compose, similarity
 from tracker.legacy import LegacyEyes, LegacyMouth
 from tracker.mouth_finder import SCORE_OK as MOUTH_SCORE_OK
 from tracker.mouth_finder import WIDE_REF
-from tracker.mouth_finder import MouthFinder, hair_round
+from tracker.mouth_finder import MouthFinder, hair_round, steady_lips
 from tracker.params import EYES_CLOSED, LOST, MOUTH_LOST, OK, FaceParams
 
 
@@ -312,6 +312,7 @@ class FaceTracker:
         self.pupils = self._cal_pupils.copy()
         self.gaze = np.zeros((2, 2))  # eye point − anchor, face px, per eye
         self.jaw = np.zeros(2)  # mouth centre − its rigid place, face px
+        self._lips_held: tuple[float, float] | None = None  # the lips' reported thicknesses (steady_lips)
         self._brow_matches: list[float | None] = [None, None]  # running mean of each seen brow's match
         self.last = self.cal.neutral.replace() if self.cal.neutral is not None else FaceParams()
         self.lost = False
@@ -415,6 +416,7 @@ class FaceTracker:
     def _lost_result(self, index: int, time: float, why: str, rois=()) -> TrackResult:
         """Hold the last values and search for the face from the next frame; ``why`` goes to the debug values."""
         self.lost = True
+        self._lips_held = None
         p = self.last.replace(frame=int(index), time=float(time), status=LOST, confidence=0.0)
         return TrackResult(p, Overlay(status=LOST, rois=list(rois)), {"reacquired": False, "lost": why})
 
@@ -673,6 +675,10 @@ class FaceTracker:
         elif why is not None:
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
+        if mouth_res is None or not hasattr(mouth_res, "column"):
+            self._lips_held = None
+        else:  # (the finder's next frame starts from what it found, not from the report)
+            mouth_res, self._lips_held = steady_lips(mouth_res, self._lips_held, self._steps)
         n_seen = 2 - int(doubt[0]) - int(doubt[1])
         # neither eye like its picture and the face picture weak: a hand over the face — but not when
         # both eyes show between their lids: a dark face whose dark irises are turned far aside
