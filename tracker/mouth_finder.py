@@ -182,10 +182,10 @@ corner there (a grin's dark corners on the copies of the shared clips: up to 0.2
 not the mouth's own (hair round the mouth joined to an open mouth's dark inside).
 
 Past it the move is still made where the inside ends within :data:`OPEN_KEEP` of the last sure
-frame's corner: a mouth does not lose a third of its width between two frames, and in a grin on a
-dark face, whose lips are nearly the skin's colour, the line's columns turn to cheek anywhere from
-0.3 to 0.4 wi short of the corner from frame to frame (the ``deep`` copy of expr_d19, frames 240-249:
-the right corner 13 columns in, the width 0.74 of the peer's)."""
+frame's corner: an inside that ends where the mouth ended a frame ago is that mouth's, and in a grin
+on a dark face, whose lips are nearly the skin's colour, the line's columns turn to cheek anywhere
+from 0.3 to 0.4 wi short of the corner from frame to frame (the ``deep`` copy of expr_d19, frames
+240-249: the right corner 13 columns in, the width 0.74 of the peer's)."""
 OPEN_KEEP = 0.075
 """Farthest (× wi, per frame's worth of time) the inside's end may lie from the last sure frame's
 corner for :meth:`MouthFinder.inside_ends` to move a corner there past :data:`OPEN_REACH`."""
