@@ -17,7 +17,6 @@ crop is put on the wrong place (nose, brows, cheeks, beside the face).
 Synthetic clips (:class:`tracker.synthetic.Performance`) are run the same way against
 their exact truth, in frame pixels.
 
-``BEFORE`` runs today's PupilFinder / LidFinder / BrowFinder the way FaceTracker uses them.
 Contact sheets (eye crops with our points in colour and the peer's in white) go to
 ``out/real_eyes/``.
 """
@@ -110,39 +109,6 @@ class Found:
     closed: np.ndarray
 
 
-class Before:
-    """Today's PupilFinder / LidFinder / BrowFinder, wired as FaceTracker wires them."""
-
-    name = "before"
-
-    def __init__(self, frame0: np.ndarray, clicks: Clicks):
-        from tracker.calibration import calibrate
-        from tracker.face_tracker import FaceTracker
-
-        cal = calibrate(frame0, clicks)
-        self.tr = FaceTracker(cal)
-        self.wi = cal.work_ipd
-        self.rect = self.tr.eye_rect
-        c = cal.clicks
-        self.pupils_cal = (c.left_pupil, c.right_pupil)
-
-    def find(self, crop: np.ndarray, grey: np.ndarray, centres: np.ndarray, adapt: bool = True) -> Found:
-        tr = self.tr
-        grey = grey.astype(np.float32)
-        res = [f.find(crop, grey, tuple(p), (tr.sx, tr.sy), previous=tuple(p)) for f, p in zip(tr.pupil_finders, centres)]
-        pup = np.array([[r.x, r.y] if r is not None else p for r, p in zip(res, centres)])
-        up, down, brow = np.zeros(2), np.zeros(2), np.zeros(2)
-        for i in range(2):
-            u, d = tr.lid_finder.find(crop, grey, tuple(pup[i]))
-            if res[i] is None or res[i].closed:
-                u, d = min(u, 0.04 * self.wi), min(d, 0.04 * self.wi)
-            h, _ = tr.brow_finders[i].find(grey, tuple(pup[i]))
-            up[i], down[i], brow[i] = u, d, (h if math.isfinite(h) else tr.cal.brow_heights[i])
-        score = np.array([r.score if r is not None else 0.0 for r in res])
-        closed = np.array([r is None or r.closed for r in res])
-        return Found(pup, up, down, brow, score, closed)
-
-
 class After:
     """The eye finder of :mod:`tracker.eyes`."""
 
@@ -180,7 +146,9 @@ class After:
         )
 
 
-FINDERS = {"before": Before, "after": After}
+FINDERS = {"after": After}
+"""The finders compared ("before", the first tracker's pupil, lid and brow finders, was retired with
+them: they live on only behind :mod:`tracker.legacy` for old calibrations)."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -389,13 +357,13 @@ SYNTH_COLUMNS = ["style", "frames", "pupil mid err px med/p95", "lid err px med/
 
 @benchmark("real_eyes")
 def run(ctx):
-    kinds = ("after",) if ctx.quick else ("before", "after")
+    kinds = ("after",)
     tables = []
     if not available():
         print(f"real_eyes: {REAL} not found; real clips skipped")
     else:
         for kind in kinds:
-            t = Table(f"Eye finder ({kind}) on real faces vs the peer (perturbed crop frames)", REAL_COLUMNS)
+            t = Table("Eye finder on real faces vs the peer (perturbed crop frames)", REAL_COLUMNS)
             for name in QUICK_CLIPS if ctx.quick else CLIPS:
                 res = run_clip(name, kind, every=4 if ctx.quick else 1, sheet_every=0 if ctx.quick else 25)
                 t.add(*real_row(res))
@@ -403,12 +371,12 @@ def run(ctx):
                     write_sheet(res, OUT / f"{name}.png")
             t.note = (f"targets: iris / mid err median ≤ {TARGETS['iris_med']:g} % ipd, p95 ≤ {TARGETS['iris_p95']:g} %; "
                       f"roll ≤ {TARGETS['roll']:g}°; r eye ≥ {TARGETS['r_eye']:g}; r brow ≥ {TARGETS['r_brow']:g}. "
-                      "ms = one find() for both eyes (after: with adapt()), wall clock and this process's CPU time; "
+                      "ms = one find() for both eyes with adapt(), wall clock and this process's CPU time; "
                       "score: lower of the two eyes on the face (p5) and on wrong places (p95: nose, brows, cheeks, "
                       "beside the face, mouth).")
             tables.append(t)
     for kind in kinds:
-        t = Table(f"Eye finder ({kind}) on the synthetic performer vs exact truth (frame px)", SYNTH_COLUMNS)
+        t = Table("Eye finder on the synthetic performer vs exact truth (frame px)", SYNTH_COLUMNS)
         for style in SYNTH[:2] if ctx.quick else SYNTH:
             t.add(*run_synth(style, kind, seconds=1.5 if ctx.quick else 8.0))
         t.note = "targets (bench_tracker): medians ≤ 1 px pupils, ≤ 1.5 px lids and brows; p95 ≤ 3× those"
