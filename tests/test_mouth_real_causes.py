@@ -335,8 +335,9 @@ def test_an_open_mouths_corners_reach_the_ends_of_its_inside(monkeypatch):
     maps = mf.prepare(_grin_crop())
     monkeypatch.setattr(mfm, "OPEN_REACH", 0.25)
     assert mf.inside_ends(maps, (28.0, 24.0), (48.0, 24.0), (19.0, 26.0), (14.0, 31.0)) == ((28.0, 24.0), (48.0, 24.0))
-    # ... unless the last sure frame had its corners where the inside ends: a mouth does not lose a
-    # third of its width in a frame; a last frame with its corners elsewhere, or an unsure one, does not count
+    # ... unless the last sure frame had its corners where the inside ends (an inside ending where the
+    # mouth ended a frame ago is that mouth's); a last frame with its corners elsewhere, or an unsure
+    # one, does not count
     def last(left_x: float, right_x: float, score: float = 1.0) -> MouthResult:
         return MouthResult(left=(left_x, 18.0), right=(right_x, 18.0), centre=(38.0, 18.0), lip_upper=6.0,
                            lip_lower=8.0, polygon=np.zeros((4, 2)), raw_polygon=np.zeros((4, 2)), cue="colour", score=score)

@@ -675,7 +675,7 @@ class FaceTracker:
         elif why is not None:
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
-        if mouth_res is None or not hasattr(mouth_res, "column"):
+        if mouth_res is None:
             self._lips_held = None
         else:  # (the finder's next frame starts from what it found, not from the report)
             mouth_res, self._lips_held = steady_lips(mouth_res, self._lips_held, self._steps)
