@@ -683,7 +683,7 @@ def test_a_seed_in_the_hair_under_the_lip_is_checked_against_the_last_line(calib
     before = finder.find(crop, tuple(centre - origin))
     assert before.score >= SCORE_OK and abs(before.line_centre[1] - t["mouth"][1]) < 3.0
     s = WORK_IPD / WI
-    monkeypatch.setattr(finder, "line_seed", lambda *a: (y0 + 8 + 0.5) * s - 0.5)  # the hair's middle row
+    monkeypatch.setattr(finder, "line_seeds", lambda *a: [(y0 + 8 + 0.5) * s - 0.5])  # the hair's middle row
     lost = finder.find(crop, tuple(centre - origin))
     assert lost.line_centre[1] - t["mouth"][1] > 12.0  # (the case: seeded in the hair, nothing else tells)
     res = finder.find(crop, tuple(centre - origin), before)
@@ -709,7 +709,7 @@ def _two_lines(calibrated, monkeypatch, side: float):
     s = WORK_IPD / WI
     held_row = (before.line_centre[1] + 0.5) * s - 0.5
     far = held_row + side * 2.0 * mouth_finder.HOLD_LINE * WORK_IPD
-    monkeypatch.setattr(finder, "line_seed", lambda *a: far)
+    monkeypatch.setattr(finder, "line_seeds", lambda *a: [far])
     return finder, crop, at, before, held_row, far
 
 
@@ -791,7 +791,7 @@ def test_a_held_search_traces_the_last_line_alone(calibrated, monkeypatch):
         return real(maps, px, py, seed, previous)
 
     monkeypatch.setattr(finder, "_from_seed", traced)
-    monkeypatch.setattr(finder, "line_seed", lambda *a: held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD)
+    monkeypatch.setattr(finder, "line_seeds", lambda *a: [held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD])
     finder.find(crop, at, before)
     assert seen == [held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD]  # the valley alone
     seen.clear()
@@ -858,3 +858,61 @@ def test_steady_lips_quiet_the_edges_not_the_gap():
     found, told = np.array(found), np.array(told)
     assert np.std(np.diff(told - gaps)) < 0.7 * np.std(np.diff(found - gaps))
     assert np.corrcoef(told, gaps)[0, 1] > np.corrcoef(found, gaps)[0, 1]
+
+
+def _seeded(calibrated, monkeypatch, rows_from_mouth: list[float]):
+    """The neutral frame's finder with its valleys replaced by rows ``rows_from_mouth`` (× wi from the
+    true mouth line, in that order), each traced one recorded: the finder, the crop, the predicted
+    centre (crop px), the truth (crop px), the rows (working px) and the list the traced rows go to."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    t = _truth_in_crop(BASE, ff, origin)
+    finder = MouthFinder(model, WI)
+    s = WORK_IPD / WI
+    line = (t["mouth"][1] + 0.5) * s - 0.5
+    rows = [line + k * WORK_IPD for k in rows_from_mouth]
+    monkeypatch.setattr(finder, "line_seeds", lambda *a: list(rows))
+    traced, real = [], finder._from_seed
+
+    def spy(maps, px, py, seed, previous):
+        traced.append(seed)
+        return real(maps, px, py, seed, previous)
+
+    monkeypatch.setattr(finder, "_from_seed", spy)
+    return finder, crop, tuple(centre - origin), t, rows, traced
+
+
+def test_a_valley_that_gives_no_mouth_hands_on_to_the_next(calibrated, monkeypatch):
+    """When the likeliest valley's line makes no mouth (the shadow under the nose of a broad grin, darker
+    than the gap over its teeth), the next valleys are traced (:data:`~tracker.mouth_finder.SEED_TRIES`)
+    and the best mouth kept; a sure mouth from the first valley is kept without tracing more."""
+    finder, crop, at, t, rows, traced = _seeded(calibrated, monkeypatch, [-0.4, 0.0, 0.1])
+    monkeypatch.setattr(mouth_finder, "SEED_TRIES", 0)
+    alone = finder.find(crop, at)
+    assert traced == [rows[0]] and alone.score < SCORE_OK
+    traced.clear()
+    monkeypatch.setattr(mouth_finder, "SEED_TRIES", 2)
+    res = finder.find(crop, at)
+    assert traced == [rows[0], rows[1]]  # the second is sure: the third is not traced
+    assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    assert _errors(res, t)[0] < 3.0
+    traced.clear()
+    rows[:] = [rows[1], rows[0]]
+    assert finder.find(crop, at).score >= SCORE_OK and traced == [rows[0]]
+
+
+def test_below_traces_only_the_valleys_under_a_refused_line(calibrated, monkeypatch):
+    """``below`` (the row a refused line started from, crop px): only valleys at least
+    :data:`~tracker.mouth_finder.BELOW_GAP` wi under it are traced, in their order — the one the line
+    started from and any just under it are not; None when no valley is left."""
+    finder, crop, at, t, rows, traced = _seeded(calibrated, monkeypatch, [-0.3, -0.25, 0.0])
+    s = WORK_IPD / WI
+    refused = (rows[0] + 0.5) / s - 0.5
+    res = finder.find(crop, at, below=refused)
+    assert traced == [rows[2]]
+    assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    assert res.seed == pytest.approx(t["mouth"][1], abs=0.01)  # (the row it started from, in crop px)
+    traced.clear()
+    assert finder.find(crop, at, below=(rows[2] + 0.5) / s - 0.5) is None and traced == []

@@ -672,6 +672,11 @@ class FaceTracker:
             mouth_res = self._mouth_held(predicted_mouth, mouth_origin)
             if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
                 mouth_res = None
+        elif why == "high":  # the line along the shadow under the nose: the valleys under it
+            seed = mouth_res.seed if math.isfinite(mouth_res.seed) else mouth_res.line_centre[1]
+            mouth_res = self._find_mouth(self._last_mouth_crop, predicted_mouth, mouth_origin, below=seed)
+            if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
+                mouth_res = None
         elif why is not None:
             mouth_res = None
         self._mouth_prev = None if mouth_res is None else (mouth_res, mouth_origin)
@@ -914,18 +919,22 @@ class FaceTracker:
         self._last_mouth_crop = crop
         return self._find_mouth(crop, centre, (rect[0], rect[1])), (rect[0], rect[1]), rect
 
-    def _find_mouth(self, crop: np.ndarray, centre: np.ndarray, origin: tuple[float, float], held: bool = False):
+    def _find_mouth(self, crop: np.ndarray, centre: np.ndarray, origin: tuple[float, float], held: bool = False,
+                    below: float | None = None):
         """The mouth finder on this frame's mouth crop (its corner at ``origin``, face px) round the
         predicted centre ``centre`` (face px), with the last frame's mouth moved into the crop's pixels
         (both crops are in face px); None when it scores under :data:`MOUTH_SCORE_OK`. ``held``: traced
-        from the last frame's line alone (:meth:`MouthFinder.find`; None without a last mouth)."""
+        from the last frame's line alone (:meth:`MouthFinder.find`; None without a last mouth).
+        ``below``: traced only from valleys under this row of the crop (the finder's ``below``)."""
         at = (float(centre[0]) - origin[0], float(centre[1]) - origin[1])
         prev = getattr(self, "_mouth_prev", None)
         if prev is not None and hasattr(self.mouth_finder, "shifted"):
             prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
-            res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held)
+            res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held, below=below)
         elif held:
             return None
+        elif below is not None:
+            res = self.mouth_finder.find(crop, at, below=below)
         else:
             res = self.mouth_finder.find(crop, at)
         return None if res is None or res.score < MOUTH_SCORE_OK else res

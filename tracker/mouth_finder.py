@@ -120,6 +120,11 @@ SEED_UNIT = 0.05
 SEED_LIP = 2.0
 """Darkness units that the lower lip's colour all along under a dark valley is worth (see
 :meth:`MouthFinder.line_seed`)."""
+SEED_TRIES = 2
+"""Further valleys (:meth:`MouthFinder.line_seeds`, in order) the line is traced from when the likeliest
+one's mouth scores under :data:`SCORE_OK`."""
+BELOW_GAP = 0.1
+"""How far (wi) under a line found too high the valleys :meth:`MouthFinder.find` (``below``) tries lie."""
 STRONG_LEAD = 2.0 * LIP_LEAD
 """Least lead (r − g chroma units) of the lips' red over the skin's for the lips to end at their first
 columns without it (:func:`~tracker.mouth_model.lip_gap`) rather than at their last red column: red
@@ -265,7 +270,8 @@ class MouthResult:
     calibration's. ``line_ends`` are the corners on the traced mouth line (x as ``left``/``right``,
     the line's rows there), whose midpoint ``line_centre`` is where calibration put the mouth's
     centre: the corners' own height is measured from the lips next to them (None: the corners).
-    ``column`` is the x of the column the lips were split on (nan: not known).
+    ``column`` is the x of the column the lips were split on (nan: not known), ``seed`` the row
+    the line was traced from on the column it started at (nan: not known).
     ``_split`` is the profile and the split it was measured from (at the finder's working scale),
     for :meth:`MouthFinder.adapt`.
     """
@@ -285,6 +291,7 @@ class MouthResult:
     shape: tuple[int, int] = (0, 0)
     line_ends: tuple[tuple[float, float], tuple[float, float]] | None = None
     column: float = math.nan
+    seed: float = math.nan
     _blob: np.ndarray | None = field(default=None, repr=False)
     _split: tuple | None = field(default=None, repr=False)
 
@@ -766,14 +773,19 @@ class MouthFinder:
         return f, (i[1:] - i[:-1]).astype(np.float32) * inv
 
     def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
-        """The row the mouth line is traced from: of the dark valleys (smoothed luminance, band through
+        """The row the mouth line is traced from: the first of :meth:`line_seeds`."""
+        return self.line_seeds(maps, x, y_line)[0]
+
+    def line_seeds(self, maps: "_Maps", x: float, y_line: float) -> list[float]:
+        """The rows the mouth line may be traced from, the likeliest first: of the dark valleys (smoothed luminance, band through
         column ``x``) within :data:`SEED_REACH` of row ``y_line``, the dark one with the lower lip's
         colour under it (its shading-free lip value, :attr:`MouthModel.axis_down`, over a lower lip's
         thickness) — the gap between the lips, not the shadow under the lower lip, which is often
         darker but has the chin under it. Upwards the reach is short: the gap does not rise far above
         the head's prediction, and the shadow under the nose is 0.25–0.4 wi above it. Where the lips
         are redder than the skin, a valley with lip-red rows on one side only (:data:`SEED_REACH_LIPS`)
-        is hair beside a lip, not the gap, once some valley has them on both sides."""
+        is hair beside a lip, not the gap, once some valley has them on both sides. The others
+        follow by the same score (a second valley is tried where the first gives no mouth)."""
         H, W = maps.shape
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
@@ -784,10 +796,10 @@ class MouthFinder:
         near = [v + 0.05 * e for v, e in zip(col, d)]
         best = near.index(min(near))
         if SEED_LIP <= 0 or b - a < 3:
-            return float(a + best)
+            return [float(a + best)]
         cands = sorted({k for k in range(1, b - a - 1) if col[k] < col[k - 1] and col[k] <= col[k + 1]} | {best})
         if len(cands) == 1:
-            return float(a + best)
+            return [float(a + best)]
         # the lower lip's value on the rows of the band (mean BGR), from the running sums: the gap has
         # the lower lip under it, the shadow under the lower lip has the chin
         c = maps.colour[:, x1] - maps.colour[:, x0]
@@ -812,7 +824,8 @@ class MouthFinder:
             za, zb = min(y + 2, H), min(y + 2 + nd, H)
             below = (cd[zb] - cd[za]) / max(zb - za, 1)
             scores.append(col[k] / unit - SEED_LIP * below + 0.05 * d[k])
-        return float(a + cands[min(range(len(scores)), key=scores.__getitem__)])  # the first lowest (finite scores)
+        order = sorted(range(len(scores)), key=scores.__getitem__)  # stable: the first lowest leads
+        return [float(a + cands[j]) for j in order]
 
     def _sums(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int]]:
         """For profiles of ``n`` rows, what :meth:`vertical` fills every frame: the running sums
@@ -1208,13 +1221,14 @@ class MouthFinder:
         return _moved(
             res, left=(res.left[0] + dx, res.left[1] + dy), right=(res.right[0] + dx, res.right[1] + dy),
             centre=(res.centre[0] + dx, res.centre[1] + dy), gap_top=res.gap_top + dy, gap_bottom=res.gap_bottom + dy,
-            column=res.column + dx,
+            column=res.column + dx, seed=res.seed + dy,
             line_ends=None if res.line_ends is None else tuple((x + dx, y + dy) for x, y in res.line_ends),
             polygon=res.polygon + (dx, dy), raw_polygon=res.raw_polygon + (dx, dy), _blob=None)
 
     # ------------------------------------------------------------------ the whole
     def find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
-             previous: MouthResult | None = None, steps: float = 1.0, held: bool = False) -> MouthResult | None:
+             previous: MouthResult | None = None, steps: float = 1.0, held: bool = False,
+             below: float | None = None) -> MouthResult | None:
         """The mouth in one crop (:data:`~tracker.mouth_model.MOUTH_RECT` around the predicted mouth
         centre, the calibrated mouth centre under the head's motion), or None when nothing there can be
         a mouth. ``previous`` (optional) is the last frame's result in this crop's pixels (the crop
@@ -1224,11 +1238,14 @@ class MouthFinder:
         second or faster; see :data:`tracker.face_tracker.FRAME_STEP`), by which the mouth's move from it
         may grow. ``held``: the line is traced from ``previous``'s line alone, not from the darkest valley
         near the prediction (None without a sure ``previous``): the caller found the valley's mouth out
-        of place. Works on the crop shrunk to :data:`WORK_IPD`; the result is in the given crop's pixels."""
+        of place. ``below`` (a row of this crop, or None): the line is traced only from valleys at least
+        :data:`BELOW_GAP` wi under it (None when there is none): the caller found the likeliest valley's
+        mouth too high (the line ran along the shadow under the nose). Works on the crop shrunk to
+        :data:`WORK_IPD`; the result is in the given crop's pixels."""
         self._steps = float(steps)
         s = self.s
         if s >= 1.0:
-            return self._find(crop_bgr, predicted_centre_crop, previous, held)
+            return self._find(crop_bgr, predicted_centre_crop, previous, held, below)
         H, W = crop_bgr.shape[:2]
         size = (max(int(round(W * s)), 8), max(int(round(H * s)), 8))
         if self._small is None or self._small.shape[:2] != (size[1], size[0]):
@@ -1239,11 +1256,11 @@ class MouthFinder:
         prev = None
         if previous is not None:
             prev = _moved(previous, centre=down(previous.centre), left=down(previous.left), right=down(previous.right),
-                          column=(previous.column + 0.5) * sx - 0.5,
+                          column=(previous.column + 0.5) * sx - 0.5, seed=(previous.seed + 0.5) * sy - 0.5,
                           gap_top=(previous.gap_top + 0.5) * sy - 0.5, gap_bottom=(previous.gap_bottom + 0.5) * sy - 0.5,
                           lip_upper=previous.lip_upper * sy, lip_lower=previous.lip_lower * sy, _blob=None,
                           line_ends=None if previous.line_ends is None else tuple(down(p) for p in previous.line_ends))
-        r = self._find(small, down(predicted_centre_crop), prev, held)
+        r = self._find(small, down(predicted_centre_crop), prev, held, None if below is None else (below + 0.5) * sy - 0.5)
         if r is None:
             return None
         up = lambda p: ((p[0] + 0.5) / sx - 0.5, (p[1] + 0.5) / sy - 0.5)
@@ -1251,13 +1268,13 @@ class MouthFinder:
         off = 0.5 * scale - 0.5
         return _moved(
             r, left=up(r.left), right=up(r.right), centre=up(r.centre), lip_upper=r.lip_upper / sy, lip_lower=r.lip_lower / sy,
-            column=(r.column + 0.5) / sx - 0.5,
+            column=(r.column + 0.5) / sx - 0.5, seed=(r.seed + 0.5) / sy - 0.5,
             line_ends=None if r.line_ends is None else tuple(up(p) for p in r.line_ends),
             polygon=r.polygon * scale + off, raw_polygon=r.raw_polygon * scale + off,
             gap_top=(r.gap_top + 0.5) / sy - 0.5, gap_bottom=(r.gap_bottom + 0.5) / sy - 0.5, shape=(H, W), _blob=None)
 
     def _find(self, crop_bgr: np.ndarray, predicted_centre_crop: tuple[float, float],
-              previous: MouthResult | None = None, held: bool = False) -> MouthResult | None:
+              previous: MouthResult | None = None, held: bool = False, below: float | None = None) -> MouthResult | None:
         """:meth:`find` on a crop at the working scale."""
         px, py = float(predicted_centre_crop[0]), float(predicted_centre_crop[1])
         sure = previous is not None and previous.score >= SCORE_OK
@@ -1271,13 +1288,19 @@ class MouthFinder:
             return self._from_seed(maps, px, py, previous.line_centre[1], previous)
         # the mouth line from a dark valley near the prediction with the lower lip under it, traced out
         # to the corners; the lips on the column through the corners' midpoint
-        seed = self.line_seed(maps, px, y_line)
+        seeds = self.line_seeds(maps, px, y_line)
+        if below is not None:
+            seeds = [y for y in seeds if y >= below + BELOW_GAP * self.wi]
+            if not seeds:
+                return None
+        seed = seeds[0]
         res = self._from_seed(maps, px, py, seed, previous)
-        if sure and HOLD_LINE > 0:
+        if sure and HOLD_LINE > 0 and below is None:
             # the valley chosen lies far from the last sure frame's line (teeth filling the gap leave
-            # the shadow under the lower lip the darkest row): the line traced from where it was too
+            # the shadow under the lower lip the darkest row), or its mouth is unsure (the shadow under
+            # the nose over a grin's thin upper lip, a little nearer): the line traced from where it was too
             held = previous.line_centre[1]
-            if abs(seed - held) > HOLD_LINE * self.wi:
+            if abs(seed - held) > HOLD_LINE * self.wi or res.score < SCORE_OK:
                 alt = self._from_seed(maps, px, py, held, previous)
                 # both may be sure (the score is full for most real mouths): then the wider one. A
                 # line traced off the mouth's middle (the shadow under the lower lip, the teeth's lower
@@ -1294,6 +1317,16 @@ class MouthFinder:
                         res = alt
                 elif alt.score > res.score:
                     res = alt
+        for other in seeds[1 : 1 + SEED_TRIES] if not sure else ():
+            if res.score >= SCORE_OK:
+                break
+            # no mouth from the likeliest valley (the shadow under the nose above a grin's thin upper
+            # lip is darker than the gap over its teeth, and has a lip under it too): the next one. Not
+            # after a sure frame, whose line was tried already: in a beard the next valley's mouth is
+            # often a sure one along the hair's edge, and the frames after it followed it there
+            alt = self._from_seed(maps, px, py, other, previous)
+            if alt.score > res.score:
+                res = alt
         return res
 
     def _from_seed(self, maps: "_Maps", px: float, py: float, seed: float, previous: MouthResult | None) -> MouthResult:
@@ -1351,7 +1384,7 @@ class MouthFinder:
         return MouthResult(
             left=left, right=right, centre=(mx, cy), lip_upper=cy - top, lip_lower=bottom - cy, polygon=poly,
             raw_polygon=raw, cue=self.model.cue, score=score, gap_top=gap_top, gap_bottom=gap_bottom,
-            stretch=stretch, shape=(H, W), line_ends=line_ends, column=cx, _split=self._split,
+            stretch=stretch, shape=(H, W), line_ends=line_ends, column=cx, seed=seed, _split=self._split,
         )
 
     def inside_ends(self, maps: "_Maps", left: tuple[float, float], right: tuple[float, float],
