@@ -916,3 +916,30 @@ def test_below_traces_only_the_valleys_under_a_refused_line(calibrated, monkeypa
     assert res.seed == pytest.approx(t["mouth"][1], abs=0.01)  # (the row it started from, in crop px)
     traced.clear()
     assert finder.find(crop, at, below=(rows[2] + 0.5) / s - 0.5) is None and traced == []
+
+
+def test_an_unsure_mouth_near_the_last_line_is_traced_again_from_it(calibrated, monkeypatch):
+    """After a sure frame, a valley whose mouth is unsure is checked against the last sure frame's line
+    even when it lies nearer than :data:`~tracker.mouth_finder.HOLD_LINE` (a grin's nose shadow, 0.15-0.2
+    wi over its teeth): the line traced from the last row is kept when it scores better. The other
+    valleys are not tried after a sure frame (in a beard they make sure mouths along the hair)."""
+    finder, crop, at, t, rows, traced = _seeded(calibrated, monkeypatch, [0.0])
+    before = finder.find(crop, at)
+    assert before.score >= SCORE_OK
+    s = WORK_IPD / WI
+    held_row = (before.line_centre[1] + 0.5) * s - 0.5
+    near = held_row - 0.5 * mouth_finder.HOLD_LINE * WORK_IPD
+    rows[:] = [near, near + 0.3 * WORK_IPD]
+    spy = finder._from_seed
+
+    def unsure_near(maps, px, py, seed, previous):
+        r = spy(maps, px, py, seed, previous)
+        return mouth_finder._moved(r, score=0.2) if seed == near else r
+
+    monkeypatch.setattr(finder, "_from_seed", unsure_near)
+    traced.clear()
+    res = finder.find(crop, at, before)
+    assert traced == [near, pytest.approx(held_row)]
+    assert res.score >= SCORE_OK and abs(res.line_centre[1] - t["mouth"][1]) < 3.0
+    traced.clear()
+    assert finder.find(crop, at).score >= SCORE_OK and traced == [near, rows[1]]  # no sure frame: the next valley
