@@ -122,7 +122,8 @@ SEED_LIP = 2.0
 :meth:`MouthFinder.line_seed`)."""
 SEED_TRIES = 2
 """Further valleys (:meth:`MouthFinder.line_seeds`, in order) the line is traced from when the likeliest
-one's mouth scores under :data:`SCORE_OK`."""
+one's mouth scores under :data:`SCORE_OK` and the last frame's mouth was not sure (after a sure one, its
+line is traced again instead)."""
 BELOW_GAP = 0.1
 """How far (wi) under a line found too high the valleys :meth:`MouthFinder.find` (``below``) tries lie."""
 STRONG_LEAD = 2.0 * LIP_LEAD
@@ -777,15 +778,16 @@ class MouthFinder:
         return self.line_seeds(maps, x, y_line)[0]
 
     def line_seeds(self, maps: "_Maps", x: float, y_line: float) -> list[float]:
-        """The rows the mouth line may be traced from, the likeliest first: of the dark valleys (smoothed luminance, band through
-        column ``x``) within :data:`SEED_REACH` of row ``y_line``, the dark one with the lower lip's
-        colour under it (its shading-free lip value, :attr:`MouthModel.axis_down`, over a lower lip's
-        thickness) — the gap between the lips, not the shadow under the lower lip, which is often
-        darker but has the chin under it. Upwards the reach is short: the gap does not rise far above
-        the head's prediction, and the shadow under the nose is 0.25–0.4 wi above it. Where the lips
+        """The rows the mouth line may be traced from, the likeliest first: of the dark valleys
+        (smoothed luminance, band through column ``x``) within :data:`SEED_REACH` of row ``y_line``,
+        the dark one with the lower lip's colour under it (its shading-free lip value,
+        :attr:`MouthModel.axis_down`, over a lower lip's thickness) — the gap between the lips, not the
+        shadow under the lower lip, which is often darker but has the chin under it. Upwards the reach
+        is short: the gap does not rise far above the head's prediction, and the shadow under the nose
+        is 0.25–0.4 wi above it (in a broad grin, 0.15-0.2 over the gap above the teeth). Where the lips
         are redder than the skin, a valley with lip-red rows on one side only (:data:`SEED_REACH_LIPS`)
-        is hair beside a lip, not the gap, once some valley has them on both sides. The others
-        follow by the same score (a second valley is tried where the first gives no mouth)."""
+        is hair beside a lip, not the gap, once some valley has them on both sides. The others follow
+        by the same score (the next is tried where the first gives no mouth)."""
         H, W = maps.shape
         x0, x1 = band_columns(x, self.half, W)
         a = min(max(int(y_line + SEED_REACH[0] * self.wi), 0), H - 1)
