@@ -928,15 +928,17 @@ class FaceTracker:
         ``below``: traced only from valleys under this row of the crop (the finder's ``below``)."""
         at = (float(centre[0]) - origin[0], float(centre[1]) - origin[1])
         prev = getattr(self, "_mouth_prev", None)
-        if prev is not None and hasattr(self.mouth_finder, "shifted"):
+        if not hasattr(self.mouth_finder, "shifted"):  # an old calibration's lip blob: one look, no second
+            if held or below is not None:
+                return None
+            res = self.mouth_finder.find(crop, at)
+        elif prev is not None:
             prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
             res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held, below=below)
         elif held:
             return None
-        elif below is not None:
-            res = self.mouth_finder.find(crop, at, below=below)
         else:
-            res = self.mouth_finder.find(crop, at)
+            res = self.mouth_finder.find(crop, at, below=below)
         return None if res is None or res.score < MOUTH_SCORE_OK else res
 
     def _mouth_held(self, centre: np.ndarray, origin: tuple[float, float]):
