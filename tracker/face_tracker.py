@@ -937,8 +937,10 @@ class FaceTracker:
             res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held, below=below)
         elif held:
             return None
-        else:
+        elif below is not None:
             res = self.mouth_finder.find(crop, at, below=below)
+        else:
+            res = self.mouth_finder.find(crop, at)
         return None if res is None or res.score < MOUTH_SCORE_OK else res
 
     def _mouth_held(self, centre: np.ndarray, origin: tuple[float, float]):
