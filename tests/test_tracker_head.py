@@ -548,6 +548,32 @@ def test_a_mouth_is_never_placed_above_the_highest_the_jaw_goes():
     assert plausible(0.6, 0.0) and not plausible(0.6, -0.1)  # after a yawn: back to the rigid place, not past it
 
 
+def test_a_mouth_back_at_its_rigid_place_is_never_out_of_place():
+    """The place check against the prediction (the rigid place moved by the last mouth's jaw): a mouth
+    found back at its rigid place, across the face or down it, is plausible however far the prediction
+    went — a corner run into a beard for a frame moved the mouth's centre sideways, the jaw followed
+    it, and the mouth found where it belonged the frame after was refused as elsewhere (the bearded
+    copy of expr_d18: six frames ``mouth_lost``). Far from both places it is still refused."""
+    from types import SimpleNamespace
+
+    img, _ = render_face(BASE)
+    tr = FaceTracker(calibrate(img, Clicks.from_dict(clicks_for(BASE))))
+    wi, w = tr.wi, tr.cal.mouth_width
+    rigid = (200.0, 300.0)
+
+    def plausible(pred, at, with_rigid=True):
+        m = SimpleNamespace(width=w, level_rise=0.0, line_centre=(rigid[0] + at[0] * wi, rigid[1] + at[1] * wi))
+        return tr._plausible_mouth(m, (rigid[0] + pred[0] * wi, rigid[1] + pred[1] * wi), (0.0, 0.0),
+                                   rigid if with_rigid else None)
+
+    assert not plausible((0.35, 0.0), (0.0, 0.0), with_rigid=False)  # (the prediction alone: elsewhere)
+    assert plausible((0.35, 0.0), (0.0, 0.0)) and plausible((-0.35, 0.0), (0.05, 0.0))
+    assert not plausible((0.35, 0.0), (-0.35, 0.0))  # far from both
+    assert not plausible((-0.2, -0.25), (0.0, 0.25), with_rigid=False)  # too low for the prediction ...
+    assert plausible((-0.2, -0.25), (0.0, 0.25))  # ... but a quarter under the rigid place
+    assert not plausible((0.0, 0.0), (0.0, 0.5))  # too low for both
+
+
 def test_the_frame_interval_sets_how_far_the_mouth_may_move_between_frames():
     """At 25 frames a second or faster the mouth's per-frame allowances hold as they are; frames further
     apart (a webcam falling to 12.5 frames a second) let it move proportionally further, up to

@@ -459,12 +459,21 @@ class FaceTracker:
         dy = c[1] + origin[1] - predicted[1]
         k = self._steps
         lo = -0.25 * self.wi * k
+        low = dy
         if rigid is not None:
             # back up to the rigid place at once, but never above the highest the jaw goes: a mouth
             # found there is the philtrum or the nostrils, and a jaw that followed it would let the
             # next one rise further still
             lo = max(min(lo, rigid[1] - predicted[1]), rigid[1] + self._jaw_min[1] - predicted[1])
-        if abs(dx) > 0.3 * self.wi * k or dy > 0.45 * self.wi * k:
+            # nor is one back at its rigid place across the face or down it out of place, wherever the
+            # last mouth took the prediction (a corner run into a beard for a frame moved the mouth's
+            # centre, the jaw followed it sideways, and the mouth found where it belonged the frame
+            # after was refused as elsewhere: a bearded copy of a shared clip lost six frames so)
+            rx = c[0] + origin[0] - rigid[0]
+            if abs(rx) < abs(dx):
+                dx = rx
+            low = min(dy, c[1] + origin[1] - rigid[1])
+        if abs(dx) > 0.3 * self.wi * k or low > 0.45 * self.wi * k:
             return "place"
         return "high" if dy < lo else None
 
