@@ -440,10 +440,10 @@ class FaceTracker:
                          rigid: tuple[float, float] | None = None) -> bool:
         """A mouth of about the calibrated size, its line tilted by under 0.45 of its width (a pulled,
         lopsided mouth: 0.4 seen on real faces), near where the head puts it: near the
-        prediction (the rigid place moved by the last jaw), or — a jaw closing fast after a yawn —
-        back up to its rigid place (``rigid``, face px) but not above it; and never higher above the
-        rigid place than the jaw goes (:data:`JAW_MIN`). The distances from the prediction grow with
-        the time since the last frame (:data:`FRAME_STEP`)."""
+        prediction (the rigid place moved by the last jaw), or near its rigid place (``rigid``, face
+        px) across the face and down it, or — a jaw closing fast after a yawn — back up to the rigid
+        place but not above it; and never higher above the rigid place than the jaw goes
+        (:data:`JAW_MIN`). The distances grow with the time since the last frame (:data:`FRAME_STEP`)."""
         return self._misplaced(m, predicted, origin, rigid) is None
 
     def _misplaced(self, m, predicted: tuple[float, float], origin: tuple[float, float],
