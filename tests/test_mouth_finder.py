@@ -693,17 +693,22 @@ def test_a_seed_in_the_hair_under_the_lip_is_checked_against_the_last_line(calib
     assert finder.find(crop, tuple(centre - origin), before).line_centre[1] - t["mouth"][1] > 12.0
 
 
+def _neutral(calibrated):
+    """A fresh finder on the neutral frame's crop round the calibrated centre: the finder, the crop,
+    the predicted centre and the truth (crop px)."""
+    model, centre = calibrated
+    img, _ = render_face(BASE)
+    ff = _frame_of(BASE)
+    crop, origin = _crop(img, ff, centre)
+    return MouthFinder(model, WI), crop, tuple(centre - origin), _truth_in_crop(BASE, ff, origin)
+
+
 def _two_lines(calibrated, monkeypatch, side: float):
     """A sure mouth on the neutral frame, then the next frame's line seeded twice
     :data:`~tracker.mouth_finder.HOLD_LINE` away from its row (``side`` +1 below, −1 above), so the
     line is also traced from the held row: the finder, the crop, the predicted centre (crop px), the
     sure mouth, the held row and the seeded row (working px)."""
-    model, centre = calibrated
-    img, _ = render_face(BASE)
-    ff = _frame_of(BASE)
-    crop, origin = _crop(img, ff, centre)
-    finder = MouthFinder(model, WI)
-    at = tuple(centre - origin)
+    finder, crop, at, _ = _neutral(calibrated)
     before = finder.find(crop, at)
     assert before.score >= SCORE_OK
     s = WORK_IPD / WI
@@ -772,13 +777,7 @@ def test_a_held_search_traces_the_last_line_alone(calibrated, monkeypatch):
     prediction (the caller found the valley's mouth out of place: a moustache's lower edge a little
     above the lips, nearer the last line than :data:`~tracker.mouth_finder.HOLD_LINE`, so not checked
     against it). Nothing to hold without a sure last frame."""
-    model, centre = calibrated
-    img, _ = render_face(BASE)
-    ff = _frame_of(BASE)
-    crop, origin = _crop(img, ff, centre)
-    t = _truth_in_crop(BASE, ff, origin)
-    finder = MouthFinder(model, WI)
-    at = tuple(centre - origin)
+    finder, crop, at, t = _neutral(calibrated)
     before = finder.find(crop, at)
     assert before.score >= SCORE_OK and abs(before.line_centre[1] - t["mouth"][1]) < 3.0
     s = WORK_IPD / WI
@@ -864,12 +863,7 @@ def _seeded(calibrated, monkeypatch, rows_from_mouth: list[float]):
     """The neutral frame's finder with its valleys replaced by rows ``rows_from_mouth`` (× wi from the
     true mouth line, in that order), each traced one recorded: the finder, the crop, the predicted
     centre (crop px), the truth (crop px), the rows (working px) and the list the traced rows go to."""
-    model, centre = calibrated
-    img, _ = render_face(BASE)
-    ff = _frame_of(BASE)
-    crop, origin = _crop(img, ff, centre)
-    t = _truth_in_crop(BASE, ff, origin)
-    finder = MouthFinder(model, WI)
+    finder, crop, at, t = _neutral(calibrated)
     s = WORK_IPD / WI
     line = (t["mouth"][1] + 0.5) * s - 0.5
     rows = [line + k * WORK_IPD for k in rows_from_mouth]
@@ -881,7 +875,7 @@ def _seeded(calibrated, monkeypatch, rows_from_mouth: list[float]):
         return real(maps, px, py, seed, previous)
 
     monkeypatch.setattr(finder, "_from_seed", spy)
-    return finder, crop, tuple(centre - origin), t, rows, traced
+    return finder, crop, at, t, rows, traced
 
 
 def test_a_valley_that_gives_no_mouth_hands_on_to_the_next(calibrated, monkeypatch):

@@ -681,9 +681,8 @@ class FaceTracker:
             mouth_res = self._mouth_held(predicted_mouth, mouth_origin)
             if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
                 mouth_res = None
-        elif why == "high":  # the line along the shadow under the nose: the valleys under it
-            seed = mouth_res.seed if math.isfinite(mouth_res.seed) else mouth_res.line_centre[1]
-            mouth_res = self._find_mouth(self._last_mouth_crop, predicted_mouth, mouth_origin, below=seed)
+        elif why == "high":  # the line along the shadow under the nose: the valleys under where it started
+            mouth_res = self._find_mouth(self._last_mouth_crop, predicted_mouth, mouth_origin, below=mouth_res.seed)
             if mouth_res is not None and not self._plausible_mouth(mouth_res, predicted_mouth, mouth_origin, rigid_mouth):
                 mouth_res = None
         elif why is not None:

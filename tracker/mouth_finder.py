@@ -11,7 +11,7 @@ to :data:`WORK_IPD` px between the eyes (the result is scaled back). Per frame:
    column along the line below is a few look-ups;
 2. **the corners** (:meth:`MouthFinder.corners`): the mouth line is traced from a dark valley near
    the prediction that has the lower lip's colour under it (the gap, or an open mouth's inside —
-   not the shadow under the lower lip, :meth:`MouthFinder.line_seed`) outwards along the darkest
+   not the shadow under the lower lip, :meth:`MouthFinder.line_seeds`) outwards along the darkest
    valley, and on each side the corner is where the columns along it (the bands above, on and below
    the line) start to look like the cheek — where the lips are redder than the skin, no further than
    :data:`~tracker.mouth_model.LIP_END` past the last column that shows them (lip-red, or teeth: hair
@@ -119,7 +119,7 @@ SEED_UNIT = 0.05
 """Luminance step (× the skin's) that one unit of darkness is worth when choosing the line's start."""
 SEED_LIP = 2.0
 """Darkness units that the lower lip's colour all along under a dark valley is worth (see
-:meth:`MouthFinder.line_seed`)."""
+:meth:`MouthFinder.line_seeds`)."""
 SEED_TRIES = 2
 """Further valleys (:meth:`MouthFinder.line_seeds`, in order) the line is traced from when the likeliest
 one's mouth scores under :data:`SCORE_OK` and the last frame's mouth was not sure (after a sure one, its
@@ -135,7 +135,7 @@ expr_d19 with --auto, lead 5.0: 0.76 → 0.11 under the first-gap rule)."""
 SEED_REACH_LIPS = 0.5
 """Rows (× wi) above and below a dark valley within which lip-red rows (redder than the skin by
 :data:`~tracker.mouth_model.GAP_RED` of the calibrated lips' lead) lie when it is between the lips
-(:meth:`MouthFinder.line_seed`; 0: not asked)."""
+(:meth:`MouthFinder.line_seeds`; 0: not asked)."""
 RETRACE = 0.03
 """How far (× wi) below the lips' opening the traced line may run before it is traced again from
 inside the opening."""
@@ -772,10 +772,6 @@ class MouthFinder:
         f = profile_features((c[1:] - c[:-1]) * inv, self.model.skin_level, self._chroma)
         i = maps.inside[:, x1] - maps.inside[:, x0]
         return f, (i[1:] - i[:-1]).astype(np.float32) * inv
-
-    def line_seed(self, maps: "_Maps", x: float, y_line: float) -> float:
-        """The row the mouth line is traced from: the first of :meth:`line_seeds`."""
-        return self.line_seeds(maps, x, y_line)[0]
 
     def line_seeds(self, maps: "_Maps", x: float, y_line: float) -> list[float]:
         """The rows the mouth line may be traced from, the likeliest first: of the dark valleys
