@@ -132,3 +132,53 @@ def test_without_the_parting_rule_the_moved_out_iris_passes(tracker_at_rest, mon
 def test_eyes_that_did_not_part_by_one_eye_are_not_doubted(tracker_at_rest, moves, scores):
     doubt, _, _ = _judge(tracker_at_rest, moves, scores, eyes_win=lambda: True)
     assert doubt == [False, False]
+
+
+def _open_eyes(tr: FaceTracker, moves, scores=(0.7, 0.5), gaps=(1.0, 1.0)) -> EyeResult:
+    """Both eyes moved by ``moves`` (× wi) from their calibrated places, each with its lid gap at
+    ``gaps`` × its calibrated one."""
+    found = tr._pupils_face + np.asarray(moves, dtype=np.float64) * tr.wi
+    eyes = []
+    for (x, y), s, g, cal_gap in zip(found, scores, gaps, tr.eye_finder.model.lid_open):
+        half = 0.5 * g * cal_gap
+        eyes.append(EyeObservation(x=x, y=y, score=s, open=True, upper=half, lower=half, brow=30.0, iris=(x, y), radius=6.0))
+    return EyeResult(tuple(eyes)), found
+
+
+def test_crossed_eyes_are_both_kept_and_leave_the_pose_alone(glancing_cal):
+    """Eyes turned in 16 % of the eye distance closer together than the head's pose says, neither
+    clearly matched and the face picture not asked: crossed eyes, not a wrong match. Both stay as
+    found, they do not turn the pose, and the pose is not pulled after them (expr_d6's crossed eyes
+    on its dark-skinned copy: the eye that turned in was held where the pose put it, 15 px off)."""
+    start, cal = glancing_cal
+    tr = FaceTracker(cal)
+    tr.track(render_face(start)[0], 0)  # a frame seen: the face picture can be asked about the scale
+    res, found = _open_eyes(tr, [[0.14, 0.0], [-0.02, 0.0]])  # mostly one eye turned in, as there
+    doubt, strong, _ = tr._judge_eyes(res, found, True, True, None)
+    assert doubt == [False, False] and not strong and tr._crossed_now
+    anchors = tr.anchors.copy()
+    pupils_img = tr._frame(anchors).to_image(found)
+    tr._follow(anchors, pupils_img, [True, True], found, True, True, False)
+    assert np.allclose(tr.anchors, anchors)
+
+
+@pytest.mark.parametrize("moves,gaps,flow_ok", [
+    ([[0.08, 0.0], [-0.08, 0.0]], (1.0, 0.5), True),    # one eye narrowed: its lash line passes for an iris
+    ([[0.15, 0.0], [-0.15, 0.0]], (1.0, 1.0), True),    # closer than crossed eyes come (VERGE)
+])
+def test_what_is_not_crossed_eyes_is_still_doubted(glancing_cal, moves, gaps, flow_ok):
+    _, cal = glancing_cal
+    tr = FaceTracker(cal)
+    res, found = _open_eyes(tr, moves, gaps=gaps)
+    doubt, strong, _ = tr._judge_eyes(res, found, flow_ok, True, None)
+    assert doubt == [False, True] and not strong and not tr._crossed_now
+
+
+def test_without_the_crossed_eyes_rule_the_less_sure_eye_is_doubted(glancing_cal, monkeypatch):
+    """The control: with no room for crossed eyes the same pair loses its less sure eye."""
+    monkeypatch.setattr(face_tracker, "VERGE", 0.0)
+    _, cal = glancing_cal
+    tr = FaceTracker(cal)
+    res, found = _open_eyes(tr, [[0.08, 0.0], [-0.08, 0.0]])
+    doubt, _, _ = tr._judge_eyes(res, found, True, True, None)
+    assert doubt == [False, True]

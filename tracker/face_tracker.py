@@ -160,6 +160,8 @@ DIVERGE = 0.12  # most (× wi) the two irises may move apart from their calibrat
 PARTED_ONE = 0.25  # ... "by one eye": the other eye's share of the parting is under this
 PAIR_AGREE = 0.06  # most the two irises' moves from their calibrated places may differ (x and y) to count as one gaze
 PAIR_GAP = 0.3  # least share of the seen eye's lid gap a doubted eye's gap measured at the pose may be (else held)
+VERGE = 0.25  # most (× wi) two open eyes may sit closer together than the head's pose says and still be crossed eyes
+VERGE_OPEN = 0.8  # ... each with at least this share of its calibrated lid gap (narrowed eyes: see _crossed)
 EYE_DOUBT = 0.3  # eye score below which an eye is doubtful (not on this person's eye)
 EYE_STRONG = 0.6  # both eyes at least this sure and open: they outvote the flow's roll and scale
 EYE_CLEAR = 0.8  # ... and at least this sure: they outvote a face picture under FACE_ABSENT (a side light's ramp)
@@ -311,6 +313,7 @@ class FaceTracker:
         self.anchors = self._cal_pupils.copy()
         self.pupils = self._cal_pupils.copy()
         self.gaze = np.zeros((2, 2))  # eye point − anchor, face px, per eye
+        self._crossed_now = False  # this frame's open eyes are crossed (_judge_eyes): they do not move the pose
         self.jaw = np.zeros(2)  # mouth centre − its rigid place, face px
         self._lips_held: tuple[float, float] | None = None  # the lips' reported thicknesses (steady_lips)
         self._brow_matches: list[float | None] = [None, None]  # running mean of each seen brow's match
@@ -582,6 +585,19 @@ class FaceTracker:
             self.pose = similarity_from_pairs(self._cal_pupils, anchors)
         return anchors, presence
 
+    def _crossed(self, ratio: float, tol: float, obs) -> bool:
+        """Whether two open eyes ``ratio`` × wi apart, closer than the head's pose allows (by more than
+        ``tol``), are crossed eyes: turned in (they converge on something near, or pull a face), by at
+        most :data:`VERGE`, with each lid gap at least :data:`VERGE_OPEN` of its calibrated one. The
+        head did not shrink: on expr_d6's crossed eyes the peer's pupils came 8-13 % closer while its
+        eye-to-mouth and brow-to-brow distances stayed. A narrowed eye is left to the usual doubt: under
+        a low lid the lash line makes a second dark hump beside the iris (expr_d3's right eye), and that
+        hump, taken for an iris, also brings the pair closer."""
+        model = getattr(self.eye_finder, "model", None)
+        if model is None or not 1.0 - VERGE <= ratio <= 1.0 - tol:
+            return False
+        return all(o.upper + o.lower >= VERGE_OPEN * g for o, g in zip(obs, model.lid_open))
+
     def _judge_eyes(self, res: EyeResult, found: np.ndarray, flow_ok: bool, face_there: bool,
                     eyes_win=None) -> tuple[list[bool], bool, list[bool]]:
         """Which eyes are doubtful (not on this person's eye, or where no gaze can put it), whether
@@ -602,8 +618,10 @@ class FaceTracker:
         distance or tilt disagree with the head's pose doubt the less sure one — unless
         ``eyes_win()`` says the face picture matches better at the eyes than at the pose: then the
         pose has drifted (the flow's scale and roll do), and the eyes stay to set it right (blaming
-        an eye every frame would keep the wrong pose for good).
+        an eye every frame would keep the wrong pose for good); or, with the flow, they are crossed
+        eyes (:meth:`_crossed`): both stay as found, and the pose is left where it is.
         """
+        self._crossed_now = False
         wi = self.wi
         preds = self._pupils_face.tolist()
         f = found.tolist()
@@ -638,7 +656,10 @@ class FaceTracker:
             # with the flow the head's roll and scale are known: open eyes must agree with them
             tol_r, tol_y = (0.1, 0.08) if flow_ok else (0.25, 0.35)
             if (not (1 - tol_r < ratio < 1 + tol_r) or abs(d[1]) > tol_y * wi) and not (eyes_win is not None and eyes_win()):
-                doubt[int(np.argmin([o.score for o in obs]))] = True
+                if flow_ok and abs(d[1]) <= tol_y * wi and self._crossed(ratio, tol_r, obs):
+                    self._crossed_now = True  # both eyes as found; the pose stays (see _follow)
+                else:
+                    doubt[int(np.argmin([o.score for o in obs]))] = True
                 strong = False
         return doubt, strong, far
 
@@ -842,7 +863,8 @@ class FaceTracker:
                 pinned: bool, strong: bool = False) -> None:
         """Pull the rigid pose towards the measured pupils (drift and gaze are slow, the flow fast).
 
-        ``usable``: the eyes seen open and sure this frame; ``pinned``: the face picture fixed
+        ``usable``: the eyes seen open and sure this frame (crossed eyes move the gaze, not the pose);
+        ``pinned``: the face picture fixed
         the position this frame, so the pupils pull less; ``strong``: both eyes matched clearly,
         so they turn the pose faster — otherwise they change its scale only where the face picture
         agrees (:meth:`_picture_allows_scale`).
@@ -854,7 +876,7 @@ class FaceTracker:
             else:
                 gaze[i] = [gaze[i][0] * 0.9, gaze[i][1] * 0.9]
         self.gaze[:] = gaze
-        if not (usable[0] and usable[1]):
+        if not (usable[0] and usable[1]) or self._crossed_now:
             new = anchors
         elif not flow_ok and not pinned:
             new = self._limited(anchors, pupils_img)
