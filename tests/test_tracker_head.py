@@ -503,11 +503,11 @@ def test_the_rigid_place_stays_where_the_finder_last_found_the_mouth(monkeypatch
     real_find = cal_mod.MouthFinder.find
     looks = []
 
-    def find(self, crop, pred, previous=None, steps=1.0):
+    def find(self, crop, pred, previous=None, steps=1.0, held=False, below=None):
         looks.append(pred)
         if len(looks) > 1:
             return None  # the look from where the first one pointed sees nothing
-        r = real_find(self, crop, pred, previous, steps)
+        r = real_find(self, crop, pred, previous, steps, held, below)
         up = 0.3 * self.wi  # the first one puts the line a third of the eye distance up (the nose's shadow)
         return dataclasses.replace(r, line_ends=tuple((x, y - up) for x, y in r.line_ends or (r.left, r.right)))
 

@@ -962,15 +962,13 @@ class FaceTracker:
             if held or below is not None:
                 return None
             res = self.mouth_finder.find(crop, at)
+        elif prev is not None:
+            prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
+            res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held, below=below)
+        elif held:
+            return None
         else:
-            more = {} if below is None else {"below": below}  # (the call as it was without a row to look below)
-            if prev is not None:
-                prev = self.mouth_finder.shifted(prev[0], prev[1][0] - origin[0], prev[1][1] - origin[1])
-                res = self.mouth_finder.find(crop, at, previous=prev, steps=self._steps, held=held, **more)
-            elif held:
-                return None
-            else:
-                res = self.mouth_finder.find(crop, at, **more)
+            res = self.mouth_finder.find(crop, at, below=below)
         return None if res is None or res.score < MOUTH_SCORE_OK else res
 
     def _mouth_held(self, centre: np.ndarray, origin: tuple[float, float]):
